@@ -1,0 +1,72 @@
+"""Exceptions raised by switchobs.
+
+Every exception subclasses a builtin so that callers that only know the
+builtins (``ValueError``, ``RuntimeError``) still catch them.  Messages name
+the offending value and say what to do; the CLI prints them as one line and
+exits with a non-zero status.
+"""
+
+from __future__ import annotations
+
+__all__ = [
+    "SwitchobsError",
+    "ModelError",
+    "ExpressionError",
+    "DimensionError",
+    "NotObservableError",
+    "SpectrumError",
+    "NotHurwitzError",
+    "FreeSymbolError",
+    "CertificateError",
+    "SolverFailure",
+    "SimulationError",
+    "CodegenError",
+]
+
+
+class SwitchobsError(Exception):
+    """Base class of every error switchobs raises on purpose."""
+
+
+class ModelError(SwitchobsError, ValueError):
+    """A model definition (built-in name, TOML file, matrices) is invalid."""
+
+
+class ExpressionError(ModelError):
+    """An expression string uses an unknown name, unsafe syntax or cannot be parsed."""
+
+
+class DimensionError(SwitchobsError, ValueError):
+    """A matrix or vector has the wrong shape."""
+
+
+class NotObservableError(SwitchobsError, ValueError):
+    """The pair (A, C) is not observable."""
+
+
+class SpectrumError(SwitchobsError, ValueError):
+    """A requested spectrum is not admissible (length, sign of real part, conjugation)."""
+
+
+class NotHurwitzError(SwitchobsError, ValueError):
+    """A matrix that must be Hurwitz is not."""
+
+
+class FreeSymbolError(SwitchobsError, ValueError):
+    """A numeric computation was asked of an expression with free symbols left."""
+
+
+class CertificateError(SwitchobsError, ValueError):
+    """A certificate is malformed or does not hold."""
+
+
+class SolverFailure(SwitchobsError, RuntimeError):
+    """A numerical solver failed or returned an inaccurate answer."""
+
+
+class SimulationError(SwitchobsError, ValueError):
+    """A simulation or scenario was given inadmissible settings."""
+
+
+class CodegenError(SwitchobsError, RuntimeError):
+    """C code generation or compilation failed."""

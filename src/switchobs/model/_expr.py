@@ -1,0 +1,126 @@
+"""Safe parsing of expression strings into sympy expressions.
+
+Strings are parsed with Python's :mod:`ast` and translated node by node into
+sympy objects; nothing is ever passed to :func:`eval`.  Only arithmetic,
+numbers, whitelisted function calls and names from an explicit table are
+accepted, so a model file cannot run code.
+"""
+
+from __future__ import annotations
+
+import ast
+from collections.abc import Mapping
+
+import sympy as sp
+
+from ..exceptions import ExpressionError
+
+__all__ = ["parse_expression", "FUNCTIONS"]
+
+#: Functions an expression string may call, by name.
+FUNCTIONS: Mapping[str, sp.Basic] = {
+    "exp": sp.exp,
+    "log": sp.log,
+    "sqrt": sp.sqrt,
+    "sin": sp.sin,
+    "cos": sp.cos,
+    "tan": sp.tan,
+    "tanh": sp.tanh,
+    "atan": sp.atan,
+    "Abs": sp.Abs,
+    "abs": sp.Abs,
+    "sign": sp.sign,
+}
+_CONSTANTS = {"pi": sp.pi, "E": sp.E, "I": sp.I}
+
+_BINOPS = {
+    ast.Add: lambda a, b: a + b,
+    ast.Sub: lambda a, b: a - b,
+    ast.Mult: lambda a, b: a * b,
+    ast.Div: lambda a, b: a / b,
+    ast.Pow: lambda a, b: a**b,
+    ast.BitXor: lambda a, b: a**b,  # engineers write x^2
+}
+
+
+def parse_expression(text: str | int | float, names: Mapping[str, sp.Symbol], *, what: str = "expression") -> sp.Expr:
+    """Parse ``text`` into a sympy expression using only the symbols in ``names``.
+
+    Parameters
+    ----------
+    text : str or number
+        The expression, e.g. ``"-a*y/vx"`` or ``"c2^2"``.  Decimal numbers are
+        converted exactly (``"187.5"`` becomes ``375/2``).
+    names : mapping of str to Symbol
+        The only names the expression may use (besides the functions in
+        :data:`FUNCTIONS` and ``pi``, ``E``, ``I``).
+    what : str
+        Where the expression comes from, for error messages (e.g. ``"A[1][2]"``).
+
+    Raises
+    ------
+    ExpressionError
+        On a syntax error, an unknown name, or any construct other than
+        arithmetic and whitelisted function calls.
+    """
+    if isinstance(text, bool):
+        raise ExpressionError(f"{what}: expected an expression, got the boolean {text!r}")
+    if isinstance(text, (int, float)):
+        text = repr(text)
+    if not isinstance(text, str):
+        raise ExpressionError(f"{what}: expected an expression string, got {type(text).__name__} {text!r}")
+    try:
+        tree = ast.parse(text.strip(), mode="eval")
+    except SyntaxError as exc:
+        raise ExpressionError(f"{what}: cannot parse {text!r} ({exc.msg})") from None
+    return _Translator(names, what, text).visit(tree.body)
+
+
+class _Translator(ast.NodeVisitor):
+    def __init__(self, names: Mapping[str, sp.Symbol], what: str, text: str):
+        self.names = names
+        self.what = what
+        self.text = text
+
+    def _fail(self, detail: str) -> ExpressionError:
+        return ExpressionError(f"{self.what}: {detail} in {self.text!r}")
+
+    def generic_visit(self, node: ast.AST) -> sp.Expr:
+        raise self._fail(f"unsupported syntax {type(node).__name__!r} (only arithmetic and calls to "
+                         f"{', '.join(sorted(FUNCTIONS))} are allowed)")
+
+    def visit_Constant(self, node: ast.Constant) -> sp.Expr:
+        value = node.value
+        if isinstance(value, bool) or not isinstance(value, (int, float)):
+            raise self._fail(f"unsupported constant {value!r}")
+        return sp.Rational(repr(value)) if isinstance(value, float) else sp.Integer(value)
+
+    def visit_Name(self, node: ast.Name) -> sp.Expr:
+        if node.id in self.names:
+            return self.names[node.id]
+        if node.id in _CONSTANTS:
+            return _CONSTANTS[node.id]
+        known = ", ".join(sorted(self.names)) or "none"
+        raise self._fail(f"unknown name {node.id!r} (known names: {known}; declare it under "
+                         "'parameters', 'external' or 'inputs')")
+
+    def visit_BinOp(self, node: ast.BinOp) -> sp.Expr:
+        op = _BINOPS.get(type(node.op))
+        if op is None:
+            raise self._fail(f"unsupported operator {type(node.op).__name__!r}")
+        return op(self.visit(node.left), self.visit(node.right))
+
+    def visit_UnaryOp(self, node: ast.UnaryOp) -> sp.Expr:
+        if isinstance(node.op, ast.USub):
+            return -self.visit(node.operand)
+        if isinstance(node.op, ast.UAdd):
+            return self.visit(node.operand)
+        raise self._fail(f"unsupported operator {type(node.op).__name__!r}")
+
+    def visit_Call(self, node: ast.Call) -> sp.Expr:
+        if not isinstance(node.func, ast.Name) or node.func.id not in FUNCTIONS:
+            name = node.func.id if isinstance(node.func, ast.Name) else ast.unparse(node.func)
+            raise self._fail(f"call of {name!r} is not allowed (allowed: {', '.join(sorted(FUNCTIONS))})")
+        if node.keywords:
+            raise self._fail("keyword arguments are not allowed")
+        return FUNCTIONS[node.func.id](*[self.visit(arg) for arg in node.args])

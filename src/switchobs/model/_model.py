@@ -1,0 +1,360 @@
+"""The model class of switchobs: systems linear after a singular time-rescaling.
+
+    dz/dt = s(y, t) (A z + d(y)) + b(y) u,    y = C z
+
+(seed 004, eq. (1); seed 000, eq. (7) and (20); seed 001, eq. (3.2)).
+"""
+
+from __future__ import annotations
+
+import re
+import tomllib
+from collections.abc import Mapping
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import sympy as sp
+
+from ..exceptions import DimensionError, FreeSymbolError, ModelError
+from ._expr import parse_expression
+
+__all__ = ["Model", "numeric", "make_symbol"]
+
+_IDENT = re.compile(r"^[A-Za-z_][A-Za-z0-9_]*$")
+_RESERVED = {"t", "pi", "E", "I"}
+
+
+def make_symbol(name: str, *, positive: bool = False, negative: bool = False) -> sp.Symbol:
+    """The one way switchobs creates symbols, so that equal names give equal symbols."""
+    if positive:
+        return sp.Symbol(name, positive=True)
+    if negative:
+        return sp.Symbol(name, negative=True)
+    return sp.Symbol(name, real=True)
+
+
+def _names(value: Any, key: str) -> tuple[str, ...]:
+    if value is None:
+        return ()
+    if isinstance(value, str) or not isinstance(value, (list, tuple)):
+        raise ModelError(f"'{key}' must be a list of names, got {value!r}")
+    for name in value:
+        if not isinstance(name, str) or not _IDENT.match(name):
+            raise ModelError(f"'{key}' holds {name!r}, which is not a valid name (letters, digits, '_')")
+        if name in _RESERVED:
+            raise ModelError(f"'{key}' holds the reserved name {name!r}; rename it")
+    if len(set(value)) != len(value):
+        dup = sorted({n for n in value if list(value).count(n) > 1})
+        raise ModelError(f"'{key}' repeats the name(s) {dup}")
+    return tuple(value)
+
+
+@dataclass(frozen=True)
+class Model:
+    """A system ``dz/dt = s(y,t)(A z + d(y)) + b(y) u, y = C z`` with one output.
+
+    Build one with :meth:`Model.from_dict`, :meth:`Model.from_toml` or
+    :func:`switchobs.builtin_model`; the constructor expects already-validated
+    sympy objects.
+
+    Attributes
+    ----------
+    name : str
+    states : tuple of str
+        State names, in order (``z1, z2, ...``).
+    output : str
+        Name of the measured output ``y`` (usable in ``d``, ``b``, ``time_scale``).
+    A : sympy.ImmutableMatrix, n x n
+        Constant matrix (may hold parameters).
+    C : sympy.ImmutableMatrix, 1 x n
+        Output row.
+    d : sympy.ImmutableMatrix, n x 1
+        Drift vector, function of ``y`` and the parameters.
+    b : sympy.ImmutableMatrix, n x m
+        Input matrix, function of ``y`` and the parameters.
+    time_scale : sympy.Expr
+        ``s(y, t)``, function of ``y``, the external signals and ``t``.
+    parameters, external, inputs : tuple of str
+    values : mapping str -> sympy.Rational
+        Numeric values of (some of) the parameters.
+    symbols : mapping str -> sympy.Symbol
+        Every name of the model and its symbol (with its sign assumptions).
+    description : str
+    references : mapping str -> str
+        Seed equation numbers, e.g. ``{"model": "seed 000 eq. (7)"}``.
+    """
+
+    name: str
+    states: tuple[str, ...]
+    output: str
+    A: sp.ImmutableMatrix
+    C: sp.ImmutableMatrix
+    d: sp.ImmutableMatrix
+    b: sp.ImmutableMatrix
+    time_scale: sp.Expr
+    parameters: tuple[str, ...]
+    external: tuple[str, ...]
+    inputs: tuple[str, ...]
+    values: Mapping[str, sp.Rational] = field(default_factory=dict)
+    symbols: Mapping[str, sp.Symbol] = field(default_factory=dict)
+    description: str = ""
+    references: Mapping[str, str] = field(default_factory=dict)
+
+    # ------------------------------------------------------------------ build
+    @classmethod
+    def from_dict(cls, data: Mapping[str, Any], *, source: str = "model") -> "Model":
+        """Build a model from the keys of the TOML format (see ``docs/model-format.md``).
+
+        Raises
+        ------
+        ModelError, ExpressionError, DimensionError
+            Naming the key and the offending value.
+        """
+        if not isinstance(data, Mapping):
+            raise ModelError(f"{source}: expected a table of keys, got {type(data).__name__}")
+        known = {"name", "description", "states", "output", "A", "C", "d", "b", "time_scale",
+                 "parameters", "external", "inputs", "values", "positive", "negative", "references"}
+        unknown = sorted(set(data) - known)
+        if unknown:
+            raise ModelError(f"{source}: unknown key(s) {unknown}; known keys are {sorted(known)}")
+        for key in ("name", "states", "A", "C", "time_scale"):
+            if key not in data:
+                raise ModelError(f"{source}: missing required key {key!r}")
+        name = data["name"]
+        if not isinstance(name, str) or not name.strip():
+            raise ModelError(f"{source}: 'name' must be a non-empty string, got {name!r}")
+        states = _names(data["states"], "states")
+        if not states:
+            raise ModelError(f"{source}: 'states' is empty; a model needs at least one state")
+        output = data.get("output", "y")
+        _names([output], "output")
+        parameters = _names(data.get("parameters"), "parameters")
+        external = _names(data.get("external"), "external")
+        inputs = _names(data.get("inputs"), "inputs")
+        positive = set(_names(data.get("positive"), "positive"))
+        negative = set(_names(data.get("negative"), "negative"))
+        declared = list(states) + [output] + list(parameters) + list(external) + list(inputs)
+        clash = sorted({n for n in declared if declared.count(n) > 1})
+        if clash:
+            raise ModelError(f"{source}: the name(s) {clash} are declared twice (states, output, "
+                             "parameters, external and inputs must be distinct)")
+        for sign_key, group in (("positive", positive), ("negative", negative)):
+            stray = sorted(group - set(parameters) - set(external))
+            if stray:
+                raise ModelError(f"{source}: '{sign_key}' names {stray}, which are not parameters or external signals")
+        if positive & negative:
+            raise ModelError(f"{source}: {sorted(positive & negative)} declared both positive and negative")
+
+        symbols = {n: make_symbol(n, positive=n in positive, negative=n in negative)
+                   for n in declared}
+        symbols["t"] = make_symbol("t")
+        n = len(states)
+        par = {k: symbols[k] for k in parameters}
+        y_par = {**par, output: symbols[output]}
+        s_names = {**y_par, **{k: symbols[k] for k in external}, "t": symbols["t"]}
+
+        A = _matrix(data["A"], par, rows=n, cols=n, name="A")
+        C_raw = data["C"]
+        if isinstance(C_raw, list) and C_raw and all(isinstance(r, list) for r in C_raw):
+            if len(C_raw) != 1:
+                raise DimensionError(f"'C' must be one row (one measured output); got {len(C_raw)} rows")
+            C_raw = C_raw[0]
+        if not isinstance(C_raw, list):
+            raise DimensionError(f"'C' must be a row (a list of {n} expressions), got {C_raw!r}")
+        C = _matrix([C_raw], par, rows=1, cols=n, name="C")
+        d = _vector(data.get("d", [0] * n), y_par, n, "d")
+        m = len(inputs)
+        b_raw = data.get("b", [[0] * m for _ in range(n)] if m != 1 else [0] * n)
+        if m == 1 and isinstance(b_raw, list) and all(not isinstance(e, list) for e in b_raw):
+            b = _vector(b_raw, y_par, n, "b")
+        else:
+            b = _matrix(b_raw, y_par, rows=n, cols=m, name="b")
+        time_scale = parse_expression(data["time_scale"], s_names, what="time_scale")
+        if time_scale == 0:
+            raise ModelError(f"{source}: 'time_scale' is identically zero; the observer would never move")
+
+        values_raw = data.get("values", {}) or {}
+        if not isinstance(values_raw, Mapping):
+            raise ModelError(f"{source}: 'values' must be a table name = number, got {values_raw!r}")
+        values = {}
+        for key, val in values_raw.items():
+            if key not in parameters:
+                raise ModelError(f"{source}: 'values' gives {key!r}, which is not a parameter "
+                                 f"(parameters: {list(parameters)})")
+            values[key] = rational_value(val, what=f"values.{key}")
+            _check_sign(key, values[key], symbols[key])
+        refs = data.get("references", {}) or {}
+        return cls(name=name, states=states, output=output, A=A, C=C, d=d, b=b,
+                   time_scale=time_scale, parameters=parameters, external=external, inputs=inputs,
+                   values=values, symbols=symbols, description=str(data.get("description", "")),
+                   references=dict(refs))
+
+    @classmethod
+    def from_toml(cls, path: str | Path) -> "Model":
+        """Read a model from a TOML file (keys as in :meth:`from_dict`)."""
+        path = Path(path)
+        try:
+            text = path.read_text(encoding="utf-8")
+        except OSError as exc:
+            raise ModelError(f"cannot read model file {str(path)!r}: {exc.strerror}") from None
+        try:
+            data = tomllib.loads(text)
+        except tomllib.TOMLDecodeError as exc:
+            raise ModelError(f"model file {str(path)!r} is not valid TOML: {exc}") from None
+        return cls.from_dict(data, source=str(path))
+
+    # -------------------------------------------------------------- queries
+    @property
+    def n(self) -> int:
+        """State dimension."""
+        return len(self.states)
+
+    def symbol(self, name: str) -> sp.Symbol:
+        """The symbol of a declared name (state, output, parameter, signal or ``t``)."""
+        try:
+            return self.symbols[name]
+        except KeyError:
+            raise ModelError(f"model {self.name!r} has no name {name!r}; known: {sorted(self.symbols)}") from None
+
+    @property
+    def parameter_symbols(self) -> tuple[sp.Symbol, ...]:
+        return tuple(self.symbols[p] for p in self.parameters)
+
+    @property
+    def signals(self) -> tuple[str, ...]:
+        """Measured signals in the order of the generated C API: y, external signals, inputs."""
+        return (self.output, *self.external, *self.inputs)
+
+    def with_values(self, values: Mapping[str, Any]) -> "Model":
+        """Return the model with parameters replaced by exact numbers.
+
+        The substituted parameters disappear from :attr:`parameters`.  Values
+        are converted exactly (``"187.5"`` -> ``375/2``).
+        """
+        if not values:
+            return self
+        subs = {}
+        for key, val in values.items():
+            if key not in self.parameters:
+                raise ModelError(f"model {self.name!r} has no parameter {key!r} "
+                                 f"(parameters: {list(self.parameters)})")
+            number = rational_value(val, what=f"--param {key}")
+            _check_sign(key, number, self.symbols[key])
+            subs[self.symbols[key]] = number
+        remaining = tuple(p for p in self.parameters if p not in values)
+        return Model(name=self.name, states=self.states, output=self.output,
+                     A=self.A.subs(subs), C=self.C.subs(subs), d=self.d.subs(subs),
+                     b=self.b.subs(subs), time_scale=self.time_scale.subs(subs),
+                     parameters=remaining, external=self.external, inputs=self.inputs,
+                     values={k: v for k, v in self.values.items() if k in remaining},
+                     symbols=self.symbols, description=self.description, references=self.references)
+
+    def numeric(self) -> "Model":
+        """The model with all its stored :attr:`values` substituted."""
+        return self.with_values(dict(self.values))
+
+    def to_dict(self) -> dict[str, Any]:
+        """The model in the TOML key format, every expression as a string."""
+        return {
+            "name": self.name,
+            "states": list(self.states),
+            "output": self.output,
+            "A": [[str(e) for e in self.A.row(i)] for i in range(self.n)],
+            "C": [str(e) for e in self.C],
+            "d": [str(e) for e in self.d],
+            "b": [[str(e) for e in self.b.row(i)] for i in range(self.n)],
+            "time_scale": str(self.time_scale),
+            "parameters": list(self.parameters),
+            "external": list(self.external),
+            "inputs": list(self.inputs),
+            "values": {k: str(v) for k, v in self.values.items()},
+        }
+
+    def __str__(self) -> str:
+        return f"Model {self.name!r}: n={self.n}, states={list(self.states)}, s={self.time_scale}"
+
+
+def rational_value(value: Any, *, what: str) -> sp.Rational:
+    """Convert a user number (int, float, decimal or fraction string) to an exact rational."""
+    if isinstance(value, bool):
+        raise ModelError(f"{what}: expected a number, got {value!r}")
+    try:
+        if isinstance(value, float):
+            if not np.isfinite(value):
+                raise ValueError
+            return sp.Rational(repr(value))
+        return sp.Rational(str(value).strip())
+    except (ValueError, TypeError, SyntaxError, sp.SympifyError):
+        raise ModelError(f"{what}: {value!r} is not a finite number (write e.g. 187.5 or 375/2)") from None
+
+
+def _check_sign(name: str, value: sp.Rational, symbol: sp.Symbol) -> None:
+    if symbol.is_positive and not value > 0:
+        raise ModelError(f"parameter {name!r} is declared positive but was given the value {value}")
+    if symbol.is_negative and not value < 0:
+        raise ModelError(f"parameter {name!r} is declared negative but was given the value {value}")
+
+
+def _matrix(data: Any, names: Mapping[str, sp.Symbol], *, rows: int, cols: int, name: str) -> sp.ImmutableMatrix:
+    """Validate a list of rows of expression strings: the one shape check of the model layer."""
+    if not isinstance(data, list) or not all(isinstance(r, list) for r in data):
+        raise DimensionError(f"'{name}' must be a list of {rows} rows, got {data!r}")
+    if len(data) != rows:
+        raise DimensionError(f"'{name}' has the wrong number of rows; expected {rows} instead of {len(data)}")
+    for i, row in enumerate(data):
+        if len(row) != cols:
+            raise DimensionError(f"'{name}' row {i + 1} has the wrong number of entries; "
+                                 f"expected {cols} instead of {len(row)}")
+    return sp.ImmutableMatrix([[parse_expression(e, names, what=f"{name}[{i + 1}][{j + 1}]")
+                                for j, e in enumerate(row)] for i, row in enumerate(data)])
+
+
+def _vector(data: Any, names: Mapping[str, sp.Symbol], n: int, name: str) -> sp.ImmutableMatrix:
+    if not isinstance(data, list) or any(isinstance(e, list) for e in data):
+        raise DimensionError(f"'{name}' must be a flat list of {n} expressions, got {data!r}")
+    if len(data) != n:
+        raise DimensionError(f"'{name}' has the wrong length; expected {n} instead of {len(data)}")
+    return sp.ImmutableMatrix([parse_expression(e, names, what=f"{name}[{i + 1}]") for i, e in enumerate(data)])
+
+
+def numeric(expr: Any, values: Mapping[Any, Any] | None = None, *, what: str = "expression") -> np.ndarray:
+    """The one symbolic-to-numeric gate: substitute ``values`` and convert to float.
+
+    Parameters
+    ----------
+    expr : sympy expression or matrix
+    values : mapping of Symbol or name to number, optional
+        Names are matched against the free symbols of ``expr`` by name.
+    what : str
+        Name used in the error message.
+
+    Returns
+    -------
+    numpy.ndarray
+        A float array of the shape of ``expr`` (0-d for a scalar).
+
+    Raises
+    ------
+    FreeSymbolError
+        If free symbols remain after substitution; the message names them.
+    """
+    scalar = not isinstance(expr, sp.MatrixBase)
+    m = sp.Matrix([[expr]]) if scalar else sp.Matrix(expr)
+    by_name = {str(s): s for s in m.free_symbols}
+    subs = {}
+    for key, val in (values or {}).items():
+        sym = key if isinstance(key, sp.Basic) else by_name.get(str(key))
+        if sym is not None:
+            subs[sym] = val
+    if subs:
+        m = m.subs(subs)
+    free = sorted(map(str, m.free_symbols))
+    if free:
+        raise FreeSymbolError(f"{what} still depends on {free}; give their values (e.g. --param {free[0]}=...)")
+    out = np.array(m.evalf(), dtype=complex)
+    if np.any(np.abs(out.imag) > 0):
+        raise FreeSymbolError(f"{what} is not real: {out}")
+    out = out.real.astype(float)
+    return out[0, 0] if scalar else out
