@@ -1,8 +1,9 @@
 """Models of the class dz/dt = s(y,t)(A z + d(y)) + b(y) u, y = C z."""
 
 from ._builtin import builtin_model, builtin_names, load_model
+from ._expr import FUNCTIONS as EXPRESSION_FUNCTIONS
 from ._expr import parse_expression
 from ._model import Model, make_symbol, numeric, rational_value
 
-__all__ = ["Model", "builtin_model", "builtin_names", "load_model", "make_symbol", "numeric",
+__all__ = ["EXPRESSION_FUNCTIONS", "Model", "builtin_model", "builtin_names", "load_model", "make_symbol", "numeric",
            "parse_expression", "rational_value"]

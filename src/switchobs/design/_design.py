@@ -1,0 +1,420 @@
+"""Switched-observer gain design: K_plus, K_minus, Routh conditions and the common P.
+
+Error dynamics in the rescaled time ``tau = ∫|s| dt`` (seed 004; seed 000 eq. (13)):
+
+    de/dtau = A_plus e   (s > 0),   A_plus  =  A - K_plus  C
+    de/dtau = A_minus e  (s < 0),   A_minus = -A + K_minus C
+
+In observer normal form (``K_nf = T K``), ``D A_minus D`` with
+``D = diag(1, -1, 1, ...)`` is the companion matrix of the coefficients
+``alpha_minus_i = (-1)^i (k_nf_minus_i - a_i)``, while ``A_plus`` has
+``alpha_plus_i = k_nf_plus_i - a_i``.  The observer-form Lyapunov solution
+``P(alpha)`` is checkerboard, so ``D P D = P`` and a common ``P`` with
+``C_plus = c_plus C``, ``C_minus = c_minus C`` exists iff ``P(alpha_plus)`` and
+``P(alpha_minus)`` are proportional (the family of Hoang et al., seed 000
+eq. (17) for n = 3).  ``alpha_minus = alpha_plus`` is the unique choice with
+``c_plus = c_minus`` (Theorem 1 of seed 004):
+``k_i^- = (-1)^i k_i^+ + (1 - (-1)^i) a_i`` in normal form.
+"""
+
+from __future__ import annotations
+
+import json
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+import sympy as sp
+
+from ..exceptions import CertificateError, DimensionError, NotHurwitzError, SpectrumError
+from ..model import Model, make_symbol, numeric, parse_expression
+from ._lyapunov import _generic_solution, observer_form_gramian
+from ._normal_form import ObserverNormalForm, observer_normal_form
+from ._routh import hurwitz_conditions, readable_condition
+from ._spectrum import LAPLACE, parse_spectrum, polynomial_coefficients, spectrum_coefficients
+
+__all__ = ["GainDesign", "design", "theorem1_K_minus", "hoang_family_constraints", "minus_coefficients",
+           "plus_coefficients", "parse_gains"]
+
+
+def _column(values: Sequence[sp.Expr]) -> sp.ImmutableMatrix:
+    return sp.ImmutableMatrix(len(values), 1, list(values))
+
+
+def _matrix_json(M: sp.MatrixBase) -> list:
+    if M.cols == 1:
+        return [str(x) for x in M]
+    return [[str(x) for x in M.row(i)] for i in range(M.rows)]
+
+
+def _sign(i: int) -> int:
+    """(-1)^i for the 1-based index i."""
+    return -1 if i % 2 else 1
+
+
+def plus_coefficients(nf: ObserverNormalForm, K_plus: sp.MatrixBase) -> tuple[sp.Expr, ...]:
+    """``alpha_plus_i = (T K_plus)_i - a_i``: characteristic coefficients of ``A_plus``."""
+    k_nf = nf.T * sp.Matrix(K_plus)
+    return tuple(sp.expand(k_nf[i] - nf.a[i]) for i in range(len(nf.a)))
+
+
+def minus_coefficients(nf: ObserverNormalForm, K_minus: sp.MatrixBase) -> tuple[sp.Expr, ...]:
+    """``alpha_minus_i = (-1)^i ((T K_minus)_i - a_i)``: characteristic coefficients of ``A_minus``."""
+    k_nf = nf.T * sp.Matrix(K_minus)
+    return tuple(sp.expand(_sign(i + 1) * (k_nf[i] - nf.a[i])) for i in range(len(nf.a)))
+
+
+def theorem1_K_minus(nf: ObserverNormalForm, K_plus: sp.MatrixBase) -> sp.ImmutableMatrix:
+    """The unique K_minus of Theorem 1 (seed 004), mapped back to the model's coordinates.
+
+    In normal form ``k_i^- = (-1)^i k_i^+ + (1 - (-1)^i) a_i``; then
+    ``K_minus = T^-1 K_nf_minus``.
+    """
+    k_nf = nf.T * sp.Matrix(K_plus)
+    n = len(nf.a)
+    k_nf_minus = [_sign(i) * k_nf[i - 1] + (1 - _sign(i)) * nf.a[i - 1] for i in range(1, n + 1)]
+    return sp.ImmutableMatrix((nf.T_inv * sp.Matrix(k_nf_minus)).applyfunc(sp.cancel))
+
+
+def hoang_family_constraints(alpha_plus: Sequence[sp.Expr], alpha_minus: Sequence[sp.Expr]) -> list[sp.Expr]:
+    """Polynomials that vanish iff ``P(alpha_plus)`` and ``P(alpha_minus)`` are proportional.
+
+    With ``u_m = N_m / D`` (see :func:`observer_form_gramian`), proportionality of
+    the checkerboard matrices is ``N_m(alpha_plus) N_1(alpha_minus) = N_1(alpha_plus) N_m(alpha_minus)``
+    for ``m = 2..n``.  For abs-xbs3 these are equivalent to seed 000 eq. (17).
+    """
+    n = len(alpha_plus)
+    generic, nums, _ = _generic_solution(n)
+    plus = [N.xreplace(dict(zip(generic, alpha_plus))) for N in nums]
+    minus = [N.xreplace(dict(zip(generic, alpha_minus))) for N in nums]
+    return [sp.factor(sp.expand(plus[m] * minus[0] - plus[0] * minus[m])) for m in range(1, n)]
+
+
+def parse_gains(gains: str | Sequence, model: Model, *, what: str) -> sp.ImmutableMatrix:
+    """Gains as a column: numbers, expressions in the parameters, or new (real) gain symbols."""
+    items = gains.split(",") if isinstance(gains, str) else list(gains)
+    if isinstance(gains, sp.MatrixBase):
+        items = list(gains)
+    if len(items) != model.n:
+        raise DimensionError(f"{what} has {len(items)} entries but model {model.name!r} has dimension {model.n}")
+    names = {p: model.symbols[p] for p in model.parameters}
+    forbidden = set(model.states) | {model.output} | set(model.external) | set(model.inputs)
+    out = []
+    for i, g in enumerate(items):
+        if isinstance(g, sp.Basic):
+            out.append(g)
+            continue
+        text = str(g).strip()
+        for name in _free_names(text):
+            if name in forbidden:
+                raise DimensionError(f"{what} entry {i + 1} uses {name!r}, a state or signal; gains are constants")
+            names.setdefault(name, make_symbol(name))
+        out.append(parse_expression(text, names, what=f"{what} entry {i + 1}"))
+    return _column(out)
+
+
+def _free_names(text: str) -> list[str]:
+    import ast
+
+    from ..model import EXPRESSION_FUNCTIONS
+
+    try:
+        tree = ast.parse(text, mode="eval")
+    except SyntaxError:
+        return []
+    return [n.id for n in ast.walk(tree) if isinstance(n, ast.Name)
+            and n.id not in EXPRESSION_FUNCTIONS and n.id not in {"pi", "E", "I"}]
+
+
+def _gain_symbols(K: sp.MatrixBase, model: Model) -> list[sp.Symbol]:
+    params = set(model.parameter_symbols)
+    syms = sorted((s for s in K.free_symbols if s not in params), key=lambda s: s.name)
+    order = {s: min(i for i, k in enumerate(K) if s in k.free_symbols) for s in syms}
+    return sorted(syms, key=lambda s: order[s])
+
+
+def _readable(alpha: Sequence[sp.Expr], unknowns: Sequence[sp.Symbol]) -> tuple[sp.Basic, ...]:
+    out = []
+    for g in hurwitz_conditions(alpha):
+        cond = readable_condition(g, unknowns)
+        if cond is sp.true:
+            continue
+        out.append(cond)
+    return tuple(out)
+
+
+@dataclass(frozen=True)
+class GainDesign:
+    """A switched gain pair with its exact common Lyapunov certificate.
+
+    Attributes
+    ----------
+    model : Model
+    choice : str
+        ``"theorem1"`` (K_minus from Theorem 1, ``C_minus = C_plus``) or
+        ``"hoang-family"`` (a given K_minus satisfying the coupling constraints).
+    spectrum : tuple or None
+        Requested poles of ``A_plus`` (None when K_plus was given).
+    alpha_plus, alpha_minus : tuple
+        Achieved characteristic coefficients of ``A_plus`` and ``A_minus``
+        (monic, highest power omitted).
+    normal_form : ObserverNormalForm
+    K_plus, K_minus : sympy.ImmutableMatrix (n x 1)
+    A_plus, A_minus : sympy.ImmutableMatrix
+    hurwitz_plus, hurwitz_minus : tuple of relationals
+        Routh–Hurwitz conditions still open (those proven by the sign
+        assumptions are dropped); empty means Hurwitz for all admissible values.
+    P : sympy.ImmutableMatrix
+        ``A_plus' P + P A_plus = -C_plus' C_plus`` and ``A_minus' P + P A_minus = -C_minus' C_minus``.
+        ``P > 0`` iff the ``hurwitz_plus`` conditions hold (the pair (A_plus, C) is observable).
+    C_plus, C_minus : sympy.ImmutableMatrix (1 x n)
+    gain_constraints : tuple of sympy.Eq
+        The Hoang-family coupling constraints on a generic ``K_minus``
+        (symbols ``k1_minus, ...``) for this ``K_plus``; the chosen K_minus satisfies them.
+    family_symbols : tuple of Symbol
+    """
+
+    model: Model
+    choice: str
+    spectrum: tuple[sp.Expr, ...] | None
+    alpha_plus: tuple[sp.Expr, ...]
+    alpha_minus: tuple[sp.Expr, ...]
+    normal_form: ObserverNormalForm
+    K_plus: sp.ImmutableMatrix
+    K_minus: sp.ImmutableMatrix
+    A_plus: sp.ImmutableMatrix
+    A_minus: sp.ImmutableMatrix
+    hurwitz_plus: tuple[sp.Basic, ...]
+    hurwitz_minus: tuple[sp.Basic, ...]
+    P: sp.ImmutableMatrix
+    C_plus: sp.ImmutableMatrix
+    C_minus: sp.ImmutableMatrix
+    gain_constraints: tuple[sp.Basic, ...]
+    family_symbols: tuple[sp.Symbol, ...] = field(default=())
+
+    @property
+    def n(self) -> int:
+        return self.model.n
+
+    @property
+    def design_symbols(self) -> tuple[sp.Symbol, ...]:
+        """Symbols of the design that are not model parameters (``beta1``, gain names, ...)."""
+        params = set(self.model.parameter_symbols)
+        syms = (self.K_plus.free_symbols | self.K_minus.free_symbols) - params
+        return tuple(sorted(syms, key=lambda s: s.name))
+
+    def characteristic_polynomial(self, which: str = "plus") -> sp.Expr:
+        """``s^n + alpha_1 s^(n-1) + ... + alpha_n`` of ``A_plus`` or ``A_minus``."""
+        alpha = self.alpha_plus if which == "plus" else self.alpha_minus
+        n = len(alpha)
+        return LAPLACE**n + sum(a * LAPLACE**(n - i - 1) for i, a in enumerate(alpha))
+
+    # ------------------------------------------------------------ checks
+    def verify(self) -> dict[str, bool]:
+        """Re-check the certificate exactly (``cancel(residual) == 0``), independently of how it was built.
+
+        Returns a mapping of check name to outcome: both Lyapunov equations,
+        the characteristic polynomials of ``A_plus``/``A_minus`` computed from
+        the matrices against ``alpha_plus``/``alpha_minus``, symmetry of P and
+        the coupling constraints at the chosen K_minus.
+        """
+        def zero(M: sp.MatrixBase) -> bool:
+            return all(sp.cancel(sp.together(x)) == 0 for x in M)
+
+        res_plus = self.A_plus.T * self.P + self.P * self.A_plus + self.C_plus.T * self.C_plus
+        res_minus = self.A_minus.T * self.P + self.P * self.A_minus + self.C_minus.T * self.C_minus
+        s = LAPLACE
+        cp_plus = self.A_plus.charpoly(s).as_expr() - self.characteristic_polynomial("plus")
+        cp_minus = self.A_minus.charpoly(s).as_expr() - self.characteristic_polynomial("minus")
+        subs = dict(zip(self.family_symbols, self.K_minus))
+        return {
+            "lyapunov_plus": zero(res_plus),
+            "lyapunov_minus": zero(res_minus),
+            "charpoly_plus": sp.cancel(cp_plus) == 0,
+            "charpoly_minus": sp.cancel(cp_minus) == 0,
+            "P_symmetric": zero(self.P - self.P.T),
+            "gain_constraints": all(sp.cancel(c.lhs.xreplace(subs) - c.rhs.xreplace(subs)) == 0
+                                    for c in self.gain_constraints),
+        }
+
+    def numeric(self, values: Mapping[str, Any] | None = None) -> dict[str, np.ndarray]:
+        """Float arrays of the gains and certificate, through the model's numeric gate.
+
+        ``values`` completes/overrides the model's stored parameter values and
+        gives the design symbols (``beta1``...).
+        """
+        merged = {**{k: v for k, v in self.model.values.items()}, **dict(values or {})}
+        out = {}
+        for name in ("K_plus", "K_minus", "A_plus", "A_minus", "P", "C_plus", "C_minus"):
+            out[name] = numeric(getattr(self, name), merged, what=name)
+        out["K_plus"] = out["K_plus"].reshape(-1)
+        out["K_minus"] = out["K_minus"].reshape(-1)
+        return out
+
+    # ----------------------------------------------------------- output
+    def to_json(self) -> dict[str, Any]:
+        """Plain-JSON view; every expression is a string ``sympy.sympify`` parses back."""
+        return {
+            "model": self.model.name,
+            "n": self.n,
+            "states": list(self.model.states),
+            "parameters": list(self.model.parameters),
+            "choice": self.choice,
+            "spectrum": None if self.spectrum is None else [str(p) for p in self.spectrum],
+            "characteristic_polynomial_plus": str(self.characteristic_polynomial("plus")),
+            "characteristic_polynomial_minus": str(self.characteristic_polynomial("minus")),
+            "A": _matrix_json(self.model.A),
+            "C": [str(x) for x in self.model.C],
+            "K_plus": _matrix_json(self.K_plus),
+            "K_minus": _matrix_json(self.K_minus),
+            "A_plus": _matrix_json(self.A_plus),
+            "A_minus": _matrix_json(self.A_minus),
+            "hurwitz_plus": [str(c) for c in self.hurwitz_plus],
+            "hurwitz_minus": [str(c) for c in self.hurwitz_minus],
+            "P": _matrix_json(self.P),
+            "C_plus": [str(x) for x in self.C_plus],
+            "C_minus": [str(x) for x in self.C_minus],
+            "gain_constraints": [str(c) for c in self.gain_constraints],
+            "family_symbols": [str(s) for s in self.family_symbols],
+            "normal_form": self.normal_form.to_json(),
+            "references": dict(self.model.references),
+        }
+
+    def to_json_string(self, indent: int = 2) -> str:
+        return json.dumps(self.to_json(), indent=indent)
+
+    def __str__(self) -> str:
+        def mat(M: sp.MatrixBase) -> str:
+            return "\n".join("    " + line for line in sp.pretty(M, use_unicode=True).splitlines())
+
+        def conds(cs: Sequence[sp.Basic]) -> str:
+            return "\n".join(f"    {sp.sstr(c)}" for c in cs) if cs else "    (none left: Hurwitz by construction)"
+
+        nf = self.normal_form
+        lines = [
+            f"switched observer design for model {self.model.name!r} (n = {self.n}, choice: {self.choice})",
+            f"  spectrum of A_plus: {', '.join(map(str, self.spectrum)) if self.spectrum else 'from the given K_plus'}",
+            f"  observable iff: {', '.join(map(str, nf.observability_conditions)) or 'always'}",
+            f"  normal form a = {list(nf.a)}",
+            "  K_plus =", mat(self.K_plus),
+            "  K_minus =", mat(self.K_minus),
+            "  Routh–Hurwitz conditions for A_plus:", conds(self.hurwitz_plus),
+            "  Routh–Hurwitz conditions for A_minus:", conds(self.hurwitz_minus),
+            "  common Lyapunov matrix P =", mat(self.P),
+            f"  C_plus = {list(self.C_plus)},  C_minus = {list(self.C_minus)}",
+            "  coupling constraints on K_minus (Hoang family):",
+            "\n".join(f"    {sp.sstr(c)}" for c in self.gain_constraints) or "    (none)",
+        ]
+        return "\n".join(lines)
+
+
+def design(model: Model, spectrum: str | Sequence | None = None, *,
+           characteristic_polynomial: str | sp.Expr | Sequence | None = None,
+           K_plus: str | Sequence | sp.MatrixBase | None = None,
+           K_minus: str | Sequence | sp.MatrixBase | None = None) -> GainDesign:
+    """Design the switched gain pair and its common Lyapunov certificate, exactly.
+
+    Give exactly one of ``spectrum``, ``characteristic_polynomial`` or ``K_plus``.
+
+    Parameters
+    ----------
+    model : Model
+    spectrum : str or sequence, optional
+        Poles of ``A_plus`` (``"-beta1,-beta2,-beta2"``); new names are
+        positive design symbols.
+    characteristic_polynomial : str, expr or sequence, optional
+        Target ``det(sI - A_plus)`` in ``s`` or its coefficients.
+    K_plus : optional
+        Gains for ``s > 0`` (numbers, expressions or new symbols ``"k1,k2,k3"``).
+    K_minus : optional
+        Gains for ``s < 0``.  Omitted: the Theorem 1 choice.  Given: must
+        satisfy the Hoang-family coupling constraints (seed 000 eq. (17)).
+
+    Returns
+    -------
+    GainDesign
+
+    Raises
+    ------
+    SpectrumError, NotObservableError, NotHurwitzError, DimensionError, CertificateError
+
+    References
+    ----------
+    seed 004 Theorem 1; seed 000 eq. (13)-(17), (23)-(28), Sec. III-E and IV-D;
+    seed 001 Proposition 1, eq. (3.20).
+
+    Examples
+    --------
+    >>> from switchobs.model import builtin_model
+    >>> d = design(builtin_model("abs-xbs3"), "-beta1,-beta2,-beta2")
+    >>> d.K_plus[0]
+    beta1 + 2*beta2 + c
+    """
+    given = [x is not None for x in (spectrum, characteristic_polynomial, K_plus)]
+    if sum(given) != 1:
+        raise SpectrumError("give exactly one of spectrum, characteristic_polynomial or K_plus "
+                            f"(got {sum(given)})")
+    nf = observer_normal_form(model)
+    a = list(nf.a)
+    poles = None
+    if K_plus is not None:
+        Kp = parse_gains(K_plus, model, what="K_plus")
+        alpha_plus = plus_coefficients(nf, Kp)
+    else:
+        if spectrum is not None:
+            poles = parse_spectrum(spectrum, model)
+            alpha_plus = spectrum_coefficients(poles)
+        else:
+            alpha_plus = polynomial_coefficients(characteristic_polynomial, model)
+        Kp = sp.ImmutableMatrix((nf.T_inv * sp.Matrix([a[i] + alpha_plus[i] for i in range(model.n)]))
+                                .applyfunc(sp.cancel))
+    hurwitz_plus = _readable(alpha_plus, _gain_symbols(Kp, model))
+    if any(c is sp.false for c in hurwitz_plus):
+        _raise_not_hurwitz("A_plus", model.A - Kp * model.C)
+
+    family = tuple(make_symbol(f"k{i}_minus") for i in range(1, model.n + 1))
+    alpha_family = minus_coefficients(nf, sp.Matrix(family))
+    constraints = tuple(sp.Eq(c, 0) for c in hoang_family_constraints(alpha_plus, alpha_family))
+
+    P_nf, nums, den = observer_form_gramian(alpha_plus)
+    P = sp.ImmutableMatrix((nf.T.T * P_nf * nf.T).applyfunc(sp.cancel) if model.n <= 6 else nf.T.T * P_nf * nf.T)
+    C = model.C
+    if K_minus is None:
+        choice = "theorem1"
+        Km = theorem1_K_minus(nf, Kp)
+        alpha_minus = tuple(alpha_plus)
+        C_minus = C
+    else:
+        choice = "hoang-family"
+        Km = parse_gains(K_minus, model, what="K_minus")
+        alpha_minus = minus_coefficients(nf, Km)
+        subs = dict(zip(family, Km))
+        broken = [c for c in constraints if sp.cancel(c.lhs.xreplace(subs)) != 0]
+        if broken and not (Km.free_symbols - set(model.parameter_symbols) - Kp.free_symbols):
+            raise CertificateError(
+                f"K_minus = {list(Km)} admits no common P with K_plus = {list(Kp)}: the coupling constraint "
+                f"{sp.sstr(broken[0])} evaluates to {sp.factor(broken[0].lhs.xreplace(subs))} instead of 0; "
+                "omit K_minus for the Theorem 1 choice or use `switchobs certify` for a dwell-time verdict")
+        _, nums_minus, den_minus = observer_form_gramian(alpha_minus)
+        ratio = sp.cancel((nums[0] / den) / (nums_minus[0] / den_minus))
+        C_minus = sp.ImmutableMatrix(sp.sqrt(ratio) * C)
+    hurwitz_minus = _readable(alpha_minus, _gain_symbols(Km, model))
+    if any(c is sp.false for c in hurwitz_minus):
+        _raise_not_hurwitz("A_minus", -model.A + Km * model.C)
+    return GainDesign(
+        model=model, choice=choice, spectrum=poles, alpha_plus=tuple(alpha_plus), alpha_minus=tuple(alpha_minus),
+        normal_form=nf, K_plus=Kp, K_minus=sp.ImmutableMatrix(Km),
+        A_plus=sp.ImmutableMatrix(model.A - Kp * C), A_minus=sp.ImmutableMatrix(-model.A + Km * C),
+        hurwitz_plus=hurwitz_plus, hurwitz_minus=hurwitz_minus, P=P, C_plus=sp.ImmutableMatrix(C),
+        C_minus=sp.ImmutableMatrix(C_minus), gain_constraints=constraints, family_symbols=family)
+
+
+def _raise_not_hurwitz(name: str, M: sp.MatrixBase) -> None:
+    try:
+        eig = np.linalg.eigvals(numeric(M, what=name))
+        spec = ", ".join(f"{z.real:.6g}{z.imag:+.6g}j" for z in eig)
+    except Exception:  # symbolic leftovers: give the polynomial instead
+        spec = str(sp.Matrix(M).charpoly(LAPLACE).as_expr())
+    raise NotHurwitzError(f"{name} is not Hurwitz: its spectrum is [{spec}]; choose gains that satisfy "
+                          "the Routh–Hurwitz conditions")

@@ -1,0 +1,137 @@
+"""Observability and the observer normal form (seed 004, slide 'Observer normal form').
+
+For an observable pair (A, C) with one output, the coordinates ``z_nf = T z``
+give ``T A T^-1 = A_nf`` with first column ``(a_1, ..., a_n)`` and ones on the
+superdiagonal, and ``C T^-1 = (1, 0, ..., 0)``.  Then
+``det(sI - A) = s^n - a_1 s^(n-1) - ... - a_n``.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import sympy as sp
+
+from ..exceptions import NotObservableError
+from ..model import Model
+
+__all__ = ["ObserverNormalForm", "observer_normal_form", "normal_form_matrix"]
+
+
+def normal_form_matrix(a: sp.MatrixBase | list) -> sp.ImmutableMatrix:
+    """The observer normal form matrix with first column ``a`` and a unit superdiagonal."""
+    n = len(a)
+    return sp.ImmutableMatrix(n, n, lambda i, j: a[i] if j == 0 else (1 if j == i + 1 else 0))
+
+
+def _observability_matrix(A: sp.MatrixBase, C: sp.MatrixBase) -> sp.Matrix:
+    rows = [sp.Matrix(C)]
+    for _ in range(A.shape[0] - 1):
+        rows.append((rows[-1] * A).applyfunc(sp.expand))
+    return sp.Matrix.vstack(*rows)
+
+
+def _is_normal_form(A: sp.MatrixBase, C: sp.MatrixBase) -> bool:
+    n = A.shape[0]
+    if list(C) != [1] + [0] * (n - 1):
+        return False
+    return all(A[i, j] == (1 if j == i + 1 else 0) for i in range(n) for j in range(1, n))
+
+
+@dataclass(frozen=True)
+class ObserverNormalForm:
+    """The observer normal form of a model's pair (A, C).
+
+    Attributes
+    ----------
+    a : sympy.ImmutableMatrix (n x 1)
+        First column of the normal form; ``det(sI - A) = s^n - sum a_i s^(n-i)``.
+    T, T_inv : sympy.ImmutableMatrix
+        ``z_nf = T z``; gains map as ``K_nf = T K``, Lyapunov matrices as ``P = T' P_nf T``.
+    observability_matrix : sympy.ImmutableMatrix
+    observability_determinant : sympy.Expr
+    observability_conditions : tuple of sympy.Ne
+        The pair is observable iff none of these factors vanishes (reported,
+        not hidden: a factor may involve parameters).
+    """
+
+    a: sp.ImmutableMatrix
+    T: sp.ImmutableMatrix
+    T_inv: sp.ImmutableMatrix
+    observability_matrix: sp.ImmutableMatrix
+    observability_determinant: sp.Expr
+    observability_conditions: tuple[sp.Basic, ...]
+
+    @property
+    def A(self) -> sp.ImmutableMatrix:
+        """The normal-form matrix ``T A T^-1``."""
+        return normal_form_matrix(list(self.a))
+
+    def to_json(self) -> dict:
+        return {
+            "a": [str(x) for x in self.a],
+            "T": [[str(x) for x in self.T.row(i)] for i in range(self.T.rows)],
+            "T_inv": [[str(x) for x in self.T_inv.row(i)] for i in range(self.T_inv.rows)],
+            "observability_determinant": str(self.observability_determinant),
+            "observability_conditions": [str(c) for c in self.observability_conditions],
+        }
+
+
+def observer_normal_form(model: Model) -> ObserverNormalForm:
+    """Compute the observer normal form of ``(model.A, model.C)`` exactly.
+
+    Parameters
+    ----------
+    model : Model
+
+    Returns
+    -------
+    ObserverNormalForm
+
+    Raises
+    ------
+    NotObservableError
+        When the observability matrix is singular for every parameter value;
+        the message gives an unobservable direction ``v`` (``O v = 0``).
+
+    Notes
+    -----
+    ``T = O_nf^-1 O`` with ``O`` the observability matrix of (A, C) and
+    ``O_nf`` that of the normal form, which is unit lower triangular, so the
+    transformation is exact and needs no pivoting.
+
+    References
+    ----------
+    seed 004, 'Observer normal form' and Theorem 1.
+
+    Examples
+    --------
+    >>> from switchobs.model import builtin_model
+    >>> nf = observer_normal_form(builtin_model("abs-xbs3"))
+    >>> nf.observability_conditions
+    (Ne(a, 0),)
+    """
+    A, C = sp.Matrix(model.A), sp.Matrix(model.C)
+    n = model.n
+    O = _observability_matrix(A, C)
+    det = sp.factor(O.det(method="berkowitz"))
+    if det == 0:
+        direction = O.nullspace(simplify=True)[0]
+        pretty = "[" + ", ".join(str(sp.simplify(x)) for x in direction) + "]"
+        raise NotObservableError(
+            f"the pair (A, C) of model {model.name!r} is not observable: the direction v = {pretty} "
+            f"(in states {list(model.states)}) is unobservable (C A^k v = 0 for all k); "
+            "change C or A so that every state shows up in the output")
+    _, factors = sp.factor_list(det)
+    conditions = tuple(sp.Ne(f, 0, evaluate=False) for f, _ in factors if f.free_symbols)
+    s = sp.Dummy("s")
+    coeffs = A.charpoly(s).all_coeffs()  # [1, c1, ..., cn]
+    a = sp.ImmutableMatrix([sp.expand(-c) for c in coeffs[1:]])
+    if _is_normal_form(A, C):
+        eye = sp.ImmutableMatrix.eye(n)
+        return ObserverNormalForm(a, eye, eye, sp.ImmutableMatrix(O), det, conditions)
+    O_nf = _observability_matrix(normal_form_matrix(list(a)), sp.Matrix([[1] + [0] * (n - 1)]))
+    T = O_nf.LUsolve(O).applyfunc(sp.cancel)
+    T_inv = O.LUsolve(O_nf).applyfunc(sp.cancel)
+    return ObserverNormalForm(a, sp.ImmutableMatrix(T), sp.ImmutableMatrix(T_inv), sp.ImmutableMatrix(O),
+                              det, conditions)
