@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import argparse
 import importlib
+import os
 import sys
 from collections.abc import Sequence
 
@@ -34,14 +35,34 @@ def build_parser() -> argparse.ArgumentParser:
     return parser
 
 
+#: Options whose value may start with "-" (a pole "-beta1", a gain "-2"); argparse would
+#: take such a value for an option, so "--spectrum -1,-2" is rewritten "--spectrum=-1,-2".
+VALUE_OPTIONS: frozenset[str] = frozenset({"--spectrum", "--charpoly", "--gains-plus", "--gains-minus"})
+
+
+def _glue_option_values(argv: Sequence[str]) -> list[str]:
+    out: list[str] = []
+    it = iter(argv)
+    for token in it:
+        if token in VALUE_OPTIONS:
+            value = next(it, None)
+            out.append(token if value is None else f"{token}={value}")
+        else:
+            out.append(token)
+    return out
+
+
 def main(argv: Sequence[str] | None = None) -> int:
     parser = build_parser()
-    args = parser.parse_args(argv)
+    args = parser.parse_args(_glue_option_values(sys.argv[1:] if argv is None else argv))
     try:
         return int(args.func(args) or 0)
     except SwitchobsError as exc:
         print(f"switchobs {args.command}: error: {exc}", file=sys.stderr)
         return 2
+    except BrokenPipeError:  # output piped into `head`: not an error of ours
+        sys.stdout = open(os.devnull, "w")
+        return 0
     except KeyboardInterrupt:
         print(f"switchobs {args.command}: interrupted", file=sys.stderr)
         return 130

@@ -173,6 +173,9 @@ class GainDesign:
         The Hoang-family coupling constraints on a generic ``K_minus``
         (symbols ``k1_minus, ...``) for this ``K_plus``; the chosen K_minus satisfies them.
     family_symbols : tuple of Symbol
+    conditional : bool
+        True when K_minus holds free gain symbols: the minus-side Lyapunov
+        equation then holds exactly when ``gain_constraints`` hold.
     """
 
     model: Model
@@ -192,6 +195,7 @@ class GainDesign:
     C_minus: sp.ImmutableMatrix
     gain_constraints: tuple[sp.Basic, ...]
     family_symbols: tuple[sp.Symbol, ...] = field(default=())
+    conditional: bool = False
 
     @property
     def n(self) -> int:
@@ -217,7 +221,9 @@ class GainDesign:
         Returns a mapping of check name to outcome: both Lyapunov equations,
         the characteristic polynomials of ``A_plus``/``A_minus`` computed from
         the matrices against ``alpha_plus``/``alpha_minus``, symmetry of P and
-        the coupling constraints at the chosen K_minus.
+        the coupling constraints at the chosen K_minus.  For a conditional
+        design the two minus-side checks are left out (they hold exactly on
+        the set where ``gain_constraints`` hold, not identically).
         """
         def zero(M: sp.MatrixBase) -> bool:
             return all(sp.cancel(sp.together(x)) == 0 for x in M)
@@ -228,15 +234,17 @@ class GainDesign:
         cp_plus = self.A_plus.charpoly(s).as_expr() - self.characteristic_polynomial("plus")
         cp_minus = self.A_minus.charpoly(s).as_expr() - self.characteristic_polynomial("minus")
         subs = dict(zip(self.family_symbols, self.K_minus))
-        return {
+        checks = {
             "lyapunov_plus": zero(res_plus),
-            "lyapunov_minus": zero(res_minus),
             "charpoly_plus": sp.cancel(cp_plus) == 0,
             "charpoly_minus": sp.cancel(cp_minus) == 0,
             "P_symmetric": zero(self.P - self.P.T),
-            "gain_constraints": all(sp.cancel(c.lhs.xreplace(subs) - c.rhs.xreplace(subs)) == 0
-                                    for c in self.gain_constraints),
         }
+        if not self.conditional:
+            checks["lyapunov_minus"] = zero(res_minus)
+            checks["gain_constraints"] = all(sp.cancel(c.lhs.xreplace(subs) - c.rhs.xreplace(subs)) == 0
+                                             for c in self.gain_constraints)
+        return checks
 
     def numeric(self, values: Mapping[str, Any] | None = None) -> dict[str, np.ndarray]:
         """Float arrays of the gains and certificate, through the model's numeric gate.
@@ -261,6 +269,7 @@ class GainDesign:
             "states": list(self.model.states),
             "parameters": list(self.model.parameters),
             "choice": self.choice,
+            "conditional": self.conditional,
             "spectrum": None if self.spectrum is None else [str(p) for p in self.spectrum],
             "characteristic_polynomial_plus": str(self.characteristic_polynomial("plus")),
             "characteristic_polynomial_minus": str(self.characteristic_polynomial("minus")),
@@ -293,7 +302,8 @@ class GainDesign:
 
         nf = self.normal_form
         lines = [
-            f"switched observer design for model {self.model.name!r} (n = {self.n}, choice: {self.choice})",
+            f"switched observer design for model {self.model.name!r} (n = {self.n}, choice: {self.choice}"
+            f"{', conditional on the coupling constraints' if self.conditional else ''})",
             f"  spectrum of A_plus: {', '.join(map(str, self.spectrum)) if self.spectrum else 'from the given K_plus'}",
             f"  observable iff: {', '.join(map(str, nf.observability_conditions)) or 'always'}",
             f"  normal form a = {list(nf.a)}",
@@ -382,6 +392,7 @@ def design(model: Model, spectrum: str | Sequence | None = None, *,
     C = model.C
     if K_minus is None:
         choice = "theorem1"
+        conditional = False
         Km = theorem1_K_minus(nf, Kp)
         alpha_minus = tuple(alpha_plus)
         C_minus = C
@@ -391,7 +402,8 @@ def design(model: Model, spectrum: str | Sequence | None = None, *,
         alpha_minus = minus_coefficients(nf, Km)
         subs = dict(zip(family, Km))
         broken = [c for c in constraints if sp.cancel(c.lhs.xreplace(subs)) != 0]
-        if broken and not (Km.free_symbols - set(model.parameter_symbols) - Kp.free_symbols):
+        conditional = bool(Km.free_symbols - set(model.parameter_symbols) - Kp.free_symbols)
+        if broken and not conditional:
             raise CertificateError(
                 f"K_minus = {list(Km)} admits no common P with K_plus = {list(Kp)}: the coupling constraint "
                 f"{sp.sstr(broken[0])} evaluates to {sp.factor(broken[0].lhs.xreplace(subs))} instead of 0; "
@@ -407,7 +419,8 @@ def design(model: Model, spectrum: str | Sequence | None = None, *,
         normal_form=nf, K_plus=Kp, K_minus=sp.ImmutableMatrix(Km),
         A_plus=sp.ImmutableMatrix(model.A - Kp * C), A_minus=sp.ImmutableMatrix(-model.A + Km * C),
         hurwitz_plus=hurwitz_plus, hurwitz_minus=hurwitz_minus, P=P, C_plus=sp.ImmutableMatrix(C),
-        C_minus=sp.ImmutableMatrix(C_minus), gain_constraints=constraints, family_symbols=family)
+        C_minus=sp.ImmutableMatrix(C_minus), gain_constraints=constraints, family_symbols=family,
+        conditional=conditional)
 
 
 def _raise_not_hurwitz(name: str, M: sp.MatrixBase) -> None:
