@@ -20,6 +20,7 @@ __all__ = [
     "CertificateError",
     "SolverFailure",
     "SimulationError",
+    "ObserverInputError",
     "CodegenError",
 ]
 
@@ -66,6 +67,19 @@ class SolverFailure(SwitchobsError, RuntimeError):
 
 class SimulationError(SwitchobsError, ValueError):
     """A simulation or scenario was given inadmissible settings."""
+
+
+class ObserverInputError(SimulationError):
+    """An observer step refused its input (state, signals, dt or time scaling).
+
+    ``code`` is the non-zero status the generated C ``<prefix>_step`` returns for
+    the same case (table in ``docs/observers.md``), so that a C binding can raise
+    the same error as the Python reference observer.
+    """
+
+    def __init__(self, message: str, code: int = 0):
+        super().__init__(message)
+        self.code = code
 
 
 class CodegenError(SwitchobsError, RuntimeError):
