@@ -1,0 +1,428 @@
+"""Switched observers built from any switchobs model (seed 000 eq. (8)-(9), seed 001 eq. (3.4), seed 004)."""
+
+from __future__ import annotations
+
+from collections.abc import Mapping, Sequence
+from typing import Any
+
+import numpy as np
+import numpy.typing as npt
+import sympy as sp
+
+from ..exceptions import DimensionError, FreeSymbolError, ModelError, SimulationError
+from ..model import Model, numeric, parse_expression, rational_value
+from ._engine import SCALE, ErrorCode, Kernel, KernelSpec, _ArrayPrinter, signal_symbols
+
+__all__ = ["SwitchedObserver", "AdaptiveSwitchedObserver"]
+
+ArrayLike = npt.ArrayLike
+
+
+def _gain(K: Any, n: int, what: str) -> np.ndarray:
+    """A gain column as n floats: numbers, a numpy array or a numeric sympy matrix."""
+    if isinstance(K, sp.MatrixBase):
+        K = numeric(K, what=what)
+    try:
+        arr = np.asarray(K, dtype=float)
+    except (TypeError, ValueError):
+        raise DimensionError(f"{what} must be {n} numbers, got {K!r}") from None
+    if arr.shape not in ((n,), (n, 1), (1, n)):
+        raise DimensionError(f"{what} has the wrong shape; expected ({n},) instead of {arr.shape}")
+    arr = arr.reshape(n)
+    if not np.isfinite(arr).all():
+        raise SimulationError(f"{what} = {arr.tolist()} has a non-finite entry")
+    return arr
+
+
+def _substituted(model: Model, params: Mapping[str, Any] | None,
+                 keep: Sequence[str]) -> tuple[Model, dict[str, sp.Rational]]:
+    """The model with every parameter but ``keep`` replaced by its value (``params`` override ``values``)."""
+    values = {k: v for k, v in model.values.items() if k not in keep}
+    for key, val in (params or {}).items():
+        if key in keep:
+            raise ModelError(f"parameter {key!r} is estimated by the adaptive observer; do not give it a value")
+        values[key] = rational_value(val, what=f"params[{key!r}]")
+    numeric_model = model.with_values(values)
+    missing = [p for p in numeric_model.parameters if p not in keep]
+    if missing:
+        raise FreeSymbolError(f"model {model.name!r}: the parameter(s) {missing} have no value; "
+                              f"give them with params={{{missing[0]!r}: ...}}")
+    return numeric_model, values
+
+
+def _check_free(expr: sp.Basic, allowed: set, what: str, model: Model) -> None:
+    t = model.symbols["t"]
+    if t in expr.free_symbols:
+        raise ModelError(f"{what} of model {model.name!r} depends on t explicitly; the observers hold the "
+                         "signals constant over a step and take no time argument (neither does the C API): "
+                         "make time an external signal instead")
+    free = sorted(str(s) for s in expr.free_symbols - allowed)
+    if free:
+        raise FreeSymbolError(f"{what} of model {model.name!r} still depends on {free}; give their values "
+                              f"(e.g. params={{{free[0]!r}: ...}})")
+
+
+class _Observer:
+    """Common machinery: input conversion, step / derivative / run, readout."""
+
+    _kernel: Kernel
+    _readout_fn: Any
+    _readout_text: str | None
+
+    def __init__(self, model: Model, K_plus: Any, K_minus: Any, *, params: Mapping[str, Any] | None,
+                 method: str, readout: str | None, unknown: Sequence[str], Gamma: Any):
+        unknown = tuple(unknown)
+        for name in unknown:
+            if name not in model.parameters:
+                raise ModelError(f"model {model.name!r} has no parameter {name!r} to estimate "
+                                 f"(parameters: {list(model.parameters)})")
+        self.model = model
+        m, values = _substituted(model, params, unknown)
+        self.values = {k: float(v) for k, v in values.items()}
+        n = model.n
+        theta = tuple(model.symbols[u] for u in unknown)
+        for what, expr in (("A", m.A), ("C", m.C), ("time_scale", m.time_scale)):
+            hit = sorted(str(s) for s in set(theta) & expr.free_symbols)
+            if hit:
+                raise ModelError(f"the estimated parameter(s) {hit} appear in {what} of model {model.name!r}; "
+                                 "the adaptive observer needs them only in d(y) and b(y)")
+        A = numeric(m.A, what=f"A of model {model.name!r}")
+        C = numeric(m.C, what=f"C of model {model.name!r}").reshape(n)
+        sig_syms = [model.symbols[name] for name in model.signals]
+        S = signal_symbols(len(sig_syms))
+        to_S = dict(zip(sig_syms, S))
+        allowed = set(sig_syms) | set(theta)
+        _check_free(m.time_scale, set(sig_syms), "time_scale", model)
+        u = sp.Matrix([model.symbols[name] for name in model.inputs])
+        F = SCALE * m.d + (m.b * u if model.inputs else sp.zeros(n, 1))
+        for i in range(n):
+            _check_free(F[i], allowed | {SCALE}, f"d or b (row {i + 1})", model)
+        regressor = []
+        drift = []
+        for i in range(n):
+            Fi = F[i]
+            row = []
+            for th in theta:
+                coeff = sp.diff(Fi, th)
+                if any(sp.diff(coeff, other) != 0 for other in theta):
+                    raise ModelError(f"s d(y) + b(y) u of model {model.name!r} is not linear in {th} (row {i + 1}); "
+                                     "the adaptive observer needs a linear parametrisation (seed 001 eq. (3.2))")
+                row.append(coeff.xreplace(to_S))
+            regressor.append(tuple(row))
+            drift.append(Fi.xreplace({th: 0 for th in theta}).xreplace(to_S))
+        p = len(unknown)
+        if p:
+            G = _gamma(Gamma, unknown)
+        else:
+            G = np.zeros((0, 0))
+        self.K_plus = _gain(K_plus, n, "K_plus")
+        self.K_minus = _gain(K_minus, n, "K_minus")
+        self.Gamma = G
+        self.unknown = unknown
+        self.A = A
+        self.C = C
+        names = (*model.states, *unknown, *[f"Upsilon_{s}_{t}" for s in model.states for t in unknown])
+        signs = tuple(1 if model.symbols[name].is_positive else -1 if model.symbols[name].is_negative else 0
+                      for name in model.signals)
+        spec = KernelSpec(A=A, C=C, K_plus=self.K_plus, K_minus=self.K_minus,
+                          time_scale=m.time_scale.xreplace(to_S), drift=tuple(drift), regressor=tuple(regressor),
+                          Gamma=G, n_signals=len(S), signal_signs=signs, signal_names=tuple(model.signals),
+                          state_names=names)
+        self._kernel = Kernel(spec, method)
+        self._readout_text = readout
+        self._readout_fn = self._compile_readout(readout, values) if readout is not None else None
+
+    # ------------------------------------------------------------------ info
+    @property
+    def method(self) -> str:
+        """``"rk4"`` or ``"euler"``."""
+        return self._kernel.method
+
+    @property
+    def state_names(self) -> tuple[str, ...]:
+        """Names of the observer state entries, in order (the C ``xhat`` layout)."""
+        return self._kernel.spec.state_names
+
+    @property
+    def signal_names(self) -> tuple[str, ...]:
+        """Names of the signals, in order: y, external signals, inputs (``Model.signals``)."""
+        return self._kernel.spec.signal_names
+
+    @property
+    def size(self) -> int:
+        """Length of the observer state."""
+        return self._kernel.spec.size
+
+    @property
+    def source(self) -> str:
+        """The generated Python source of the step (for inspection and for mirroring in C)."""
+        return self._kernel.source
+
+    # ------------------------------------------------------------------ numerics
+    def step(self, xhat: ArrayLike, signals: ArrayLike, dt: float) -> np.ndarray:
+        """Advance the observer state by one step of ``dt`` seconds, signals held constant.
+
+        Parameters
+        ----------
+        xhat : array_like, shape (size,)
+            Current observer state (layout :attr:`state_names`).
+        signals : array_like, shape (len(signal_names),)
+            ``y``, the external signals, the inputs, held over the step (zero-order hold).
+        dt : float
+            Step in seconds, finite and > 0.
+
+        Returns
+        -------
+        numpy.ndarray
+            The new state; ``xhat`` is not modified.
+
+        Raises
+        ------
+        ObserverInputError
+            With ``.code`` one of :class:`ErrorCode` (checked in that order).
+        DimensionError
+            If ``xhat`` or ``signals`` has the wrong length.
+        """
+        k = self._kernel
+        x = k.floats(xhat, self.state_names, "xhat")
+        sig = k.floats(signals, self.signal_names, "signals")
+        return np.array(k.step(x, sig, dt))
+
+    def derivative(self, xhat: ArrayLike, signals: ArrayLike) -> np.ndarray:
+        """The continuous-time right-hand side ``dxhat/dt`` at ``xhat`` and ``signals``.
+
+        Raises the same errors as :meth:`step` (except for ``dt``).
+        """
+        k = self._kernel
+        return np.array(k.derivative(k.floats(xhat, self.state_names, "xhat"),
+                                     k.floats(signals, self.signal_names, "signals")))
+
+    def run(self, xhat0: ArrayLike, signal_rows: ArrayLike, dt: float) -> np.ndarray:
+        """Step through a whole record of signals; the same arithmetic as repeated :meth:`step`.
+
+        Parameters
+        ----------
+        xhat0 : array_like, shape (size,)
+        signal_rows : array_like, shape (k, len(signal_names))
+            One row of signals per step.
+        dt : float
+
+        Returns
+        -------
+        numpy.ndarray, shape (k, size)
+            Row ``i`` is the state after consuming row ``i`` of the signals
+            (the layout of the C ``<prefix>_run`` trajectory; ``xhat0`` is not included).
+
+        Raises
+        ------
+        ObserverInputError
+            The error :meth:`step` would raise at the first failing row; the message names the row.
+        """
+        k = self._kernel
+        x0 = k.floats(xhat0, self.state_names, "xhat0")
+        try:
+            rows = np.asarray(signal_rows, dtype=float)
+        except (TypeError, ValueError):
+            raise DimensionError(f"signal_rows must be a k x {len(self.signal_names)} array of numbers") from None
+        if rows.ndim != 2 or rows.shape[1] != len(self.signal_names):
+            raise DimensionError(f"signal_rows has the wrong shape; expected (k, {len(self.signal_names)}) "
+                                 f"for ({', '.join(self.signal_names)}) instead of {rows.shape}")
+        return k.run(x0, rows, dt)
+
+    # ------------------------------------------------------------------ readout
+    def _compile_readout(self, text: str, values: Mapping[str, sp.Rational]):
+        states = {name: sp.Symbol(f"x{i}", real=True) for i, name in enumerate(self.state_names)}
+        names = {**{p: self.model.symbols[p] for p in self.model.parameters}, **states}
+        expr = parse_expression(text, names, what="readout").xreplace(
+            {self.model.symbols[k]: v for k, v in values.items()})
+        _check_free(expr, set(states.values()), "readout", self.model)
+        code = _ArrayPrinter().doprint(expr)
+        args = ", ".join(f"x{i}" for i in range(self.size))
+        namespace: dict = {"numpy": np}
+        exec(f"def readout({args}):\n    return {code}\n", namespace)
+        return namespace["readout"]
+
+    @property
+    def readout_expression(self) -> str | None:
+        """The readout (e.g. the XBS estimate ``"z2"``) in terms of :attr:`state_names`, if any."""
+        return self._readout_text
+
+    def readout(self, xhat: ArrayLike) -> float | np.ndarray:
+        """Evaluate the readout on one state (a float) or on a trajectory ``(k, size)`` (an array)."""
+        if self._readout_fn is None:
+            raise SimulationError("this observer has no readout; build it with readout='<expression in "
+                                  f"{', '.join(self.state_names)}>'")
+        arr = np.asarray(xhat, dtype=float)
+        if arr.shape[-1:] != (self.size,) or arr.ndim > 2:
+            raise DimensionError(f"readout expects a state of length {self.size} or a (k, {self.size}) "
+                                 f"trajectory, got shape {arr.shape}")
+        out = self._readout_fn(*(arr[..., i] for i in range(self.size))) + np.zeros(arr.shape[:-1])
+        return float(out) if arr.ndim == 1 else out
+
+    # ------------------------------------------------------------------ output
+    def to_json(self) -> dict[str, Any]:
+        """Plain-JSON description (model, gains, discretisation, layouts, error codes)."""
+        return {
+            "kind": type(self).__name__,
+            "model": self.model.name,
+            "method": self.method,
+            "state_names": list(self.state_names),
+            "signal_names": list(self.signal_names),
+            "parameters": dict(self.values),
+            "K_plus": self.K_plus.tolist(),
+            "K_minus": self.K_minus.tolist(),
+            "unknown": list(self.unknown),
+            "Gamma": self.Gamma.tolist(),
+            "readout": self._readout_text,
+            "error_codes": {c.name: int(c) for c in ErrorCode},
+        }
+
+    def __str__(self) -> str:
+        lines = [f"{type(self).__name__} of model {self.model.name!r} ({self.method}, ZOH signals "
+                 f"{', '.join(self.signal_names)})",
+                 f"  state: {', '.join(self.state_names)}",
+                 f"  K_plus  = {np.array2string(self.K_plus, precision=6)}",
+                 f"  K_minus = {np.array2string(self.K_minus, precision=6)}"]
+        if self.unknown:
+            lines.append(f"  estimated: {', '.join(self.unknown)}, Gamma = {self.Gamma.tolist()}")
+        if self._readout_text:
+            lines.append(f"  readout: {self._readout_text}")
+        return "\n".join(lines)
+
+    def __repr__(self) -> str:
+        return f"<{type(self).__name__} {self.model.name} {self.method} n={self.size}>"
+
+
+def _gamma(Gamma: Any, unknown: Sequence[str]) -> np.ndarray:
+    p = len(unknown)
+    if Gamma is None:
+        raise SimulationError(f"the adaptive observer needs Gamma, a {p} x {p} symmetric positive definite "
+                              f"adaptation gain for ({', '.join(unknown)})")
+    try:
+        G = np.asarray(Gamma, dtype=float)
+    except (TypeError, ValueError):
+        raise DimensionError(f"Gamma must be a {p} x {p} matrix of numbers, got {Gamma!r}") from None
+    if G.ndim == 1 and G.shape == (p,):
+        G = np.diag(G)
+    if G.shape != (p, p):
+        raise DimensionError(f"Gamma has the wrong shape; expected ({p}, {p}) (or a diagonal of {p}) "
+                             f"instead of {G.shape}")
+    if not np.isfinite(G).all():
+        raise SimulationError(f"Gamma = {G.tolist()} has a non-finite entry")
+    if not np.allclose(G, G.T, rtol=1e-12, atol=0.0):
+        raise SimulationError(f"Gamma = {G.tolist()} is not symmetric (seed 001 eq. (3.4) needs Gamma = Gamma' > 0)")
+    eig = np.linalg.eigvalsh(G)
+    if eig.min() <= 0.0:
+        raise SimulationError(f"Gamma is not positive definite: its eigenvalues are {eig.tolist()} "
+                              "(seed 001 eq. (3.4) needs Gamma = Gamma' > 0)")
+    return G
+
+
+class SwitchedObserver(_Observer):
+    """The switched observer of a model ``dz/dt = s(y,t)(A z + d(y)) + b(y) u``, ``y = C z``.
+
+    .. math::
+
+        \\dot{\\hat z} = s(y)\\,\\bigl(A\\hat z + d(y) + K(y)\\,(y - C\\hat z)\\bigr) + b(y)\\,u,
+        \\qquad K = K_+ \\text{ if } s > 0,\\; K_- \\text{ otherwise},
+
+    so that in the rescaled time ``tau = ∫|s| dt`` the error ``e = z - zhat``
+    obeys ``de/dtau = A_plus e`` (s > 0) or ``A_minus e`` (s < 0), with
+    ``A_plus = A - K_plus C`` and ``A_minus = -A + K_minus C``.  The correction
+    ``s K(s) (y - C zhat)`` is continuous through ``s = 0`` (it vanishes there
+    from both sides), as ``k_i(z1) z1 (z1 - zhat1)`` in seed 000.
+
+    Parameters
+    ----------
+    model : Model
+        Any switchobs model (built-in or TOML).  Parameters take the model's
+        :attr:`~switchobs.model.Model.values` unless overridden by ``params``;
+        none may be left free.
+    K_plus, K_minus : array_like or sympy.Matrix, length n
+        Numeric gains (e.g. ``design(model, spectrum).numeric(values)``).
+    params : mapping, optional
+        Parameter values overriding the model's (numbers or fraction strings).
+    method : {"rk4", "euler"}
+        One classic RK4 step per ``dt`` with the signals held constant (the
+        default), or forward Euler.
+    readout : str, optional
+        An expression in the state names and parameters evaluated by
+        :meth:`readout` (e.g. ``"z2"``, the XBS estimate of abs-xbs3).
+
+    Raises
+    ------
+    FreeSymbolError
+        A parameter has no value.
+    ModelError
+        The time scaling depends on ``t`` explicitly.
+    DimensionError, SimulationError
+        Gains of the wrong length or not finite; unknown ``method``.
+
+    References
+    ----------
+    seed 000 eq. (8)-(9) and (13); seed 004 (observer and Theorem 1).
+
+    Examples
+    --------
+    >>> from switchobs.model import builtin_model
+    >>> obs = SwitchedObserver(builtin_model("abs-xbs3"), [84.0, -19.5, -21.3], [-16.0, -4.4, 21.3])
+    >>> obs.signal_names
+    ('y', 'vx', 'u')
+    >>> obs.step([0.0, 0.5, 0.0], [10.0, 20.0, 0.0], 1e-3).round(6).tolist()
+    [-0.468646, 0.500852, 0.0]
+    """
+
+    def __init__(self, model: Model, K_plus: Any, K_minus: Any, *, params: Mapping[str, Any] | None = None,
+                 method: str = "rk4", readout: str | None = None):
+        super().__init__(model, K_plus, K_minus, params=params, method=method, readout=readout,
+                         unknown=(), Gamma=None)
+
+
+class AdaptiveSwitchedObserver(_Observer):
+    """The switched adaptive observer of seed 001 eq. (3.4), for any model linear in the unknowns.
+
+    With ``theta`` the parameters named in ``unknown`` (which may appear only
+    in ``d(y)`` and ``b(y)``, linearly), ``s d(y) + b(y) u = c(y, u) + Psi(y, u) theta``
+    and (seed 001 eq. (3.4a)-(3.4c), with ``K(t, y) = s K'(y)`` of (3.8) and the
+    switched ``K'`` of (3.15))::
+
+        dw/dt      = s A w + c + Psi theta_hat + (s K(s) + Upsilon Gamma Upsilon' C') (y - C w)
+        dtheta/dt  = Gamma Upsilon' C' (y - C w)
+        dUpsilon/dt = (s A - s K(s) C) Upsilon + Psi
+
+    The state is ``(w, theta_hat, Upsilon)`` with ``Upsilon`` (n x p) stored
+    row-major (:attr:`state_names`).  For abs-adaptive2, ``Psi`` is the matrix
+    of seed 001 eq. (3.3).
+
+    Parameters
+    ----------
+    model : Model
+    K_plus, K_minus : array_like, length n
+        The gains ``K'`` for ``y > 0`` and ``y < 0`` (seed 001 (3.15); (3.20)
+        asks ``k1- = -k1+ > ... `` see :func:`adaptive_xbs_observer`).
+    unknown : sequence of str
+        Parameters to estimate (``("c", "d")`` for abs-adaptive2).
+    Gamma : array_like, p x p (or its diagonal)
+        Symmetric positive definite adaptation gain.
+    params, method, readout
+        As for :class:`SwitchedObserver`; ``readout`` may use the estimated
+        parameters by name (they denote the estimates).
+
+    Raises
+    ------
+    ModelError
+        An unknown parameter appears in A, C or s, or not linearly.
+    SimulationError, DimensionError
+        Gamma not symmetric positive definite, wrong shapes.
+
+    References
+    ----------
+    seed 001 eq. (3.2)-(3.5), (3.8), (3.15), (3.20), Propositions 1-2.
+    """
+
+    def __init__(self, model: Model, K_plus: Any, K_minus: Any, *, unknown: Sequence[str], Gamma: Any,
+                 params: Mapping[str, Any] | None = None, method: str = "rk4", readout: str | None = None):
+        if isinstance(unknown, str) or not unknown:
+            raise ModelError(f"unknown must be a non-empty list of parameter names, got {unknown!r}")
+        super().__init__(model, K_plus, K_minus, params=params, method=method, readout=readout,
+                         unknown=unknown, Gamma=Gamma)

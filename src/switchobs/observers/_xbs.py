@@ -1,0 +1,152 @@
+"""The XBS observers of the seeds as instances of the generic ones, with beta-parametrised gains."""
+
+from __future__ import annotations
+
+import functools
+import math
+from collections.abc import Mapping
+from typing import Any
+
+import numpy as np
+
+from ..design import GainDesign, design
+from ..exceptions import SpectrumError
+from ..model import builtin_model, rational_value
+from ._observer import AdaptiveSwitchedObserver, SwitchedObserver
+
+__all__ = ["xbs3_observer", "xbs4_observer", "adaptive_xbs_observer", "xbs_gains"]
+
+#: Target spectra of ``A_plus`` (and, by Theorem 1 of seed 004, of ``A_minus``) per built-in XBS model.
+_SPECTRA = {
+    "abs-xbs3": ("-beta1,-beta2,-beta2", ("beta1", "beta2")),          # seed 000 Sec. III-E
+    "abs-xbs4": ("-beta1,-beta1,-beta2,-beta2", ("beta1", "beta2")),   # seed 000 Sec. IV-D
+    "abs-adaptive2": ("-beta,-beta", ("beta",)),                        # seed 001 (3.20), double pole
+}
+
+
+@functools.lru_cache(maxsize=None)
+def _symbolic_design(model_name: str) -> GainDesign:
+    return design(builtin_model(model_name), _SPECTRA[model_name][0])
+
+
+def _positive(name: str, value: Any) -> float:
+    try:
+        v = float(value)
+    except (TypeError, ValueError):
+        raise SpectrumError(f"{name} = {value!r} is not a number") from None
+    if not math.isfinite(v) or v <= 0.0:
+        raise SpectrumError(f"{name} = {value!r} must be finite and > 0: the error dynamics have the "
+                            f"eigenvalue -{name}, which must be stable")
+    return v
+
+
+def xbs_gains(model_name: str, betas: Mapping[str, float], *,
+              params: Mapping[str, Any] | None = None) -> tuple[np.ndarray, np.ndarray]:
+    """Numeric ``(K_plus, K_minus)`` of a built-in XBS model for the given betas.
+
+    The gains come from :func:`switchobs.design.design` with the spectra of
+    the seeds: ``{-beta1, -beta2, -beta2}`` for abs-xbs3 (seed 000 Sec. III-E),
+    ``{-beta1, -beta1, -beta2, -beta2}`` for abs-xbs4 (Sec. IV-D) and
+    ``{-beta, -beta}`` for abs-adaptive2 (a double pole; then
+    ``k1- = -k1+`` and ``k2- = k2+`` as seed 001 eq. (3.20) asks).  They equal
+    the seeds' closed formulas (checked in the tests).
+
+    Parameters
+    ----------
+    model_name : {"abs-xbs3", "abs-xbs4", "abs-adaptive2"}
+    betas : mapping
+        ``beta1``, ``beta2`` (or ``beta`` for abs-adaptive2), all > 0.
+    params : mapping, optional
+        Model parameter values overriding the built-in ones (e.g. ``{"c": 24}``).
+
+    Raises
+    ------
+    SpectrumError
+        A beta is missing, not finite or not positive.
+    """
+    if model_name not in _SPECTRA:
+        raise SpectrumError(f"no XBS gain formula for model {model_name!r}; use one of {sorted(_SPECTRA)} "
+                            "or switchobs.design.design for other models")
+    _, names = _SPECTRA[model_name]
+    unexpected = sorted(set(betas) - set(names))
+    if unexpected:
+        raise SpectrumError(f"model {model_name!r} takes {list(names)}, not {unexpected}")
+    missing = [n for n in names if n not in betas]
+    if missing:
+        raise SpectrumError(f"model {model_name!r} needs {list(names)}; missing {missing}")
+    values: dict[str, Any] = {n: _positive(n, betas[n]) for n in names}
+    values.update({k: rational_value(v, what=f"params[{k!r}]") for k, v in (params or {}).items()})
+    gains = _symbolic_design(model_name).numeric(values)
+    return gains["K_plus"], gains["K_minus"]
+
+
+def xbs3_observer(beta1: float, beta2: float, *, params: Mapping[str, Any] | None = None,
+                  method: str = "rk4") -> SwitchedObserver:
+    """The 3D known-road XBS observer of seed 000 eq. (8)-(9) on model abs-xbs3.
+
+    State ``(z1, z2, z3)`` = (wheel-acceleration offset x2, XBS mu', -c2 c3);
+    signals ``(y, vx, u)`` with ``y = x2`` [m/s^2], ``vx`` [m/s], ``u = dP_b/dt``
+    [bar/s].  The error has the spectrum ``{-beta1, -beta2, -beta2}`` in the
+    rescaled time for both signs of ``y`` (seed 000 Sec. III-E).  Readout: ``z2``.
+
+    Parameters
+    ----------
+    beta1, beta2 : float
+        Positive; the rates of the error in ``tau = ∫|y|/vx dt``.
+    params : mapping, optional
+        Overrides of ``a = R^2 Fz / I``, ``b = -R gamma_b / I``, ``c = -c2`` (the
+        built-in values are the TU Delft rig of seed 000 Fig. 2).
+    method : {"rk4", "euler"}
+
+    Examples
+    --------
+    >>> obs = xbs3_observer(10.0, 20.0)
+    >>> obs.K_plus.round(4).tolist()
+    [84.0, -19.4987, -21.3333]
+    """
+    K_plus, K_minus = xbs_gains("abs-xbs3", {"beta1": beta1, "beta2": beta2}, params=params)
+    return SwitchedObserver(builtin_model("abs-xbs3"), K_plus, K_minus, params=params, method=method,
+                            readout="z2")
+
+
+def xbs4_observer(beta1: float, beta2: float, *, params: Mapping[str, Any] | None = None,
+                  method: str = "rk4") -> SwitchedObserver:
+    """The 4D unknown-road XBS observer of seed 000 Sec. IV on model abs-xbs4.
+
+    State ``(z1, z2, z3, z4)`` = (x2, mu', mu'', alpha0); the error has two
+    double eigenvalues ``-beta1``, ``-beta2`` (seed 000 Sec. IV-D).  Readout: ``z2``.
+
+    Examples
+    --------
+    >>> xbs4_observer(10.0, 20.0).K_plus.round(3).tolist()
+    [134.0, -53.717, -3221.504, -213.333]
+    """
+    K_plus, K_minus = xbs_gains("abs-xbs4", {"beta1": beta1, "beta2": beta2}, params=params)
+    return SwitchedObserver(builtin_model("abs-xbs4"), K_plus, K_minus, params=params, method=method,
+                            readout="z2")
+
+
+def adaptive_xbs_observer(beta: float, Gamma: Any, *, params: Mapping[str, Any] | None = None,
+                          method: str = "rk4") -> AdaptiveSwitchedObserver:
+    """The switched adaptive XBS observer of seed 001 eq. (3.4) on model abs-adaptive2.
+
+    Estimates ``w = (w1, w2)`` with ``w1 = z1``, ``w2 = z2 + (c/a) z1`` and
+    ``theta = (c, d) = (-c2, -c2 c3)``; the XBS readout is
+    ``z2_hat = w2_hat - (c_hat / a) w1_hat``.  Gains ``K'`` of (3.15) with
+    ``k1+ = 2 beta``, ``k2+ = -beta^2 / a``, ``k1- = -k1+``, ``k2- = k2+``
+    (conditions (3.20); ``A_plus`` and ``A_minus`` both have the double
+    eigenvalue ``-beta``).
+
+    Parameters
+    ----------
+    beta : float
+        Positive.
+    Gamma : array_like, 2 x 2 or its diagonal
+        Symmetric positive definite adaptation gain for ``(c, d)``.
+    params : mapping, optional
+        Overrides of ``a`` and ``b`` (``c`` and ``d`` are estimated).
+    method : {"rk4", "euler"}
+    """
+    K_plus, K_minus = xbs_gains("abs-adaptive2", {"beta": beta}, params=params)
+    return AdaptiveSwitchedObserver(builtin_model("abs-adaptive2"), K_plus, K_minus, unknown=("c", "d"),
+                                    Gamma=Gamma, params=params, method=method, readout="w2 - c*w1/a")
