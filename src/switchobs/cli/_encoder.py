@@ -1,0 +1,99 @@
+"""``switchobs encoder``: simulate an imperfect wheel encoder and score the speed/acceleration estimators."""
+
+from __future__ import annotations
+
+import argparse
+
+from ..exceptions import SimulationError
+from ..sensors import (ESTIMATORS, AngleTrajectory, ChainSettings, Encoder, EstimatorComparison,
+                       braking_trajectory, compare_estimators, constant_speed, varying_speed)
+from ._common import emit_json
+
+__all__ = ["register"]
+
+PROFILES = ("constant", "varying", "braking")
+
+
+def register(sub: argparse._SubParsersAction) -> None:
+    p = sub.add_parser(
+        "encoder", help="wheel-encoder chain: TSA, notch, three-stage and super-twisting RMS errors",
+        description="Simulate a wheel encoder with transition noise and eccentricity, estimate the wheel "
+                    "speed and acceleration at the controller rate and print the RMS errors against the "
+                    "exact trajectory (seed 001 Table 6.1 layout).")
+    p.add_argument("--ppr", type=int, default=60, help="pulses per revolution N (default 60)")
+    p.add_argument("--events", type=int, default=15, help="TSA window n (default 15)")
+    p.add_argument("--order", type=int, default=2, help="TSA polynomial order m (default 2)")
+    p.add_argument("--harmonics", type=int, default=5, help="harmonics M of the three-stage estimator (default 5)")
+    p.add_argument("--rpm", type=float, default=1020.0, help="mean wheel speed for constant/varying (default 1020)")
+    p.add_argument("--profile", choices=PROFILES, default="constant",
+                   help="constant speed, sinusoidal speed (+-40 rad/s at 1 Hz), or a quarter-car braking run")
+    p.add_argument("--duration", type=float, default=10.0, help="simulated time in s (default 10)")
+    p.add_argument("--estimator", choices=("all", *ESTIMATORS), default="all", help="estimator (default all)")
+    p.add_argument("--rate-hz", type=float, default=1000.0, help="controller rate (default 1000)")
+    p.add_argument("--dnl", type=float, default=0.01,
+                   help="transition noise bound eps in encoder cycles (default 0.01)")
+    p.add_argument("--eccentricity", type=float, default=0.003, help="code-track eccentricity e/r (default 0.003)")
+    p.add_argument("--clock-hz", type=float, default=1e6, help="timer clock; 0 for exact time stamps (default 1e6)")
+    p.add_argument("--both-edges", action="store_true", help="use rising and falling edges")
+    p.add_argument("--seed", type=int, default=1, help="seed of the per-tooth transition errors (default 1)")
+    p.add_argument("--warmup", type=float, default=1.0, help="seconds left out of the statistics (default 1)")
+    p.add_argument("--json", action="store_true", help="print the results as JSON")
+    p.add_argument("--plot", metavar="PNG", help="save speed and acceleration estimates against the truth")
+    p.set_defaults(func=run)
+
+
+def _trajectory(args: argparse.Namespace) -> AngleTrajectory:
+    if args.profile == "constant":
+        return constant_speed(args.rpm, args.duration)
+    if args.profile == "varying":
+        return varying_speed(args.rpm, args.duration)
+    return braking_trajectory(args.duration).trajectory("braking, dry asphalt, 130 km/h")
+
+
+def run(args: argparse.Namespace) -> int:
+    if args.warmup >= args.duration:
+        raise SimulationError(f"--warmup {args.warmup:g} must be shorter than --duration {args.duration:g}")
+    encoder = Encoder(ppr=args.ppr, dnl_cycles=args.dnl, eccentricity=args.eccentricity,
+                      both_edges=args.both_edges, clock_hz=args.clock_hz or None, seed=args.seed)
+    settings = ChainSettings(rate_hz=args.rate_hz, order=args.order, window=args.events,
+                             harmonics=args.harmonics, warmup_s=args.warmup)
+    estimators = ESTIMATORS if args.estimator == "all" else (args.estimator,)
+    comparison = compare_estimators(_trajectory(args), encoder, estimators=estimators, settings=settings)
+    if args.json:
+        emit_json(comparison.to_json())
+    else:
+        print(comparison)
+    if args.plot:
+        plot_comparison(comparison, args.plot)
+        if not args.json:
+            print(f"plot written to {args.plot}")
+    return 0
+
+
+def plot_comparison(comparison: EstimatorComparison, path: str) -> None:
+    """Speed and acceleration of every estimator against the truth over one second after the warm-up."""
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    first = comparison.results[0]
+    t0 = first.t[0] + first.settings.warmup_s
+    show = (first.t >= t0) & (first.t <= t0 + 1.0)
+    fig, axes = plt.subplots(2, 1, figsize=(9, 6), sharex=True)
+    axes[0].plot(first.t[show], first.omega_true[show], "k", lw=2, label="truth")
+    axes[1].plot(first.t[show], first.alpha_true[show], "k", lw=2, label="truth")
+    for r in comparison.results:
+        axes[0].plot(r.t[show], r.omega[show], lw=0.9, label=r.estimator)
+        axes[1].plot(r.t[show], r.alpha[show], lw=0.9, label=r.estimator)
+    axes[0].set_ylabel("omega [rad/s]")
+    axes[1].set_ylabel("alpha [rad/s^2]")
+    axes[1].set_xlabel("t [s]")
+    axes[0].legend(loc="upper right", fontsize=8)
+    axes[0].set_title(f"{comparison.trajectory}, {comparison.encoder.ppr}-ppr encoder")
+    fig.tight_layout()
+    try:
+        fig.savefig(path, dpi=110)
+    except OSError as exc:
+        raise SimulationError(f"cannot write the plot to {path!r}: {exc}") from None
+    finally:
+        plt.close(fig)

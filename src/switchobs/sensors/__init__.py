@@ -1,0 +1,47 @@
+"""Wheel-encoder measurement chain: from the teeth to the wheel speed, acceleration and ``x2``.
+
+Seed 001 Chapters 5-6 and Appendix C (time-stamping algorithm, encoder
+imperfections, three-stage harmonic compensation, notch baseline) and seed 003
+(super-twisting observer, equivalent output injection, stiffness and radius
+identification).
+
+Trajectories
+    AngleTrajectory, constant_speed, varying_speed, rpm_to_rad_s
+Encoder
+    Encoder, EncoderEvents
+Time-stamping algorithm
+    time_stamping, TsaEstimate, tsa_condition_number, controller_times, TimeStamper
+Harmonic compensation
+    ThreeStageEstimator, three_stage, NotchFilter, notch, SpeedEstimate
+Super-twisting observer and identification
+    SuperTwistingGains, super_twisting_gains, SuperTwistingObserver, super_twisting,
+    SuperTwistingRun, low_pass, StiffnessEstimate, identify_stiffness
+Quarter car used by the examples
+    Wheel, WheelRun, simulate_wheel, braking_trajectory, linear_tyre, burckhardt_tyre
+Chain
+    encoder_chain, compare_estimators, ChainSettings, ChainResult, EstimatorComparison,
+    ESTIMATORS, rms_error, estimate_lag
+"""
+
+from ._chain import ESTIMATORS, ChainResult, ChainSettings, EstimatorComparison, compare_estimators, encoder_chain
+from ._encoder import Encoder, EncoderEvents
+from ._identify import StiffnessEstimate, identify_stiffness
+from ._quarter_car import Wheel, WheelRun, braking_trajectory, burckhardt_tyre, linear_tyre, simulate_wheel
+from ._series import SpeedEstimate, estimate_lag, rms_error
+from ._super_twisting import (SuperTwistingGains, SuperTwistingObserver, SuperTwistingRun, low_pass,
+                              super_twisting, super_twisting_gains)
+from ._three_stage import NotchFilter, ThreeStageEstimator, notch, three_stage
+from ._trajectory import AngleTrajectory, constant_speed, rpm_to_rad_s, varying_speed
+from ._tsa import TimeStamper, TsaEstimate, controller_times, time_stamping, tsa_condition_number
+
+__all__ = [
+    "AngleTrajectory", "constant_speed", "varying_speed", "rpm_to_rad_s",
+    "Encoder", "EncoderEvents",
+    "time_stamping", "TsaEstimate", "tsa_condition_number", "controller_times", "TimeStamper",
+    "ThreeStageEstimator", "three_stage", "NotchFilter", "notch", "SpeedEstimate",
+    "SuperTwistingGains", "super_twisting_gains", "SuperTwistingObserver", "super_twisting",
+    "SuperTwistingRun", "low_pass", "StiffnessEstimate", "identify_stiffness",
+    "Wheel", "WheelRun", "simulate_wheel", "braking_trajectory", "linear_tyre", "burckhardt_tyre",
+    "encoder_chain", "compare_estimators", "ChainSettings", "ChainResult", "EstimatorComparison",
+    "ESTIMATORS", "rms_error", "estimate_lag",
+]

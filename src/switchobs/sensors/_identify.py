@@ -1,0 +1,185 @@
+"""Tyre stiffness and effective radius from the super-twisting equivalent output injection.
+
+Seed 003, Sections IV-V.  After the observer has converged, the low-pass
+filtered injection ``z2_bar`` equals the unknown part of the wheel
+acceleration, (20) and (25).  With the quarter car of seed 001 (2.1) and the
+linear tyre ``F_x = C_x (R omega - v) / v`` (seed 003 (5), sign re-derived,
+see :mod:`switchobs.sensors._quarter_car`)::
+
+    xi1 = -R F_x / J = theta_11 / J - theta_12 omega / (J v),
+    theta_1 = [R C_x, R^2 C_x],   phi_1 = [1 / J, -omega / (J v)]
+
+(seed 003 (22)-(23) print ``phi_1 = [-1/J, x2/(J x3)]`` and ``theta_1 = [R C_x, R C_x]``:
+the first is the sign of its (5), the second an extraction slip, since
+``xi1`` in (7) carries ``R^2 C_x``).  ``R = theta_12 / theta_11`` when both
+are identified; with a known radius the single parameter ``R C_x`` multiplies
+``(1 - R omega / v) / J = -lambda / J``.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+import numpy.typing as npt
+
+from ..exceptions import SimulationError
+from ._super_twisting import low_pass
+from ._validate import as_signal, check_increasing, check_positive, check_range
+
+__all__ = ["StiffnessEstimate", "identify_stiffness"]
+
+Array = npt.NDArray[np.float64]
+
+
+@dataclass(frozen=True, eq=False)
+class StiffnessEstimate:
+    """Result of the RLS identification (27)-(30).
+
+    Attributes
+    ----------
+    t : ndarray
+        Times of the RLS updates (s).
+    history : ndarray, shape (len(t), p)
+        Estimates after each update: ``[R C_x, R^2 C_x]`` (``p = 2``) or ``[R C_x]``
+        (``p = 1``, radius given).
+    given_radius_m : float or None
+        The radius supplied by the user, if any.
+    """
+
+    t: Array
+    history: Array
+    given_radius_m: float | None
+
+    @property
+    def stiffness_radius(self) -> float:
+        """Identified ``R C_x`` (N m)."""
+        return float(self.history[-1, 0])
+
+    @property
+    def radius_m(self) -> float:
+        """Given radius, or the identified ``theta_12 / theta_11`` (m)."""
+        if self.given_radius_m is not None:
+            return self.given_radius_m
+        return float(self.history[-1, 1] / self.history[-1, 0])
+
+    @property
+    def stiffness_n(self) -> float:
+        """Longitudinal stiffness ``C_x = (R C_x) / R`` (N per unit slip)."""
+        return self.stiffness_radius / self.radius_m
+
+    def to_json(self) -> dict[str, Any]:
+        return {"stiffness_radius_nm": self.stiffness_radius, "radius_m": self.radius_m,
+                "radius_identified": self.given_radius_m is None, "stiffness_n": self.stiffness_n,
+                "updates": int(self.t.size)}
+
+    def __str__(self) -> str:
+        how = "identified" if self.given_radius_m is None else "given"
+        return (f"StiffnessEstimate: R C_x = {self.stiffness_radius:.6g} N m, R = {self.radius_m:.5g} m ({how}), "
+                f"C_x = {self.stiffness_n:.6g} N after {self.t.size} RLS updates")
+
+
+def identify_stiffness(
+    t: npt.ArrayLike,
+    z2: npt.ArrayLike,
+    omega_hat: npt.ArrayLike,
+    speed_m_s: npt.ArrayLike,
+    *,
+    inertia_kg_m2: float,
+    radius_m: float | None = None,
+    tau_s: float = 0.01,
+    start_s: float = 0.0,
+    forgetting: float = 1.0,
+    rho: float = 1e-8,
+    nominal: npt.ArrayLike | None = None,
+    rls_step_s: float = 1e-3,
+) -> StiffnessEstimate:
+    """Identify ``R C_x`` (and ``R``) from the super-twisting injection by recursive least squares.
+
+    Parameters
+    ----------
+    t : array_like
+        Uniform observer sample times (s).
+    z2 : array_like
+        Injection ``z2 = alpha sign(x1 - x1_hat)`` of the discrete observer.
+    omega_hat : array_like
+        Observer speed ``x2_hat`` (rad/s), used in the regressor in place of ``x2``.
+    speed_m_s : array_like
+        Measured vehicle speed ``v_x = x3`` (m/s), positive.
+    inertia_kg_m2 : float
+        Wheel inertia ``J`` (assumed known, as in seed 003 Section V).
+    radius_m : float, optional
+        Known effective radius; omit it to identify ``R`` as well.
+    tau_s : float
+        Time constant of the low-pass filter extracting the equivalent
+        injection (20).  The regressor passes through the same filter, so the
+        filter delay cancels in the regression (``theta`` is constant).
+    start_s : float
+        First time used (after the observer's finite-time transient).
+    forgetting : float
+        Forgetting factor ``sigma`` in [0.9, 1] of (29)-(30).
+    rho : float
+        ``Gamma_0 = I / rho``.
+    nominal : array_like, optional
+        Nominal ``theta_1_bar`` used inside the observer (24); the identified
+        value is ``nominal + Delta theta``.  Default zero.
+    rls_step_s : float
+        Period of the RLS updates (s): the filtered signals vary on the scale
+        of ``tau_s``, so updating at every observer step adds cost, not information.
+
+    Returns
+    -------
+    StiffnessEstimate
+
+    Raises
+    ------
+    SimulationError
+        Bad lengths, NaN samples, non-positive speed, ``forgetting`` outside
+        [0.9, 1], or no sample after ``start_s``.
+
+    Notes
+    -----
+    (29)-(30) are used in their discrete form (seed 003, Remark 3)::
+
+        K = Gamma phi / (sigma + phi' Gamma phi),  theta += K (h - phi' theta),
+        Gamma = (Gamma - K phi' Gamma) / sigma.
+    """
+    tt = as_signal(t, "t")
+    check_increasing(tt, "t")
+    z = as_signal(z2, "z2", length=tt.size)
+    w = as_signal(omega_hat, "omega_hat", length=tt.size)
+    v = as_signal(speed_m_s, "speed_m_s", length=tt.size)
+    if np.any(v <= 0.0):
+        raise SimulationError(f"speed_m_s must stay positive (seed 003 divides by x3), min is {v.min():g}")
+    J = check_positive(inertia_kg_m2, "inertia_kg_m2")
+    sigma = check_range(forgetting, "forgetting (sigma)", 0.9, 1.0)
+    rho = check_positive(rho, "rho")
+    dt = float(tt[1] - tt[0]) if tt.size > 1 else 0.0
+    if tt.size < 2 or np.max(np.abs(np.diff(tt) - dt)) > 1e-6 * dt:
+        raise SimulationError("identify_stiffness needs uniformly spaced samples (at least two)")
+    if radius_m is None:
+        phi = np.column_stack([np.full(tt.size, 1.0 / J), -w / (J * v)])
+        given = None
+    else:
+        given = check_positive(radius_m, "radius_m")
+        phi = ((1.0 - given * w / v) / J)[:, None]
+    p = phi.shape[1]
+    theta_bar = np.zeros(p) if nominal is None else as_signal(nominal, "nominal", length=p)
+    zbar = low_pass(z, dt, tau_s)
+    phibar = np.column_stack([low_pass(phi[:, j], dt, tau_s) for j in range(p)])
+    every = max(1, int(round(check_positive(rls_step_s, "rls_step_s") / dt)))
+    use = np.flatnonzero(tt >= start_s)[::every]
+    if use.size == 0:
+        raise SimulationError(f"no sample at or after start_s = {start_s:g} s (last is {tt[-1]:g} s)")
+    est = np.zeros(p)
+    gamma = np.eye(p) / rho
+    hist = np.empty((use.size, p))
+    for row, i in enumerate(use):
+        f = phibar[i]
+        gf = gamma @ f
+        gain = gf / (sigma + float(f @ gf))
+        est = est + gain * (zbar[i] - float(f @ est))
+        gamma = (gamma - np.outer(gain, gf)) / sigma
+        hist[row] = est
+    return StiffnessEstimate(t=tt[use], history=hist + theta_bar, given_radius_m=given)
