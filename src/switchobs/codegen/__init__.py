@@ -1,0 +1,19 @@
+"""Generated C observers (casadi): exact translation, strict C99 API, and a ctypes binding.
+
+Public API
+----------
+generate_observer   -- model + gains -> GeneratedObserver (``<prefix>.h``, ``<prefix>.c``, README)
+GeneratedObserver   -- the generated files and what they mean (names, defaults, checks, stack)
+compile_observer    -- compile with the system C compiler (cached) and bind with ctypes
+CObserver           -- the compiled observer: ``step`` / ``run`` like the Python reference observers
+StepStatus          -- status codes of ``<prefix>_step`` / ``<prefix>_run``
+default_prefix      -- ``switchobs_<model>`` with non-identifier characters as ``_``
+"""
+
+from ._build import CObserver, cache_directory, compile_observer
+from ._generate import METHODS, REALS, GeneratedObserver, default_prefix, generate_observer
+from ._status import STATUS_TEXT, StepStatus
+from ._translate import Guard, domain_guards
+
+__all__ = ["CObserver", "GeneratedObserver", "Guard", "METHODS", "REALS", "STATUS_TEXT", "StepStatus",
+           "cache_directory", "compile_observer", "default_prefix", "domain_guards", "generate_observer"]

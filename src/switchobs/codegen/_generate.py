@@ -1,0 +1,583 @@
+"""Generation of the C observer: discretisation, C API, header, README.
+
+The observer ODE is discretised with one step of classic fourth-order
+Runge-Kutta, the signals (y, external signals, inputs) held constant over the
+step (zero-order hold), or with forward Euler on request:
+
+    h = dt/2, k1 = f(x), k2 = f(x + h k1), k3 = f(x + h k2), k4 = f(x + dt k3),
+    x+ = x + dt/6 (k1 + 2 k2 + 2 k3 + k4)
+
+With the signals held, the observer is an affine ODE with constant
+coefficients over the step, so RK4 is the fourth-order Taylor polynomial of
+its exact flow: error O(dt^5) per step, stable for ``|s| dt |lambda| < 2.78``
+on the real axis (Euler: first order, ``< 2``), a fixed count of operations,
+no iteration and no allocation -- what a brake ECU wants -- and the same
+scheme as the Python reference observers, so that the two agree to rounding.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import json
+import re
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import casadi as ca
+import numpy as np
+import sympy as sp
+
+from ..design import GainDesign
+from ..exceptions import CodegenError, DimensionError, ModelError
+from ..model import Model, numeric, rational_value
+from ._emit import Kernel, float_literal, kernel
+from ._readme import readme
+from ._status import STATUS_TEXT, StepStatus
+from ._translate import GUARD_TESTS, Guard, Translation, translate_adaptive, translate_switched
+
+__all__ = ["GeneratedObserver", "generate_observer", "default_prefix", "REALS", "METHODS"]
+
+REALS = ("double", "float")
+METHODS = ("rk4", "euler")
+
+_C_KEYWORDS = frozenset(
+    "auto break case char const continue default do double else enum extern float for goto if inline int long "
+    "register restrict return short signed sizeof static struct switch typedef union unsigned void volatile "
+    "while _Bool _Complex _Imaginary".split())
+
+
+def default_prefix(model_name: str) -> str:
+    """``switchobs_<model>`` with every character that is not a C identifier character turned into ``_``."""
+    return "switchobs_" + re.sub(r"[^A-Za-z0-9_]", "_", model_name)
+
+
+def _check_prefix(prefix: str) -> str:
+    if not re.fullmatch(r"[A-Za-z][A-Za-z0-9_]*", prefix or ""):
+        raise CodegenError(f"prefix {prefix!r} is not a C identifier (a letter, then letters, digits or '_')")
+    if prefix in _C_KEYWORDS:
+        raise CodegenError(f"prefix {prefix!r} is a C keyword; choose another with --prefix")
+    return prefix
+
+
+def _macro_names(kind: str, names: Sequence[str]) -> list[str]:
+    upper = [n.upper() for n in names]
+    clash = sorted({u for u in upper if upper.count(u) > 1})
+    if clash:
+        dup = [n for n in names if n.upper() in clash]
+        raise CodegenError(f"the {kind} names {dup} give the same C macro name(s) {clash}; rename them in the model")
+    return upper
+
+
+@dataclass(frozen=True)
+class GeneratedObserver:
+    """The generated C observer: the two C files, the README, and what they mean.
+
+    Attributes
+    ----------
+    prefix : str
+        C prefix of every public name (``switchobs_abs_xbs3``).
+    real : {"double", "float"}
+    method : {"rk4", "euler"}
+    kind : {"switched", "adaptive"}
+    model_name : str
+    state_names, signal_names, param_names : tuple of str
+        In C order; states are in the model's own coordinates (adaptive:
+        ``w``, then ``theta_hat``, then ``Upsilon`` row-major).
+    default_params : tuple of float
+        ``<prefix>_default_params``: the model values and designed gains used at generation.
+    guards : tuple of Guard
+        Conditions the step checks, in order, with their status codes.
+    temporaries : int
+        Scalar temporaries of the step kernel (casadi ``sz_w``).
+    stack_reals : int
+        Upper bound of the reals one ``_step`` call keeps on the stack
+        (temporaries + the new state + one guard value).
+    header, source, readme : str
+        Text of ``<prefix>.h``, ``<prefix>.c`` and ``README.md``.
+    casadi_version : str
+    references : mapping str -> str
+    """
+
+    prefix: str
+    real: str
+    method: str
+    kind: str
+    model_name: str
+    state_names: tuple[str, ...]
+    signal_names: tuple[str, ...]
+    param_names: tuple[str, ...]
+    default_params: tuple[float, ...]
+    guards: tuple[Guard, ...]
+    temporaries: int
+    stack_reals: int
+    header: str
+    source: str
+    readme: str
+    casadi_version: str
+    references: Mapping[str, str] = field(default_factory=dict)
+    step_function: ca.Function | None = field(default=None, repr=False, compare=False)
+
+    @property
+    def nx(self) -> int:
+        return len(self.state_names)
+
+    @property
+    def ns(self) -> int:
+        return len(self.signal_names)
+
+    @property
+    def np(self) -> int:
+        return len(self.param_names)
+
+    @property
+    def files(self) -> dict[str, str]:
+        """File name -> text."""
+        return {f"{self.prefix}.h": self.header, f"{self.prefix}.c": self.source, "README.md": self.readme}
+
+    def param_index(self, name: str) -> int:
+        """Index of a parameter in ``params`` (the value of ``<PREFIX>_P_<NAME>``)."""
+        try:
+            return self.param_names.index(name)
+        except ValueError:
+            raise ModelError(f"the generated observer has no parameter {name!r} "
+                             f"(parameters: {list(self.param_names)})") from None
+
+    def params_with(self, values: Mapping[str, float] | None = None) -> np.ndarray:
+        """The default parameter vector with some entries replaced by name."""
+        out = np.array(self.default_params, dtype=float)
+        for name, value in (values or {}).items():
+            out[self.param_index(name)] = float(value)
+        return out
+
+    def write(self, directory: str | Path) -> tuple[Path, ...]:
+        """Write ``<prefix>.h``, ``<prefix>.c`` and ``README.md`` into ``directory`` (created if needed)."""
+        out = Path(directory)
+        try:
+            out.mkdir(parents=True, exist_ok=True)
+            paths = []
+            for name, text in self.files.items():
+                path = out / name
+                path.write_text(text, encoding="utf-8")
+                paths.append(path)
+        except OSError as exc:
+            raise CodegenError(f"cannot write the generated files into {str(out)!r}: {exc.strerror}") from None
+        return tuple(paths)
+
+    def to_json(self) -> dict[str, Any]:
+        return {
+            "prefix": self.prefix, "real": self.real, "method": self.method, "kind": self.kind,
+            "model": self.model_name, "nx": self.nx, "ns": self.ns, "np": self.np,
+            "states": list(self.state_names), "signals": list(self.signal_names),
+            "parameters": {n: v for n, v in zip(self.param_names, self.default_params)},
+            "guards": [g.to_json() for g in self.guards],
+            "status_codes": {s.name: int(s) for s in StepStatus},
+            "temporaries": self.temporaries, "stack_reals": self.stack_reals,
+            "files": sorted(self.files), "casadi_version": self.casadi_version,
+            "references": dict(self.references),
+        }
+
+    def __str__(self) -> str:
+        params = ", ".join(f"{n}={v:.6g}" for n, v in zip(self.param_names, self.default_params))
+        lines = [
+            f"generated C {self.kind} observer {self.prefix} for model {self.model_name!r} "
+            f"({self.real}, {self.method}, casadi {self.casadi_version})",
+            f"  files: {', '.join(sorted(self.files))}",
+            f"  NX = {self.nx}: {', '.join(self.state_names)}",
+            f"  NS = {self.ns}: {', '.join(self.signal_names)}",
+            f"  NP = {self.np}: {params}",
+            "  checks: " + ("; ".join(str(g) for g in self.guards) or "none beyond finiteness"),
+            f"  stack: {self.temporaries} temporaries, at most {self.stack_reals} reals per step",
+        ]
+        return "\n".join(lines)
+
+
+# ----------------------------------------------------------------------------- inputs
+def _gains(model: Model, gains: Any, values: Mapping[str, Any]) -> tuple[np.ndarray, np.ndarray]:
+    if isinstance(gains, GainDesign):
+        if gains.model.states != model.states:
+            raise CodegenError(f"the gain design is for model {gains.model.name!r} with states "
+                               f"{list(gains.model.states)}, not for {model.name!r} with {list(model.states)}")
+        num = gains.numeric(values)
+        return num["K_plus"], num["K_minus"]
+    try:
+        Kp, Km = gains
+    except (TypeError, ValueError):
+        raise CodegenError("gains must be a GainDesign or a pair (K_plus, K_minus) of number sequences, "
+                           f"got {type(gains).__name__}") from None
+    out = []
+    for name, K in (("K_plus", Kp), ("K_minus", Km)):
+        if isinstance(K, sp.MatrixBase):
+            arr = numeric(K, values, what=name).reshape(-1)
+        else:
+            try:
+                arr = np.asarray(K, dtype=float).reshape(-1)
+            except (TypeError, ValueError):
+                raise DimensionError(f"{name} must be {model.n} numbers, got {K!r}") from None
+        if arr.shape != (model.n,):
+            raise DimensionError(f"{name} has {arr.size} entries but model {model.name!r} has dimension {model.n}")
+        if not np.all(np.isfinite(arr)):
+            raise CodegenError(f"{name} = {arr.tolist()} is not finite")
+        out.append(arr)
+    return out[0], out[1]
+
+
+def _defaults(model: Model, values: Mapping[str, Any], extra_names: Sequence[str]) -> dict[str, float]:
+    """Float default of every model parameter: the model's values, overridden by ``values``."""
+    unknown = sorted(set(values) - set(model.parameters) - set(extra_names))
+    if unknown:
+        raise ModelError(f"values given for {unknown}, which are neither parameters of model {model.name!r} "
+                         f"({list(model.parameters)}) nor design symbols ({list(extra_names)})")
+    overrides = {k: v for k, v in values.items() if k in model.parameters}
+    model.with_values(overrides)  # validates the overrides (finite numbers, declared signs)
+    merged = {**model.values, **{k: rational_value(v, what=k) for k, v in overrides.items()}}
+    missing = [p for p in model.parameters if p not in merged]
+    if missing:
+        raise ModelError(f"parameter(s) {missing} of model {model.name!r} have no value; every parameter is a "
+                         f"runtime parameter of the C observer and needs a default (e.g. --param {missing[0]}=...)")
+    return {p: float(merged[p]) for p in model.parameters}
+
+
+# ----------------------------------------------------------------------------- assembly
+def _step_expression(tr: Translation, method: str) -> ca.SX:
+    x, dt = tr.x, tr.dt
+    k1 = tr.rhs(x)
+    if method == "euler":
+        return x + dt * k1
+    h = 0.5 * dt
+    dt6 = dt / 6.0
+    k2 = tr.rhs(x + h * k1)
+    k3 = tr.rhs(x + h * k2)
+    k4 = tr.rhs(x + dt * k3)
+    return x + dt6 * (k1 + 2.0 * k2 + 2.0 * k3 + k4)
+
+
+def _guard_value(guard: Guard, expr: ca.SX, tr: Translation, index: int, real: str,
+                 prefix: str, P: str) -> tuple[str, Kernel | None]:
+    """C expression of the guard value; a kernel when it is more than one signal or parameter."""
+    if guard.expr.is_Symbol:
+        name = guard.expr.name
+        if name in tr.param_names:
+            return f"par[{P}_P_{name.upper()}]", None
+        if name in tr.signal_names:
+            return f"sig[{P}_S_{name.upper()}]", None
+    k = kernel(f"{prefix}_guard{index}", [("sig", tr.signals), ("par", tr.params)], expr, real=real, prefix=prefix)
+    return "g", k
+
+
+def _assemble(tr: Translation, *, model: Model, kind: str, real: str, method: str, prefix: str,
+              command: str | None) -> GeneratedObserver:
+    P = prefix.upper()
+    x_macros = _macro_names("state", tr.state_names)
+    s_macros = _macro_names("signal", tr.signal_names)
+    p_macros = _macro_names("parameter", tr.param_names)
+    step_expr = _step_expression(tr, method)
+    step_k = kernel(f"{prefix}_kernel", [("x", tr.x), ("sig", tr.signals), ("par", tr.params), ("dt", tr.dt)],
+                    step_expr, real=real, prefix=prefix)
+    scale_k = kernel(f"{prefix}_scale", [("sig", tr.signals), ("par", tr.params)], tr.scale, real=real,
+                     prefix=prefix)
+    kernels = [step_k, scale_k]
+    checks: list[str] = []
+    scale_done = False
+    for i, (guard, expr) in enumerate(tr.guards):
+        if guard.status != StepStatus.UNDEFINED_TIME_SCALE and guard.status != StepStatus.BAD_PARAM \
+                and not scale_done:
+            checks += _scale_check(scale_k, P)
+            scale_done = True
+        value, k = _guard_value(guard, expr, tr, i, real, prefix, P)
+        if k is not None:
+            kernels.append(k)
+            checks.append("    " + k.call("&g", sig="sig", par="par"))
+        test = GUARD_TESTS[guard.kind].format(g=value)
+        checks.append(f"    if (!({test})) return {P}_ERR_{guard.status.name};  /* {_comment(guard.reason)} */")
+    if not scale_done:
+        checks += _scale_check(scale_k, P)
+
+    step_fn = ca.Function(f"{prefix}_step", [tr.x, tr.signals, tr.params, tr.dt], [step_expr],
+                          ["x", "signals", "params", "dt"], ["x_next"])
+    stack_reals = max(k.temporaries for k in kernels) + len(tr.state_names) + 1
+    text_args = dict(tr=tr, model=model, kind=kind, real=real, method=method, prefix=prefix, P=P,
+                     x_macros=x_macros, s_macros=s_macros, p_macros=p_macros, command=command,
+                     temporaries=step_k.temporaries, stack_reals=stack_reals)
+    header = _header(**text_args)
+    source = _source(kernels=kernels, checks=checks, **text_args)
+    gen = GeneratedObserver(
+        prefix=prefix, real=real, method=method, kind=kind, model_name=model.name, state_names=tr.state_names,
+        signal_names=tr.signal_names, param_names=tr.param_names, default_params=tr.default_params,
+        guards=tuple(g for g, _ in tr.guards), temporaries=step_k.temporaries, stack_reals=stack_reals,
+        header=header, source=source, readme="", casadi_version=ca.__version__,
+        references=dict(model.references), step_function=step_fn)
+    return dataclasses.replace(gen, readme=readme(gen, model=model, command=command))
+
+
+def _comment(text: str) -> str:
+    return text.replace("*/", "* /")
+
+
+def _scale_check(scale_k: Kernel, P: str) -> list[str]:
+    return ["    " + scale_k.call("&g", sig="sig", par="par"),
+            f"    if (!isfinite(g)) return {P}_ERR_UNDEFINED_TIME_SCALE;  /* s(y) must be finite */"]
+
+
+def generate_observer(model: Model, gains: GainDesign | tuple[Sequence[float], Sequence[float]], *,
+                      values: Mapping[str, Any] | None = None, real: str = "double", method: str = "rk4",
+                      prefix: str | None = None, unknown: Sequence[str] = (),
+                      Gamma: Sequence[Sequence[float]] | np.ndarray | None = None,
+                      command: str | None = None) -> GeneratedObserver:
+    """Generate the C observer of a model and its gain pair.
+
+    Parameters
+    ----------
+    model : Model
+        Any built-in or TOML model; every parameter stays a runtime parameter.
+    gains : GainDesign or (K_plus, K_minus)
+        The designed gains (``switchobs.design.design``) or two sequences of
+        ``n`` numbers.  They become the runtime parameters ``K_plus_<state>``
+        and ``K_minus_<state>`` with these defaults.
+    values : mapping, optional
+        Values of design symbols (``beta1``...) and overrides of the model's
+        parameter values (defaults of the runtime parameters).
+    real : {"double", "float"}
+    method : {"rk4", "euler"}
+        Classic RK4 (default) or forward Euler, signals held over the step.
+    prefix : str, optional
+        C prefix; default ``switchobs_<model>`` (:func:`default_prefix`).
+    unknown : sequence of str, optional
+        Parameters estimated online: generates the switched adaptive observer
+        of seed 001 eq. (3.4) with state ``(w, theta_hat, Upsilon)``.
+    Gamma : (p, p) array or its diagonal, optional
+        Adaptation gain of (3.4b), symmetric positive definite, required with
+        ``unknown``; its entries are runtime parameters ``Gamma_<u>_<v>``.
+    command : str, optional
+        Command line recorded in the files' comments.
+
+    Returns
+    -------
+    GeneratedObserver
+
+    Raises
+    ------
+    CodegenError
+        Unsupported expression, bad prefix, clashing C names, explicit time dependence.
+    ModelError, FreeSymbolError, DimensionError
+        Missing parameter values or design symbols, wrong gain sizes.
+
+    References
+    ----------
+    seed 000 eq. (8)-(9) (observer), Sec. III-E and IV-D (gains); seed 001
+    eq. (3.4), (3.8), (3.15) (adaptive observer); seed 004 (time rescaling).
+
+    Examples
+    --------
+    >>> from switchobs.model import builtin_model
+    >>> from switchobs.design import design
+    >>> m = builtin_model("abs-xbs3")
+    >>> gen = generate_observer(m, design(m, "-40,-60,-60"))
+    >>> gen.prefix, gen.nx, gen.ns, gen.np
+    ('switchobs_abs_xbs3', 3, 3, 9)
+    """
+    if real not in REALS:
+        raise CodegenError(f"real must be one of {list(REALS)}, got {real!r}")
+    if method not in METHODS:
+        raise CodegenError(f"method must be one of {list(METHODS)}, got {method!r}")
+    prefix = _check_prefix(default_prefix(model.name) if prefix is None else prefix)
+    values = dict(values or {})
+    design_syms = [s.name for s in gains.design_symbols] if isinstance(gains, GainDesign) else []
+    defaults = _defaults(model, values, design_syms)
+    num_values = {**{k: v for k, v in values.items() if k not in model.parameters}, **defaults}
+    Kp, Km = _gains(model, gains, num_values)
+    if unknown:
+        unknown = tuple(unknown)
+        p = len(unknown)
+        if Gamma is None:
+            raise CodegenError(f"the adaptive observer needs Gamma, a {p} x {p} symmetric positive definite "
+                               f"adaptation gain for ({', '.join(unknown)}) (seed 001 eq. (3.4))")
+        try:
+            G = np.asarray(Gamma, dtype=float)
+        except (TypeError, ValueError):
+            raise DimensionError(f"Gamma must be a {p} x {p} matrix of numbers, got {Gamma!r}") from None
+        if G.shape == (p,):
+            G = np.diag(G)
+        if G.shape != (p, p):
+            raise DimensionError(f"Gamma has the wrong shape; expected ({p}, {p}) for the unknowns {list(unknown)} "
+                                 f"instead of {G.shape}")
+        if not np.all(np.isfinite(G)) or not np.allclose(G, G.T, rtol=1e-12, atol=0) \
+                or np.min(np.linalg.eigvalsh((G + G.T) / 2)) <= 0:
+            raise CodegenError(f"Gamma = {G.tolist()} must be finite, symmetric and positive definite "
+                               "(seed 001 eq. (3.4): Gamma = Gamma' > 0)")
+        tr = translate_adaptive(model, Kp, Km, defaults, unknown, G.tolist())
+        kind = "adaptive"
+    else:
+        if Gamma is not None:
+            raise CodegenError("Gamma is only used by the adaptive observer; give the unknown parameters too")
+        tr = translate_switched(model, Kp, Km, defaults)
+        kind = "switched"
+    return _assemble(tr, model=model, kind=kind, real=real, method=method, prefix=prefix, command=command)
+
+
+# ----------------------------------------------------------------------------- text
+def _equations(kind: str, model: Model) -> list[str]:
+    eq = [f"dzhat/dt = s (A zhat + d(y) + K (y - C zhat)) + b(y) u,  s = {model.time_scale},",
+          "K = K_plus where s > 0, K_minus otherwise (the correction s K e is continuous at s = 0)."]
+    if kind == "adaptive":
+        eq = ["switched adaptive observer (seed 001 eq. (3.4)): with g = s K(s), e = y - C w, r = Upsilon' C',",
+              "q = Gamma r:  w' = s A w + c + Psi theta + (g + Upsilon q) e,  theta' = q e,",
+              f"Upsilon' = s A Upsilon - g r' + Psi,  s = {model.time_scale}, c + Psi theta = s d + b u."]
+    return eq
+
+
+def _header(*, tr: Translation, model: Model, kind: str, real: str, method: str, prefix: str, P: str,
+            x_macros: Sequence[str], s_macros: Sequence[str], p_macros: Sequence[str], command: str | None,
+            temporaries: int, stack_reals: int) -> str:
+    guard = f"{P}_H"
+    scheme = ("classic RK4" if method == "rk4" else "forward Euler") + ", signals held over the step (zero-order hold)"
+    lines = [
+        f"/* {prefix}.h -- generated by switchobs with casadi {ca.__version__}; do not edit.",
+        f" * Model {model.name!r}: {model.description or 'user model'}.",
+        *[f" * {e}" for e in _equations(kind, model)],
+        f" * Discretisation: {scheme}.  Real type: {real}.",
+        " * No heap allocation, no global mutable state: re-entrant and thread-safe.",
+    ]
+    if command:
+        lines.append(f" * Regenerate with: {_comment(command)}")
+    lines += [" */", f"#ifndef {guard}", f"#define {guard}", "", "#ifdef __cplusplus", 'extern "C" {', "#endif", "",
+              f"#define {P}_NX {len(tr.state_names)}  /* observer state size */",
+              f"#define {P}_NS {len(tr.signal_names)}  /* signals per step: y, external signals, inputs */",
+              f"#define {P}_NP {len(tr.param_names)}  /* runtime parameters */",
+              f"#define {P}_SZ_W {temporaries}  /* scalar temporaries of the step kernel (casadi sz_w) */",
+              f"#define {P}_STACK_REALS {stack_reals}  /* bound on the {real}s one step keeps on the stack */",
+              "", "/* Observer state (xhat), in the model's coordinates. */"]
+    lines += [f"#define {P}_X_{m} {i}" for i, m in enumerate(x_macros)]
+    lines += ["", "/* Signals, one row per step. */"]
+    lines += [f"#define {P}_S_{m} {i}  /* {role} */" for i, (m, role) in
+              enumerate(zip(s_macros, _signal_roles(model)))]
+    lines += ["", "/* Parameters (index into params; default in <prefix>_default_params). */"]
+    lines += [f"#define {P}_P_{m} {i}  /* default {float_literal(v, 'double')} */"
+              for i, (m, v) in enumerate(zip(p_macros, tr.default_params))]
+    lines += ["", "/* Status codes of _step and _run (xhat is unchanged by a failed step). */"]
+    lines += [f"#define {P}_{'OK' if s == StepStatus.OK else 'ERR_' + s.name} {int(s)}  /* {STATUS_TEXT[s]} */"
+              for s in StepStatus]
+    lines += [
+        "",
+        f"typedef {real} {prefix}_real;",
+        "",
+        f"/* The model values and designed gains used at generation. */",
+        f"extern const {real} {prefix}_default_params[{P}_NP];",
+        "",
+        f"/* Advance xhat[{P}_NX] in place by one step of dt seconds with signals[{P}_NS] held;",
+        f" * params[{P}_NP] may be NULL for the defaults.  Returns {P}_OK or an error code. */",
+        f"int {prefix}_step({real} *xhat, const {real} *signals, const {real} *params, {real} dt);",
+        "",
+        f"/* n_steps steps through the rows of signals (row-major, {P}_NS per row), writing each new",
+        f" * state to trajectory (row-major, {P}_NX per row; may be NULL).  On error, returns the code of",
+        " * the first failing step k: xhat holds the state after the k steps that succeeded and rows",
+        " * 0..k-1 of trajectory are written. */",
+        f"int {prefix}_run({real} *xhat, const {real} *signals, long n_steps, const {real} *params, {real} dt,",
+        f"    {real} *trajectory);",
+        "",
+        "/* A static description of a status code. */",
+        f"const char *{prefix}_status_message(int status);",
+        "", "#ifdef __cplusplus", "}", "#endif", "", f"#endif /* {guard} */", ""]
+    return "\n".join(lines)
+
+
+def _signal_roles(model: Model) -> list[str]:
+    roles = [f"measured output {model.output} = {sp.sstr(sum(c * model.symbols.get(z, sp.Symbol(z)) for c, z in zip(model.C, model.states)))}"]
+    for name in model.external:
+        sym = model.symbols[name]
+        sign = " (> 0)" if sym.is_positive else " (< 0)" if sym.is_negative else ""
+        roles.append(f"external signal{sign}")
+    roles += ["input" for _ in model.inputs]
+    return roles
+
+
+def _source(*, tr: Translation, model: Model, kind: str, real: str, method: str, prefix: str, P: str,
+            kernels: Sequence[Kernel], checks: Sequence[str], command: str | None, **_: Any) -> str:
+    nx = f"{P}_NX"
+    used = "\n".join(k.body for k in kernels)
+    helpers = []
+    zero, one = float_literal(0.0, real), float_literal(1.0, real)
+    if f"{prefix}_sq(" in used:
+        helpers.append(f"static {real} {prefix}_sq({real} v) {{ return v * v; }}")
+    if f"{prefix}_sign(" in used:
+        helpers.append(f"static {real} {prefix}_sign({real} v) {{ return v < {zero} ? -{one} : "
+                       f"(v > {zero} ? {one} : v); }}")
+    defaults = ",\n".join(f"    {float_literal(v, real)}  /* {n} */" for n, v in zip(tr.param_names,
+                                                                                       tr.default_params))
+    status_cases = "\n".join(f"    case {int(s)}: return \"{STATUS_TEXT[s]}\";" for s in StepStatus)
+    body = [
+        f"/* {prefix}.c -- generated by switchobs with casadi {ca.__version__}; do not edit.",
+        f" * Kernels: casadi C of the {'RK4' if method == 'rk4' else 'Euler'} step, post-processed for {real}.",
+        " */",
+        f'#include "{prefix}.h"',
+        "",
+        "#include <math.h>",
+        "#include <stddef.h>",
+        "",
+        *helpers,
+        "" if helpers else None,
+        f"const {real} {prefix}_default_params[{P}_NP] = {{\n{defaults}\n}};",
+        "",
+        used,
+        "/* All checks of one step, then the step into next; nothing is written unless every check passes. */",
+        f"static int {prefix}_advance(const {real} *x, const {real} *sig, const {real} *par, {real} dt, "
+        f"{real} *next)",
+        "{",
+        f"    {real} g;",
+        "    int i;",
+        f"    if (!(dt > {zero}) || !isfinite(dt)) return {P}_ERR_BAD_DT;",
+        f"    for (i = 0; i < {nx}; ++i) if (!isfinite(x[i])) return {P}_ERR_NONFINITE_STATE;",
+        f"    for (i = 0; i < {P}_NS; ++i) if (!isfinite(sig[i])) return {P}_ERR_NONFINITE_SIGNAL;",
+        f"    for (i = 0; i < {P}_NP; ++i) if (!isfinite(par[i])) return {P}_ERR_BAD_PARAM;",
+        *checks,
+        "    " + kernels[0].call("next", x="x", sig="sig", par="par", dt="dt"),
+        f"    for (i = 0; i < {nx}; ++i) if (!isfinite(next[i])) return {P}_ERR_NONFINITE_RESULT;",
+        "    return 0;",
+        "}",
+        "",
+        f"int {prefix}_step({real} *xhat, const {real} *signals, const {real} *params, {real} dt)",
+        "{",
+        f"    {real} next[{nx}];",
+        "    int i, status;",
+        f"    if (xhat == NULL || signals == NULL) return {P}_ERR_BAD_ARGUMENT;",
+        f"    status = {prefix}_advance(xhat, signals, params != NULL ? params : {prefix}_default_params, dt, next);",
+        "    if (status != 0) return status;",
+        f"    for (i = 0; i < {nx}; ++i) xhat[i] = next[i];",
+        "    return 0;",
+        "}",
+        "",
+        f"int {prefix}_run({real} *xhat, const {real} *signals, long n_steps, const {real} *params, {real} dt,",
+        f"    {real} *trajectory)",
+        "{",
+        f"    {real} next[{nx}];",
+        "    long k;",
+        "    int i, status;",
+        f"    if (xhat == NULL || n_steps < 0 || (signals == NULL && n_steps > 0)) return {P}_ERR_BAD_ARGUMENT;",
+        f"    if (params == NULL) params = {prefix}_default_params;",
+        "    for (k = 0; k < n_steps; ++k) {",
+        f"        status = {prefix}_advance(xhat, signals + k * {P}_NS, params, dt, next);",
+        "        if (status != 0) return status;",
+        f"        for (i = 0; i < {nx}; ++i) xhat[i] = next[i];",
+        "        if (trajectory != NULL) {",
+        f"            for (i = 0; i < {nx}; ++i) trajectory[k * {nx} + i] = next[i];",
+        "        }",
+        "    }",
+        "    return 0;",
+        "}",
+        "",
+        f"const char *{prefix}_status_message(int status)",
+        "{",
+        "    switch (status) {",
+        status_cases,
+        "    default: return \"unknown status code\";",
+        "    }",
+        "}",
+        "",
+    ]
+    return "\n".join(line for line in body if line is not None)
+
+
+def describe_command(argv: Sequence[str]) -> str:
+    """The command line as it would be typed (for the files' comments)."""
+    return " ".join(json.dumps(a) if re.search(r"[\s\"'$]", a) else a for a in argv)

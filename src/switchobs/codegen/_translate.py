@@ -1,0 +1,443 @@
+"""Exact translation of a switchobs model and its gains into casadi SX expressions.
+
+The observer right-hand side (seed 000 eq. (8)-(9), seed 004) is
+
+    dzhat/dt = s(y) (A zhat + d(y) + K(y) (y - C zhat)) + b(y) u,
+    K = K_plus where s > 0, K_minus otherwise,
+
+written, like the Python reference observers, as ``s (A zhat) + c + g e`` with
+``c = s d(y) + b(y) u``, ``e = y - C zhat`` and ``g = s K(s)`` chosen with
+``if_else(s > 0, s K_plus, s K_minus)``: both branches vanish at ``s = 0``, so
+the correction ``g e`` is continuous there (seed 000, remark after eq. (9))
+and each branch is evaluated exactly, without ``K_minus + (K_plus - K_minus)``
+rounding.  The switched adaptive observer of seed 001 eq. (3.4), (3.8),
+(3.15) adds ``theta`` and ``Upsilon`` to the state.
+
+Every model parameter and every gain stays a runtime parameter (an entry of
+the ``params`` vector of the generated C).  Besides the equations, the
+translation returns the *guards*: the conditions under which the right-hand
+side is defined (denominators nonzero, logarithm arguments positive, even
+roots non-negative, declared signs respected), each tagged with the status
+code the generated step returns when it fails.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Mapping, Sequence
+from dataclasses import dataclass
+
+import casadi as ca
+import sympy as sp
+
+from ..exceptions import CodegenError
+from ..model import Model
+from ._status import StepStatus
+
+__all__ = ["Guard", "Translation", "to_casadi", "domain_guards", "translate_switched", "translate_adaptive"]
+
+#: Guard kinds and the C comparison that holds when the guard is satisfied (NaN fails every one).
+GUARD_TESTS: Mapping[str, str] = {
+    "positive": "{g} > 0",
+    "negative": "{g} < 0",
+    "nonzero": "({g} < 0 || {g} > 0)",
+    "nonnegative": "{g} >= 0",
+}
+
+_FUNCTIONS: Mapping[type, Callable[[ca.SX], ca.SX]] = {
+    sp.exp: ca.exp,
+    sp.log: ca.log,
+    sp.sin: ca.sin,
+    sp.cos: ca.cos,
+    sp.tan: ca.tan,
+    sp.tanh: ca.tanh,
+    sp.atan: ca.atan,
+    sp.Abs: ca.fabs,
+    sp.sign: ca.sign,
+}
+
+
+def _power(base: ca.SX, exponent: sp.Expr) -> ca.SX:
+    """Powers as the Python reference evaluates them: small integer powers as products, halves as sqrt."""
+    if exponent == sp.Rational(1, 2):
+        return ca.sqrt(base)
+    if exponent == sp.Rational(-1, 2):
+        return 1 / ca.sqrt(base)
+    if exponent.is_Integer:
+        k = int(exponent)
+        if k == -1:
+            return 1 / base
+        if 2 <= abs(k) <= 4:
+            prod = base
+            for _ in range(abs(k) - 1):
+                prod = prod * base
+            return prod if k > 0 else 1 / prod
+    return ca.power(base, float(exponent))
+
+
+def to_casadi(expr: sp.Expr, env: Mapping[sp.Symbol, ca.SX], *, what: str = "expression") -> ca.SX:
+    """Translate a sympy expression into casadi SX, node by node.
+
+    Parameters
+    ----------
+    expr : sympy.Expr
+        Built from the model's whitelisted functions (see ``switchobs.model.EXPRESSION_FUNCTIONS``).
+    env : mapping Symbol -> casadi.SX
+        The casadi scalar of every free symbol.
+    what : str
+        Name used in error messages.
+
+    Raises
+    ------
+    CodegenError
+        For a symbol missing from ``env`` or a construct C cannot evaluate (complex numbers, ...).
+    """
+    def walk(e: sp.Basic) -> ca.SX:
+        if e.is_Symbol:
+            if e not in env:
+                raise CodegenError(f"{what} uses {e.name!r}, which is not a state, signal or parameter of the "
+                                   "generated observer (an explicit time t cannot be evaluated by the C step: "
+                                   "pass the time-varying quantity as an external signal)")
+            return env[e]
+        if e.is_Rational or e.is_Float:
+            return ca.SX(float(e))
+        if e in (sp.pi, sp.E):
+            return ca.SX(float(e))
+        if e.is_Add:
+            terms = [walk(a) for a in e.args]
+            total = terms[0]
+            for t in terms[1:]:
+                total = total + t
+            return total
+        if e.is_Mul:
+            num, den = [], []
+            for factor in e.args:
+                if factor.is_Pow and factor.exp.is_Rational and factor.exp < 0 and factor.exp != -sp.Rational(1, 2):
+                    den.append(sp.Pow(factor.base, -factor.exp))
+                elif factor.is_Rational and factor.q != 1:
+                    num.append(sp.Integer(factor.p))
+                    den.append(sp.Integer(factor.q))
+                else:
+                    num.append(factor)
+            sign = 1
+            if num and num[0] == -1:
+                sign, num = -1, num[1:]
+            top = _product([walk(f) for f in num]) if num else ca.SX(1.0)
+            out = top / _product([walk(f) for f in den]) if den else top
+            return -out if sign < 0 else out
+        if e.is_Pow:
+            return _power(walk(e.base), e.exp)
+        for fn, cfn in _FUNCTIONS.items():
+            if isinstance(e, fn):
+                return cfn(walk(e.args[0]))
+        raise CodegenError(f"{what}: cannot generate C for {sp.sstr(e)!r} ({type(e).__name__}); "
+                           "only real arithmetic and the model's expression functions are supported")
+
+    return walk(sp.sympify(expr))
+
+
+def _product(factors: Sequence[ca.SX]) -> ca.SX:
+    out = factors[0]
+    for f in factors[1:]:
+        out = out * f
+    return out
+
+
+@dataclass(frozen=True)
+class Guard:
+    """A condition the right-hand side needs: ``expr`` is ``kind`` (positive, negative, nonzero, nonnegative).
+
+    ``status`` is what the generated step returns when the condition fails,
+    ``reason`` says where the condition comes from.
+    """
+
+    expr: sp.Expr
+    kind: str
+    status: StepStatus
+    reason: str
+
+    def to_json(self) -> dict[str, str | int]:
+        return {"expr": str(self.expr), "kind": self.kind, "status": int(self.status),
+                "status_name": self.status.name, "reason": self.reason}
+
+    def __str__(self) -> str:
+        sym = {"positive": "> 0", "negative": "< 0", "nonzero": "!= 0", "nonnegative": ">= 0"}[self.kind]
+        return f"{self.expr} {sym}  ({self.reason}; else {self.status.name} = {int(self.status)})"
+
+
+def _domain_conditions(expr: sp.Expr) -> list[tuple[sp.Expr, str, str]]:
+    """(argument, kind, reason) of every partial operation in ``expr``, innermost first."""
+    out: list[tuple[sp.Expr, str, str]] = []
+
+    def walk(e: sp.Basic) -> None:
+        for arg in e.args:
+            walk(arg)
+        if e.is_Pow and e.exp.is_Rational and not e.base.is_Number:
+            if not e.exp.is_Integer:
+                out.append((e.base, "positive" if e.exp < 0 else "nonnegative", f"base of {sp.sstr(e)}"))
+            elif e.exp < 0:
+                out.append((e.base, "nonzero", f"denominator of {sp.sstr(e)}"))
+        elif e.is_Pow and not e.exp.is_Rational:
+            out.append((e.base, "positive", f"base of the real power {sp.sstr(e)}"))
+        elif isinstance(e, sp.log):
+            out.append((e.args[0], "positive", f"argument of {sp.sstr(e)}"))
+
+    walk(sp.sympify(expr))
+    return out
+
+
+def domain_guards(model: Model) -> tuple[Guard, ...]:
+    """Where the model's right-hand side is defined, as guards in the order the generated step checks them.
+
+    Order and codes follow the Python reference observers: parameters first
+    (their declared signs, then parameter-only conditions: ``BAD_PARAM``),
+    then the external signals declared positive/negative and the conditions of
+    ``time_scale`` (``UNDEFINED_TIME_SCALE``), then the conditions of ``d`` and
+    ``b`` (``NONFINITE_RESULT``, as a domain error in the reference).  A
+    condition already implied by an earlier one is dropped.
+    """
+    params = set(model.parameter_symbols)
+    guards: list[Guard] = []
+
+    def add(expr: sp.Expr, kind: str, status: StepStatus, reason: str) -> None:
+        for g in guards:
+            if sp.simplify(g.expr - expr) == 0 and (g.kind == kind or g.kind in ("positive", "negative")
+                                                    and kind in ("nonzero", "nonnegative")):
+                return
+        guards.append(Guard(sp.sympify(expr), kind, status, reason))
+
+    for name in model.parameters:
+        sym = model.symbols[name]
+        if sym.is_positive:
+            add(sym, "positive", StepStatus.BAD_PARAM, f"parameter {name} is declared positive")
+        elif sym.is_negative:
+            add(sym, "negative", StepStatus.BAD_PARAM, f"parameter {name} is declared negative")
+    everything = [model.time_scale, *model.A, *model.C, *model.d, *model.b]
+    for expr in everything:
+        for arg, kind, reason in _domain_conditions(expr):
+            if arg.free_symbols <= params:
+                add(arg, kind, StepStatus.BAD_PARAM, reason)
+    for name in model.external:
+        sym = model.symbols[name]
+        if sym.is_positive:
+            add(sym, "positive", StepStatus.UNDEFINED_TIME_SCALE, f"signal {name} is declared positive")
+        elif sym.is_negative:
+            add(sym, "negative", StepStatus.UNDEFINED_TIME_SCALE, f"signal {name} is declared negative")
+    for arg, kind, reason in _domain_conditions(model.time_scale):
+        add(arg, kind, StepStatus.UNDEFINED_TIME_SCALE, f"{reason} in the time scaling s = {model.time_scale}")
+    for expr in [*model.d, *model.b]:
+        for arg, kind, reason in _domain_conditions(expr):
+            add(arg, kind, StepStatus.NONFINITE_RESULT, reason)
+    return tuple(guards)
+
+
+@dataclass(frozen=True)
+class Translation:
+    """The casadi graph of one observer and the names of its C interface.
+
+    Attributes
+    ----------
+    x, signals, params, dt : casadi.SX
+        Symbolic inputs of the step (state, signals ``(y, external..., inputs...)``, parameters, step).
+    rhs : callable
+        ``rhs(x) -> dx/dt`` at the same signals and parameters (casadi SX column).
+    scale : casadi.SX
+        The time scaling ``s``.
+    guards : tuple of (Guard, casadi.SX)
+        The conditions with their casadi expression.
+    state_names, signal_names, param_names : tuple of str
+    default_params : tuple of float
+    """
+
+    x: ca.SX
+    signals: ca.SX
+    params: ca.SX
+    dt: ca.SX
+    rhs: Callable[[ca.SX], ca.SX]
+    scale: ca.SX
+    guards: tuple[tuple[Guard, ca.SX], ...]
+    state_names: tuple[str, ...]
+    signal_names: tuple[str, ...]
+    param_names: tuple[str, ...]
+    default_params: tuple[float, ...]
+
+
+def _environment(model: Model, extra_params: Sequence[str]) -> tuple[ca.SX, ca.SX, ca.SX, dict, dict]:
+    sig = ca.SX.sym("signals", len(model.signals))
+    names = (*model.parameters, *extra_params)
+    par = ca.SX.sym("params", len(names))
+    env = {model.symbols[name]: sig[i] for i, name in enumerate(model.signals)}
+    env.update({model.symbols[name]: par[i] for i, name in enumerate(model.parameters)})
+    index = {name: i for i, name in enumerate(names)}
+    dt = ca.SX.sym("dt")
+    return sig, par, dt, env, index
+
+
+def _affine_parts(model: Model, env: Mapping[sp.Symbol, ca.SX], sig: ca.SX, unknown: Sequence[str] = ()):
+    """``s``, ``A``, ``C`` and ``c = s d + b u`` (with ``theta = 0``) and ``Psi = dc/dtheta``, as casadi.
+
+    ``A`` and ``C`` keep structural zeros as ``None`` so that no term is
+    generated for them, as in the reference.
+    """
+    s = to_casadi(model.time_scale, env, what="time_scale")
+    n = model.n
+    A = [[None if model.A[i, j] == 0 else to_casadi(model.A[i, j], env, what=f"A[{i + 1}][{j + 1}]")
+          for j in range(n)] for i in range(n)]
+    C = [None if model.C[j] == 0 else to_casadi(model.C[j], env, what=f"C[{j + 1}]") for j in range(n)]
+    theta = [model.symbols[name] for name in unknown]
+    s_sym = sp.Dummy("s")
+    inputs = [model.symbols[u] for u in model.inputs]
+    c_sym = [s_sym * model.d[i] + sum((model.b[i, j] * inputs[j] for j in range(len(inputs))), sp.Integer(0))
+             for i in range(n)]
+    for i, e in enumerate(c_sym):
+        for t in theta:
+            if sp.diff(e, t, 2) != 0:
+                raise CodegenError(f"row {i + 1} of s*d + b*u is not linear in the unknown parameter {t}; "
+                                   "the adaptive observer of seed 001 (3.4) needs d and b affine in theta")
+    env_s = {**env, s_sym: s}
+    zero = {t: 0 for t in theta}
+    c = [None if sp.expand(ci := e.xreplace(zero)) == 0 else to_casadi(ci, env_s, what=f"s*d[{i + 1}] + b u")
+         for i, e in enumerate(c_sym)]
+    psi = [[None if sp.expand(q := sp.diff(e, t)) == 0 else to_casadi(q, env_s, what="regressor Psi")
+            for t in theta] for e in c_sym]
+    return s, A, C, c, psi
+
+
+def _lin(coeffs: Sequence[ca.SX | None], xs: Sequence[ca.SX]) -> ca.SX | None:
+    total = None
+    for a, x in zip(coeffs, xs):
+        if a is None:
+            continue
+        term = a * x
+        total = term if total is None else total + term
+    return total
+
+
+def _sum(parts: Sequence[ca.SX | None]) -> ca.SX:
+    parts = [p for p in parts if p is not None]
+    if not parts:
+        return ca.SX(0.0)
+    total = parts[0]
+    for p in parts[1:]:
+        total = total + p
+    return total
+
+
+def _guards(model: Model, env: Mapping[sp.Symbol, ca.SX]) -> tuple[tuple[Guard, ca.SX], ...]:
+    return tuple((g, to_casadi(g.expr, env, what=f"guard {g.expr}")) for g in domain_guards(model))
+
+
+def _check_no_time(model: Model) -> None:
+    t = model.symbols.get("t")
+    if t is not None and t in model.time_scale.free_symbols:
+        raise CodegenError(f"time_scale s = {model.time_scale} depends on the time t explicitly; the generated "
+                           "step has no clock: declare the time-varying quantity as an external signal")
+
+
+def translate_switched(model: Model, K_plus: Sequence[float], K_minus: Sequence[float],
+                       defaults: Mapping[str, float]) -> Translation:
+    """The switched observer of seed 000 eq. (8)-(9) / seed 004 as casadi SX.
+
+    Parameters
+    ----------
+    model : Model
+    K_plus, K_minus : sequence of float
+        Default gains (runtime parameters ``K_plus_<state>``, ``K_minus_<state>``).
+    defaults : mapping name -> float
+        Default value of every model parameter.
+    """
+    _check_no_time(model)
+    n = model.n
+    gain_names = [f"K_plus_{z}" for z in model.states] + [f"K_minus_{z}" for z in model.states]
+    sig, par, dt, env, index = _environment(model, gain_names)
+    x = ca.SX.sym("x", n)
+    s, A, C, c, _ = _affine_parts(model, env, sig)
+    y = sig[0]
+    g = [ca.if_else(s > 0, s * par[index[f"K_plus_{z}"]], s * par[index[f"K_minus_{z}"]]) for z in model.states]
+
+    def rhs(w: ca.SX) -> ca.SX:
+        ws = [w[j] for j in range(n)]
+        e = y - _sum([_lin(C, ws)])
+        rows = []
+        for i in range(n):
+            Aw = _lin(A[i], ws)
+            rows.append(_sum([None if Aw is None else s * Aw, c[i], g[i] * e]))
+        return ca.vertcat(*rows)
+
+    values = [defaults[name] for name in model.parameters] + [float(k) for k in K_plus] + [float(k) for k in K_minus]
+    return Translation(x=x, signals=sig, params=par, dt=dt, rhs=rhs, scale=s, guards=_guards(model, env),
+                       state_names=tuple(model.states), signal_names=tuple(model.signals),
+                       param_names=tuple(index), default_params=tuple(values))
+
+
+def translate_adaptive(model: Model, K_plus: Sequence[float], K_minus: Sequence[float],
+                       defaults: Mapping[str, float], unknown: Sequence[str],
+                       Gamma: Sequence[Sequence[float]]) -> Translation:
+    """The switched adaptive observer of seed 001 eq. (3.4), (3.8), (3.15) as casadi SX.
+
+    With ``g = s K(s)``, ``e = y - C w``, ``r = Upsilon' C'``, ``q = Gamma r``::
+
+        w'       = s (A w) + c + Psi theta + (g + Upsilon q) e      (3.4a)
+        theta'   = q e                                              (3.4b)
+        Upsilon' = s (A Upsilon) - g r' + Psi                       (3.4c)
+
+    where ``c = s d + b u`` at ``theta = 0`` and ``Psi = dc/dtheta``.  The
+    state is ``(w, theta, Upsilon row-major)``, named as in the Python reference
+    (``z...``, the unknown names, ``Upsilon_<state>_<unknown>``).  ``Gamma``
+    entries are runtime parameters ``Gamma_<unknown>_<unknown>``; the unknown
+    parameters leave the parameter vector (they are states).
+    """
+    _check_no_time(model)
+    n, p = model.n, len(unknown)
+    missing = [u for u in unknown if u not in model.parameters]
+    if missing:
+        raise CodegenError(f"unknown parameter(s) {missing} are not parameters of model {model.name!r} "
+                           f"(parameters: {list(model.parameters)})")
+    known = tuple(q for q in model.parameters if q not in unknown)
+    gain_names = [f"K_plus_{z}" for z in model.states] + [f"K_minus_{z}" for z in model.states]
+    gamma_names = [f"Gamma_{a}_{b}" for a in unknown for b in unknown]
+    reduced = Model(name=model.name, states=model.states, output=model.output, A=model.A, C=model.C, d=model.d,
+                    b=model.b, time_scale=model.time_scale, parameters=known, external=model.external,
+                    inputs=model.inputs, values={k: v for k, v in model.values.items() if k in known},
+                    symbols=model.symbols, description=model.description, references=model.references)
+    bad = [name for name in unknown
+           if model.symbols[name] in (model.A.free_symbols | model.C.free_symbols | model.time_scale.free_symbols)]
+    if bad:
+        raise CodegenError(f"unknown parameter(s) {bad} enter A, C or the time scaling; the adaptive observer "
+                           "of seed 001 (3.4) needs them only in d and b")
+    sig, par, dt, env, index = _environment(reduced, [*gain_names, *gamma_names])
+    N = n + p + n * p
+    x = ca.SX.sym("x", N)
+    s, A, C, c, psi = _affine_parts(model, env, sig, unknown)
+    y = sig[0]
+    g = [ca.if_else(s > 0, s * par[index[f"K_plus_{z}"]], s * par[index[f"K_minus_{z}"]]) for z in model.states]
+    G = [[par[index[f"Gamma_{a}_{b}"]] for b in unknown] for a in unknown]
+
+    def rhs(v: ca.SX) -> ca.SX:
+        w = [v[i] for i in range(n)]
+        th = [v[n + j] for j in range(p)]
+        U = [[v[n + p + i * p + j] for j in range(p)] for i in range(n)]
+        e = y - _sum([_lin(C, w)])
+        r = [_sum([_lin(C, [U[i][j] for i in range(n)])]) for j in range(p)]
+        m = [_sum([_lin(G[j], r)]) for j in range(p)]
+        rows = []
+        for i in range(n):
+            Aw = _lin(A[i], w)
+            parts = [None if Aw is None else s * Aw, c[i]]
+            parts += [psi[i][j] * th[j] for j in range(p) if psi[i][j] is not None]
+            gain = _sum([g[i], *[U[i][j] * m[j] for j in range(p)]]) if p else g[i]
+            parts.append(gain * e)
+            rows.append(_sum(parts))
+        rows += [m[j] * e for j in range(p)]
+        for i in range(n):
+            for j in range(p):
+                AU = _lin(A[i], [U[k][j] for k in range(n)])
+                rows.append(_sum([None if AU is None else s * AU, -(g[i] * r[j]), psi[i][j]]))
+        return ca.vertcat(*rows)
+
+    flat_gamma = [float(Gamma[i][j]) for i in range(p) for j in range(p)]
+    values = ([defaults[name] for name in known] + [float(k) for k in K_plus] + [float(k) for k in K_minus]
+              + flat_gamma)
+    states = (*model.states, *unknown, *[f"Upsilon_{z}_{u}" for z in model.states for u in unknown])
+    return Translation(x=x, signals=sig, params=par, dt=dt, rhs=rhs, scale=s, guards=_guards(reduced, env),
+                       state_names=states, signal_names=tuple(model.signals), param_names=tuple(index),
+                       default_params=tuple(values))
