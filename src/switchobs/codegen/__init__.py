@@ -2,7 +2,9 @@
 
 Public API
 ----------
-generate_observer   -- model + gains -> GeneratedObserver (``<prefix>.h``, ``<prefix>.c``, README)
+generate_observer   -- model + gains -> GeneratedObserver (``<prefix>.h``, ``<prefix>.c``, README); switched
+                       observer (seed 000 (8)-(9)) or, with ``unknown``, the adaptive observer (seed 001 (3.4))
+generate_super_twisting -- the super-twisting observer of seed 003 (8)-(9), Euler scheme (13)
 GeneratedObserver   -- the generated files and what they mean (names, defaults, checks, stack)
 compile_observer    -- compile with the system C compiler (cached) and bind with ctypes
 CObserver           -- the compiled observer: ``step`` / ``run`` like the Python reference observers
@@ -11,9 +13,11 @@ default_prefix      -- ``switchobs_<model>`` with non-identifier characters as `
 """
 
 from ._build import CObserver, cache_directory, compile_observer
-from ._generate import METHODS, REALS, GeneratedObserver, default_prefix, generate_observer
+from ._generate import (METHODS, REALS, GeneratedObserver, default_prefix, generate_observer,
+                        generate_super_twisting)
 from ._status import STATUS_TEXT, StepStatus
 from ._translate import Guard, domain_guards
 
 __all__ = ["CObserver", "GeneratedObserver", "Guard", "METHODS", "REALS", "STATUS_TEXT", "StepStatus",
-           "cache_directory", "compile_observer", "default_prefix", "domain_guards", "generate_observer"]
+           "cache_directory", "compile_observer", "default_prefix", "domain_guards", "generate_observer",
+           "generate_super_twisting"]

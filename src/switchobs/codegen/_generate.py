@@ -35,9 +35,10 @@ from ..model import Model, numeric, rational_value
 from ._emit import Kernel, float_literal, kernel
 from ._readme import readme
 from ._status import STATUS_TEXT, StepStatus
-from ._translate import GUARD_TESTS, Guard, Translation, translate_adaptive, translate_switched
+from ._translate import (GUARD_TESTS, Guard, Translation, translate_adaptive, translate_super_twisting,
+                         translate_switched)
 
-__all__ = ["GeneratedObserver", "generate_observer", "default_prefix", "REALS", "METHODS"]
+__all__ = ["GeneratedObserver", "generate_observer", "generate_super_twisting", "default_prefix", "REALS", "METHODS"]
 
 REALS = ("double", "float")
 METHODS = ("rk4", "euler")
@@ -51,6 +52,13 @@ _C_KEYWORDS = frozenset(
 def default_prefix(model_name: str) -> str:
     """``switchobs_<model>`` with every character that is not a C identifier character turned into ``_``."""
     return "switchobs_" + re.sub(r"[^A-Za-z0-9_]", "_", model_name)
+
+
+def _check_options(real: str, method: str) -> None:
+    if real not in REALS:
+        raise CodegenError(f"real must be one of {list(REALS)}, got {real!r}")
+    if method not in METHODS:
+        raise CodegenError(f"method must be one of {list(METHODS)}, got {method!r}")
 
 
 def _check_prefix(prefix: str) -> str:
@@ -97,7 +105,15 @@ class GeneratedObserver:
     header, source, readme : str
         Text of ``<prefix>.h``, ``<prefix>.c`` and ``README.md``.
     casadi_version : str
+    description : str
+        What is observed (the model's description).
+    equations : tuple of str
+        The observer equations, as written in the files' comments.
+    signal_roles : tuple of str
+        What each signal is (measured output, external signal, input).
     references : mapping str -> str
+    step_function : casadi.Function
+        The same step as a casadi Function ``(x, signals, params, dt) -> x_next`` (not compared, not in JSON).
     """
 
     prefix: str
@@ -116,6 +132,9 @@ class GeneratedObserver:
     source: str
     readme: str
     casadi_version: str
+    description: str = ""
+    equations: tuple[str, ...] = ()
+    signal_roles: tuple[str, ...] = ()
     references: Mapping[str, str] = field(default_factory=dict)
     step_function: ca.Function | None = field(default=None, repr=False, compare=False)
 
@@ -241,6 +260,8 @@ def _defaults(model: Model, values: Mapping[str, Any], extra_names: Sequence[str
 
 # ----------------------------------------------------------------------------- assembly
 def _step_expression(tr: Translation, method: str) -> ca.SX:
+    if tr.advance is not None:
+        return tr.advance(method)
     x, dt = tr.x, tr.dt
     k1 = tr.rhs(x)
     if method == "euler":
@@ -266,8 +287,40 @@ def _guard_value(guard: Guard, expr: ca.SX, tr: Translation, index: int, real: s
     return "g", k
 
 
-def _assemble(tr: Translation, *, model: Model, kind: str, real: str, method: str, prefix: str,
+@dataclass(frozen=True)
+class _Info:
+    """What the files say about the observer besides its numbers."""
+
+    name: str
+    description: str
+    equations: tuple[str, ...]
+    signal_roles: tuple[str, ...]
+    references: Mapping[str, str]
+
+
+def _model_info(model: Model, kind: str) -> _Info:
+    s = model.time_scale
+    if kind == "adaptive":
+        eq = ("switched adaptive observer (seed 001 eq. (3.4)): with g = s K(s), e = y - C w, r = Upsilon' C',",
+              "q = Gamma r:  w' = s A w + c + Psi theta + (g + Upsilon q) e,  theta' = q e,",
+              f"Upsilon' = s A Upsilon - g r' + Psi,  where c + Psi theta = s d + b u,  s = {s}.")
+    else:
+        eq = (f"dzhat/dt = s (A zhat + d(y) + K (y - C zhat)) + b(y) u,  s = {s},",
+              "K = K_plus where s > 0, K_minus otherwise (the correction s K e is continuous at s = 0).")
+    y = sum((c * model.symbols[z] for c, z in zip(model.C, model.states)), sp.Integer(0))
+    roles = [f"measured output {model.output} = {sp.sstr(y)}"]
+    for name in model.external:
+        sym = model.symbols[name]
+        roles.append("external signal" + (" (> 0)" if sym.is_positive else " (< 0)" if sym.is_negative else ""))
+    roles += ["input"] * len(model.inputs)
+    return _Info(name=model.name, description=model.description or "user model", equations=eq,
+                 signal_roles=tuple(roles), references=dict(model.references))
+
+
+def _assemble(tr: Translation, *, info: _Info, kind: str, real: str, method: str, prefix: str,
               command: str | None) -> GeneratedObserver:
+    if method not in tr.methods:
+        raise CodegenError(f"the {kind} observer admits only method {list(tr.methods)}, got {method!r}")
     P = prefix.upper()
     x_macros = _macro_names("state", tr.state_names)
     s_macros = _macro_names("signal", tr.signal_names)
@@ -275,15 +328,21 @@ def _assemble(tr: Translation, *, model: Model, kind: str, real: str, method: st
     step_expr = _step_expression(tr, method)
     step_k = kernel(f"{prefix}_kernel", [("x", tr.x), ("sig", tr.signals), ("par", tr.params), ("dt", tr.dt)],
                     step_expr, real=real, prefix=prefix)
-    scale_k = kernel(f"{prefix}_scale", [("sig", tr.signals), ("par", tr.params)], tr.scale, real=real,
-                     prefix=prefix)
-    kernels = [step_k, scale_k]
+    kernels = [step_k]
+    if tr.scale.is_constant():
+        scale_check: list[str] = []
+    else:
+        scale_k = kernel(f"{prefix}_scale", [("sig", tr.signals), ("par", tr.params)], tr.scale, real=real,
+                         prefix=prefix)
+        kernels.append(scale_k)
+        scale_check = ["    " + scale_k.call("&g", sig="sig", par="par"),
+                       f"    if (!isfinite(g)) return {P}_ERR_UNDEFINED_TIME_SCALE;  /* s must be finite */"]
     checks: list[str] = []
     scale_done = False
     for i, (guard, expr) in enumerate(tr.guards):
         if guard.status != StepStatus.UNDEFINED_TIME_SCALE and guard.status != StepStatus.BAD_PARAM \
                 and not scale_done:
-            checks += _scale_check(scale_k, P)
+            checks += scale_check
             scale_done = True
         value, k = _guard_value(guard, expr, tr, i, real, prefix, P)
         if k is not None:
@@ -292,32 +351,28 @@ def _assemble(tr: Translation, *, model: Model, kind: str, real: str, method: st
         test = GUARD_TESTS[guard.kind].format(g=value)
         checks.append(f"    if (!({test})) return {P}_ERR_{guard.status.name};  /* {_comment(guard.reason)} */")
     if not scale_done:
-        checks += _scale_check(scale_k, P)
+        checks += scale_check
 
     step_fn = ca.Function(f"{prefix}_step", [tr.x, tr.signals, tr.params, tr.dt], [step_expr],
                           ["x", "signals", "params", "dt"], ["x_next"])
     stack_reals = max(k.temporaries for k in kernels) + len(tr.state_names) + 1
-    text_args = dict(tr=tr, model=model, kind=kind, real=real, method=method, prefix=prefix, P=P,
+    text_args = dict(tr=tr, info=info, kind=kind, real=real, method=method, prefix=prefix, P=P,
                      x_macros=x_macros, s_macros=s_macros, p_macros=p_macros, command=command,
                      temporaries=step_k.temporaries, stack_reals=stack_reals)
     header = _header(**text_args)
     source = _source(kernels=kernels, checks=checks, **text_args)
     gen = GeneratedObserver(
-        prefix=prefix, real=real, method=method, kind=kind, model_name=model.name, state_names=tr.state_names,
+        prefix=prefix, real=real, method=method, kind=kind, model_name=info.name, state_names=tr.state_names,
         signal_names=tr.signal_names, param_names=tr.param_names, default_params=tr.default_params,
         guards=tuple(g for g, _ in tr.guards), temporaries=step_k.temporaries, stack_reals=stack_reals,
-        header=header, source=source, readme="", casadi_version=ca.__version__,
-        references=dict(model.references), step_function=step_fn)
-    return dataclasses.replace(gen, readme=readme(gen, model=model, command=command))
+        header=header, source=source, readme="", casadi_version=ca.__version__, description=info.description,
+        equations=info.equations, signal_roles=info.signal_roles, references=dict(info.references),
+        step_function=step_fn)
+    return dataclasses.replace(gen, readme=readme(gen, command=command))
 
 
 def _comment(text: str) -> str:
     return text.replace("*/", "* /")
-
-
-def _scale_check(scale_k: Kernel, P: str) -> list[str]:
-    return ["    " + scale_k.call("&g", sig="sig", par="par"),
-            f"    if (!isfinite(g)) return {P}_ERR_UNDEFINED_TIME_SCALE;  /* s(y) must be finite */"]
 
 
 def generate_observer(model: Model, gains: GainDesign | tuple[Sequence[float], Sequence[float]], *,
@@ -377,10 +432,7 @@ def generate_observer(model: Model, gains: GainDesign | tuple[Sequence[float], S
     >>> gen.prefix, gen.nx, gen.ns, gen.np
     ('switchobs_abs_xbs3', 3, 3, 9)
     """
-    if real not in REALS:
-        raise CodegenError(f"real must be one of {list(REALS)}, got {real!r}")
-    if method not in METHODS:
-        raise CodegenError(f"method must be one of {list(METHODS)}, got {method!r}")
+    _check_options(real, method)
     prefix = _check_prefix(default_prefix(model.name) if prefix is None else prefix)
     values = dict(values or {})
     design_syms = [s.name for s in gains.design_symbols] if isinstance(gains, GainDesign) else []
@@ -413,29 +465,58 @@ def generate_observer(model: Model, gains: GainDesign | tuple[Sequence[float], S
             raise CodegenError("Gamma is only used by the adaptive observer; give the unknown parameters too")
         tr = translate_switched(model, Kp, Km, defaults)
         kind = "switched"
-    return _assemble(tr, model=model, kind=kind, real=real, method=method, prefix=prefix, command=command)
+    return _assemble(tr, info=_model_info(model, kind), kind=kind, real=real, method=method, prefix=prefix,
+                     command=command)
+
+
+def generate_super_twisting(lam: float, alpha: float, *, real: str = "double",
+                            prefix: str = "switchobs_super_twisting", command: str | None = None) -> GeneratedObserver:
+    """Generate the C super-twisting observer of seed 003 eq. (8)-(9), Euler scheme (13).
+
+    Parameters
+    ----------
+    lam, alpha : float
+        Gains of (9) (e.g. from ``switchobs.sensors.super_twisting_gains``, rule (12)); positive.
+        They are runtime parameters ``lam`` and ``alpha``.
+    real : {"double", "float"}
+    prefix : str
+
+    Returns
+    -------
+    GeneratedObserver
+        Signals ``(x1, f1)`` (measured angle, known acceleration), state
+        ``(x1_hat, x2_hat, z2)`` with ``z2`` the injection of the last step.
+
+    References
+    ----------
+    seed 003 eq. (8), (9), (12), (13), (20).
+    """
+    _check_options(real, "euler")
+    prefix = _check_prefix(prefix)
+    for name, v in (("lam", lam), ("alpha", alpha)):
+        if not (isinstance(v, (int, float)) and np.isfinite(v) and v > 0):
+            raise CodegenError(f"{name} = {v!r} must be a finite number > 0 (seed 003 eq. (9))")
+    info = _Info(name="super-twisting", description="wheel angle and speed from an angle sensor (seed 003)",
+                 equations=("super-twisting observer (seed 003 eq. (8)-(9)), Euler scheme (13): e = x1 - x1_hat,",
+                            "x1_hat' = x2_hat + lam |e|^(1/2) sign(e),  x2_hat' = f1 + alpha sign(e);",
+                            "state entry z2 = alpha sign(e) is the injection of the last step (seed 003 eq. (20))."),
+                 signal_roles=("measured angle x1 (rad)", "known acceleration f1 (rad/s^2)"),
+                 references={"observer": "seed 003 eq. (8)-(9)", "discretisation": "seed 003 eq. (13)",
+                             "gains": "seed 003 eq. (12)"})
+    return _assemble(translate_super_twisting(lam, alpha), info=info, kind="super-twisting", real=real,
+                     method="euler", prefix=prefix, command=command)
 
 
 # ----------------------------------------------------------------------------- text
-def _equations(kind: str, model: Model) -> list[str]:
-    eq = [f"dzhat/dt = s (A zhat + d(y) + K (y - C zhat)) + b(y) u,  s = {model.time_scale},",
-          "K = K_plus where s > 0, K_minus otherwise (the correction s K e is continuous at s = 0)."]
-    if kind == "adaptive":
-        eq = ["switched adaptive observer (seed 001 eq. (3.4)): with g = s K(s), e = y - C w, r = Upsilon' C',",
-              "q = Gamma r:  w' = s A w + c + Psi theta + (g + Upsilon q) e,  theta' = q e,",
-              f"Upsilon' = s A Upsilon - g r' + Psi,  s = {model.time_scale}, c + Psi theta = s d + b u."]
-    return eq
-
-
-def _header(*, tr: Translation, model: Model, kind: str, real: str, method: str, prefix: str, P: str,
+def _header(*, tr: Translation, info: _Info, kind: str, real: str, method: str, prefix: str, P: str,
             x_macros: Sequence[str], s_macros: Sequence[str], p_macros: Sequence[str], command: str | None,
             temporaries: int, stack_reals: int) -> str:
     guard = f"{P}_H"
     scheme = ("classic RK4" if method == "rk4" else "forward Euler") + ", signals held over the step (zero-order hold)"
     lines = [
         f"/* {prefix}.h -- generated by switchobs with casadi {ca.__version__}; do not edit.",
-        f" * Model {model.name!r}: {model.description or 'user model'}.",
-        *[f" * {e}" for e in _equations(kind, model)],
+        f" * Model {info.name!r}: {info.description}.",
+        *[f" * {e}" for e in info.equations],
         f" * Discretisation: {scheme}.  Real type: {real}.",
         " * No heap allocation, no global mutable state: re-entrant and thread-safe.",
     ]
@@ -451,7 +532,7 @@ def _header(*, tr: Translation, model: Model, kind: str, real: str, method: str,
     lines += [f"#define {P}_X_{m} {i}" for i, m in enumerate(x_macros)]
     lines += ["", "/* Signals, one row per step. */"]
     lines += [f"#define {P}_S_{m} {i}  /* {role} */" for i, (m, role) in
-              enumerate(zip(s_macros, _signal_roles(model)))]
+              enumerate(zip(s_macros, info.signal_roles))]
     lines += ["", "/* Parameters (index into params; default in <prefix>_default_params). */"]
     lines += [f"#define {P}_P_{m} {i}  /* default {float_literal(v, 'double')} */"
               for i, (m, v) in enumerate(zip(p_macros, tr.default_params))]
@@ -482,17 +563,7 @@ def _header(*, tr: Translation, model: Model, kind: str, real: str, method: str,
     return "\n".join(lines)
 
 
-def _signal_roles(model: Model) -> list[str]:
-    roles = [f"measured output {model.output} = {sp.sstr(sum(c * model.symbols.get(z, sp.Symbol(z)) for c, z in zip(model.C, model.states)))}"]
-    for name in model.external:
-        sym = model.symbols[name]
-        sign = " (> 0)" if sym.is_positive else " (< 0)" if sym.is_negative else ""
-        roles.append(f"external signal{sign}")
-    roles += ["input" for _ in model.inputs]
-    return roles
-
-
-def _source(*, tr: Translation, model: Model, kind: str, real: str, method: str, prefix: str, P: str,
+def _source(*, tr: Translation, info: _Info, kind: str, real: str, method: str, prefix: str, P: str,
             kernels: Sequence[Kernel], checks: Sequence[str], command: str | None, **_: Any) -> str:
     nx = f"{P}_NX"
     used = "\n".join(k.body for k in kernels)
@@ -524,7 +595,7 @@ def _source(*, tr: Translation, model: Model, kind: str, real: str, method: str,
         f"static int {prefix}_advance(const {real} *x, const {real} *sig, const {real} *par, {real} dt, "
         f"{real} *next)",
         "{",
-        f"    {real} g;",
+        f"    {real} g;" if any("&g" in c for c in checks) else None,
         "    int i;",
         f"    if (!(dt > {zero}) || !isfinite(dt)) return {P}_ERR_BAD_DT;",
         f"    for (i = 0; i < {nx}; ++i) if (!isfinite(x[i])) return {P}_ERR_NONFINITE_STATE;",

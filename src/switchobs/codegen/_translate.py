@@ -33,7 +33,8 @@ from ..exceptions import CodegenError
 from ..model import Model
 from ._status import StepStatus
 
-__all__ = ["Guard", "Translation", "to_casadi", "domain_guards", "translate_switched", "translate_adaptive"]
+__all__ = ["Guard", "Translation", "to_casadi", "domain_guards", "translate_switched", "translate_adaptive",
+           "translate_super_twisting"]
 
 #: Guard kinds and the C comparison that holds when the guard is satisfied (NaN fails every one).
 GUARD_TESTS: Mapping[str, str] = {
@@ -238,27 +239,34 @@ class Translation:
     ----------
     x, signals, params, dt : casadi.SX
         Symbolic inputs of the step (state, signals ``(y, external..., inputs...)``, parameters, step).
-    rhs : callable
-        ``rhs(x) -> dx/dt`` at the same signals and parameters (casadi SX column).
+    rhs : callable or None
+        ``rhs(x) -> dx/dt`` at the same signals and parameters (casadi SX column);
+        None when ``advance`` gives the step directly.
     scale : casadi.SX
         The time scaling ``s``.
     guards : tuple of (Guard, casadi.SX)
         The conditions with their casadi expression.
     state_names, signal_names, param_names : tuple of str
     default_params : tuple of float
+    advance : callable, optional
+        ``advance(method) -> x_next`` replacing the generic RK4 / Euler step of ``rhs``.
+    methods : tuple of str
+        The discretisations this observer admits.
     """
 
     x: ca.SX
     signals: ca.SX
     params: ca.SX
     dt: ca.SX
-    rhs: Callable[[ca.SX], ca.SX]
+    rhs: Callable[[ca.SX], ca.SX] | None
     scale: ca.SX
     guards: tuple[tuple[Guard, ca.SX], ...]
     state_names: tuple[str, ...]
     signal_names: tuple[str, ...]
     param_names: tuple[str, ...]
     default_params: tuple[float, ...]
+    advance: Callable[[str], ca.SX] | None = None
+    methods: tuple[str, ...] = ("rk4", "euler")
 
 
 def _environment(model: Model, extra_params: Sequence[str]) -> tuple[ca.SX, ca.SX, ca.SX, dict, dict]:
@@ -441,3 +449,39 @@ def translate_adaptive(model: Model, K_plus: Sequence[float], K_minus: Sequence[
     return Translation(x=x, signals=sig, params=par, dt=dt, rhs=rhs, scale=s, guards=_guards(reduced, env),
                        state_names=states, signal_names=tuple(model.signals), param_names=tuple(index),
                        default_params=tuple(values))
+
+
+def translate_super_twisting(lam: float, alpha: float) -> Translation:
+    """The super-twisting observer of seed 003 eq. (8)-(9) with its Euler scheme (13), as casadi SX.
+
+    Signals ``(x1, f1)``: the measured angle and the known part of the
+    acceleration; parameters ``(lam, alpha)``; state ``(x1_hat, x2_hat, z2)``
+    where ``z2 = alpha sign(x1 - x1_hat)`` is the injection used over the last
+    step (an output, not integrated), so that the equivalent output injection
+    (seed 003 eq. (20)) is available from the state::
+
+        e = x1 - x1_hat,  z1 = lam |e|^(1/2) sign(e),  z2 = alpha sign(e)
+        x1_hat+ = x1_hat + dt (x2_hat + z1),  x2_hat+ = x2_hat + dt (f1 + z2)
+
+    Only forward Euler is admitted: (13) is the seed's discretisation, and the
+    stages of RK4 would straddle the discontinuity of ``sign``.
+    """
+    sig = ca.SX.sym("signals", 2)
+    par = ca.SX.sym("params", 2)
+    dt = ca.SX.sym("dt")
+    x = ca.SX.sym("x", 3)
+    e = sig[0] - x[0]
+    sgn = ca.sign(e)
+    z1 = par[0] * ca.sqrt(ca.fabs(e)) * sgn
+    z2 = par[1] * sgn
+
+    def advance(method: str) -> ca.SX:  # noqa: ARG001 - only "euler" is admitted
+        return ca.vertcat(x[0] + dt * (x[1] + z1), x[1] + dt * (sig[1] + z2), z2)
+
+    lam_s, alpha_s = sp.Symbol("lam", positive=True), sp.Symbol("alpha", positive=True)
+    guards = tuple((Guard(sym, "positive", StepStatus.BAD_PARAM, f"gain {sym.name} of seed 003 (9) must be > 0"),
+                    par[i]) for i, sym in enumerate((lam_s, alpha_s)))
+    return Translation(x=x, signals=sig, params=par, dt=dt, rhs=None, scale=ca.SX(1.0), guards=guards,
+                       state_names=("x1_hat", "x2_hat", "z2"), signal_names=("x1", "f1"),
+                       param_names=("lam", "alpha"), default_params=(float(lam), float(alpha)),
+                       advance=advance, methods=("euler",))

@@ -1,0 +1,114 @@
+"""``switchobs codegen MODEL``: the designed observer as C (casadi), with a README for integrators."""
+
+from __future__ import annotations
+
+import argparse
+import shlex
+
+from ..codegen import generate_observer, generate_super_twisting
+from ..design import design
+from ..exceptions import CodegenError, SpectrumError
+from ..model import load_model
+from ._common import emit_json, parse_params
+
+__all__ = ["register"]
+
+#: Pseudo-model name of the super-twisting observer of seed 003 (not a switchobs model).
+SUPER_TWISTING = "super-twisting"
+
+
+def register(sub: argparse._SubParsersAction) -> None:
+    p = sub.add_parser("codegen", help="generate the observer as strict C99 (casadi): <prefix>.c/.h and a README",
+                       description="Generate C for the switched observer of MODEL (built-in or TOML), the "
+                                   "adaptive observer of seed 001 (3.4) with --unknown, or the super-twisting "
+                                   f"observer of seed 003 with MODEL = {SUPER_TWISTING}.")
+    p.add_argument("model", metavar="MODEL",
+                   help="built-in model (abs-xbs3, abs-xbs4, abs-adaptive2, normal-form-N), a TOML file, "
+                        f"or {SUPER_TWISTING}")
+    p.add_argument("--param", action="append", default=[], metavar="NAME=VALUE",
+                   help="default of a runtime parameter or value of a design symbol (repeatable), e.g. "
+                        "--param beta1=40 --param c=24; for super-twisting: lam and alpha")
+    target = p.add_mutually_exclusive_group()
+    target.add_argument("--spectrum", help='poles of A_plus, e.g. "-40,-60,-60" or "-beta1,-beta2,-beta2" '
+                        "(give the betas with --param)")
+    target.add_argument("--charpoly", help='target det(sI - A_plus) in s, e.g. "s^3 + 6*s^2 + 11*s + 6"')
+    target.add_argument("--gains-plus", help="K_plus entries, comma-separated")
+    p.add_argument("--gains-minus", help="K_minus entries (default: the Theorem 1 choice)")
+    p.add_argument("--unknown", help="parameters estimated by the adaptive observer of seed 001 (3.4), e.g. c,d")
+    p.add_argument("--gamma", help="adaptation gain Gamma: its diagonal (\"50,20\") or rows (\"50,0;0,20\")")
+    p.add_argument("--real", choices=("double", "float"), default="double", help="C real type (default double)")
+    p.add_argument("--method", choices=("rk4", "euler"), default=None,
+                   help="discretisation, signals held over the step (default rk4; super-twisting: euler)")
+    p.add_argument("--prefix", help="C prefix (default switchobs_<model>, non-identifier characters as _)")
+    p.add_argument("--out", required=True, metavar="DIR", help="directory for <prefix>.c, <prefix>.h, README.md")
+    p.add_argument("--json", action="store_true", help="print the description as JSON")
+    p.set_defaults(func=run)
+
+
+def _command(args: argparse.Namespace) -> str:
+    """The command line that regenerates the files (recorded in their comments)."""
+    words = ["switchobs", "codegen", args.model]
+    for opt in ("spectrum", "charpoly", "gains_plus", "gains_minus", "unknown", "gamma"):
+        value = getattr(args, opt)
+        if value is not None:
+            words.append(f"--{opt.replace('_', '-')}={value}")
+    words += [f"--param={item}" for item in args.param]
+    words += [f"--real={args.real}"]
+    if args.method:
+        words.append(f"--method={args.method}")
+    if args.prefix:
+        words.append(f"--prefix={args.prefix}")
+    words.append("--out=DIR")
+    return shlex.join(words)
+
+
+def _gamma(text: str) -> list[list[float]] | list[float]:
+    try:
+        if ";" in text:
+            return [[float(v) for v in row.split(",")] for row in text.split(";")]
+        return [float(v) for v in text.split(",")]
+    except ValueError:
+        raise CodegenError(f"--gamma expects numbers like \"50,20\" or \"50,0;0,20\", got {text!r}") from None
+
+
+def run(args: argparse.Namespace) -> int:
+    values = parse_params(args.param)
+    command = _command(args)
+    if args.model == SUPER_TWISTING:
+        extra = sorted(set(values) - {"lam", "alpha"})
+        missing = [k for k in ("lam", "alpha") if k not in values]
+        if extra or missing:
+            raise CodegenError(f"{SUPER_TWISTING} takes --param lam=... and --param alpha=... (seed 003 (9), rule "
+                               f"(12)); missing {missing}, unexpected {extra}")
+        if args.spectrum or args.charpoly or args.gains_plus or args.gains_minus or args.unknown or args.gamma:
+            raise CodegenError(f"{SUPER_TWISTING} has no gain design or unknowns; give only lam and alpha")
+        if args.method not in (None, "euler"):
+            raise CodegenError(f"{SUPER_TWISTING} is discretised by the Euler scheme of seed 003 (13); "
+                               f"--method {args.method} is not available")
+        try:
+            lam, alpha = float(values["lam"]), float(values["alpha"])
+        except ValueError:
+            raise CodegenError(f"lam and alpha must be numbers, got {values['lam']!r}, {values['alpha']!r}") from None
+        gen = generate_super_twisting(lam, alpha, real=args.real,
+                                      prefix=args.prefix or "switchobs_super_twisting", command=command)
+    else:
+        if not (args.spectrum or args.charpoly or args.gains_plus):
+            raise SpectrumError("give the gains with --spectrum, --charpoly or --gains-plus")
+        model = load_model(args.model)
+        gains = design(model, args.spectrum, characteristic_polynomial=args.charpoly,
+                       K_plus=args.gains_plus, K_minus=args.gains_minus)
+        unknown = [u.strip() for u in args.unknown.split(",")] if args.unknown else []
+        if args.gamma and not unknown:
+            raise CodegenError("--gamma is the adaptation gain of the adaptive observer; give --unknown too")
+        gen = generate_observer(model, gains, values=values, real=args.real, method=args.method or "rk4",
+                                prefix=args.prefix, unknown=unknown,
+                                Gamma=_gamma(args.gamma) if args.gamma else None, command=command)
+    paths = gen.write(args.out)
+    if args.json:
+        data = gen.to_json()
+        data["written"] = [str(p) for p in paths]
+        emit_json(data)
+    else:
+        print(gen)
+        print(f"  wrote {', '.join(str(p) for p in paths)}")
+    return 0
