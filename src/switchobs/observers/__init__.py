@@ -9,6 +9,7 @@ xbs4_observer            -- 4D unknown-road XBS observer (abs-xbs4, seed 000 Sec
 adaptive_xbs_observer    -- switched adaptive XBS observer (abs-adaptive2, seed 001 Ch. 3), gains from beta, Gamma
 xbs_gains                -- the beta-parametrised gain pairs of the three built-in XBS models
 ObserverXbsEstimator     -- an observer as a switchobs.plants.XbsEstimator (reset / update -> mu_hat)
+SteppingObserver         -- protocol the adapter needs (step, readout, names): a C binding can satisfy it
 ErrorCode                -- status codes of a refused step (mirrored by the generated C)
 METHODS                  -- discretisations: "rk4" (default), "euler"
 
@@ -17,10 +18,10 @@ Every observer has ``step(xhat, signals, dt)``, ``run(xhat0, signal_rows, dt)``,
 ``Model.signals`` (y, external signals, inputs) and held constant over a step.
 """
 
-from ._adapter import ObserverXbsEstimator
+from ._adapter import ObserverXbsEstimator, SteppingObserver
 from ._engine import METHODS, ErrorCode
 from ._observer import AdaptiveSwitchedObserver, SwitchedObserver
 from ._xbs import adaptive_xbs_observer, xbs3_observer, xbs4_observer, xbs_gains
 
-__all__ = ["AdaptiveSwitchedObserver", "ErrorCode", "METHODS", "ObserverXbsEstimator", "SwitchedObserver",
+__all__ = ["AdaptiveSwitchedObserver", "ErrorCode", "METHODS", "ObserverXbsEstimator", "SteppingObserver", "SwitchedObserver",
            "adaptive_xbs_observer", "xbs3_observer", "xbs4_observer", "xbs_gains"]

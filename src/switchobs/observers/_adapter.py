@@ -52,7 +52,7 @@ class ObserverXbsEstimator:
     >>> est = ObserverXbsEstimator(xbs3_observer(10.0, 20.0), initial_state={"z2": 0.3})
     >>> est.reset(0.0, -5.0, 20.0)
     >>> round(est.update(0.001, -5.1, 19.99, 120.0, 0.001), 6)
-    0.300848
+    0.297506
     """
 
     def __init__(self, observer: SteppingObserver, *, initial_state: Mapping[str, float] | None = None):
@@ -79,6 +79,10 @@ class ObserverXbsEstimator:
         """The last XBS estimate."""
         return self._estimate
 
+    def describe(self) -> str:
+        """One line naming the observer, for the simulation report."""
+        return str(self.observer).splitlines()[0]
+
     def reset(self, t0: float, y0: float, vx0: float) -> None:  # noqa: ARG002 - the observer is time-invariant
         """Restart from the first measurements (protocol :class:`switchobs.plants.XbsEstimator`)."""
         names = self.observer.state_names
@@ -96,7 +100,8 @@ class ObserverXbsEstimator:
         Raises
         ------
         ObserverInputError
-            As :meth:`SwitchedObserver.step` (e.g. ``vx <= 0``, ``dt < 0``).
+            As :meth:`SwitchedObserver.step`, checked on the held (mean)
+            signals (e.g. a held ``vx <= 0``, ``dt < 0``).
         """
         if dt != 0.0:
             signals = (0.5 * (self._y + y), 0.5 * (self._vx + vx), u)

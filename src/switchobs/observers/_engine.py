@@ -182,7 +182,7 @@ class _Source:
 
     # per-step quantities -------------------------------------------------------
     def prelude_names(self) -> list[str]:
-        spec = self.spec
+        """The per-step quantities, in the order ``prelude`` returns them and ``loop`` unpacks them."""
         names = ["s", *self.g, *[c for c in self.c if c]]
         names += [q for row in self.psi for q in row if q]
         return names
@@ -323,6 +323,7 @@ class _Source:
 _NONFINITE = ("the step produced a non-finite state (overflow, or a domain error in d(y), b(y)); "
               "reduce dt or check the signals")
 
+
 class Kernel:
     """Compiled step / derivative / run of one observer, with the input checks of :class:`ErrorCode`."""
 
@@ -367,11 +368,11 @@ class Kernel:
             raise self._fail(ErrorCode.BAD_DT, f"dt = {dt_f!r} must be finite and > 0 (seconds)")
         return dt_f
 
-    def check_state(self, x: list[float], row: int | None = None) -> None:
+    def check_state(self, x: list[float]) -> None:
         for name, v in zip(self.spec.state_names, x):
             if not math.isfinite(v):
                 raise self._fail(ErrorCode.NONFINITE_STATE, f"state {name} = {v!r} is not finite; "
-                                 "reset the observer", row)
+                                 "reset the observer")
 
     def check_signals(self, sig: list[float], row: int | None = None) -> float:
         """Codes 3 and 4 for one row of signals; returns the time scaling s."""
@@ -393,13 +394,13 @@ class Kernel:
                              + ", ".join(f"{k} = {v!r}" for k, v in zip(names, sig)), row)
         return s
 
-    def _result(self, fn, *args, row: int | None = None) -> list[float]:
+    def _result(self, fn, *args) -> list[float]:
         try:
             out = fn(*args)
         except (ArithmeticError, ValueError):  # math domain errors, division by zero, overflow in math.exp
             out = (math.nan,)
         if not all(map(math.isfinite, out)):
-            raise self._fail(ErrorCode.NONFINITE_RESULT, _NONFINITE, row)
+            raise self._fail(ErrorCode.NONFINITE_RESULT, _NONFINITE)
         return list(out)
 
     # -------------------------------------------------------------- numerics
@@ -441,5 +442,6 @@ class Kernel:
             raise self._fail(ErrorCode.NONFINITE_RESULT, _NONFINITE, int(np.argmin(finite)))
         if valid < k:
             self.check_signals(rows[valid].tolist(), valid)
+            # numpy found s non-finite where math did not (never seen; refuse rather than skip rows)
             raise self._fail(ErrorCode.UNDEFINED_TIME_SCALE, "time scaling is not finite", valid)
         return traj

@@ -364,12 +364,18 @@ class SwitchedObserver(_Observer):
 
     Examples
     --------
+    >>> from switchobs.design import design
     >>> from switchobs.model import builtin_model
-    >>> obs = SwitchedObserver(builtin_model("abs-xbs3"), [84.0, -19.5, -21.3], [-16.0, -4.4, 21.3])
+    >>> model = builtin_model("abs-xbs3")
+    >>> g = design(model, "-beta1,-beta2,-beta2").numeric({"beta1": 10, "beta2": 20})
+    >>> obs = SwitchedObserver(model, g["K_plus"], g["K_minus"], readout="z2")
     >>> obs.signal_names
     ('y', 'vx', 'u')
-    >>> obs.step([0.0, 0.5, 0.0], [10.0, 20.0, 0.0], 1e-3).round(6).tolist()
-    [-0.468646, 0.500852, 0.0]
+    >>> x = obs.step([0.0, 0.5, 0.0], [10.0, 20.0, 0.0], 1e-3)
+    >>> x.round(6).tolist()
+    [0.36948, 0.412037, -0.10469]
+    >>> round(obs.readout(x), 6)
+    0.412037
     """
 
     def __init__(self, model: Model, K_plus: Any, K_minus: Any, *, params: Mapping[str, Any] | None = None,
