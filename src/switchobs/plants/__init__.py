@@ -1,0 +1,35 @@
+"""ABS plants, brake controllers and braking simulations (seed 000 Secs. II, V; seed 001 Chs. 2-4).
+
+Tyres and roads
+    :class:`Burckhardt`, :data:`ROADS`, :func:`road`, :func:`road_names`,
+    :class:`ExponentialTyre`, :func:`fit_exponential`, :func:`relation19_alphas`,
+    :class:`RoadChange`, :class:`RoadSchedule`
+Vehicle
+    :class:`QuarterCar`, :class:`BrakeActuator`, :class:`PrescribedSpeed`
+Controllers
+    :class:`FivePhaseABS`, :class:`TwoPhaseABS`, :class:`ContinuousXbsControl`
+Observer interface
+    :class:`XbsEstimator` (protocol), :class:`TrueXbs` (oracle)
+Simulation
+    :class:`BrakingScenario`, :func:`simulate`, :class:`BrakingResult`,
+    :class:`BrakingMetrics`, :class:`Assumption1Status`, :func:`assumption1`
+"""
+
+from ._controllers import ContinuousXbsControl, FivePhaseABS, TwoPhaseABS
+from ._estimator import TrueXbs, XbsEstimator
+from ._metrics import Assumption1Status, BrakingMetrics, Reconvergence, assumption1, pe_level, zero_crossings
+from ._road import RoadChange, RoadSchedule
+from ._simulate import SERIES, BrakingResult, BrakingScenario, simulate
+from ._tyre import (D1_HOANG, D2_HOANG, ROADS, Burckhardt, ExponentialTyre, fit_exponential, relation19_alphas,
+                    road, road_names)
+from ._vehicle import GRAVITY, BrakeActuator, PrescribedSpeed, QuarterCar
+
+__all__ = [
+    "Burckhardt", "ROADS", "road", "road_names", "ExponentialTyre", "fit_exponential", "relation19_alphas",
+    "D1_HOANG", "D2_HOANG", "RoadChange", "RoadSchedule",
+    "QuarterCar", "BrakeActuator", "PrescribedSpeed", "GRAVITY",
+    "FivePhaseABS", "TwoPhaseABS", "ContinuousXbsControl",
+    "XbsEstimator", "TrueXbs",
+    "BrakingScenario", "BrakingResult", "simulate", "SERIES",
+    "BrakingMetrics", "Assumption1Status", "Reconvergence", "assumption1", "pe_level", "zero_crossings",
+]

@@ -1,0 +1,73 @@
+"""The interface through which a simulation feeds an XBS observer, and a trivial oracle.
+
+The simulation loop of :mod:`switchobs.plants` never imports an observer: it
+receives any object with the two methods of :class:`XbsEstimator` (structural
+typing), so that the Python reference observers of :mod:`switchobs.observers`
+and, later, bindings of the generated C observers plug in the same way.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from typing import Protocol, runtime_checkable
+
+__all__ = ["XbsEstimator", "TrueXbs"]
+
+
+@runtime_checkable
+class XbsEstimator(Protocol):
+    """An on-line estimator of the extended braking stiffness ``mu'(lambda)``.
+
+    The simulation calls :meth:`reset` once, at the first sample, then
+    :meth:`update` after every accepted integration step (steps are split at
+    the hybrid events, so ``dt`` is not constant).
+
+    Signals, all in SI units except the pressure rate:
+
+    ``y``
+        measured wheel-acceleration offset ``x2 = R dω/dt - a_x`` [m/s²] at time ``t``
+        (seed 000 Sec. II-B, seed 001 eq. (2.2)); it is ``z1`` of the observer models.
+    ``vx``
+        vehicle speed used by the observer [m/s] (the true speed, or an estimate
+        for the two-axle vehicle of seed 001 Sec. 3.6).
+    ``u``
+        brake-pressure rate ``dP_b/dt`` [bar/s] averaged over the step, i.e.
+        ``(P_b(t) - P_b(t - dt)) / dt``, so that ``∫ u dt`` is exact over the step.
+    ``dt``
+        length of the step just taken [s]; the observer advances from ``t - dt`` to ``t``.
+    """
+
+    def reset(self, t0: float, y0: float, vx0: float) -> None:
+        """Restart the estimator at time ``t0`` from the first measurements."""
+        ...
+
+    def update(self, t: float, y: float, vx: float, u: float, dt: float) -> float:
+        """Advance from ``t - dt`` to ``t`` and return the XBS estimate ``mu_hat'(t)``."""
+        ...
+
+
+class TrueXbs:
+    """Oracle 'estimator' returning the true XBS; state feedback for tests and references.
+
+    Parameters
+    ----------
+    truth : callable
+        ``truth() -> float`` giving the plant's current ``mu'(lambda)``; the
+        simulation provides :meth:`switchobs.plants.BrakingSimulation.true_xbs`.
+
+    Examples
+    --------
+    >>> est = TrueXbs(lambda: 0.25)
+    >>> est.reset(0.0, -3.0, 30.0)
+    >>> est.update(0.001, -3.1, 29.99, 100.0, 0.001)
+    0.25
+    """
+
+    def __init__(self, truth: Callable[[], float]):
+        self._truth = truth
+
+    def reset(self, t0: float, y0: float, vx0: float) -> None:  # noqa: ARG002 - nothing to restart
+        return None
+
+    def update(self, t: float, y: float, vx: float, u: float, dt: float) -> float:  # noqa: ARG002
+        return float(self._truth())

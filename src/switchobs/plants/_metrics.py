@@ -1,0 +1,290 @@
+"""Figures of merit of a braking run: distances, friction, XBS error and Assumption 1.
+
+Definitions (all over the recorded samples, trapezoidal integrals):
+
+* ``mean_friction`` ``mū``: time average of the braking friction ``-mu(lambda(t))``
+  over the whole run; ``braking_distance_m = vx(0)² / (2 g mū)`` is the braking
+  distance as seed 001 Table 4.1 defines it (Sec. 4.4).
+* ``stopping_distance_m``: distance actually travelled until the stop speed.
+* XBS error ``e = mu_hat' - mu'``: RMS over the ABS-active part; after each road
+  change (and from the ABS activation for the initial road) the re-convergence
+  time is the time after the end of the transition from which ``|e|`` stays
+  within 10 % of the peak-to-peak range of the true XBS over that segment.
+* Assumption 1 of seed 001 (Sec. 3.2) on the measured output ``y = x2`` over the
+  ABS-active part: the PE level ``min_t ∫_t^{t+T0} y² dς`` of (3.17), the zero
+  crossings of ``y`` with their slopes (3.18) and their smallest separation, the
+  dwell time (3.19); also the smallest eigenvalue of ``∫ Ψᵀ Ψ`` over windows of
+  ``T1 = 1 s`` for the adaptive observer's regressor (3.7), and the final
+  rescaled time ``τ = ∫ |y| / vx dt`` of (3.12).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import asdict, dataclass
+from typing import TYPE_CHECKING, Any
+
+import numpy as np
+import numpy.typing as npt
+
+from ._vehicle import GRAVITY
+
+if TYPE_CHECKING:
+    from ._simulate import BrakingScenario
+
+__all__ = ["BrakingMetrics", "Assumption1Status", "Reconvergence", "braking_metrics", "assumption1",
+           "pe_level", "zero_crossings", "regressor_pe"]
+
+#: Defaults of the Assumption 1 check.
+PE_WINDOW_S = 0.2
+PE_MIN = 1.0            # (m/s²)² s: far below an ABS cycle (~ 50 (m/s²)² s per 0.2 s), far above y -> 0
+DWELL_MIN_S = 0.002
+PSI_WINDOW_S = 1.0
+
+
+def _cumtrapz(t: npt.NDArray[np.float64], f: npt.NDArray[np.float64]) -> npt.NDArray[np.float64]:
+    out = np.zeros_like(t)
+    if len(t) > 1:
+        out[1:] = np.cumsum(0.5 * (f[1:] + f[:-1]) * np.diff(t))
+    return out
+
+
+def _window_min(t: npt.NDArray[np.float64], cum: npt.NDArray[np.float64], window: float) -> float | None:
+    """``min_t (F(t + window) - F(t))`` for a cumulative integral ``F`` sampled at ``t``."""
+    if len(t) < 2 or t[-1] - t[0] < window:
+        return None
+    starts = t[t <= t[-1] - window]
+    return float(np.min(np.interp(starts + window, t, cum) - np.interp(starts, t, cum)))
+
+
+def pe_level(t: npt.ArrayLike, y: npt.ArrayLike, window_s: float = PE_WINDOW_S) -> float | None:
+    """PE level of (3.17): ``min_t ∫_t^{t+T0} y(ς)² dς`` (None if the record is shorter than ``T0``)."""
+    t = np.asarray(t, dtype=float)
+    y = np.asarray(y, dtype=float)
+    return _window_min(t, _cumtrapz(t, y * y), window_s)
+
+
+def zero_crossings(t: npt.ArrayLike, y: npt.ArrayLike) -> tuple[npt.NDArray[np.float64], npt.NDArray[np.float64]]:
+    """Times of the sign changes of ``y`` (linear interpolation) and ``dy/dt`` there (3.18)."""
+    t = np.asarray(t, dtype=float)
+    y = np.asarray(y, dtype=float)
+    s = np.sign(y)
+    # a sample exactly at zero carries the previous sign, so a touch is one crossing, not two
+    nz = np.where(s != 0, np.arange(len(s)), 0)
+    s = s[np.maximum.accumulate(nz)]
+    idx = np.nonzero(s[:-1] * s[1:] < 0)[0]
+    t0, t1, y0, y1 = t[idx], t[idx + 1], y[idx], y[idx + 1]
+    times = t0 - y0 * (t1 - t0) / (y1 - y0)
+    slopes = (y1 - y0) / (t1 - t0)
+    return times, slopes
+
+
+def regressor_pe(t: npt.ArrayLike, y: npt.ArrayLike, vx: npt.ArrayLike, u: npt.ArrayLike, *, a: float,
+                 b: float, window_s: float = PSI_WINDOW_S) -> float | None:
+    """Smallest eigenvalue of ``∫_t^{t+T1} Ψᵀ Ψ`` over ``t`` (seed 001 eq. (3.7), Fig. 3.1).
+
+    ``Ψ = [[y²/vx, 0], [-(b/a) u, y/vx]]`` (eq. (3.3)), ``b = R γ_b / J``.
+    """
+    t = np.asarray(t, dtype=float)
+    y = np.asarray(y, dtype=float)
+    vx = np.asarray(vx, dtype=float)
+    u = np.asarray(u, dtype=float)
+    p, q, r = y * y / vx, -(b / a) * u, y / vx
+    if len(t) < 2 or t[-1] - t[0] < window_s:
+        return None
+    starts = t[t <= t[-1] - window_s]
+
+    def window(f: npt.NDArray[np.float64]) -> npt.NDArray[np.float64]:
+        cum = _cumtrapz(t, f)
+        return np.interp(starts + window_s, t, cum) - np.interp(starts, t, cum)
+
+    m11, m12, m22 = window(p * p + q * q), window(q * r), window(r * r)
+    eig_min = 0.5 * (m11 + m22 - np.sqrt((m11 - m22) ** 2 + 4.0 * m12 ** 2))
+    return float(np.min(eig_min))
+
+
+@dataclass(frozen=True)
+class Assumption1Status:
+    """Assumption 1 of seed 001 (Sec. 3.2) measured on a trajectory.
+
+    Attributes
+    ----------
+    pe_window_s, pe_level : float, float | None
+        ``T0`` and ``min_t ∫_t^{t+T0} y²`` (3.17).
+    crossings : int
+        Number of zero crossings of ``y``.
+    dwell_time_s : float | None
+        Smallest separation of consecutive crossings (3.19).
+    min_crossing_slope : float | None
+        Smallest ``|dy/dt|`` at a crossing (3.18).
+    tau_final : float
+        Rescaled time ``∫ |y| / vx dt`` (3.12) reached at the end.
+    regressor_pe : float | None
+        Smallest eigenvalue of the windowed ``∫ Ψᵀ Ψ`` (3.7), ``T1 = 1 s``.
+    holds : bool
+        ``pe_level >= pe_min``, at least two crossings, and ``dwell_time_s >= dwell_min_s``.
+    """
+
+    pe_window_s: float
+    pe_level: float | None
+    crossings: int
+    dwell_time_s: float | None
+    min_crossing_slope: float | None
+    tau_final: float
+    regressor_pe: float | None
+    pe_min: float
+    dwell_min_s: float
+    holds: bool
+
+    def to_json(self) -> dict[str, Any]:
+        return asdict(self)
+
+    def __str__(self) -> str:
+        def f(v: float | None, fmt: str) -> str:
+            return "n/a" if v is None else format(v, fmt)
+        return (f"Assumption 1 {'holds' if self.holds else 'FAILS'}: PE level {f(self.pe_level, '.3g')} "
+                f"(T0 = {self.pe_window_s:g} s, need >= {self.pe_min:g}), {self.crossings} zero crossings, "
+                f"dwell {f(self.dwell_time_s, '.4f')} s, min |dy/dt| at crossings "
+                f"{f(self.min_crossing_slope, '.3g')}, tau = {self.tau_final:.3g}, "
+                f"regressor PE {f(self.regressor_pe, '.3g')}")
+
+
+def assumption1(t: npt.ArrayLike, y: npt.ArrayLike, vx: npt.ArrayLike, u: npt.ArrayLike | None = None, *,
+                a: float | None = None, b: float | None = None, pe_window_s: float = PE_WINDOW_S,
+                pe_min: float = PE_MIN, dwell_min_s: float = DWELL_MIN_S) -> Assumption1Status:
+    """Check Assumption 1 (seed 001 Sec. 3.2) on a sampled output ``y`` (the regressor PE needs ``u, a, b``)."""
+    t = np.asarray(t, dtype=float)
+    y = np.asarray(y, dtype=float)
+    vx = np.asarray(vx, dtype=float)
+    level = pe_level(t, y, pe_window_s)
+    times, slopes = zero_crossings(t, y)
+    dwell = float(np.min(np.diff(times))) if len(times) >= 2 else None
+    slope = float(np.min(np.abs(slopes))) if len(slopes) else None
+    tau = float(_cumtrapz(t, np.abs(y) / vx)[-1]) if len(t) else 0.0
+    psi = None
+    if u is not None and a is not None and b is not None:
+        psi = regressor_pe(t, y, vx, u, a=a, b=b)
+    holds = bool(level is not None and level >= pe_min and dwell is not None and dwell >= dwell_min_s)
+    return Assumption1Status(pe_window_s=pe_window_s, pe_level=level, crossings=int(len(times)),
+                             dwell_time_s=dwell, min_crossing_slope=slope, tau_final=tau, regressor_pe=psi,
+                             pe_min=pe_min, dwell_min_s=dwell_min_s, holds=holds)
+
+
+@dataclass(frozen=True)
+class Reconvergence:
+    """Re-convergence of the XBS estimate after a road change (or after the ABS activation)."""
+
+    label: str
+    settle_start_s: float
+    band: float
+    time_s: float | None       # None: still outside the band at the end of the segment
+
+    def to_json(self) -> dict[str, Any]:
+        return asdict(self)
+
+
+@dataclass(frozen=True)
+class BrakingMetrics:
+    """Scalar results of a braking run (see the module notes for the definitions)."""
+
+    initial_speed_m_s: float
+    final_speed_m_s: float
+    stop_time_s: float | None
+    stopping_distance_m: float
+    mean_friction: float
+    braking_distance_m: float
+    abs_activation_s: float | None
+    mean_friction_abs: float | None
+    efficiency: float | None
+    abs_cycles: int
+    slip_mean: float | None
+    slip_std: float | None
+    xbs_rms_error: float | None
+    reconvergence: tuple[Reconvergence, ...]
+    assumption1: Assumption1Status | None
+
+    def to_json(self) -> dict[str, Any]:
+        out = asdict(self)
+        out["reconvergence"] = [r.to_json() for r in self.reconvergence]
+        out["assumption1"] = None if self.assumption1 is None else self.assumption1.to_json()
+        return out
+
+    def __str__(self) -> str:
+        stop = "not reached" if self.stop_time_s is None else f"{self.stop_time_s:.3f} s"
+        lines = [f"stop: {stop}, stopping distance {self.stopping_distance_m:.2f} m, final speed "
+                 f"{self.final_speed_m_s:.2f} m/s",
+                 f"mean friction {self.mean_friction:.4f} -> braking distance (Table 4.1 definition) "
+                 f"{self.braking_distance_m:.2f} m"]
+        if self.abs_activation_s is not None:
+            eff = "" if self.efficiency is None else f", {100 * self.efficiency:.1f} % of the peak"
+            lines.append(f"ABS active from {self.abs_activation_s:.3f} s: {self.abs_cycles} cycles, mean friction "
+                         f"{self.mean_friction_abs:.4f}{eff}, slip {self.slip_mean:.4f} ± {self.slip_std:.4f}")
+        if self.xbs_rms_error is not None:
+            rec = "; ".join(f"{r.label}: " + ("not re-converged" if r.time_s is None else f"{r.time_s:.3f} s")
+                            for r in self.reconvergence)
+            lines.append(f"XBS estimation error: RMS {self.xbs_rms_error:.4g}; re-convergence within 10 %: {rec}")
+        if self.assumption1 is not None:
+            lines.append(str(self.assumption1))
+        return "\n".join(lines)
+
+
+def _reconvergence(t: npt.NDArray[np.float64], err: npt.NDArray[np.float64], truth: npt.NDArray[np.float64],
+                   start: float, stop: float, label: str) -> Reconvergence | None:
+    sel = (t >= start) & (t <= stop)
+    if np.count_nonzero(sel) < 2:
+        return None
+    ts, es, xs = t[sel], np.abs(err[sel]), truth[sel]
+    band = 0.1 * float(np.max(xs) - np.min(xs))
+    outside = np.nonzero(~(es <= band))[0]
+    if len(outside) == 0:
+        return Reconvergence(label, start, band, 0.0)
+    last = int(outside[-1])
+    if last == len(ts) - 1:
+        return Reconvergence(label, start, band, None)
+    return Reconvergence(label, start, band, float(ts[last + 1] - start))
+
+
+def braking_metrics(series: dict[str, npt.NDArray[np.float64]], scenario: BrakingScenario,
+                    road_starts: list[float], *, status: str, have_estimate: bool) -> BrakingMetrics:
+    """Compute :class:`BrakingMetrics` from the recorded series of a run."""
+    t, vx, mu = series["t"], series["vx"], series["mu"]
+    v0 = scenario.speed_m_s
+    duration = float(t[-1] - t[0])
+    mean_mu = float(_cumtrapz(t, -mu)[-1] / duration) if duration > 0 else 0.0
+    braking = v0 * v0 / (2.0 * GRAVITY * mean_mu) if mean_mu > 0 else math.inf
+    phase = series["phase"]
+    active = np.nonzero(phase >= 1)[0]
+    t_abs = float(t[active[0]]) if len(active) else None
+    cycles = int(np.count_nonzero((phase[1:] == 1) & (phase[:-1] != 1)))
+    mean_abs = eff = slip_mean = slip_std = rms = None
+    reconv: list[Reconvergence] = []
+    a1 = None
+    if t_abs is not None:
+        sel = t >= t_abs
+        ta = t[sel]
+        span = float(ta[-1] - ta[0])
+        if span > 0:
+            mean_abs = float(_cumtrapz(ta, -mu[sel])[-1] / span)
+            if not scenario.roads.changes:
+                eff = mean_abs / -scenario.roads.initial.peak_friction
+        slip_mean = float(np.mean(series["lambda"][sel]))
+        slip_std = float(np.std(series["lambda"][sel]))
+        veh = scenario.vehicle
+        a1 = assumption1(ta, series["x2"][sel], vx[sel], series["u"][sel], a=veh.a, b=veh.b)
+        if have_estimate:
+            err = series["xbs_hat"] - series["xbs"]
+            rms = float(np.sqrt(np.mean(err[sel] ** 2)))
+            changes = scenario.roads.changes
+            bounds = [t_abs] + [s + c.duration_s for s, c in zip(road_starts, changes)]
+            labels = ["initial"] + [f"-> {c.road.name}" for c in changes[:len(road_starts)]]
+            ends = [s for s in road_starts] + [float(t[-1])]
+            for start, stop, label in zip(bounds, ends, labels):
+                r = _reconvergence(t, err, series["xbs"], max(start, t_abs), stop, label)
+                if r is not None:
+                    reconv.append(r)
+    stop_time = float(t[-1]) if status == "stopped" else None
+    return BrakingMetrics(initial_speed_m_s=v0, final_speed_m_s=float(vx[-1]), stop_time_s=stop_time,
+                          stopping_distance_m=float(series["x"][-1]), mean_friction=mean_mu,
+                          braking_distance_m=braking, abs_activation_s=t_abs, mean_friction_abs=mean_abs,
+                          efficiency=eff, abs_cycles=cycles, slip_mean=slip_mean, slip_std=slip_std,
+                          xbs_rms_error=rms, reconvergence=tuple(reconv), assumption1=a1)

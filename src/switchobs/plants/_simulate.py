@@ -1,0 +1,515 @@
+"""Emergency-braking simulation of the quarter car with a hybrid brake controller.
+
+The plant is the non-simplified quarter car of seed 001 eq. (2.1) (seed 000
+eq. (1)-(3)); the controller is a hybrid automaton of
+:mod:`switchobs.plants._controllers`; an optional :class:`XbsEstimator` is
+stepped once per accepted step with the measured signals.
+
+Integration
+-----------
+Classical RK4 with a fixed step ``dt_s`` (default 1 ms).  Below
+``low_speed_m_s`` (default 5 m/s) the step shrinks as ``dt_s * vx /
+low_speed_m_s``: that is a fixed step in the time ``s = ∫ dt / vx`` of seed 001
+eq. (3.21), in which the wheel dynamics does not depend on the speed, so the
+stiffness ``a mu'(lambda) / vx`` never leaves the RK4 stability region
+(``|h a mu' / vx| <= 1.3`` for the roads of Table 2.1 with the default rig).
+Steps end exactly on the known breakpoints (start and end of the road
+transitions, end of a reference trajectory, the final time); controller phase
+changes, position-triggered road changes and the final stop are located within
+the step (:func:`locate_event`).  Only the controller's guards that read an
+observer's estimate are checked at the step ends, where the estimate changes.
+"""
+
+from __future__ import annotations
+
+import bisect
+import math
+import time
+from collections.abc import Sequence
+from dataclasses import dataclass, field, replace
+from typing import Any
+
+import numpy as np
+import numpy.typing as npt
+
+from ..exceptions import SimulationError
+from ._controllers import ContinuousXbsControl, Controller, FivePhaseABS, TwoPhaseABS
+from ._estimator import TrueXbs, XbsEstimator
+from ._hybrid import locate_event, rk4_step
+from ._metrics import BrakingMetrics, braking_metrics
+from ._road import RoadChange, RoadSchedule, _RoadState
+from ._tyre import Burckhardt
+from ._vehicle import GRAVITY, BrakeActuator, PrescribedSpeed, QuarterCar
+
+__all__ = ["BrakingScenario", "BrakingResult", "simulate", "SERIES"]
+
+#: Columns of :attr:`BrakingResult.series`, in order.
+SERIES = ("t", "omega", "vx", "x", "P_b", "lambda", "mu", "xbs", "x2", "ax", "omega_dot", "u", "phase",
+          "xbs_hat")
+
+_MAX_CASCADE = 8
+
+
+def _check(owner: str, key: str, value: Any, *, positive: bool = True, allow_zero: bool = False) -> None:
+    if not isinstance(value, (int, float)) or isinstance(value, bool) or not math.isfinite(value):
+        raise SimulationError(f"{owner}: {key} must be a finite number, got {value!r}")
+    if positive and (value < 0 or (value == 0 and not allow_zero)):
+        raise SimulationError(f"{owner}: {key} must be {'>= 0' if allow_zero else '> 0'}, got {value!r}")
+
+
+@dataclass(frozen=True)
+class BrakingScenario:
+    """Everything that defines one braking simulation.
+
+    Parameters
+    ----------
+    roads : RoadSchedule or str
+        Surface(s); a road name means one surface throughout.
+    speed_m_s : float
+        Initial vehicle speed ``vx(0)`` [m/s], > 0.
+    controller : FivePhaseABS, TwoPhaseABS or ContinuousXbsControl
+    name : str
+    vehicle : QuarterCar
+    actuator : BrakeActuator
+    speed_profile : PrescribedSpeed, optional
+        ``None``: the vehicle decelerates by its own tyre force (2.1b);
+        otherwise the speed is imposed (drum test rig).
+    duration_s : float
+        Upper bound of the simulated time [s], > 0.
+    stop_speed_m_s : float
+        The run ends when ``vx`` reaches it (2.5 km/h by default, the lower
+        bound of seed 001 eq. (2.3)).
+    dt_s : float
+        Integration step [s] (see the module notes), in ``(0, 0.01]``.
+    low_speed_m_s : float
+        Speed below which the step shrinks proportionally to ``vx``.
+
+    Raises
+    ------
+    SimulationError
+        On any non-positive speed, duration or step, or a stop speed not below
+        the initial speed.
+    """
+
+    roads: RoadSchedule
+    speed_m_s: float
+    controller: Controller = field(default_factory=FivePhaseABS)
+    name: str = "braking"
+    vehicle: QuarterCar = field(default_factory=QuarterCar)
+    actuator: BrakeActuator = field(default_factory=BrakeActuator)
+    speed_profile: PrescribedSpeed | None = None
+    duration_s: float = 60.0
+    stop_speed_m_s: float = 2.5 / 3.6
+    dt_s: float = 1e-3
+    low_speed_m_s: float = 5.0
+
+    def __post_init__(self) -> None:
+        if isinstance(self.roads, (str, Burckhardt)):
+            object.__setattr__(self, "roads", RoadSchedule(self.roads))
+        if not isinstance(self.roads, RoadSchedule):
+            raise SimulationError(f"roads must be a RoadSchedule or a road name, got {self.roads!r}")
+        if not isinstance(self.controller, (FivePhaseABS, TwoPhaseABS, ContinuousXbsControl)):
+            raise SimulationError(f"unknown controller {self.controller!r}")
+        owner = f"scenario {self.name!r}"
+        _check(owner, "initial speed speed_m_s", self.speed_m_s)
+        _check(owner, "duration_s", self.duration_s)
+        _check(owner, "stop_speed_m_s", self.stop_speed_m_s)
+        _check(owner, "dt_s", self.dt_s)
+        _check(owner, "low_speed_m_s", self.low_speed_m_s, allow_zero=True)
+        if self.dt_s > 0.01:
+            raise SimulationError(f"{owner}: dt_s = {self.dt_s} s is too coarse for the wheel dynamics; "
+                                  f"use at most 0.01 s (default 0.001 s)")
+        if self.stop_speed_m_s >= self.speed_m_s:
+            raise SimulationError(f"{owner}: the stop speed {self.stop_speed_m_s:g} m/s must be below the "
+                                  f"initial speed {self.speed_m_s:g} m/s")
+        if 0.0 < self.actuator.delay_s < self.dt_s:
+            raise SimulationError(f"{owner}: an actuator delay of {self.actuator.delay_s:g} s is shorter than "
+                                  f"the step {self.dt_s:g} s; use 0 or at least one step")
+
+    @property
+    def speed_kmh(self) -> float:
+        return self.speed_m_s * 3.6
+
+    def with_step(self, dt_s: float) -> BrakingScenario:
+        """The same scenario integrated with another step (for convergence checks)."""
+        return replace(self, dt_s=dt_s)
+
+    def to_json(self) -> dict[str, Any]:
+        return {"name": self.name, "roads": self.roads.to_json(), "speed_m_s": self.speed_m_s,
+                "speed_kmh": self.speed_kmh, "controller": self.controller.to_json(),
+                "vehicle": self.vehicle.to_json(), "actuator": self.actuator.to_json(),
+                "speed_profile": None if self.speed_profile is None else self.speed_profile.to_json(),
+                "duration_s": self.duration_s, "stop_speed_m_s": self.stop_speed_m_s, "dt_s": self.dt_s,
+                "low_speed_m_s": self.low_speed_m_s}
+
+    def __str__(self) -> str:
+        profile = "free vehicle (2.1b)" if self.speed_profile is None else \
+            f"prescribed deceleration {self.speed_profile.decel_m_s2:g} m/s²"
+        return (f"scenario {self.name}: {self.roads}, {self.speed_kmh:.0f} km/h, {profile}, "
+                f"{self.controller}, dt={self.dt_s * 1e3:g} ms")
+
+
+@dataclass(frozen=True)
+class BrakingResult:
+    """Time histories and metrics of one braking simulation.
+
+    Attributes
+    ----------
+    scenario : BrakingScenario
+    status : str
+        ``stopped`` (reached the stop speed), ``duration`` (time bound reached)
+        or ``controller-singular`` (the continuous law became undefined).
+    message : str
+        Details of the status.
+    series : dict of str -> ndarray
+        The columns of :data:`SERIES`: time, wheel speed ``omega``, ``vx``,
+        travelled distance ``x``, pressure ``P_b`` [bar], slip ``lambda``,
+        friction ``mu``, true XBS ``xbs``, ``x2 = R dω/dt - a_x``, ``ax``,
+        ``omega_dot``, applied ``u = dP_b/dt`` [bar/s], controller ``phase``,
+        estimate ``xbs_hat`` (NaN without estimator).
+    events : tuple of (float, str)
+        Phase changes and road changes with their times.
+    metrics : BrakingMetrics
+    observer : str
+        Description of the estimator (``none`` without).
+    observer_in_loop : bool
+        Whether the controller used the estimate (otherwise the true XBS).
+    wall_time_s, observer_time_s, steps : float, float, int
+        Cost of the run (measured, for the benchmark).
+    """
+
+    scenario: BrakingScenario
+    status: str
+    message: str
+    series: dict[str, npt.NDArray[np.float64]]
+    events: tuple[tuple[float, str], ...]
+    metrics: BrakingMetrics
+    observer: str
+    observer_in_loop: bool
+    wall_time_s: float
+    observer_time_s: float
+    steps: int
+
+    def to_json(self, *, include_series: bool = False) -> dict[str, Any]:
+        out: dict[str, Any] = {
+            "scenario": self.scenario.to_json(), "status": self.status, "message": self.message,
+            "observer": self.observer, "observer_in_loop": self.observer_in_loop,
+            "metrics": self.metrics.to_json(),
+            "cost": {"steps": self.steps, "wall_time_s": self.wall_time_s, "observer_time_s": self.observer_time_s,
+                     "simulated_time_s": float(self.series["t"][-1])},
+            "events": [{"t": t, "event": e} for t, e in self.events],
+        }
+        if include_series:
+            out["series"] = {k: [None if math.isnan(v) else float(v) for v in arr]
+                             for k, arr in self.series.items()}
+        return out
+
+    def __str__(self) -> str:
+        lines = [str(self.scenario), f"  status: {self.status}" + (f" ({self.message})" if self.message else ""),
+                 f"  observer: {self.observer}" + (" (in the loop)" if self.observer_in_loop and
+                                                    self.observer != "none" else "")]
+        lines += ["  " + line for line in str(self.metrics).splitlines()]
+        sim_t = float(self.series["t"][-1])
+        lines.append(f"  cost: {self.steps} steps, {self.wall_time_s:.3f} s wall for {sim_t:.3f} s simulated "
+                     f"(x{sim_t / max(self.wall_time_s, 1e-12):.1f} real time)")
+        return "\n".join(lines)
+
+
+class _Loop:
+    """The inner loop; plain floats and locals, no numpy per step."""
+
+    def __init__(self, sc: BrakingScenario, estimator: XbsEstimator | None, in_loop: bool):
+        veh = sc.vehicle
+        self.sc = sc
+        self.R = veh.radius_m
+        self.J = veh.inertia_kg_m2
+        self.Fz = veh.load_n
+        self.gb = veh.brake_gain_nm_bar
+        self.m = veh.mass_kg
+        self.road = _RoadState(sc.roads)
+        self.prescribed = sc.speed_profile is not None
+        self.decel = sc.speed_profile.decel_m_s2 if sc.speed_profile is not None else 0.0
+        self.max_rate = sc.actuator.max_rate_bar_s
+        self.p_max = sc.actuator.max_pressure_bar
+        self.delay = sc.actuator.delay_s
+        ctrl = sc.controller
+        if isinstance(ctrl, ContinuousXbsControl):
+            first = sc.roads.initial
+            self.ctrl = ctrl.runtime(veh, sc.actuator, c=first.c, d=first.d)
+        else:
+            self.ctrl = ctrl.runtime(veh, sc.actuator)
+        self.estimator = estimator
+        # the controller reads the estimate only if it needs an XBS and the estimator is in the loop
+        self.use_hat = bool(estimator is not None and in_loop and ctrl.uses_xbs)
+        self.xbs_hat = math.nan
+        self.hist_t: list[float] = []
+        self.hist_u: list[float] = []
+        # outputs of the last rhs evaluation
+        self.o_lam = self.o_mu = self.o_xbs = self.o_omdot = self.o_ax = self.o_x2 = self.o_ucmd = self.o_u = 0.0
+
+    def true_xbs(self) -> float:
+        return self.o_xbs
+
+    def rhs(self, t: float, y: tuple[float, ...]) -> tuple[float, float, float, float]:
+        om, vx, _x, P = y
+        R = self.R
+        lam = (R * om - vx) / vx
+        mu, xbs = self.road.eval(lam, t)
+        fx = self.Fz * mu
+        omdot = (-R * fx - self.gb * P) / self.J
+        if om <= 0.0 and omdot < 0.0:
+            omdot = 0.0               # locked wheel: static friction holds it at rest
+        ax = -self.decel if self.prescribed else fx / self.m
+        x2 = R * omdot - ax
+        if self.delay > 0.0:
+            ucmd = self._delayed(t - self.delay)
+        else:
+            ucmd = self.ctrl.rate(t, x2, R * om, vx, self.xbs_hat if self.use_hat else xbs)
+        u = ucmd
+        if u > self.max_rate:
+            u = self.max_rate
+        elif u < -self.max_rate:
+            u = -self.max_rate
+        if (P <= 0.0 and u < 0.0) or (P >= self.p_max and u > 0.0):
+            u = 0.0
+        self.o_lam, self.o_mu, self.o_xbs, self.o_omdot, self.o_ax, self.o_x2 = lam, mu, xbs, omdot, ax, x2
+        self.o_ucmd, self.o_u = ucmd, u
+        return (omdot, ax, vx, u)
+
+    def _delayed(self, t: float) -> float:
+        ht = self.hist_t
+        if not ht or t < ht[0]:
+            return 0.0
+        i = bisect.bisect_right(ht, t) - 1
+        if i >= len(ht) - 1:
+            return self.hist_u[-1]
+        t0, t1 = ht[i], ht[i + 1]
+        if t1 <= t0:
+            return self.hist_u[i + 1]
+        w = (t - t0) / (t1 - t0)
+        return self.hist_u[i] + w * (self.hist_u[i + 1] - self.hist_u[i])
+
+    def _command_now(self, t: float, y: tuple[float, ...]) -> float:
+        """Controller output at a step end (kept for the delayed actuator)."""
+        xbs = self.xbs_hat if self.use_hat else self.o_xbs
+        return self.ctrl.rate(t, self.o_x2, self.R * y[0], y[1], xbs)
+
+    def guard_values(self) -> tuple[float, ...]:
+        return self.ctrl.guards(self.o_x2, self.xbs_hat if self.use_hat else self.o_xbs)
+
+    def run(self) -> BrakingResult:
+        sc = self.sc
+        wall0 = time.perf_counter()
+        obs_time = 0.0
+        R = self.R
+        t = 0.0
+        v0 = sc.speed_m_s
+        y: tuple[float, ...] = (v0 / R, v0, 0.0, 0.0)
+        ctrl = self.ctrl
+        road = self.road
+        est = self.estimator
+        dt, v_low, t_end, v_stop = sc.dt_s, sc.low_speed_m_s, sc.duration_s, sc.stop_speed_m_s
+        events: list[tuple[float, str]] = []
+        rows: list[tuple[float, ...]] = []
+        rhs = self.rhs
+        locate_ctrl = not (self.use_hat and ctrl.guards_use_xbs)
+
+        k1 = rhs(t, y)
+        if est is not None:
+            t_obs = time.perf_counter()
+            est.reset(t, self.o_x2, y[1])
+            obs_time += time.perf_counter() - t_obs
+        if self.delay > 0.0:
+            self.hist_t.append(t)
+            self.hist_u.append(self._command_now(t, y))
+            k1 = rhs(t, y)
+
+        def record() -> None:
+            rows.append((t, y[0], y[1], y[2], y[3], self.o_lam, self.o_mu, self.o_xbs, self.o_x2, self.o_ax,
+                         self.o_omdot, self.o_u, float(ctrl.phase), self.xbs_hat))
+
+        record()
+        status, message = "duration", f"reached the time bound {t_end:g} s"
+        steps = 0
+        g_ctrl = self.guard_values()
+        while True:
+            vx = y[1]
+            h = dt if vx >= v_low else dt * vx / v_low
+            # breakpoints: road transitions by time, end of a transition, controller kinks, final time
+            tb = t_end
+            pending = road.pending
+            if road.blending:
+                tb = min(tb, road.t0 + road.duration)
+            elif pending is not None and pending.at_time_s is not None:
+                tb = min(tb, pending.at_time_s)
+            tb = min(tb, ctrl.breakpoint())
+            at_break = t + h >= tb - 1e-12
+            if at_break:
+                h = tb - t
+            y1 = rk4_step(rhs, t, y, h, k1)
+            k_end = rhs(t + h, y1)
+            # located events: (theta, kind, index)
+            found: tuple[float, str, int] | None = None
+            guards: list[tuple[str, int, float, float]] = []
+            if locate_ctrl:
+                g_new = self.guard_values()
+                guards += [("ctrl", i, g0, g1) for i, (g0, g1) in enumerate(zip(g_ctrl, g_new)) if g1 > 0.0]
+            if y1[1] <= v_stop:
+                guards.append(("stop", 0, v_stop - vx, v_stop - y1[1]))
+            if not road.blending and pending is not None and pending.at_position_m is not None \
+                    and y1[2] >= pending.at_position_m:
+                guards.append(("road", 0, y[2] - pending.at_position_m, y1[2] - pending.at_position_m))
+            if guards:
+                best = 2.0
+                for kind, idx, g0, g1 in guards:
+                    theta = locate_event(rhs, t, y, h, k1, self._guard_fn(kind, idx), min(g0, 0.0), g1)
+                    if theta < best:
+                        best, found = theta, (theta, kind, idx)
+                assert found is not None
+                if found[0] < 1.0:
+                    h *= found[0]
+                    at_break = False
+                    y1 = rk4_step(rhs, t, y, h, k1)
+                    k_end = rhs(t + h, y1)
+            t += h
+            om, vx1, x1, P1 = y1
+            clamped = om < 0.0 or P1 < 0.0 or P1 > self.p_max
+            y = (max(om, 0.0), vx1, x1, min(max(P1, 0.0), self.p_max))
+            if clamped:
+                k_end = rhs(t, y)
+            steps += 1
+            if est is not None:
+                t_obs = time.perf_counter()
+                self.xbs_hat = est.update(t, self.o_x2, y[1], (y[3] - rows[-1][4]) / h, h)
+                obs_time += time.perf_counter() - t_obs
+            record()
+            changed = self.use_hat
+            # transitions: located event, time breakpoints, sampled guards, cascades
+            if found is not None and found[1] == "stop":
+                status, message = "stopped", f"vx reached {v_stop:.3f} m/s"
+                break
+            if found is not None and found[1] == "road":
+                road.start_change(t)
+                events.append((t, f"road -> {pending.road.name} (x = {y[2]:.2f} m)"))
+                changed = True
+            if at_break:
+                if road.blending and t >= road.t0 + road.duration - 1e-12:
+                    road.end_change()
+                    changed = True
+                elif not road.blending and pending is not None and pending.at_time_s is not None \
+                        and t >= pending.at_time_s - 1e-12:
+                    road.start_change(t)
+                    events.append((t, f"road -> {pending.road.name}"))
+                    changed = True
+            if found is not None and found[1] == "ctrl":
+                fire = found[2]
+            else:
+                fire = -1
+            if changed and fire < 0:
+                k_end = rhs(t, y)
+            cascade = 0
+            while True:
+                if fire < 0:
+                    g_ctrl = self.guard_values()
+                    fire = next((i for i, g in enumerate(g_ctrl) if g > 0.0), -1)
+                    if fire < 0:
+                        break
+                before = ctrl.phase
+                ctrl.fire(t, fire, self.o_x2, R * y[0], y[1])
+                events.append((t, f"phase {before} -> {ctrl.phase}"))
+                fire = -1
+                cascade += 1
+                if cascade > _MAX_CASCADE:
+                    raise SimulationError(
+                        f"scenario {sc.name!r}: the controller switched {cascade} times at t = {t:.6f} s "
+                        f"without time passing (phase {ctrl.phase}); check its thresholds")
+                k_end = rhs(t, y)
+                changed = True
+            failure = getattr(ctrl, "failure", None)
+            if failure:
+                status, message = "controller-singular", failure
+                break
+            if self.delay > 0.0:
+                self.hist_t.append(t)
+                self.hist_u.append(self._command_now(t, y))
+                if len(self.hist_t) > 4096:
+                    keep = bisect.bisect_left(self.hist_t, t - 2.0 * self.delay - dt)
+                    del self.hist_t[:keep], self.hist_u[:keep]
+            k1 = k_end if not changed else rhs(t, y)
+            if t >= t_end - 1e-12:
+                break
+        wall = time.perf_counter() - wall0
+        data = np.array(rows, dtype=float)
+        series = {name: data[:, i].copy() for i, name in enumerate(SERIES)}
+        metrics = braking_metrics(series, sc, road.starts, status=status,
+                                  have_estimate=est is not None)
+        observer = "none" if est is None else (est.describe() if hasattr(est, "describe") else type(est).__name__)
+        return BrakingResult(scenario=sc, status=status, message=message, series=series, events=tuple(events),
+                             metrics=metrics, observer=observer, observer_in_loop=self.use_hat,
+                             wall_time_s=wall, observer_time_s=obs_time, steps=steps)
+
+    def _guard_fn(self, kind: str, idx: int):  # noqa: ANN202 - internal closure factory
+        if kind == "ctrl":
+            def g(t: float, y: tuple[float, ...]) -> float:
+                self.rhs(t, y)
+                return self.guard_values()[idx]
+        elif kind == "stop":
+            v_stop = self.sc.stop_speed_m_s
+
+            def g(t: float, y: tuple[float, ...]) -> float:
+                return v_stop - y[1]
+        else:
+            x_change = self.road.pending.at_position_m
+
+            def g(t: float, y: tuple[float, ...]) -> float:
+                return y[2] - x_change
+        return g
+
+
+def simulate(scenario: BrakingScenario, *, estimator: XbsEstimator | str | None = None,
+             observer_in_loop: bool = True) -> BrakingResult:
+    """Simulate one emergency braking.
+
+    Parameters
+    ----------
+    scenario : BrakingScenario
+    estimator : XbsEstimator, "true" or None
+        Observer stepped along the run (an object with ``reset``/``update``,
+        see :class:`XbsEstimator`); ``"true"`` plugs the :class:`TrueXbs`
+        oracle (sampled true XBS).
+    observer_in_loop : bool
+        If true (default) controllers that need an XBS read the estimate
+        (output feedback, seed 001 Fig. 4.6); otherwise they read the true XBS
+        and the estimator runs in parallel (Fig. 4.5).
+
+    Returns
+    -------
+    BrakingResult
+
+    Raises
+    ------
+    SimulationError
+        On inadmissible settings, or when the controller switches endlessly
+        without time passing.
+
+    Examples
+    --------
+    >>> sc = BrakingScenario("dry-asphalt", speed_m_s=60 / 3.6)
+    >>> res = simulate(sc)
+    >>> res.status, 0.95 < res.metrics.efficiency < 1.0
+    ('stopped', True)
+    """
+    if not isinstance(scenario, BrakingScenario):
+        raise SimulationError(f"simulate() needs a BrakingScenario, got {type(scenario).__name__}")
+    if isinstance(estimator, str):
+        if estimator != "true":
+            raise SimulationError(f"estimator must be an XbsEstimator object, 'true' or None, got {estimator!r}")
+        loop = _Loop(scenario, None, observer_in_loop)
+        oracle = TrueXbs(loop.true_xbs)
+        loop.estimator = oracle
+        loop.use_hat = bool(observer_in_loop and scenario.controller.uses_xbs)
+        return loop.run()
+    if estimator is not None and not isinstance(estimator, XbsEstimator):
+        raise SimulationError(f"the estimator {estimator!r} lacks reset(t0, y0, vx0) and "
+                              f"update(t, y, vx, u, dt)")
+    return _Loop(scenario, estimator, observer_in_loop).run()

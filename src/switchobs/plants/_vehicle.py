@@ -1,0 +1,125 @@
+"""Parameters of the quarter car (seed 001 eq. (2.1)), its brake actuator and speed profiles."""
+
+from __future__ import annotations
+
+import math
+from dataclasses import asdict, dataclass
+from typing import Any
+
+from ..exceptions import SimulationError
+
+__all__ = ["QuarterCar", "BrakeActuator", "PrescribedSpeed", "GRAVITY"]
+
+GRAVITY = 9.81
+
+
+def _positive(owner: str, **values: float) -> None:
+    for key, value in values.items():
+        if not isinstance(value, (int, float)) or not math.isfinite(value) or value <= 0:
+            raise SimulationError(f"{owner}: {key} must be a finite number > 0, got {value!r}")
+
+
+@dataclass(frozen=True)
+class QuarterCar:
+    """Wheel and corner mass of the quarter-car model (seed 001 eq. (2.1))::
+
+        J dω/dt = -R Fx - γ_b P_b,    m dvx/dt = Fx,    Fx = Fz mu(lambda)
+
+    Parameters
+    ----------
+    inertia_kg_m2 : float
+        Wheel inertia ``J`` (``I`` in seed 000).
+    radius_m : float
+        Effective rolling radius ``R``.
+    load_n : float
+        Vertical load ``Fz``.
+    brake_gain_nm_bar : float
+        Brake efficiency ``γ_b`` [N·m/bar].
+    mass_kg : float, optional
+        Corner mass ``m``; default ``Fz / g`` so that ``a_x = g mu`` (then the
+        braking distance of seed 001 Table 4.1, ``vx(0)² / (2 g mū)``, is the
+        distance of a constant deceleration at the mean friction).
+
+    Notes
+    -----
+    The defaults are the TU Delft rig of seed 001 Fig. 3.12 (``J = 1.2``,
+    ``R = 0.3``, ``Fz = 2850``, ``γ_b = 17.5``); :meth:`hoang2014` gives the
+    rig of seed 000 Fig. 2 (``Fz = 2500``).
+    """
+
+    inertia_kg_m2: float = 1.2
+    radius_m: float = 0.3
+    load_n: float = 2850.0
+    brake_gain_nm_bar: float = 17.5
+    mass_kg: float | None = None
+
+    def __post_init__(self) -> None:
+        _positive("QuarterCar", inertia_kg_m2=self.inertia_kg_m2, radius_m=self.radius_m, load_n=self.load_n,
+                  brake_gain_nm_bar=self.brake_gain_nm_bar)
+        if self.mass_kg is None:
+            object.__setattr__(self, "mass_kg", self.load_n / GRAVITY)
+        _positive("QuarterCar", mass_kg=self.mass_kg)
+
+    @classmethod
+    def hoang2014(cls) -> QuarterCar:
+        """The TU Delft rig of seed 000 Fig. 2: ``I = 1.2``, ``R = 0.3``, ``Fz = 2500``, ``γ_b = 17.5``."""
+        return cls(load_n=2500.0)
+
+    @property
+    def a(self) -> float:
+        """``a = R² Fz / J`` (seed 000 Sec. II-B, seed 001 eq. (2.6))."""
+        return self.radius_m ** 2 * self.load_n / self.inertia_kg_m2
+
+    @property
+    def b(self) -> float:
+        """``b = R γ_b / J > 0`` of seed 001 eq. (2.6) (seed 000 writes ``b = -R γ_b / I`` with ``+b u``)."""
+        return self.radius_m * self.brake_gain_nm_bar / self.inertia_kg_m2
+
+    def to_json(self) -> dict[str, Any]:
+        return {**asdict(self), "a": self.a, "b": self.b}
+
+
+@dataclass(frozen=True)
+class BrakeActuator:
+    """Brake-pressure actuator: rate limit, pressure range and an optional transport delay.
+
+    Parameters
+    ----------
+    max_rate_bar_s : float
+        Largest ``|dP_b/dt|`` the hydraulics deliver (``Ṗ_b^M`` of seed 000 Sec. V).
+    max_pressure_bar : float
+        Master-cylinder pressure: the ABS can hold or release but not exceed it
+        (seed 001 Sec. 2.2.2).
+    delay_s : float
+        Delay between the commanded and the applied pressure rate; ``0`` or at
+        least the integration step.
+    """
+
+    max_rate_bar_s: float = 2000.0
+    max_pressure_bar: float = 250.0
+    delay_s: float = 0.0
+
+    def __post_init__(self) -> None:
+        _positive("BrakeActuator", max_rate_bar_s=self.max_rate_bar_s, max_pressure_bar=self.max_pressure_bar)
+        if not isinstance(self.delay_s, (int, float)) or not math.isfinite(self.delay_s) or self.delay_s < 0:
+            raise SimulationError(f"BrakeActuator: delay_s must be finite and >= 0, got {self.delay_s!r}")
+
+    def to_json(self) -> dict[str, Any]:
+        return asdict(self)
+
+
+@dataclass(frozen=True)
+class PrescribedSpeed:
+    """Vehicle speed imposed from outside (a drum test rig): ``vx(t) = vx(0) - decel t``.
+
+    Seed 001 Sec. 3.4 drives the wheel with ``vx(0) = 25 m/s`` and a constant
+    deceleration of 1.96 m/s²; then ``a_x = -decel`` whatever the tyre force.
+    """
+
+    decel_m_s2: float = 1.96
+
+    def __post_init__(self) -> None:
+        _positive("PrescribedSpeed", decel_m_s2=self.decel_m_s2)
+
+    def to_json(self) -> dict[str, Any]:
+        return {"decel_m_s2": self.decel_m_s2}
