@@ -89,7 +89,7 @@ class Encoder:
     def __post_init__(self) -> None:
         check_int(self.ppr, "ppr (pulses per revolution)", minimum=2)
         limit = 0.25 if self.both_edges else 0.5
-        dnl = check_range(self.dnl_cycles, "dnl_cycles", 0.0, limit)
+        dnl = check_positive(self.dnl_cycles, "dnl_cycles", allow_zero=True)
         if dnl >= limit:
             raise SimulationError(
                 f"dnl_cycles = {dnl:g} must stay below {limit:g} cycle so that consecutive edges keep their order")
