@@ -1,0 +1,376 @@
+"""Exact rational linear algebra for certificates (standard library only).
+
+Everything here works on matrices stored as lists of rows of
+:class:`fractions.Fraction` (or of Python ``int`` for the integer kernels).
+Definiteness is decided by fraction-free symmetric Bareiss elimination on an
+integer multiple of the matrix, which is exact and fast: the intermediate
+numbers are minors of the matrix, so their size grows linearly with the step,
+never exponentially as in naive rational elimination.
+
+The module deliberately imports nothing from numpy, scipy, cvxpy or sympy, so
+that the certificate checker built on it (:mod:`switchobs.certify._verify`)
+shares no code with the floating-point pipeline that produced a certificate.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Iterable, Sequence
+from dataclasses import dataclass
+from fractions import Fraction
+from typing import Any
+
+from ..exceptions import CertificateError, DimensionError
+
+__all__ = [
+    "Matrix", "to_fraction", "fraction_matrix", "matrix_strings", "identity", "zeros", "transpose",
+    "matmul", "add", "sub", "scale", "lyapunov_form", "integer_form", "Definiteness", "definiteness",
+    "rank", "nullspace", "observable", "expm_enclosure", "inf_norm", "sqrt_lower", "sqrt_upper",
+    "is_zero",
+]
+
+Matrix = list[list[Fraction]]
+
+
+# --------------------------------------------------------------------------- parsing
+def to_fraction(value: Any, *, what: str = "entry") -> Fraction:
+    """An exact rational from an int, Fraction, decimal/fraction string or float.
+
+    Floats are taken at their exact binary value (``0.1`` becomes
+    ``3602879701896397/36028797018963968``); write ``"0.1"`` or ``"1/10"`` for
+    the decimal.  Objects with ``p``/``q`` (sympy Rationals) and numpy scalars
+    are accepted.
+
+    Raises
+    ------
+    CertificateError
+        For NaN, infinities, non-numbers and irrational symbolic values.
+    """
+    if isinstance(value, bool):
+        raise CertificateError(f"{what}: expected a number, got {value!r}")
+    if isinstance(value, (int, Fraction)):
+        return Fraction(value)
+    if isinstance(value, str):
+        try:
+            return Fraction(value.strip())
+        except (ValueError, ZeroDivisionError):
+            raise CertificateError(f"{what}: {value!r} is not a finite rational number "
+                                   "(write e.g. 187.5, 375/2 or -3e-2)") from None
+    p, q = getattr(value, "p", None), getattr(value, "q", None)
+    if isinstance(p, int) and isinstance(q, int) and q != 0:
+        return Fraction(p, q)
+    try:
+        f = float(value)
+    except (TypeError, ValueError):
+        raise CertificateError(f"{what}: {value!r} is not a rational number (irrational or symbolic values "
+                               "cannot be certified exactly; substitute numbers first)") from None
+    if not math.isfinite(f):
+        raise CertificateError(f"{what}: {value!r} is not finite")
+    if hasattr(value, "is_Number") and not getattr(value, "is_Rational", True):
+        raise CertificateError(f"{what}: {value!r} is irrational; give a rational approximation")
+    return Fraction(f)
+
+
+def fraction_matrix(data: Any, *, what: str = "matrix", rows: int | None = None,
+                    cols: int | None = None) -> Matrix:
+    """Validate a rectangular matrix and convert every entry with :func:`to_fraction`.
+
+    Accepts nested sequences, numpy arrays and sympy matrices.  A flat
+    sequence is read as one row.
+    """
+    if hasattr(data, "tolist") and not isinstance(data, (list, tuple)):
+        data = data.tolist()
+    if not isinstance(data, (list, tuple)) or not data:
+        raise DimensionError(f"{what} must be a non-empty list of rows, got {data!r}")
+    if not isinstance(data[0], (list, tuple)):
+        data = [data]
+    out = []
+    width = len(data[0])
+    for i, row in enumerate(data):
+        if not isinstance(row, (list, tuple)):
+            raise DimensionError(f"{what} row {i + 1} is not a list: {row!r}")
+        if len(row) != width:
+            raise DimensionError(f"{what} is not rectangular: row 1 has {width} entries, row {i + 1} has {len(row)}")
+        out.append([to_fraction(x, what=f"{what}[{i + 1}][{j + 1}]") for j, x in enumerate(row)])
+    if rows is not None and len(out) != rows:
+        raise DimensionError(f"{what} has the wrong number of rows; expected {rows} instead of {len(out)}")
+    if cols is not None and width != cols:
+        raise DimensionError(f"{what} has the wrong number of columns; expected {cols} instead of {width}")
+    return out
+
+
+def matrix_strings(M: Sequence[Sequence[Fraction]]) -> list[list[str]]:
+    """Rows of rational strings (``"-375/2"``), the certificate's storage format."""
+    return [[str(Fraction(x)) for x in row] for row in M]
+
+
+# ------------------------------------------------------------------ basic algebra
+def identity(n: int) -> Matrix:
+    return [[Fraction(int(i == j)) for j in range(n)] for i in range(n)]
+
+
+def zeros(r: int, c: int) -> Matrix:
+    return [[Fraction(0)] * c for _ in range(r)]
+
+
+def transpose(M: Sequence[Sequence[Any]]) -> list[list[Any]]:
+    return [list(col) for col in zip(*M)]
+
+
+def matmul(A: Sequence[Sequence[Any]], B: Sequence[Sequence[Any]]) -> list[list[Any]]:
+    """Product of two matrices of ints or Fractions (exact)."""
+    Bt = transpose(B)
+    return [[sum((a * b for a, b in zip(row, col)), start=0) for col in Bt] for row in A]
+
+
+def add(A: Sequence[Sequence[Any]], B: Sequence[Sequence[Any]]) -> list[list[Any]]:
+    return [[a + b for a, b in zip(ra, rb)] for ra, rb in zip(A, B)]
+
+
+def sub(A: Sequence[Sequence[Any]], B: Sequence[Sequence[Any]]) -> list[list[Any]]:
+    return [[a - b for a, b in zip(ra, rb)] for ra, rb in zip(A, B)]
+
+
+def scale(c: Any, A: Sequence[Sequence[Any]]) -> list[list[Any]]:
+    return [[c * a for a in row] for row in A]
+
+
+def is_zero(M: Iterable[Iterable[Any]]) -> bool:
+    return all(x == 0 for row in M for x in row)
+
+
+def lyapunov_form(A: Sequence[Sequence[Any]], P: Sequence[Sequence[Any]]) -> list[list[Any]]:
+    """``A' P + P A`` (exact)."""
+    AtP = matmul(transpose(A), P)
+    return [[AtP[i][j] + AtP[j][i] for j in range(len(P))] for i in range(len(P))]
+
+
+def integer_form(M: Sequence[Sequence[Fraction]]) -> tuple[list[list[int]], int]:
+    """``(N, d)`` with ``M = N / d``, ``N`` integer and ``d > 0`` the lcm of the denominators."""
+    d = 1
+    for row in M:
+        for x in row:
+            d = d * x.denominator // math.gcd(d, x.denominator)
+    return [[int(x * d) for x in row] for row in M], d
+
+
+def inf_norm(M: Sequence[Sequence[Any]]) -> Any:
+    """Induced infinity norm (largest absolute row sum), exact."""
+    return max(sum(abs(x) for x in row) for row in M)
+
+
+def sqrt_lower(x: Fraction, bits: int = 64) -> Fraction:
+    """A rational ``q`` with ``0 <= q <= sqrt(x)`` and ``sqrt(x) - q < 2**-bits * max(1, sqrt(x))``."""
+    if x <= 0:
+        return Fraction(0)
+    s = 4 ** bits
+    return Fraction(math.isqrt(x.numerator * s // x.denominator), 2 ** bits)
+
+
+def sqrt_upper(x: Fraction, bits: int = 64) -> Fraction:
+    """A rational ``q >= sqrt(x)`` close to it."""
+    q = sqrt_lower(x, bits)
+    return q if q * q == x else q + Fraction(1, 2 ** bits)
+
+
+# ------------------------------------------------------------------ definiteness
+@dataclass(frozen=True)
+class Definiteness:
+    """Outcome of :func:`definiteness`.
+
+    Attributes
+    ----------
+    holds : bool
+    index : int or None
+        0-based index at which elimination failed.
+    reason : str
+        Empty when ``holds``; otherwise which minor or Schur-complement entry
+        breaks the claim (1-based indices, as a person reads them).
+    """
+
+    holds: bool
+    index: int | None = None
+    reason: str = ""
+
+
+def definiteness(M: Sequence[Sequence[Any]], *, strict: bool) -> Definiteness:
+    """Exactly decide ``M > 0`` (``strict``) or ``M >= 0`` for a symmetric rational matrix.
+
+    Fraction-free symmetric Bareiss elimination on ``N = d M`` (integers).
+    After eliminating the pivots ``K``, entry ``(i, j)`` of the working matrix
+    is the minor ``det N[K+i, K+j]``, so the diagonal pivots are leading
+    principal minors (Sylvester's criterion) and every division is exact.
+    For the semidefinite test a zero pivot is allowed only when its whole row
+    of the Schur complement vanishes; that index is then dropped, which is
+    the LDL' rule for semidefinite matrices.
+
+    Raises
+    ------
+    DimensionError
+        If ``M`` is not square or not symmetric.
+    """
+    n = len(M)
+    if any(len(row) != n for row in M):
+        raise DimensionError(f"definiteness needs a square matrix, got {n} rows of lengths {[len(r) for r in M]}")
+    F = [[Fraction(x) for x in row] for row in M]
+    for i in range(n):
+        for j in range(i):
+            if F[i][j] != F[j][i]:
+                raise DimensionError(f"matrix is not symmetric: entry ({i + 1},{j + 1}) = {F[i][j]} but "
+                                     f"({j + 1},{i + 1}) = {F[j][i]}")
+    a, _ = integer_form(F)
+    prev = 1
+    kept: list[int] = []
+    for k in range(n):
+        p = a[k][k]
+        rest = range(k + 1, n)
+        if p < 0 or (p == 0 and strict):
+            rows = [i + 1 for i in kept] + [k + 1]
+            sign = "negative" if p < 0 else "zero"
+            return Definiteness(False, k, f"the principal minor on rows/columns {rows} is {sign}")
+        if p == 0:
+            bad = next((j for j in rest if a[k][j] != 0), None)
+            if bad is not None:
+                return Definiteness(False, k, f"a zero pivot at {k + 1} has a nonzero coupling to {bad + 1} "
+                                              f"(the principal minor on {[i + 1 for i in kept] + [k + 1, bad + 1]} "
+                                              "is negative)")
+            continue
+        for i in rest:
+            aik = a[i][k]
+            row_i = a[i]
+            for j in range(i, n):
+                v = (p * row_i[j] - aik * a[k][j]) // prev
+                row_i[j] = v
+                a[j][i] = v
+        prev = p
+        kept.append(k)
+    return Definiteness(True)
+
+
+# ------------------------------------------------------------- rank and kernels
+def _rref(M: Sequence[Sequence[Fraction]]) -> tuple[list[list[Fraction]], list[int]]:
+    A = [[Fraction(x) for x in row] for row in M]
+    rows = len(A)
+    cols = len(A[0]) if rows else 0
+    pivots: list[int] = []
+    r = 0
+    for c in range(cols):
+        piv = next((i for i in range(r, rows) if A[i][c] != 0), None)
+        if piv is None:
+            continue
+        A[r], A[piv] = A[piv], A[r]
+        inv = 1 / A[r][c]
+        A[r] = [x * inv for x in A[r]]
+        for i in range(rows):
+            if i != r and A[i][c] != 0:
+                f = A[i][c]
+                A[i] = [x - f * y for x, y in zip(A[i], A[r])]
+        pivots.append(c)
+        r += 1
+        if r == rows:
+            break
+    return A[:r], pivots
+
+
+def rank(M: Sequence[Sequence[Any]]) -> int:
+    """Exact rank of a rational matrix."""
+    if not M or not M[0]:
+        return 0
+    return len(_rref(M)[1])
+
+
+def nullspace(M: Sequence[Sequence[Any]], cols: int | None = None) -> list[list[Fraction]]:
+    """A rational basis of ``{x : M x = 0}`` (list of vectors)."""
+    ncols = cols if cols is not None else len(M[0])
+    if not M:
+        return [[Fraction(int(i == j)) for i in range(ncols)] for j in range(ncols)]
+    R, pivots = _rref(M)
+    free = [c for c in range(ncols) if c not in pivots]
+    basis = []
+    for f in free:
+        v = [Fraction(0)] * ncols
+        v[f] = Fraction(1)
+        for row, pc in zip(R, pivots):
+            v[pc] = -row[f]
+        basis.append(v)
+    return basis
+
+
+def observable(A: Sequence[Sequence[Fraction]], C: Sequence[Sequence[Fraction]]) -> tuple[bool, int]:
+    """Exact observability of ``(A, C)``: grow the row space of ``C, CA, CA^2, ...`` until it stops.
+
+    Returns ``(observable, dimension of the observable subspace)``.
+    """
+    n = len(A)
+    basis, _ = _rref(C) if C else ([], [])
+    block = basis
+    dim = len(basis)
+    while dim < n and block:
+        block = matmul(block, A)
+        new, _ = _rref(basis + block)
+        if len(new) == dim:
+            break
+        basis, dim = new, len(new)
+    return dim == n, dim
+
+
+# ----------------------------------------------------------- matrix exponential
+def expm_enclosure(A: Sequence[Sequence[Fraction]], T: Fraction, bits: int = 160
+                   ) -> tuple[list[list[int]], int, Fraction]:
+    """Rigorous enclosure of ``exp(A T)``: ``(E, w, err)`` with ``||exp(AT) - E/2**w||_inf <= err``.
+
+    Scaling and squaring in fixed-point integer arithmetic with ``w = bits``
+    fractional bits.  ``B = A T / 2**s`` with ``||B||_inf <= 1/2``; Taylor
+    polynomial of degree ``K`` with the tail bound
+    ``||B||^(K+1) / (K+1)! / (1 - ||B||/(K+2))``; every rounding (at most
+    ``2**-w`` per entry) and the rounding of ``B`` itself are propagated
+    through the recurrences as exact rational bounds, then through the ``s``
+    squarings with ``eps' = (2 ||E|| + eps) eps + n 2**-w``.
+    """
+    n = len(A)
+    T = Fraction(T)
+    if T < 0:
+        raise CertificateError(f"expm_enclosure needs T >= 0, got {T}")
+    B = [[Fraction(x) * T for x in row] for row in A]
+    nb = inf_norm(B) if n else Fraction(0)
+    s = 0
+    while nb / 2 ** s > Fraction(1, 2):
+        s += 1
+    Bs = [[x / 2 ** s for x in row] for row in B]
+    nu = nb / 2 ** s
+    one = 1 << bits
+    unit = Fraction(1, one)
+    Bh = [[round(x * one) for x in row] for row in Bs]
+    beta = Fraction(n, 2) * unit  # ||Bs - Bh/2^w||_inf
+    nu_hat = inf_norm(Bh) * unit
+    # degree: tail < 2^-w
+    K = 1
+    fact = Fraction(1)
+    while True:
+        fact *= K + 1
+        tail = nu ** (K + 1) / fact / (1 - nu / (K + 2))
+        if tail < unit:
+            break
+        K += 1
+    term = [[one if i == j else 0 for j in range(n)] for i in range(n)]
+    total = [row[:] for row in term]
+    err = Fraction(0)
+    e_prev = Fraction(0)
+    t_norm = Fraction(1)  # ||Bs^(k-1)/(k-1)!|| bound
+    for k in range(1, K + 1):
+        prod = matmul(term, Bh)
+        div = k * one
+        term = [[x // div for x in row] for row in prod]
+        e_k = (e_prev * nu_hat + t_norm * beta) / k + n * unit
+        err += e_k
+        e_prev = e_k
+        t_norm = t_norm * nu / k
+        total = [[x + y for x, y in zip(r1, r2)] for r1, r2 in zip(total, term)]
+    err += tail
+    E = total
+    for _ in range(s):
+        norm_E = inf_norm(E) * unit
+        sq = matmul(E, E)
+        E = [[x >> bits for x in row] for row in sq]
+        err = (2 * norm_E + err) * err + n * unit
+    return E, bits, err

@@ -1,0 +1,122 @@
+"""The one validation gate for a switched family ``{A_p}``: shapes, finiteness, Hurwitz."""
+
+from __future__ import annotations
+
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass
+from typing import Any, Union
+
+import numpy as np
+
+from ..exceptions import CertificateError, DimensionError, ModelError, NotHurwitzError
+from ._exact import Matrix, fraction_matrix, matrix_strings
+
+__all__ = ["Family", "as_family", "format_spectrum", "FamilyLike"]
+
+
+@dataclass(frozen=True)
+class Family:
+    """A validated finite family of square matrices, exact and in floating point.
+
+    Attributes
+    ----------
+    names : tuple of str
+        ``("A_plus", "A_minus")`` for an observer, ``("A_1", "A_2", ...)`` otherwise.
+    exact : tuple of Matrix
+        The matrices as :class:`fractions.Fraction` rows (floats are taken at
+        their exact binary value, strings and sympy Rationals exactly).
+    numeric : tuple of numpy.ndarray
+    """
+
+    names: tuple[str, ...]
+    exact: tuple[Matrix, ...]
+    numeric: tuple[np.ndarray, ...]
+
+    @property
+    def n(self) -> int:
+        return len(self.exact[0])
+
+    def __len__(self) -> int:
+        return len(self.exact)
+
+    def to_json(self) -> dict[str, Any]:
+        return {"names": list(self.names), "matrices": [matrix_strings(M) for M in self.exact]}
+
+    def __str__(self) -> str:
+        return f"family of {len(self)} matrices of size {self.n}: {', '.join(self.names)}"
+
+
+FamilyLike = Union[Family, Sequence[Any], Mapping[str, Any]]
+
+
+def format_spectrum(M: np.ndarray) -> str:
+    eig = np.linalg.eigvals(np.asarray(M, dtype=float))
+    eig = eig[np.lexsort((eig.imag, eig.real))]
+    parts = []
+    for z in eig:
+        parts.append(f"{z.real:.6g}" if abs(z.imag) <= 1e-12 * max(1.0, abs(z)) else f"{z.real:.6g}{z.imag:+.6g}j")
+    return "[" + ", ".join(parts) + "]"
+
+
+def as_family(matrices: FamilyLike, names: Sequence[str] | None = None, *, hurwitz: bool = True) -> Family:
+    """Validate a finite family of square matrices of one size.
+
+    Parameters
+    ----------
+    matrices : Family, sequence of array-likes, or mapping name -> array-like
+        Entries may be ints, floats, fraction/decimal strings or sympy Rationals.
+    names : sequence of str, optional
+        Names used in messages and certificates (default ``A_1, A_2, ...``).
+    hurwitz : bool
+        Require every matrix to be Hurwitz (all eigenvalues with negative real part).
+
+    Raises
+    ------
+    DimensionError
+        Empty family, non-square or mismatched sizes.
+    ModelError
+        NaN, infinite or non-numeric entries.
+    NotHurwitzError
+        A matrix is not Hurwitz; the message names it and gives its spectrum.
+    """
+    if isinstance(matrices, Family):
+        fam = matrices
+    else:
+        if isinstance(matrices, Mapping):
+            names = list(matrices)
+            items = list(matrices.values())
+        else:
+            items = list(matrices)
+        if not items:
+            raise DimensionError("the switched family is empty; give at least one matrix")
+        names = list(names) if names is not None else [f"A_{i + 1}" for i in range(len(items))]
+        if len(names) != len(items):
+            raise DimensionError(f"{len(names)} names for {len(items)} matrices")
+        exact = []
+        for nm, M in zip(names, items):
+            rows = M.tolist() if hasattr(M, "tolist") else M
+            if not isinstance(rows, (list, tuple)) or not rows or not all(isinstance(r, (list, tuple)) for r in rows):
+                raise DimensionError(f"{nm} must be a matrix given as a list of rows, got {M!r}")
+            try:
+                F = fraction_matrix(rows, what=nm)
+            except CertificateError as exc:
+                raise ModelError(str(exc)) from None
+            if len(F) != len(F[0]):
+                raise DimensionError(f"{nm} is not square: shape {len(F)}x{len(F[0])}")
+            exact.append(F)
+        n = len(exact[0])
+        for nm, M in zip(names, exact):
+            if len(M) != n:
+                raise DimensionError(f"{nm} is {len(M)}x{len(M)} but {names[0]} is {n}x{n}; "
+                                     "all matrices of a family must have the same size")
+        fam = Family(tuple(str(x) for x in names), tuple(exact),
+                     tuple(np.array([[float(x) for x in row] for row in M]) for M in exact))
+    if hurwitz:
+        for nm, M in zip(fam.names, fam.numeric):
+            if not np.all(np.isfinite(M)):
+                raise ModelError(f"{nm} has entries too large for floating point")
+            if np.max(np.linalg.eigvals(M).real) >= 0:
+                raise NotHurwitzError(f"{nm} is not Hurwitz: its spectrum is {format_spectrum(M)}; every matrix "
+                                      "of the family must have eigenvalues with negative real part "
+                                      "(check the gains against the Routh-Hurwitz conditions)")
+    return fam

@@ -1,0 +1,436 @@
+"""Independent exact checker of switchobs certificates (standard library only).
+
+A certificate is a JSON document (format ``switchobs-certificate``, version 1)
+holding the switched family ``{A_p}`` and, as rational strings, the matrices
+of one or more certificates.  :func:`verify_certificate` re-derives every
+inequality from those matrices alone, decides each in exact rational
+arithmetic (:mod:`switchobs.certify._exact`), recomputes the verdict they
+imply and compares it with the verdict the document claims.  It never looks
+at margins, solver names or statuses: those are provenance, not evidence.
+
+Certificate kinds and what they prove (``W_p(P) = A_p' P + P A_p``):
+
+``strict-cqlf``
+    ``P > 0`` and ``W_p(P) < 0`` for every p: uniform global exponential
+    stability under arbitrary switching.
+``hespanha``
+    ``P > 0``, ``W_p(P) + C_p' C_p <= 0`` and ``(A_p, C_p)`` observable for every
+    p (Hespanha 2004, Theorem 4, as used in seed 004 and seed 000 Appendix):
+    uniform stability under arbitrary switching, uniform exponential stability
+    under any positive dwell time.
+``no-strict-cqlf``
+    ``R_p >= 0``, not all zero, ``sum_p (A_p R_p + R_p A_p') >= 0``: no strict common
+    quadratic Lyapunov function exists (theorem of alternatives: for such a P,
+    ``0 <= <P, sum_p ...> = sum_p <W_p(P), R_p> < 0``).
+``no-common-lyapunov``
+    Same with ``S = sum_p (A_p R_p + R_p A_p') >= 0`` and ``S != 0``: not even a
+    non-strict ``P > 0`` with ``W_p(P) <= 0`` exists.
+``dwell-time``
+    ``P_p > 0``, ``W_p(P_p) < 0`` and ``exp(A_p' T) P_q exp(A_p T) - P_p < 0`` for
+    ``p != q`` at ``T = tau_D`` (Geromel & Colaneri 2006): uniform exponential
+    stability for every switching signal with dwell time ``>= tau_D``.  The
+    exponential is enclosed rigorously (:func:`expm_enclosure`).
+``planar``
+    The Balde–Boscain–Mason case (seed 004), recomputed exactly from Gamma,
+    the determinants and ``tr(A_1 A_2)``; cases i–iii are decided exactly,
+    the R-test of case iv is not exact and is not part of the implied verdict.
+"""
+
+from __future__ import annotations
+
+import json
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass
+from fractions import Fraction
+from pathlib import Path
+from typing import Any
+
+from ..exceptions import CertificateError
+from ._exact import (Matrix, add, definiteness, expm_enclosure, fraction_matrix, identity, inf_norm,
+                     integer_form, is_zero, lyapunov_form, matmul, observable, scale, sqrt_upper, sub,
+                     transpose)
+
+__all__ = ["FORMAT", "VERSION", "Check", "VerificationReport", "verify_certificate", "load_certificate",
+           "implied_verdict", "planar_case_exact"]
+
+FORMAT = "switchobs-certificate"
+VERSION = 1
+KINDS = ("strict-cqlf", "hespanha", "no-strict-cqlf", "no-common-lyapunov", "dwell-time", "planar")
+
+
+@dataclass(frozen=True)
+class Check:
+    """One verified statement: ``name`` (which certificate), ``holds`` and the reason when it does not."""
+
+    name: str
+    holds: bool
+    detail: str = ""
+
+    def to_json(self) -> dict[str, Any]:
+        return {"name": self.name, "holds": self.holds, "detail": self.detail}
+
+    def __str__(self) -> str:
+        return f"{self.name}: {'holds' if self.holds else 'FAILS'}{(' - ' + self.detail) if self.detail else ''}"
+
+
+@dataclass(frozen=True)
+class VerificationReport:
+    """Result of :func:`verify_certificate`.
+
+    Attributes
+    ----------
+    holds : bool
+        Every certificate holds exactly and the claimed verdict is the implied one.
+    checks : tuple of Check
+    implied : dict
+        The verdict the verified certificates imply.
+    claimed : dict
+        The verdict written in the document.
+    """
+
+    holds: bool
+    checks: tuple[Check, ...]
+    implied: Mapping[str, Any]
+    claimed: Mapping[str, Any]
+
+    def to_json(self) -> dict[str, Any]:
+        return {"holds": self.holds, "checks": [c.to_json() for c in self.checks],
+                "implied": dict(self.implied), "claimed": dict(self.claimed)}
+
+    def __str__(self) -> str:
+        head = "certificate holds exactly" if self.holds else "certificate does NOT hold"
+        lines = [head] + [f"  {c}" for c in self.checks]
+        lines.append("  implied verdict: " + ", ".join(f"{k} = {v}" for k, v in self.implied.items()))
+        return "\n".join(lines)
+
+
+def load_certificate(path: str | Path) -> dict[str, Any]:
+    """Read a certificate JSON file.
+
+    Raises
+    ------
+    CertificateError
+        If the file cannot be read or is not JSON.
+    """
+    try:
+        text = Path(path).read_text(encoding="utf-8")
+    except OSError as exc:
+        raise CertificateError(f"cannot read certificate {str(path)!r}: {exc.strerror}") from None
+    try:
+        doc = json.loads(text)
+    except json.JSONDecodeError as exc:
+        raise CertificateError(f"certificate {str(path)!r} is not valid JSON: {exc}") from None
+    if not isinstance(doc, dict):
+        raise CertificateError(f"certificate {str(path)!r} must be a JSON object, got {type(doc).__name__}")
+    return doc
+
+
+# ------------------------------------------------------------------ family
+def _family(doc: Mapping[str, Any]) -> tuple[list[str], list[Matrix]]:
+    if doc.get("format") != FORMAT:
+        raise CertificateError(f"not a switchobs certificate: format is {doc.get('format')!r}, expected {FORMAT!r}")
+    if doc.get("version") != VERSION:
+        raise CertificateError(f"unsupported certificate version {doc.get('version')!r} (this checker reads {VERSION})")
+    fam = doc.get("family")
+    if not isinstance(fam, Mapping) or "matrices" not in fam:
+        raise CertificateError("certificate has no 'family' with 'matrices'")
+    mats = fam["matrices"]
+    if not isinstance(mats, list) or not mats:
+        raise CertificateError("certificate 'family.matrices' must be a non-empty list of matrices")
+    names = fam.get("names") or [f"A_{i + 1}" for i in range(len(mats))]
+    if len(names) != len(mats):
+        raise CertificateError(f"'family.names' has {len(names)} names for {len(mats)} matrices")
+    first = fraction_matrix(mats[0], what=names[0])
+    n = len(first)
+    As = [fraction_matrix(M, what=str(nm), rows=n, cols=n) for M, nm in zip(mats, names)]
+    return [str(x) for x in names], As
+
+
+def _per_mode(cert: Mapping[str, Any], key: str, names: Sequence[str], n: int) -> list[Matrix]:
+    items = cert.get(key)
+    if not isinstance(items, list) or len(items) != len(names):
+        raise CertificateError(f"{cert.get('kind')}: '{key}' must list one matrix per mode ({len(names)})")
+    return [fraction_matrix(M, what=f"{key}[{nm}]", rows=n, cols=n) for M, nm in zip(items, names)]
+
+
+def _defin(M: Matrix, *, strict: bool, negate: bool = False) -> Any:
+    return definiteness(scale(-1, M) if negate else M, strict=strict)
+
+
+def _fail(name: str, claim: str, res: Any) -> Check:
+    return Check(name, False, f"{claim} fails: {res.reason}")
+
+
+# ------------------------------------------------------------- certificate kinds
+def _check_strict(names: Sequence[str], As: Sequence[Matrix], cert: Mapping[str, Any]) -> Check:
+    n = len(As[0])
+    P = fraction_matrix(cert.get("P"), what="P", rows=n, cols=n)
+    r = _defin(P, strict=True)
+    if not r.holds:
+        return _fail("strict-cqlf", "P > 0", r)
+    for nm, A in zip(names, As):
+        r = _defin(lyapunov_form(A, P), strict=True, negate=True)
+        if not r.holds:
+            return _fail("strict-cqlf", f"{nm}' P + P {nm} < 0", r)
+    return Check("strict-cqlf", True)
+
+
+def _check_hespanha(names: Sequence[str], As: Sequence[Matrix], cert: Mapping[str, Any]) -> Check:
+    n = len(As[0])
+    P = fraction_matrix(cert.get("P"), what="P", rows=n, cols=n)
+    Cs = cert.get("C")
+    if not isinstance(Cs, list) or len(Cs) != len(As):
+        raise CertificateError(f"hespanha: 'C' must list one output matrix per mode ({len(As)})")
+    r = _defin(P, strict=True)
+    if not r.holds:
+        return _fail("hespanha", "P > 0", r)
+    for nm, A, Craw in zip(names, As, Cs):
+        C = fraction_matrix(Craw, what=f"C[{nm}]", cols=n)
+        M = add(lyapunov_form(A, P), matmul(transpose(C), C))
+        r = _defin(M, strict=False, negate=True)
+        if not r.holds:
+            return _fail("hespanha", f"{nm}' P + P {nm} + C_{nm}' C_{nm} <= 0", r)
+        obs, dim = observable(A, C)
+        if not obs:
+            return Check("hespanha", False, f"({nm}, C_{nm}) is not observable: the observable subspace has "
+                                            f"dimension {dim} < {n}")
+    return Check("hespanha", True)
+
+
+def _dual_sum(As: Sequence[Matrix], Rs: Sequence[Matrix]) -> Matrix:
+    n = len(As[0])
+    S = [[Fraction(0)] * n for _ in range(n)]
+    for A, R in zip(As, Rs):
+        AR = matmul(A, R)
+        S = add(S, [[AR[i][j] + AR[j][i] for j in range(n)] for i in range(n)])
+    return S
+
+
+def _check_dual(names: Sequence[str], As: Sequence[Matrix], cert: Mapping[str, Any], *, kind: str) -> Check:
+    n = len(As[0])
+    Rs = _per_mode(cert, "R", names, n)
+    for nm, R in zip(names, Rs):
+        r = _defin(R, strict=False)
+        if not r.holds:
+            return _fail(kind, f"R_{nm} >= 0", r)
+    if all(is_zero(R) for R in Rs):
+        return Check(kind, False, "all R_p are zero (the alternative needs a nonzero R_p)")
+    S = _dual_sum(As, Rs)
+    r = _defin(S, strict=False)
+    if not r.holds:
+        return _fail(kind, "sum_p (A_p R_p + R_p A_p') >= 0", r)
+    if kind == "no-common-lyapunov" and is_zero(S):
+        return Check(kind, False, "sum_p (A_p R_p + R_p A_p') is zero; it must be nonzero to exclude a "
+                                  "non-strict common P")
+    return Check(kind, True)
+
+
+def _check_dwell(names: Sequence[str], As: Sequence[Matrix], cert: Mapping[str, Any]) -> Check:
+    n = len(As[0])
+    try:
+        T = Fraction(str(cert.get("tau_D")))
+    except (ValueError, ZeroDivisionError):
+        raise CertificateError(f"dwell-time: tau_D {cert.get('tau_D')!r} is not a rational number") from None
+    if T <= 0:
+        return Check("dwell-time", False, f"tau_D = {T} must be positive")
+    Ps = _per_mode(cert, "P", names, n)
+    for nm, A, P in zip(names, As, Ps):
+        r = _defin(P, strict=True)
+        if not r.holds:
+            return _fail("dwell-time", f"P_{nm} > 0", r)
+        r = _defin(lyapunov_form(A, P), strict=True, negate=True)
+        if not r.holds:
+            return _fail("dwell-time", f"{nm}' P_{nm} + P_{nm} {nm} < 0", r)
+    for p, (nm, A, P) in enumerate(zip(names, As, Ps)):
+        for q, (nq, Pq) in enumerate(zip(names, Ps)):
+            if p == q:
+                continue
+            claim = f"exp({nm}' tau_D) P_{nq} exp({nm} tau_D) - P_{nm} < 0"
+            ok, reason = _jump_condition(A, T, Pq, P)
+            if not ok:
+                return Check("dwell-time", False, f"{claim} fails: {reason}")
+    return Check("dwell-time", True)
+
+
+def _jump_condition(A: Matrix, T: Fraction, Pq: Matrix, Pp: Matrix) -> tuple[bool, str]:
+    """``exp(A'T) Pq exp(AT) - Pp < 0`` with a rigorous enclosure, refining the precision twice."""
+    n = len(A)
+    reason = ""
+    for bits in (128, 256, 512):
+        E_int, w, err = expm_enclosure(A, T, bits)
+        E = [[Fraction(x, 1 << w) for x in row] for row in E_int]
+        nominal = sub(matmul(matmul(transpose(E), Pq), E), Pp)
+        r = definiteness(scale(-1, nominal), strict=True)
+        if not r.holds:
+            return False, r.reason
+        # ||Delta||_2 <= sqrt(n) ||Delta||_inf ;  ||E||_2 <= (||E||_1 + ||E||_inf)/2 ;  ||Pq||_2 <= ||Pq||_inf
+        d2 = sqrt_upper(Fraction(n)) * err
+        e2 = (inf_norm(transpose(E)) + inf_norm(E)) / 2
+        p2 = inf_norm(Pq)
+        eta = 2 * e2 * p2 * d2 + p2 * d2 * d2
+        r = definiteness(scale(-1, add(nominal, scale(eta, identity(n)))), strict=True)
+        if r.holds:
+            return True, ""
+        reason = (f"the nominal inequality holds but the enclosure of exp(A tau_D) (error {float(err):.2e}) "
+                  f"is too wide to decide it ({r.reason})")
+    return False, reason
+
+
+def planar_case_exact(A1: Matrix, A2: Matrix) -> str:
+    """Balde–Boscain–Mason case (``"i"``..``"iv"``) of a Hurwitz 2x2 pair, decided in exact arithmetic.
+
+    ``Gamma = (tr A1 tr A2 - tr(A1 A2)) / 2`` is compared with
+    ``-sqrt(det A1 det A2)`` and ``tr(A1 A2)`` with ``-2 sqrt(det A1 det A2)``
+    by comparing squares, so no square root is ever taken.
+    """
+    tr1 = A1[0][0] + A1[1][1]
+    tr2 = A2[0][0] + A2[1][1]
+    d1 = A1[0][0] * A1[1][1] - A1[0][1] * A1[1][0]
+    d2 = A2[0][0] * A2[1][1] - A2[0][1] * A2[1][0]
+    P = matmul(A1, A2)
+    t12 = P[0][0] + P[1][1]
+    if not (tr1 < 0 < d1 and tr2 < 0 < d2):
+        raise CertificateError("planar classification needs two Hurwitz 2x2 matrices "
+                               f"(tr, det) = ({tr1}, {d1}) and ({tr2}, {d2})")
+    gamma = (tr1 * tr2 - t12) / 2
+    dd = d1 * d2
+    if gamma < 0 and gamma * gamma > dd:
+        return "i"
+    if gamma < 0 and gamma * gamma == dd:
+        return "ii"
+    if t12 >= 0 or t12 * t12 < 4 * dd:
+        return "iii"
+    return "iv"
+
+
+# ------------------------------------------------------------------- verdict
+def implied_verdict(holding: Sequence[str], planar_case: str | None = None,
+                    dwell: Sequence[Fraction] = ()) -> dict[str, Any]:
+    """The verdict implied by the certificate kinds that hold (and the exact planar case, if any)."""
+    strict = "strict-cqlf" in holding or planar_case == "iii"
+    hesp = "hespanha" in holding
+    if strict:
+        arbitrary = "UGES"
+    elif planar_case == "ii":
+        arbitrary = "UGS-not-UGES"
+    elif planar_case == "i":
+        arbitrary = "unbounded"
+    elif hesp:
+        arbitrary = "UGS"
+    else:
+        arbitrary = "unknown"
+    if strict or hesp:
+        dwell_time = "any"
+    elif dwell:
+        dwell_time = str(min(dwell))
+    else:
+        dwell_time = None
+    if strict:
+        cqlf = "exists"
+    elif {"no-strict-cqlf", "no-common-lyapunov"} & set(holding) or planar_case in ("i", "ii", "iv"):
+        cqlf = "none"
+    else:
+        cqlf = "unknown"
+    if strict or hesp:
+        common = "exists"
+    elif "no-common-lyapunov" in holding or planar_case == "i":
+        common = "none"
+    else:
+        common = "unknown"
+    return {"arbitrary_switching": arbitrary, "dwell_time": dwell_time, "strict_cqlf": cqlf,
+            "common_lyapunov": common}
+
+
+def _check_observer(names: Sequence[str], As: Sequence[Matrix], obs: Mapping[str, Any]) -> Check:
+    n = len(As[0])
+    A = fraction_matrix(obs.get("A"), what="observer A", rows=n, cols=n)
+    C = fraction_matrix(obs.get("C"), what="observer C", cols=n)
+    Kp = fraction_matrix([[x] for x in obs.get("K_plus", [])], what="K_plus", rows=n, cols=1)
+    Km = fraction_matrix([[x] for x in obs.get("K_minus", [])], what="K_minus", rows=n, cols=1)
+    expected = {"A_plus": sub(A, matmul(Kp, C)), "A_minus": add(scale(-1, A), matmul(Km, C))}
+    for nm, M in zip(names, As):
+        if nm in expected and expected[nm] != M:
+            which = "A - K_plus C" if nm == "A_plus" else "-A + K_minus C"
+            return Check("observer", False, f"{nm} in the family differs from {which} computed from the "
+                                            "observer's A, C and gains")
+    return Check("observer", True)
+
+
+def verify_certificate(doc: Mapping[str, Any] | str | Path) -> VerificationReport:
+    """Re-check a certificate exactly, from its matrices alone.
+
+    Parameters
+    ----------
+    doc : mapping, or path of a JSON file
+
+    Returns
+    -------
+    VerificationReport
+        ``holds`` is True iff every certificate in the document holds exactly
+        and the claimed ``verdict`` equals the verdict they imply.
+
+    Raises
+    ------
+    CertificateError
+        If the document is malformed (unknown kind, wrong shapes, entries
+        that are not rational numbers).
+
+    Examples
+    --------
+    >>> doc = {"format": "switchobs-certificate", "version": 1,
+    ...        "family": {"names": ["A1"], "matrices": [[["-1"]]]},
+    ...        "certificates": [{"kind": "strict-cqlf", "P": [["1"]]}],
+    ...        "verdict": {"arbitrary_switching": "UGES", "dwell_time": "any",
+    ...                    "strict_cqlf": "exists", "common_lyapunov": "exists"}}
+    >>> verify_certificate(doc).holds
+    True
+    """
+    if not isinstance(doc, Mapping):
+        doc = load_certificate(doc)
+    names, As = _family(doc)
+    certs = doc.get("certificates")
+    if not isinstance(certs, list) or not certs:
+        raise CertificateError("certificate has no 'certificates' list")
+    checks: list[Check] = []
+    if doc.get("observer") is not None:
+        checks.append(_check_observer(names, As, doc["observer"]))
+    holding: list[str] = []
+    dwell: list[Fraction] = []
+    planar: str | None = None
+    for cert in certs:
+        kind = cert.get("kind") if isinstance(cert, Mapping) else None
+        if kind not in KINDS:
+            raise CertificateError(f"unknown certificate kind {kind!r}; known kinds: {', '.join(KINDS)}")
+        if kind == "strict-cqlf":
+            c = _check_strict(names, As, cert)
+        elif kind == "hespanha":
+            c = _check_hespanha(names, As, cert)
+        elif kind in ("no-strict-cqlf", "no-common-lyapunov"):
+            c = _check_dual(names, As, cert, kind=kind)
+        elif kind == "dwell-time":
+            c = _check_dwell(names, As, cert)
+            if c.holds:
+                dwell.append(Fraction(str(cert["tau_D"])))
+        else:
+            if len(As) != 2 or len(As[0]) != 2:
+                c = Check("planar", False, "the planar classification needs exactly two 2x2 matrices")
+            else:
+                case = planar_case_exact(As[0], As[1])
+                claimed = cert.get("case")
+                c = Check("planar", case == claimed,
+                          "" if case == claimed else f"claimed case {claimed!r} but the exact case is {case!r}")
+                if c.holds:
+                    planar = case
+        checks.append(c)
+        if c.holds:
+            holding.append(kind)
+    implied = implied_verdict(holding, planar, dwell)
+    claimed = doc.get("verdict") or {}
+    if dict(claimed) != implied:
+        diff = [k for k in implied if claimed.get(k) != implied[k]] + [k for k in claimed if k not in implied]
+        checks.append(Check("verdict", False, "the claimed verdict differs from the one the certificates imply "
+                            f"in {sorted(set(diff))}: claimed {dict(claimed)}, implied {implied}"))
+    else:
+        checks.append(Check("verdict", True))
+    return VerificationReport(holds=all(c.holds for c in checks), checks=tuple(checks), implied=implied,
+                              claimed=dict(claimed))
