@@ -1,0 +1,266 @@
+"""Hostile inputs, documented status codes, untouched state; bad generation requests; the codegen CLI."""
+
+from __future__ import annotations
+
+import ctypes
+import dataclasses
+import json
+import math
+
+import numpy as np
+import pytest
+import sympy as sp
+
+from switchobs.cli.main import main
+from switchobs.codegen import CObserver, StepStatus, compile_observer, generate_observer, generate_super_twisting
+from switchobs.design import design
+from switchobs.exceptions import CodegenError, DimensionError, FreeSymbolError, ModelError, ObserverInputError
+from switchobs.model import Model, builtin_model
+from switchobs.observers import SwitchedObserver, xbs4_observer
+
+NAN, INF = math.nan, math.inf
+X0 = [0.5, 0.4, -0.2, 3.0]
+SIG = [2.0, 20.0, 100.0]
+
+
+@pytest.fixture(scope="module")
+def xbs4():
+    ref = xbs4_observer(10.0, 20.0)
+    return ref, CObserver.like(ref), CObserver.like(ref, real="float")
+
+
+# (x, signals, dt) -> status of seed 000's 4D observer; the Python reference must agree on codes 1-5.
+HOSTILE = [
+    (X0, SIG, 0.0, StepStatus.BAD_DT),
+    (X0, SIG, -1e-3, StepStatus.BAD_DT),
+    (X0, SIG, NAN, StepStatus.BAD_DT),
+    (X0, SIG, INF, StepStatus.BAD_DT),
+    ([NAN, 0, 0, 0], SIG, 1e-3, StepStatus.NONFINITE_STATE),
+    ([0, 0, 0, -INF], SIG, 1e-3, StepStatus.NONFINITE_STATE),
+    (X0, [NAN, 20.0, 0.0], 1e-3, StepStatus.NONFINITE_SIGNAL),
+    (X0, [1.0, INF, 0.0], 1e-3, StepStatus.NONFINITE_SIGNAL),
+    (X0, [1.0, 20.0, -INF], 1e-3, StepStatus.NONFINITE_SIGNAL),
+    (X0, [1.0, 0.0, 0.0], 1e-3, StepStatus.UNDEFINED_TIME_SCALE),     # vx = 0
+    (X0, [1.0, -5.0, 0.0], 1e-3, StepStatus.UNDEFINED_TIME_SCALE),    # vx < 0
+    (X0, [1e300, 1e-300, 0.0], 1e-3, StepStatus.UNDEFINED_TIME_SCALE),  # s = y/vx overflows
+    ([1e306, -1e306, 1e306, 1e306], SIG, 1e-2, StepStatus.NONFINITE_RESULT),  # the step overflows
+    (X0, [1e150, 20.0, 1e300], 1.0, StepStatus.NONFINITE_RESULT),
+]
+
+
+@pytest.mark.parametrize("x, sig, dt, status", HOSTILE)
+def test_hostile_inputs_give_documented_codes_like_the_reference(xbs4, x, sig, dt, status):
+    ref, c, _ = xbs4
+    with pytest.raises(ObserverInputError) as c_err:
+        c.step(x, sig, dt)
+    with pytest.raises(ObserverInputError) as py_err:
+        ref.step(x, sig, dt)
+    assert c_err.value.code == py_err.value.code == int(status)
+    assert status.name in str(c_err.value)
+
+
+def _raw(c: CObserver):
+    """The C step itself, on our own buffers, to see that a refused step writes nothing."""
+    lib = ctypes.CDLL(str(c.library_path))
+    real = ctypes.c_float if c.real == "float" else ctypes.c_double
+    fn = getattr(lib, f"{c.generated.prefix}_step")
+    fn.argtypes = [ctypes.c_void_p, ctypes.c_void_p, ctypes.c_void_p, real]
+    fn.restype = ctypes.c_int
+    dtype = np.float32 if c.real == "float" else np.float64
+    return fn, dtype
+
+
+@pytest.mark.parametrize("real", ["double", "float"])
+def test_refused_step_leaves_state_untouched_and_null_pointers_are_refused(xbs4, real):
+    c = xbs4[1] if real == "double" else xbs4[2]
+    fn, dtype = _raw(c)
+    for x, sig, dt, status in HOSTILE:
+        with np.errstate(over="ignore"):
+            xb, sb = np.array(x, dtype=dtype), np.array(sig, dtype=dtype)
+        before = xb.copy()
+        code = fn(xb.ctypes.data, sb.ctypes.data, None, dt)  # NULL params: the defaults
+        assert code != 0
+        assert np.array_equal(xb, before, equal_nan=True)
+        if real == "double":
+            assert code == status
+    xb, sb = np.array(X0, dtype=dtype), np.array(SIG, dtype=dtype)
+    assert fn(None, sb.ctypes.data, None, 1e-3) == StepStatus.BAD_ARGUMENT
+    assert fn(xb.ctypes.data, None, None, 1e-3) == StepStatus.BAD_ARGUMENT
+    assert fn(xb.ctypes.data, sb.ctypes.data, None, 1e-3) == 0 and not np.array_equal(xb, X0)
+
+
+@pytest.mark.parametrize("name, value", [("a", 0.0), ("a", -1.0), ("b", 2.0), ("K_plus_z2", NAN), ("c", INF)])
+def test_bad_runtime_parameter_is_refused(xbs4, name, value):
+    _, c, _ = xbs4
+    if name == "c":
+        name = "alpha1"
+    bad = c.with_params({name: value})
+    with pytest.raises(ObserverInputError, match="BAD_PARAM") as err:
+        bad.step(X0, SIG, 1e-3)
+    assert err.value.code == StepStatus.BAD_PARAM
+    assert name in str(err.value)
+
+
+def test_run_stops_at_the_first_failing_row_and_names_it(xbs4):
+    ref, c, _ = xbs4
+    rows = np.tile(SIG, (10, 1))
+    rows[6, 1] = 0.0  # vx = 0 at row 6
+    with pytest.raises(ObserverInputError, match="row 6") as c_err:
+        c.run(X0, rows, 1e-3)
+    with pytest.raises(ObserverInputError, match="row 6") as py_err:
+        ref.run(X0, rows, 1e-3)
+    assert c_err.value.code == py_err.value.code == StepStatus.UNDEFINED_TIME_SCALE
+    # the C run: xhat holds the state after the 6 good steps, rows 0..5 are written, the rest untouched
+    lib = ctypes.CDLL(str(c.library_path))
+    run = getattr(lib, f"{c.generated.prefix}_run")
+    run.argtypes = [ctypes.c_void_p, ctypes.c_void_p, ctypes.c_long, ctypes.c_void_p, ctypes.c_double,
+                    ctypes.c_void_p]
+    x = np.array(X0, dtype=float)
+    traj = np.full((10, 4), -7.0)
+    assert run(x.ctypes.data, np.ascontiguousarray(rows).ctypes.data, 10, None, 1e-3, traj.ctypes.data) == 4
+    good = c.run(X0, rows[:6], 1e-3)
+    assert np.array_equal(traj[:6], good) and np.all(traj[6:] == -7.0) and np.array_equal(x, good[-1])
+    assert run(x.ctypes.data, None, 3, None, 1e-3, None) == StepStatus.BAD_ARGUMENT
+    assert run(x.ctypes.data, None, -1, None, 1e-3, None) == StepStatus.BAD_ARGUMENT
+    assert run(x.ctypes.data, None, 0, None, 1e-3, None) == 0
+    with pytest.raises(ObserverInputError) as err:
+        c.run(X0, np.empty((0, 3)), 0.0)  # dt is checked even without rows, as the reference does
+    assert err.value.code == StepStatus.BAD_DT
+
+
+def test_domain_guards_of_d_and_b_match_the_reference(tmp_path):
+    """Division by zero and log of a non-positive number in d(y): NONFINITE_RESULT in C and in Python."""
+    path = tmp_path / "dom.toml"
+    path.write_text('name = "dom"\nstates = ["z1", "z2"]\nA = [["0", "1"], ["0", "0"]]\nC = ["1", "0"]\n'
+                    'd = ["1/(y - 1)", "log(y + 2)"]\nb = ["1/m", "0"]\ntime_scale = "y/(w - 3)"\n'
+                    'parameters = ["m"]\nexternal = ["w"]\ninputs = ["u"]\n[values]\nm = "2"\n')
+    model = Model.from_toml(path)
+    gen = generate_observer(model, ([1.0, 2.0], [3.0, 4.0]))
+    assert [(str(g.expr), g.kind, g.status) for g in gen.guards] == [
+        ("m", "nonzero", StepStatus.BAD_PARAM), ("w - 3", "nonzero", StepStatus.UNDEFINED_TIME_SCALE),
+        ("y - 1", "nonzero", StepStatus.NONFINITE_RESULT), ("y + 2", "positive", StepStatus.NONFINITE_RESULT)]
+    c, ref = compile_observer(gen), SwitchedObserver(model, [1.0, 2.0], [3.0, 4.0])
+    for sig, status in [([1.0, 5.0, 0.0], StepStatus.NONFINITE_RESULT), ([-2.0, 5.0, 0.0], StepStatus.NONFINITE_RESULT),
+                        ([-3.0, 5.0, 0.0], StepStatus.NONFINITE_RESULT), ([0.5, 3.0, 0.0], StepStatus.UNDEFINED_TIME_SCALE)]:
+        for obs in (c, ref):
+            with pytest.raises(ObserverInputError) as err:
+                obs.step([0.1, 0.2], sig, 1e-3)
+            assert err.value.code == status
+    assert np.allclose(c.step([0.1, 0.2], [0.5, 5.0, 1.0], 1e-3), ref.step([0.1, 0.2], [0.5, 5.0, 1.0], 1e-3),
+                       rtol=1e-12, atol=0)
+    with pytest.raises(ObserverInputError, match="BAD_PARAM"):
+        c.with_params({"m": 0.0}).step([0.1, 0.2], [0.5, 5.0, 1.0], 1e-3)
+
+
+def test_wrong_shapes_are_dimension_errors(xbs4):
+    _, c, _ = xbs4
+    with pytest.raises(DimensionError, match=r"expected \(4,\)"):
+        c.step([1.0, 2.0], SIG, 1e-3)
+    with pytest.raises(DimensionError, match=r"\(y, vx, u\)"):
+        c.step(X0, [1.0, 2.0], 1e-3)
+    with pytest.raises(DimensionError, match="signal_rows"):
+        c.run(X0, [1.0, 2.0, 3.0], 1e-3)
+    with pytest.raises(ModelError, match="no parameter 'zeta'"):
+        c.with_params({"zeta": 1.0})
+
+
+# --------------------------------------------------------------------------- generation errors
+def test_generation_refuses_bad_requests(tmp_path):
+    m = builtin_model("abs-xbs3")
+    g = ([1.0, 2.0, 3.0], [4.0, 5.0, 6.0])
+    with pytest.raises(CodegenError, match="not a C identifier"):
+        generate_observer(m, g, prefix="9lives")
+    with pytest.raises(CodegenError, match="C keyword"):
+        generate_observer(m, g, prefix="double")
+    with pytest.raises(CodegenError, match="real must be"):
+        generate_observer(m, g, real="half")
+    with pytest.raises(CodegenError, match="method must be"):
+        generate_observer(m, g, method="rk45")
+    with pytest.raises(DimensionError, match="K_plus has 2 entries"):
+        generate_observer(m, ([1.0, 2.0], [4.0, 5.0, 6.0]))
+    with pytest.raises(CodegenError, match="not finite"):
+        generate_observer(m, ([1.0, NAN, 3.0], [4.0, 5.0, 6.0]))
+    with pytest.raises(FreeSymbolError, match="beta1"):
+        generate_observer(m, design(m, "-beta1,-2,-3"))
+    with pytest.raises(ModelError, match="declared positive"):
+        generate_observer(m, g, values={"a": -1})
+    with pytest.raises(ModelError, match="neither parameters"):
+        generate_observer(m, g, values={"zz": 1})
+    with pytest.raises(ModelError, match=r"\['a', 'b', 'c'\] of model 'abs-xbs3' have no value"):
+        generate_observer(dataclasses.replace(m, values={}), g)
+    t = m.symbols["t"]
+    with pytest.raises(CodegenError, match="depends on the time t"):
+        generate_observer(dataclasses.replace(m, time_scale=m.time_scale * (1 + t)), g)
+    y = m.symbols["y"]
+    with pytest.raises(CodegenError, match="cannot generate C for"):
+        generate_observer(dataclasses.replace(m, d=sp.ImmutableMatrix([sp.Heaviside(y), 0, 0])), g)
+    clash = tmp_path / "clash.toml"
+    clash.write_text('name = "clash"\nstates = ["z1"]\nA = [["k + K"]]\nC = ["1"]\ntime_scale = "y"\n'
+                     'parameters = ["k", "K"]\n[values]\nk = "1"\nK = "2"\n')
+    with pytest.raises(CodegenError, match=r"same C macro name\(s\) \['K'\]"):
+        generate_observer(Model.from_toml(clash), ([1.0], [2.0]))
+
+
+def test_adaptive_generation_refuses_bad_gamma_and_unknowns():
+    m = builtin_model("abs-adaptive2")
+    g = ([30.0, -1.2], [-30.0, -1.2])
+    with pytest.raises(CodegenError, match="needs Gamma"):
+        generate_observer(m, g, unknown=["c", "d"])
+    with pytest.raises(CodegenError, match="positive definite"):
+        generate_observer(m, g, unknown=["c", "d"], Gamma=[[1.0, 2.0], [2.0, 1.0]])
+    with pytest.raises(DimensionError, match=r"expected \(2, 2\)"):
+        generate_observer(m, g, unknown=["c", "d"], Gamma=[1.0, 2.0, 3.0])
+    with pytest.raises(CodegenError, match="not parameters"):
+        generate_observer(m, g, unknown=["q"], Gamma=[1.0])
+    with pytest.raises(CodegenError, match="enter A, C or the time scaling"):
+        generate_observer(m, g, unknown=["a"], Gamma=[1.0])
+    with pytest.raises(CodegenError, match="only used by the adaptive"):
+        generate_observer(m, g, Gamma=[1.0, 1.0])
+    with pytest.raises(CodegenError, match="must be a finite number > 0"):
+        generate_super_twisting(-1.0, 10.0)
+
+
+def test_compiler_failure_and_missing_compiler_are_codegen_errors(tmp_path):
+    gen = generate_observer(builtin_model("abs-xbs3"), ([1.0, 2.0, 3.0], [4.0, 5.0, 6.0]), prefix="broken_x")
+    broken = dataclasses.replace(gen, source=gen.source + "\nthis is not C;\n")
+    with pytest.raises(CodegenError, match="failed on the generated broken_x.c"):
+        compile_observer(broken, cache_dir=tmp_path)
+    with pytest.raises(CodegenError, match="no C compiler found"):
+        compile_observer(gen, compiler="no-such-cc-xyz", cache_dir=tmp_path)
+
+
+# --------------------------------------------------------------------------- CLI
+def test_cli_codegen_writes_the_files_and_json(tmp_path, capsys):
+    out = tmp_path / "gen"
+    code = main(["codegen", "abs-xbs3", "--spectrum", "-beta1,-beta2,-beta2", "--param", "beta1=40",
+                 "--param", "beta2=60", "--real", "float", "--out", str(out), "--json"])
+    assert code == 0
+    data = json.loads(capsys.readouterr().out)
+    assert sorted(p.name for p in out.iterdir()) == ["README.md", "switchobs_abs_xbs3.c", "switchobs_abs_xbs3.h"]
+    assert data["real"] == "float" and data["parameters"]["K_plus_z1"] == 194.0
+    header = (out / "switchobs_abs_xbs3.h").read_text()
+    assert "int switchobs_abs_xbs3_step(float *xhat, const float *signals, const float *params, float dt);" in header
+    assert "--spectrum=-beta1,-beta2,-beta2" in header  # the command that regenerates the files
+    assert main(["codegen", "abs-adaptive2", "--spectrum", "-15,-15", "--unknown", "c,d", "--gamma", "50,0;0,20",
+                 "--prefix", "adapt", "--out", str(tmp_path / "ad")]) == 0
+    assert "#define ADAPT_X_UPSILON_W2_D 7" in (tmp_path / "ad" / "adapt.h").read_text()
+    assert main(["codegen", "super-twisting", "--param", "lam=400", "--param", "alpha=2000",
+                 "--out", str(tmp_path / "st")]) == 0
+    assert "SWITCHOBS_SUPER_TWISTING_P_ALPHA 1" in (tmp_path / "st" / "switchobs_super_twisting.h").read_text()
+
+
+@pytest.mark.parametrize("argv, message", [
+    (["abs-xbs3"], "give the gains with --spectrum"),
+    (["abs-xbs3", "--spectrum", "-beta1,-2,-3"], "beta1"),
+    (["abs-xbs3", "--spectrum", "-1,-2,-3", "--prefix", "1x"], "not a C identifier"),
+    (["abs-xbs3", "--spectrum", "-1,-2,-3", "--param", "a=-2"], "declared positive"),
+    (["abs-xbs3", "--spectrum", "-1,-2,-3", "--gamma", "1"], "give --unknown too"),
+    (["abs-adaptive2", "--spectrum", "-1,-1", "--unknown", "c,d", "--gamma", "x"], "--gamma expects numbers"),
+    (["super-twisting", "--param", "lam=1"], "missing ['alpha']"),
+    (["super-twisting", "--param", "lam=1", "--param", "alpha=2", "--method", "rk4"], "Euler scheme"),
+    (["nope-model", "--spectrum", "-1"], "unknown model 'nope-model'"),
+])
+def test_cli_codegen_errors_are_one_line_exit_2(tmp_path, capsys, argv, message):
+    assert main(["codegen", *argv, "--out", str(tmp_path / "o")]) == 2
+    err = capsys.readouterr().err
+    assert err.startswith("switchobs codegen: error: ") and message in err and err.count("\n") == 1
