@@ -10,12 +10,12 @@ import pytest
 from switchobs.cli.main import main
 from switchobs.exceptions import SimulationError
 from switchobs.observers import xbs3_observer
+from switchobs.plants import road, scenario, simulate
 from switchobs.sensors import (ESTIMATORS, AngleTrajectory, ChainSettings, Encoder, braking_trajectory,
                                compare_estimators, constant_speed, encoder_chain)
 
 ENCODER = Encoder(ppr=60, dnl_cycles=0.01, eccentricity=0.003, clock_hz=1e6, seed=1)
-DRY_ASPHALT = (1.2801, 23.99, 0.52)  # seed 001 Table 2.1
-BRAKE_GAIN = 17.5  # gamma_b, N m / bar (seed 001 Section 3.5)
+DRY = road("dry-asphalt")  # seed 001 Table 2.1, the road of braking_trajectory
 
 
 @pytest.fixture(scope="module")
@@ -42,7 +42,7 @@ def test_aguado_eq22_chain_output_is_R_alpha_hat_minus_ax(braking, braking_compa
         ok = np.isfinite(r.alpha)
         np.testing.assert_allclose(r.x2[ok], traj.radius_m * r.alpha[ok] - traj.accel_x(r.t[ok]), atol=1e-12)
     truth = braking_comparison["tsa"].x2_true
-    x2_plant = braking.wheel.radius_m * braking.alpha - braking.accel_x_m_s2
+    x2_plant = braking.vehicle.radius_m * braking.alpha - braking.accel_x_m_s2
     # the quintic Hermite interpolant reproduces the plant's alpha at its samples up to rounding of
     # theta (~300 rad) over 1e-4 s cells: ~1e-5 rad/s^2
     np.testing.assert_allclose(truth[::10], x2_plant[::100], atol=1e-4)
@@ -58,16 +58,15 @@ def test_three_stage_gives_the_best_x2_on_a_braking_run(braking_comparison):
 
 def test_chain_feeds_the_xbs3_observer(braking, braking_comparison):
     # the chain's x2 is the observer's output y (seed 000 (7)); its quality shows in the XBS estimate
-    wheel = braking.wheel
-    params = {"a": wheel.radius_m**2 * wheel.load_n / wheel.inertia_kg_m2,
-              "b": -wheel.radius_m * BRAKE_GAIN / wheel.inertia_kg_m2, "c": DRY_ASPHALT[1]}
+    car = braking.vehicle
+    # abs-xbs3 writes b = -R gamma_b / I and c = -c2 (braking c2 < 0): seed 000 (7)
+    params = {"a": car.a, "b": -car.b, "c": DRY.c}
     obs = xbs3_observer(10.0, 20.0, params=params)
     t = braking_comparison["tsa"].t
     speed = np.interp(t, braking.t, braking.speed_m_s)
-    pressure_rate = np.interp(t, braking.t, -np.gradient(braking.torque_nm, braking.t) / BRAKE_GAIN)
-    slip = np.interp(t, braking.t, braking.slip)
-    c1, c2, c3 = DRY_ASPHALT
-    xbs = c1 * c2 * np.exp(-c2 * np.abs(slip)) - c3
+    # T = -gamma_b P_b, so the observer input u = dP_b/dt is -dT/dt / gamma_b
+    pressure_rate = np.interp(t, braking.t, -np.gradient(braking.torque_nm, braking.t) / car.brake_gain_nm_bar)
+    xbs = DRY.xbs_array(np.interp(t, braking.t, braking.slip))
     errors = {}
     for r in braking_comparison.results:
         first = int(np.argmax(np.isfinite(r.x2)))
@@ -75,6 +74,21 @@ def test_chain_feeds_the_xbs3_observer(braking, braking_comparison):
         late = t[first:] >= 2.0
         errors[r.estimator] = float(np.sqrt(np.mean((states[late, 1] - xbs[first:][late]) ** 2)))
     assert errors["three-stage"] < 0.5 * errors["tsa"]
+
+
+def test_chain_runs_on_a_closed_loop_abs_braking_of_switchobs_plants():
+    # seed 000 Fig. 3 five-phase ABS; the chain's truth must be the plant's own x2 = R omega_dot - a_x
+    sc = scenario("hoang-fig3")
+    s = simulate(sc).series
+    keep = np.concatenate([[True], np.diff(s["t"]) > 0])
+    traj = AngleTrajectory.from_samples(s["t"][keep], omega=s["omega"][keep], alpha=s["omega_dot"][keep],
+                                        accel_x=s["ax"][keep], radius_m=sc.vehicle.radius_m, name="hoang-fig3")
+    res = encoder_chain(traj, ENCODER, estimator="tsa", settings=ChainSettings(warmup_s=0.5))
+    tk = s["t"][keep]
+    np.testing.assert_allclose(traj.radius_m * traj.alpha(tk) - traj.accel_x(tk), s["x2"][keep], atol=1e-8)
+    # ABS cycling is fast: the TSA's lag, not the encoder ripple, dominates the x2 error
+    assert res.lag_alpha_s >= 0.005
+    assert 1.0 < res.rms_x2 < 0.6 * float(np.sqrt(np.mean(s["x2"] ** 2)))
 
 
 def test_comparison_json_and_table(braking_comparison):

@@ -10,11 +10,12 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from switchobs.exceptions import SimulationError
-from switchobs.sensors import (SuperTwistingGains, SuperTwistingObserver, Wheel, burckhardt_tyre,
+from switchobs.plants import QuarterCar, road
+from switchobs.sensors import (SuperTwistingGains, SuperTwistingObserver, burckhardt_tyre,
                                identify_stiffness, linear_tyre, low_pass, simulate_wheel, super_twisting,
                                super_twisting_gains, varying_speed)
 
-WHEEL = Wheel()
+WHEEL = QuarterCar()  # seed 001 Section 3.5 rig: J = 1.2, R = 0.3, Fz = 2850
 J, R = WHEEL.inertia_kg_m2, WHEEL.radius_m
 CX = 60000.0
 
@@ -108,20 +109,32 @@ def test_msirdi2008_eq27_eq30_identifies_stiffness_radius_on_noise_free_data(lin
     assert est.to_json()["radius_identified"] is (radius is None)
 
 
-def test_msirdi2008_eq20_equivalent_injection_recovers_xi1_with_burckhardt_tyre():
-    # dry asphalt of seed 001 Table 2.1; xi1 = -R F_x / J is what the torque does not explain
-    run = simulate_wheel(_torque, burckhardt_tyre(1.2801, 23.99, 0.52, WHEEL.load_n), speed0_m_s=36.0,
-                         duration_s=2.0)
+def test_msirdi2008_eq20_eq27_burckhardt_tyre_injection_and_effective_stiffness():
+    # dry asphalt of seed 001 Table 2.1, gentle braking (slip 0.5 % .. 1.7 %, stable side of the tyre);
+    # xi1 = -R F_x / J is the part of the acceleration the torque does not explain
+    dry = road("dry-asphalt")
+
+    def torque(t: float) -> float:
+        return -250.0 * (1.0 + 0.5 * math.sin(2.0 * math.pi * 2.0 * t))
+    run = simulate_wheel(torque, burckhardt_tyre(dry, WHEEL.load_n), speed0_m_s=36.0, duration_s=3.0)
     traj = run.trajectory()
     dt, tau = 2e-5, 0.01
-    t = np.arange(0.0, 2.0, dt)
-    u = np.array([_torque(x) for x in t])
+    t = np.arange(0.0, 3.0, dt)
+    u = np.array([torque(x) for x in t])
     obs = super_twisting(t, traj.theta(t), gains=super_twisting_gains(1500.0), f1=u / J)
     xi = np.interp(t, run.t, -R * run.force_n / J)
     after = t > 0.5
     assert np.max(np.abs(obs.x2_hat - traj.omega(t))[after]) < 0.5
     zbar, xibar = low_pass(obs.z2, dt, tau), low_pass(xi, dt, tau)
     assert np.sqrt(np.mean((zbar - xibar)[after] ** 2)) < 0.03 * np.max(xi)
+    # the linear model (5) fits the curved tyre by its secant over the visited slips, not by mu'(0) Fz
+    est = identify_stiffness(t, obs.z2, obs.x2_hat, np.interp(t, run.t, run.speed_m_s), inertia_kg_m2=J,
+                             start_s=0.5)
+    seen = run.t > 0.5
+    secant = np.polyfit(run.slip[seen], run.force_n[seen], 1)[0]
+    assert est.stiffness_n == pytest.approx(secant, rel=0.05)
+    assert est.stiffness_n < 0.85 * WHEEL.load_n * dry.xbs(0.0)
+    assert est.radius_m == pytest.approx(R, rel=0.01)
 
 
 def test_identification_needs_positive_speed_and_good_settings(linear_run):

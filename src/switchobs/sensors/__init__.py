@@ -16,8 +16,8 @@ Harmonic compensation
 Super-twisting observer and identification
     SuperTwistingGains, super_twisting_gains, SuperTwistingObserver, super_twisting,
     SuperTwistingRun, low_pass, StiffnessEstimate, identify_stiffness
-Quarter car used by the examples
-    Wheel, WheelRun, simulate_wheel, braking_trajectory, linear_tyre, burckhardt_tyre
+Torque-driven quarter car (vehicle and roads of switchobs.plants)
+    WheelRun, simulate_wheel, braking_trajectory, linear_tyre, burckhardt_tyre
 Chain
     encoder_chain, compare_estimators, ChainSettings, ChainResult, EstimatorComparison,
     ESTIMATORS, rms_error, estimate_lag
@@ -26,7 +26,7 @@ Chain
 from ._chain import ESTIMATORS, ChainResult, ChainSettings, EstimatorComparison, compare_estimators, encoder_chain
 from ._encoder import Encoder, EncoderEvents
 from ._identify import StiffnessEstimate, identify_stiffness
-from ._quarter_car import Wheel, WheelRun, braking_trajectory, burckhardt_tyre, linear_tyre, simulate_wheel
+from ._quarter_car import WheelRun, braking_trajectory, burckhardt_tyre, linear_tyre, simulate_wheel
 from ._series import SpeedEstimate, estimate_lag, rms_error
 from ._super_twisting import (SuperTwistingGains, SuperTwistingObserver, SuperTwistingRun, low_pass,
                               super_twisting, super_twisting_gains)
@@ -41,7 +41,7 @@ __all__ = [
     "ThreeStageEstimator", "three_stage", "NotchFilter", "notch", "SpeedEstimate",
     "SuperTwistingGains", "super_twisting_gains", "SuperTwistingObserver", "super_twisting",
     "SuperTwistingRun", "low_pass", "StiffnessEstimate", "identify_stiffness",
-    "Wheel", "WheelRun", "simulate_wheel", "braking_trajectory", "linear_tyre", "burckhardt_tyre",
+    "WheelRun", "simulate_wheel", "braking_trajectory", "linear_tyre", "burckhardt_tyre",
     "encoder_chain", "compare_estimators", "ChainSettings", "ChainResult", "EstimatorComparison",
     "ESTIMATORS", "rms_error", "estimate_lag",
 ]

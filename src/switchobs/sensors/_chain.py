@@ -95,6 +95,10 @@ class ChainSettings:
         return asdict(self)
 
 
+def _ms(seconds: float) -> str:
+    return "-" if math.isnan(seconds) else f"{1e3 * seconds:.0f}"
+
+
 def _clean(a: Array | None) -> list[float | None] | None:
     return None if a is None else [None if math.isnan(x) else float(x) for x in a]
 
@@ -145,8 +149,8 @@ class ChainResult:
             return None if math.isnan(x) else float(x)
         return {"estimator": self.estimator, "events": self.events, "samples": int(self.t.size),
                 "rms_omega_rad_s": num(self.rms_omega), "rms_alpha_rad_s2": num(self.rms_alpha),
-                "rms_x2_m_s2": num(self.rms_x2), "lag_omega_s": self.lag_omega_s,
-                "lag_alpha_s": self.lag_alpha_s}
+                "rms_x2_m_s2": num(self.rms_x2), "lag_omega_s": num(self.lag_omega_s),
+                "lag_alpha_s": num(self.lag_alpha_s)}
 
     def to_json(self, *, arrays: bool = False) -> dict[str, Any]:
         out = {**self.summary(), "settings": self.settings.to_json()}
@@ -159,7 +163,7 @@ class ChainResult:
     def __str__(self) -> str:
         x2 = "" if math.isnan(self.rms_x2) else f", x2 {self.rms_x2:.4g} m/s^2"
         return (f"{self.estimator}: RMS error omega {self.rms_omega:.4g} rad/s, alpha {self.rms_alpha:.4g} rad/s^2"
-                f"{x2}; lag {1e3 * self.lag_omega_s:.0f} / {1e3 * self.lag_alpha_s:.0f} ms "
+                f"{x2}; lag {_ms(self.lag_omega_s)} / {_ms(self.lag_alpha_s)} ms "
                 f"({self.events} events, {self.t.size} samples)")
 
 
@@ -193,7 +197,7 @@ class EstimatorComparison:
         for r in self.results:
             x2 = "-" if math.isnan(r.rms_x2) else f"{r.rms_x2:.4f}"
             lines.append(f"{r.estimator:<16}{r.rms_omega:>15.4f}{r.rms_alpha:>17.3f}{x2:>12}"
-                         f"{1e3 * r.lag_omega_s:>12.0f}{1e3 * r.lag_alpha_s:>12.0f}")
+                         f"{_ms(r.lag_omega_s):>12}{_ms(r.lag_alpha_s):>12}")
         return "\n".join(lines)
 
 

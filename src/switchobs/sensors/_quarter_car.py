@@ -1,6 +1,10 @@
-"""A minimal quarter car for the sensor chain: wheel + corner mass with a linear or Burckhardt tyre.
+"""A torque-driven quarter car for the sensor chain, with the linear tyre of seed 003 or a Burckhardt road.
 
-Seed 001 (2.1) conventions, which are also those of ``switchobs.plants``::
+Vehicle constants and Burckhardt roads come from :mod:`switchobs.plants`
+(:class:`~switchobs.plants.QuarterCar`, :func:`~switchobs.plants.road`); what
+this module adds is a wheel driven by a known torque (seed 003 (1)-(3), ``T_f``
+measured) and the linear tyre (5), which the identification of seed 003
+needs.  Seed 001 (2.1) conventions, as in ``switchobs.plants``::
 
     J domega/dt = T - R F_x,   m dv/dt = F_x,   lambda = (R omega - v) / v,
 
@@ -21,14 +25,14 @@ import numpy.typing as npt
 from scipy.integrate import solve_ivp
 
 from ..exceptions import SimulationError
+from ..plants import Burckhardt, QuarterCar, road
 from ._trajectory import AngleTrajectory
 from ._validate import check_positive
 
-__all__ = ["TyreForce", "linear_tyre", "burckhardt_tyre", "Wheel", "WheelRun", "simulate_wheel", "braking_trajectory"]
+__all__ = ["TyreForce", "linear_tyre", "burckhardt_tyre", "WheelRun", "simulate_wheel", "braking_trajectory"]
 
 Array = npt.NDArray[np.float64]
 TyreForce = Callable[[Array], Array]
-GRAVITY = 9.81
 
 
 def linear_tyre(stiffness_n: float) -> TyreForce:
@@ -37,36 +41,21 @@ def linear_tyre(stiffness_n: float) -> TyreForce:
     return lambda lam: cx * np.asarray(lam, dtype=float)
 
 
-def burckhardt_tyre(c1: float, c2: float, c3: float, load_n: float) -> TyreForce:
-    """``F_x = F_z mu(lambda)``, Burckhardt (seed 001 (2.5)) extended as an odd function.
+def burckhardt_tyre(surface: str | Burckhardt, load_n: float) -> TyreForce:
+    """``F_x = F_z mu(lambda)`` with Burckhardt's odd characteristic (seed 001 (2.5), Table 2.1).
 
-    The small-slip stiffness is ``C_x = F_z mu'(0) = F_z (c1 c2 - c3)``.
+    ``surface`` is a road name of :func:`switchobs.plants.road` (``"dry-asphalt"``, ...)
+    or a :class:`switchobs.plants.Burckhardt`.  The small-slip stiffness is
+    ``C_x = F_z mu'(0) = F_z (c1 c2 - c3)``.
     """
+    tyre = road(surface)
     fz = check_positive(load_n, "load_n")
-
-    def force(lam: Array) -> Array:
-        lam = np.asarray(lam, dtype=float)
-        a = np.abs(lam)
-        return fz * np.sign(lam) * (c1 * (1.0 - np.exp(-c2 * a)) - c3 * a)
-    return force
-
-
-@dataclass(frozen=True)
-class Wheel:
-    """Quarter-car constants (defaults: the rig of seed 001 Section 3.5: J = 1.2, R = 0.3, Fz = 2850)."""
-
-    inertia_kg_m2: float = 1.2
-    radius_m: float = 0.3
-    load_n: float = 2850.0
-
-    @property
-    def mass_kg(self) -> float:
-        return self.load_n / GRAVITY
+    return lambda lam: fz * tyre.mu_array(lam)
 
 
 @dataclass(frozen=True, eq=False)
 class WheelRun:
-    """Sampled quarter-car trajectory (all arrays on the same time grid)."""
+    """Sampled quarter-car trajectory (all arrays on the same time grid; SI units, rad)."""
 
     t: Array
     theta: Array
@@ -77,12 +66,12 @@ class WheelRun:
     slip: Array
     force_n: Array
     torque_nm: Array
-    wheel: Wheel
+    vehicle: QuarterCar
 
     def trajectory(self, name: str = "quarter car") -> AngleTrajectory:
         """The wheel angle as a continuous :class:`AngleTrajectory` (quintic Hermite on the samples)."""
         return AngleTrajectory.from_samples(self.t, theta=self.theta, omega=self.omega, alpha=self.alpha,
-                                            accel_x=self.accel_x_m_s2, radius_m=self.wheel.radius_m, name=name)
+                                            accel_x=self.accel_x_m_s2, radius_m=self.vehicle.radius_m, name=name)
 
 
 def simulate_wheel(
@@ -91,7 +80,7 @@ def simulate_wheel(
     *,
     speed0_m_s: float,
     duration_s: float,
-    wheel: Wheel = Wheel(),
+    vehicle: QuarterCar = QuarterCar(),
     sample_s: float = 1e-4,
 ) -> WheelRun:
     """Integrate the quarter car from free rolling under the torque ``torque(t)`` (N m, < 0 braking).
@@ -101,7 +90,8 @@ def simulate_wheel(
     SimulationError
         If the wheel locks or the car stops within ``duration_s``.
     """
-    J, R, m = wheel.inertia_kg_m2, wheel.radius_m, wheel.mass_kg
+    J, R = vehicle.inertia_kg_m2, vehicle.radius_m
+    m = float(vehicle.mass_kg)  # type: ignore[arg-type]  # set by QuarterCar.__post_init__
 
     def rhs(t: float, x: Array) -> list[float]:
         _, w, v = x
@@ -124,7 +114,7 @@ def simulate_wheel(
     f = tyre(lam)
     torque_arr = np.array([torque(ti) for ti in sol.t])
     return WheelRun(t=sol.t, theta=theta, omega=w, alpha=(torque_arr - R * f) / J, speed_m_s=v,
-                    accel_x_m_s2=f / m, slip=lam, force_n=f, torque_nm=torque_arr, wheel=wheel)
+                    accel_x_m_s2=f / m, slip=lam, force_n=f, torque_nm=torque_arr, vehicle=vehicle)
 
 
 def braking_trajectory(
@@ -134,23 +124,24 @@ def braking_trajectory(
     decel_m_s2: float = 3.0,
     modulation: float = 0.3,
     modulation_hz: float = 4.0,
-    road: tuple[float, float, float] = (1.2801, 23.99, 0.52),
-    wheel: Wheel = Wheel(),
+    surface: str | Burckhardt = "dry-asphalt",
+    vehicle: QuarterCar = QuarterCar(),
 ) -> WheelRun:
-    """A braking manoeuvre on a Burckhardt road with an ABS-like modulated brake torque.
+    """A braking manoeuvre on a Burckhardt road with a modulated brake torque.
 
     The torque ramps in over 0.2 s to the level that would decelerate the car
     at ``decel_m_s2`` and is modulated by ``+-modulation`` of that level at
     ``modulation_hz``, so the wheel acceleration swings as in ABS cycling.
-    Default road: dry asphalt of seed 001 Table 2.1.
+    Defaults: dry asphalt of seed 001 Table 2.1 and the rig of seed 001
+    Section 3.5 (``J = 1.2``, ``R = 0.3``, ``Fz = 2850``).
     """
     check_positive(duration_s, "duration_s")
-    level = wheel.mass_kg * check_positive(decel_m_s2, "decel_m_s2") * wheel.radius_m
+    level = float(vehicle.mass_kg) * check_positive(decel_m_s2, "decel_m_s2") * vehicle.radius_m  # type: ignore[arg-type]
     wf = 2.0 * math.pi * check_positive(modulation_hz, "modulation_hz")
 
     def torque(t: float) -> float:
         ramp = min(t / 0.2, 1.0)
         return -level * ramp * (1.0 + modulation * math.sin(wf * t))
-    return simulate_wheel(torque, burckhardt_tyre(*road, load_n=wheel.load_n),
+    return simulate_wheel(torque, burckhardt_tyre(surface, vehicle.load_n),
                           speed0_m_s=check_positive(speed0_kmh, "speed0_kmh") / 3.6,
-                          duration_s=duration_s, wheel=wheel)
+                          duration_s=duration_s, vehicle=vehicle)

@@ -57,8 +57,11 @@ def estimate_lag(t: Array, estimate: Array, truth: Array, *, max_lag_s: float = 
     """Delay (s) that best aligns ``estimate`` with ``truth`` (least squares over whole samples).
 
     Positive when the estimate lags.  Both signals are taken on the uniform
-    grid ``t``; non-finite samples are ignored.
+    grid ``t``; non-finite samples are ignored.  NaN when the truth is
+    constant (a delay is then unobservable).
     """
+    if np.ptp(truth[np.isfinite(truth)]) == 0.0:
+        return math.nan
     dt = float(t[1] - t[0])
     best, best_err = 0.0, math.inf
     for shift in range(int(round(max_lag_s / dt)) + 1):

@@ -226,13 +226,13 @@ def varying_speed(
     duration_s: float = 10.0,
     *,
     amplitude_rad_s: float = 40.0,
-    frequency_hz: float = 0.5,
+    frequency_hz: float = 1.0,
     theta0: float = 0.0,
 ) -> AngleTrajectory:
     """A smooth time-varying rig reference (our stand-in for seed 001 Fig. 6.4).
 
     ``omega(t) = omega0 + A sin(2 pi f t)``, so ``alpha`` swings between
-    ``+-2 pi f A`` (about 126 rad/s^2 with the defaults) and the speed stays
+    ``+-2 pi f A`` (about 251 rad/s^2 with the defaults) and the speed stays
     positive as long as ``A < omega0``.
 
     Raises
