@@ -13,10 +13,19 @@ Observer interface
 Simulation
     :class:`BrakingScenario`, :func:`simulate`, :class:`BrakingResult`,
     :class:`BrakingMetrics`, :class:`Assumption1Status`, :func:`assumption1`
+Scenarios and figures
+    :func:`scenario`, :func:`scenario_names`, :func:`table41` (seed 001 Table 4.1),
+    :func:`plot_braking`, :func:`plot_table41`
+Limit cycle of the two-phase ABS
+    :class:`PoincareMap` (seed 001 eqs. (4.13)-(4.14)), :func:`simulate_return_map`
 """
 
 from ._controllers import ContinuousXbsControl, FivePhaseABS, TwoPhaseABS
 from ._estimator import TrueXbs, XbsEstimator
+from ._plot import plot_braking, plot_table41
+from ._poincare import PoincareFixedPoint, PoincareMap, simulate_return_map
+from ._scenarios import (TABLE41_ROADS, TABLE41_SEED, TABLE41_SPEEDS_KMH, Table41Result, Table41Row, scenario,
+                         scenario_description, scenario_names, scenario_observer, table41)
 from ._metrics import Assumption1Status, BrakingMetrics, Reconvergence, assumption1, pe_level, zero_crossings
 from ._road import RoadChange, RoadSchedule
 from ._simulate import SERIES, BrakingResult, BrakingScenario, simulate
@@ -32,4 +41,7 @@ __all__ = [
     "XbsEstimator", "TrueXbs",
     "BrakingScenario", "BrakingResult", "simulate", "SERIES",
     "BrakingMetrics", "Assumption1Status", "Reconvergence", "assumption1", "pe_level", "zero_crossings",
+    "scenario", "scenario_names", "scenario_observer", "scenario_description", "table41", "Table41Result",
+    "Table41Row", "TABLE41_SEED", "TABLE41_ROADS", "TABLE41_SPEEDS_KMH", "plot_braking", "plot_table41",
+    "PoincareMap", "PoincareFixedPoint", "simulate_return_map",
 ]

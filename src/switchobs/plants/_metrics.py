@@ -4,7 +4,8 @@ Definitions (all over the recorded samples, trapezoidal integrals):
 
 * ``mean_friction`` ``mū``: time average of the braking friction ``-mu(lambda(t))``
   over the whole run; ``braking_distance_m = vx(0)² / (2 g mū)`` is the braking
-  distance as seed 001 Table 4.1 defines it (Sec. 4.4).
+  distance as seed 001 Table 4.1 defines it (Sec. 4.4), ``None`` when the speed
+  is imposed (drum) since the tyre force then does not stop the vehicle.
 * ``stopping_distance_m``: distance actually travelled until the stop speed.
 * XBS error ``e = mu_hat' - mu'``: RMS over the ABS-active part; after each road
   change (and from the ABS activation for the initial road) the re-convergence
@@ -192,7 +193,7 @@ class BrakingMetrics:
     stop_time_s: float | None
     stopping_distance_m: float
     mean_friction: float
-    braking_distance_m: float
+    braking_distance_m: float | None
     abs_activation_s: float | None
     mean_friction_abs: float | None
     efficiency: float | None
@@ -213,8 +214,9 @@ class BrakingMetrics:
         stop = "not reached" if self.stop_time_s is None else f"{self.stop_time_s:.3f} s"
         lines = [f"stop: {stop}, stopping distance {self.stopping_distance_m:.2f} m, final speed "
                  f"{self.final_speed_m_s:.2f} m/s",
-                 f"mean friction {self.mean_friction:.4f} -> braking distance (Table 4.1 definition) "
-                 f"{self.braking_distance_m:.2f} m"]
+                 f"mean friction {self.mean_friction:.4f}" + (
+                     "" if self.braking_distance_m is None else
+                     f" -> braking distance (Table 4.1 definition) {self.braking_distance_m:.2f} m")]
         if self.abs_activation_s is not None:
             eff = "" if self.efficiency is None else f", {100 * self.efficiency:.1f} % of the peak"
             lines.append(f"ABS active from {self.abs_activation_s:.3f} s: {self.abs_cycles} cycles, mean friction "
@@ -251,7 +253,9 @@ def braking_metrics(series: dict[str, npt.NDArray[np.float64]], scenario: Brakin
     v0 = scenario.speed_m_s
     duration = float(t[-1] - t[0])
     mean_mu = float(_cumtrapz(t, -mu)[-1] / duration) if duration > 0 else 0.0
-    braking = v0 * v0 / (2.0 * GRAVITY * mean_mu) if mean_mu > 0 else math.inf
+    # with an imposed speed the tyre force does not stop the vehicle: no braking distance
+    braking = None if scenario.speed_profile is not None else (
+        v0 * v0 / (2.0 * GRAVITY * mean_mu) if mean_mu > 0 else None)
     phase = series["phase"]
     active = np.nonzero(phase >= 1)[0]
     t_abs = float(t[active[0]]) if len(active) else None

@@ -193,13 +193,16 @@ class PoincareMap:
         SolverFailure
             If no sign change of ``P(ζ) - ζ`` is found in ``(-1, 0)``.
         """
-        eps = 1e-12
-        lo, hi = -1.0 + eps, -eps
+        # with a large alpha |kappa| the cycle saturates (ζ1 within 1e-12 of -1): bracket to the last float
+        lo, hi = math.nextafter(-1.0, 0.0), math.nextafter(0.0, -1.0)
         f_lo, f_hi = self(lo) - lo, self(hi) - hi
-        if not (f_lo > 0.0 > f_hi):
+        if -8 * np.finfo(float).eps < f_lo < 0.0:
+            f_lo = 0.0      # P rounds to -1: the fixed point is -1 to the last bit (e^(alpha kappa) < 1e-15)
+        if not (f_lo >= 0.0 >= f_hi):
             raise SolverFailure(f"P(ζ) - ζ does not change sign on (-1, 0) ({f_lo:.3g}, {f_hi:.3g}); "
                                 f"no fixed point for {self}")
-        zeta = brentq(lambda z: self(z) - z, lo, hi, xtol=1e-15, rtol=4 * np.finfo(float).eps, maxiter=200)
+        zeta = lo if f_lo == 0.0 else brentq(lambda z: self(z) - z, lo, hi, xtol=1e-15,
+                                             rtol=4 * np.finfo(float).eps, maxiter=200)
         deriv, factors = self.derivative(zeta)
         return PoincareFixedPoint(zeta=float(zeta), derivative=float(deriv),
                                   factors=factors, alpha=self.alpha, alpha_bound=self.alpha_bound)

@@ -342,7 +342,9 @@ class _Loop:
                 tb = min(tb, road.t0 + road.duration)
             elif pending is not None and pending.at_time_s is not None:
                 tb = min(tb, pending.at_time_s)
-            tb = min(tb, ctrl.breakpoint())
+            kink = ctrl.breakpoint()
+            if kink > t + 1e-12:
+                tb = min(tb, kink)
             at_break = t + h >= tb - 1e-12
             if at_break:
                 h = tb - t
@@ -407,6 +409,12 @@ class _Loop:
                 fire = -1
             if changed and fire < 0:
                 k_end = rhs(t, y)
+            if fire < 0 and t >= ctrl.deadline - 1e-12:
+                before = ctrl.phase
+                ctrl.expire(t, self.o_x2, R * y[0], y[1])
+                events.append((t, f"phase {before} -> {ctrl.phase} (stall timeout)"))
+                k_end = rhs(t, y)
+                changed = True
             cascade = 0
             while True:
                 if fire < 0:

@@ -1,0 +1,173 @@
+"""``switchobs simulate [SCENARIO]``: ABS braking simulations with the reference XBS observers.
+
+Without SCENARIO: a straight-line emergency braking on one road from a given
+speed to standstill (the set-up of seed 001 Table 4.1).  Scenarios:
+``hoang-fig3``, ``hoang-fig4``, ``aguado-sec34`` and ``table41`` (both ABS
+algorithms on every road and speed of seed 001 Table 4.1).
+"""
+
+from __future__ import annotations
+
+import argparse
+from dataclasses import replace
+from typing import Any
+
+from ..exceptions import SimulationError
+from ..plants import (TABLE41_ROADS, TABLE41_SPEEDS_KMH, BrakeActuator, BrakingScenario, ContinuousXbsControl,
+                      FivePhaseABS, TwoPhaseABS, XbsEstimator, plot_braking, plot_table41, road, road_names,
+                      scenario, scenario_description, scenario_names, scenario_observer, simulate, table41)
+from ._common import emit_json
+
+__all__ = ["register", "make_estimator", "OBSERVERS"]
+
+OBSERVERS = ("xbs3", "xbs4", "adaptive", "none")
+CONTROLLERS = ("five-phase", "two-phase", "continuous")
+#: Default observer gains: error rates in the rescaled time tau (seed 000 Sec. III-E, IV-D; seed 001 (3.20)).
+DEFAULT_BETA = {"xbs3": 150.0, "xbs4": 100.0, "adaptive": 100.0}
+DEFAULT_GAMMA = 1e4
+#: Initial estimates: a small positive XBS (the stable side) and rough road parameters.
+INITIAL_STATE = {"xbs3": {"z2": 0.5}, "xbs4": {"z2": 0.5}, "adaptive": {"c": 20.0, "d": 10.0}}
+
+
+def register(sub: argparse._SubParsersAction) -> None:
+    p = sub.add_parser("simulate", help="ABS braking simulation (quarter car, five/two-phase ABS, XBS observers)",
+                       description="Simulate an emergency braking of the quarter car of seed 001 (2.1) with a "
+                                   "hybrid ABS and an XBS observer; print the metrics or JSON, draw the plots.")
+    p.add_argument("scenario", nargs="?", metavar="SCENARIO",
+                   help=f"built-in scenario: {', '.join(scenario_names())} (default: braking on --road "
+                        f"from --speed-kmh to standstill)")
+    p.add_argument("--road", help=f"road surface: {', '.join(road_names())} (default dry-asphalt)")
+    p.add_argument("--speed-kmh", type=float, help="initial speed [km/h] (default 120)")
+    p.add_argument("--controller", choices=CONTROLLERS, help="ABS algorithm (default five-phase)")
+    p.add_argument("--tracking", action="store_true",
+                   help="five-phase: closed-loop wheel-acceleration tracking (21)-(22) in phases 1, 3, 4")
+    p.add_argument("--observer", choices=OBSERVERS,
+                   help="XBS observer (default: none, or the scenario's); controllers that need an XBS read "
+                        "its estimate, or the true XBS with --observer none")
+    p.add_argument("--observer-impl", choices=("python", "c"), default="python",
+                   help="observer implementation (the generated C arrives with issue 6)")
+    p.add_argument("--parallel", action="store_true",
+                   help="run the observer beside the loop: the controller reads the true XBS (seed 001 Fig. 4.5)")
+    p.add_argument("--beta", type=float, help="observer rate beta in the rescaled time (default per observer)")
+    p.add_argument("--gamma", type=float, help=f"adaptive observer: Gamma = gamma I (default {DEFAULT_GAMMA:g})")
+    p.add_argument("--duration", type=float, help="time bound [s] (default: scenario's, or 60)")
+    p.add_argument("--dt", type=float, help="integration step [s] (default 0.001)")
+    p.add_argument("--delay", type=float, help="actuator delay [s] (0 or >= the step)")
+    p.add_argument("--json", action="store_true", help="print the result as JSON")
+    p.add_argument("--series", action="store_true", help="with --json: include the time series")
+    p.add_argument("--plot", metavar="PNG", help="write the figure to this file")
+    p.set_defaults(func=run)
+
+
+def make_estimator(kind: str, sc: BrakingScenario, *, beta: float | None = None, gamma: float | None = None,
+                   impl: str = "python") -> XbsEstimator | None:
+    """The reference observer ``kind`` set up for the plant of ``sc`` (None for ``none``).
+
+    ``a = R² Fz / J`` and ``b`` come from the scenario's vehicle (``b = -R γ_b / J``
+    for the models of seed 000, ``+R γ_b / J`` for seed 001's); the 3D observer
+    knows the initial road's ``c = -c2``.
+    """
+    if kind == "none":
+        return None
+    if kind not in OBSERVERS:
+        raise SimulationError(f"unknown observer {kind!r}; choose one of {', '.join(OBSERVERS)}")
+    if impl != "python":
+        raise SimulationError(f"--observer-impl {impl!r} is not available yet: the generated C observers "
+                              f"come with issue 6; use --observer-impl python")
+    from ..observers import ObserverXbsEstimator, adaptive_xbs_observer, xbs3_observer, xbs4_observer
+
+    beta = DEFAULT_BETA[kind] if beta is None else beta
+    veh = sc.vehicle
+    if kind == "xbs3":
+        obs = xbs3_observer(beta, beta, params={"a": veh.a, "b": -veh.b, "c": sc.roads.initial.c})
+    elif kind == "xbs4":
+        obs = xbs4_observer(beta, beta, params={"a": veh.a, "b": -veh.b})
+    else:
+        g = DEFAULT_GAMMA if gamma is None else gamma
+        obs = adaptive_xbs_observer(beta, [g, g], params={"a": veh.a, "b": veh.b})
+    return ObserverXbsEstimator(obs, initial_state=INITIAL_STATE[kind])
+
+
+def _controller(args: argparse.Namespace, base: Any) -> Any:
+    if args.controller is None:
+        ctrl = base
+    elif args.controller == "five-phase":
+        ctrl = base if isinstance(base, FivePhaseABS) else FivePhaseABS()
+    elif args.controller == "two-phase":
+        ctrl = TwoPhaseABS()
+    else:
+        ctrl = ContinuousXbsControl()
+    if args.tracking:
+        if not isinstance(ctrl, FivePhaseABS):
+            raise SimulationError(f"--tracking applies to the five-phase ABS, not to {ctrl.name}")
+        ctrl = replace(ctrl, tracking=True)
+    return ctrl
+
+
+def _scenario(args: argparse.Namespace) -> tuple[BrakingScenario, str]:
+    if args.scenario is not None:
+        sc = scenario(args.scenario)
+        if args.road is not None:
+            raise SimulationError(f"--road does not apply to the scenario {args.scenario!r}, which fixes its roads")
+        observer = scenario_observer(args.scenario)
+    else:
+        sc = BrakingScenario(road(args.road or "dry-asphalt"), speed_m_s=120 / 3.6,
+                             name=f"braking-{args.road or 'dry-asphalt'}")
+        observer = "none"
+    changes: dict[str, Any] = {"controller": _controller(args, sc.controller)}
+    if args.speed_kmh is not None:
+        if not args.speed_kmh > 0:
+            raise SimulationError(f"--speed-kmh must be > 0, got {args.speed_kmh:g}")
+        changes["speed_m_s"] = args.speed_kmh / 3.6
+    if args.duration is not None:
+        if not args.duration > 0:
+            raise SimulationError(f"--duration must be > 0 s, got {args.duration:g}")
+        changes["duration_s"] = args.duration
+    if args.dt is not None:
+        changes["dt_s"] = args.dt
+    if args.delay is not None:
+        changes["actuator"] = BrakeActuator(delay_s=args.delay)
+    return replace(sc, **changes), (args.observer or observer)
+
+
+def _table41(args: argparse.Namespace) -> int:
+    for opt in ("road", "speed_kmh", "controller", "duration", "delay"):
+        if getattr(args, opt) is not None or (opt == "controller" and args.tracking):
+            raise SimulationError(f"--{opt.replace('_', '-')} does not apply to table41, which runs both ABS "
+                                  f"algorithms on the roads and speeds of seed 001 Table 4.1")
+    kind = args.observer or "none"
+    factory = None
+    if kind != "none":
+        def factory(sc: BrakingScenario) -> XbsEstimator | None:
+            return make_estimator(kind, sc, beta=args.beta, gamma=args.gamma, impl=args.observer_impl)
+    result = table41(roads=TABLE41_ROADS, speeds_kmh=TABLE41_SPEEDS_KMH, dt_s=args.dt or 1e-3,
+                     estimator_factory=factory, observer=kind)
+    if args.plot:
+        plot_table41(result, args.plot)
+    if args.json:
+        emit_json(result.to_json())
+    else:
+        print(result)
+    return 0 if result.two_phase_always_shorter else 1
+
+
+def run(args: argparse.Namespace) -> int:
+    if args.series and not args.json:
+        raise SimulationError("--series only applies with --json")
+    if args.scenario == "table41":
+        return _table41(args)
+    sc, kind = _scenario(args)
+    est = make_estimator(kind, sc, beta=args.beta, gamma=args.gamma, impl=args.observer_impl)
+    result = simulate(sc, estimator=est, observer_in_loop=not args.parallel)
+    if args.plot:
+        plot_braking(result, args.plot)
+    if args.json:
+        data = result.to_json(include_series=args.series)
+        if args.scenario is not None:
+            data["description"] = scenario_description(args.scenario)
+        emit_json(data)
+    else:
+        if args.scenario is not None:
+            print(scenario_description(args.scenario))
+        print(result)
+    return 0

@@ -1,0 +1,118 @@
+"""Figures of braking runs, in the style of the seeds' plots (matplotlib, Agg backend)."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+
+from ..exceptions import SimulationError
+from ._scenarios import Table41Result
+from ._simulate import BrakingResult
+
+__all__ = ["plot_braking", "plot_table41"]
+
+
+def _save(fig, path: str | Path) -> Path:  # noqa: ANN001 - matplotlib figure
+    path = Path(path)
+    try:
+        fig.savefig(path, dpi=110)
+    except (OSError, ValueError) as exc:
+        raise SimulationError(f"cannot write the plot {str(path)!r}: {exc}") from None
+    return path
+
+
+def plot_braking(result: BrakingResult, path: str | Path) -> Path:
+    """Time histories and phase planes of a run (seed 000 Figs. 3-4, seed 001 Figs. 3.4, 4.5-4.7).
+
+    Left: speeds ``vx`` and ``R ω``, slip, ``x2`` with the controller phase,
+    pressure, true and estimated XBS.  Right: the ``(lambda, x2)`` plane (seed
+    001 Fig. 4.7) and the ``(z1, z2) = (x2, mu')`` plane (Figs. 4.4-4.6).
+    """
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    s = result.series
+    t = s["t"]
+    fig = plt.figure(figsize=(12, 10))
+    grid = fig.add_gridspec(5, 2, width_ratios=(1.6, 1.0))
+    axes = [fig.add_subplot(grid[i, 0]) for i in range(5)]
+    for ax in axes[1:]:
+        ax.sharex(axes[0])
+    r = result.scenario.vehicle.radius_m
+    axes[0].plot(t, s["vx"], label="vx")
+    axes[0].plot(t, r * s["omega"], label="R ω")
+    axes[0].set_ylabel("speed [m/s]")
+    axes[0].legend(loc="upper right")
+    axes[1].plot(t, s["lambda"])
+    axes[1].set_ylabel("slip λ")
+    axes[2].plot(t, s["x2"], lw=0.8)
+    axes[2].set_ylabel("x2 [m/s²]")
+    phase_ax = axes[2].twinx()
+    phase_ax.step(t, s["phase"], where="post", color="tab:gray", lw=0.6, alpha=0.6)
+    phase_ax.set_ylabel("phase")
+    axes[3].plot(t, s["P_b"])
+    axes[3].set_ylabel("P_b [bar]")
+    axes[4].plot(t, s["xbs"], label="μ' (true)")
+    if not np.all(np.isnan(s["xbs_hat"])):
+        axes[4].plot(t, s["xbs_hat"], "--", label="μ' estimate")
+    lo, hi = np.nanpercentile(np.r_[s["xbs"], s["xbs_hat"]], [1, 97])
+    axes[4].set_ylim(lo - 0.5, hi + 0.5)
+    axes[4].set_ylabel("XBS")
+    axes[4].set_xlabel("t [s]")
+    axes[4].legend(loc="upper right")
+    for when, what in result.events:
+        if what.startswith("road"):
+            for ax in axes:
+                ax.axvline(when, color="tab:red", lw=0.6, ls=":")
+    active = s["phase"] >= 1
+    p1 = fig.add_subplot(grid[0:2, 1])
+    p1.plot(s["lambda"][active], s["x2"][active], lw=0.6)
+    p1.set_xlabel("slip λ")
+    p1.set_ylabel("x2 [m/s²]")
+    p1.set_title("(λ, x2) plane")
+    p2 = fig.add_subplot(grid[2:5, 1])
+    p2.plot(s["x2"][active], s["xbs"][active], lw=0.6, label="true")
+    if not np.all(np.isnan(s["xbs_hat"])):
+        p2.plot(s["x2"][active], s["xbs_hat"][active], lw=0.6, alpha=0.7, label="estimate")
+        p2.legend(loc="upper right")
+    p2.set_ylim(lo - 0.5, hi + 0.5)
+    p2.set_xlabel("z1 = x2 [m/s²]")
+    p2.set_ylabel("z2 = μ'")
+    p2.set_title("(z1, z2) plane")
+    fig.suptitle(f"{result.scenario.name}: {result.scenario.roads}, {result.scenario.speed_kmh:.0f} km/h, "
+                 f"{result.scenario.controller.name}, observer {result.observer}", fontsize=10)
+    fig.tight_layout()
+    try:
+        return _save(fig, path)
+    finally:
+        plt.close(fig)
+
+
+def plot_table41(result: Table41Result, path: str | Path) -> Path:
+    """Bar chart of the braking distances of Table 4.1, ours beside the seed's."""
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    speeds = sorted({r.speed_kmh for r in result.rows})
+    fig, axes = plt.subplots(1, len(speeds), figsize=(4.5 * len(speeds), 4.5), squeeze=False)
+    for ax, v in zip(axes[0], speeds):
+        rows = [r for r in result.rows if r.speed_kmh == v]
+        x = np.arange(len(rows))
+        w = 0.2
+        ax.bar(x - 1.5 * w, [r.five_phase_m for r in rows], w, label="five-phase (ours)")
+        ax.bar(x - 0.5 * w, [r.seed_five_phase_m or np.nan for r in rows], w, label="five-phase (seed)", alpha=0.5)
+        ax.bar(x + 0.5 * w, [r.two_phase_m for r in rows], w, label="two-phase (ours)")
+        ax.bar(x + 1.5 * w, [r.seed_two_phase_m or np.nan for r in rows], w, label="two-phase (seed)", alpha=0.5)
+        ax.set_xticks(x, [r.road.replace("-", "\n") for r in rows], fontsize=8)
+        ax.set_title(f"{v:.0f} km/h")
+        ax.set_ylabel("braking distance [m]")
+    axes[0][0].legend(fontsize=8)
+    fig.suptitle("seed 001 Table 4.1: braking distance vx(0)²/(2 g μ̄)")
+    fig.tight_layout()
+    try:
+        return _save(fig, path)
+    finally:
+        plt.close(fig)

@@ -1,0 +1,238 @@
+"""Built-in braking scenarios of the seeds and the Table 4.1 campaign of seed 001.
+
+The seeds give the road sequences and a few speeds but not every setting; the
+choices made here are listed in each scenario's ``description`` and in
+``docs/abs.md``.  Seed 000 Figs. 3-4 and seed 001 Sec. 3.4 last longer than a
+free quarter car on dry asphalt needs to stop (about 2.3 s from 25 m/s), so
+they impose the vehicle speed (drum test rig) with the 1.96 m/s² deceleration
+stated in seed 001 Sec. 3.4.
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass
+from typing import Any
+
+from ..exceptions import SimulationError
+from ._controllers import FivePhaseABS, TwoPhaseABS
+from ._estimator import XbsEstimator
+from ._road import RoadChange, RoadSchedule
+from ._simulate import BrakingResult, BrakingScenario, simulate
+from ._vehicle import PrescribedSpeed, QuarterCar
+
+__all__ = ["SCENARIOS", "scenario", "scenario_names", "scenario_observer", "scenario_description", "TABLE41_SEED", "TABLE41_ROADS", "TABLE41_SPEEDS_KMH",
+           "Table41Row", "Table41Result", "table41"]
+
+#: Transition length of the road changes (seed 000 Sec. IV-D: "transitions, (which last 25 ms)").
+TRANSITION_S = 0.025
+#: Stall timeout used by the scenarios with road changes (see :class:`FivePhaseABS`).
+STALL_TIMEOUT_S = 0.3
+
+
+@dataclass(frozen=True)
+class _Spec:
+    description: str
+    build: Callable[[], BrakingScenario]
+    observer: str            # default --observer of the CLI
+
+
+def _hoang_fig3() -> BrakingScenario:
+    roads = RoadSchedule("hoang-dry", [RoadChange("hoang-wet", at_time_s=3.0, duration_s=TRANSITION_S)])
+    return BrakingScenario(roads, speed_m_s=25.0, name="hoang-fig3", vehicle=QuarterCar.hoang2014(),
+                           controller=FivePhaseABS(stall_timeout_s=STALL_TIMEOUT_S),
+                           speed_profile=PrescribedSpeed(1.96), duration_s=6.0)
+
+
+def _hoang_fig4() -> BrakingScenario:
+    roads = RoadSchedule("hoang-dry", [RoadChange("hoang-wet", at_time_s=3.0, duration_s=TRANSITION_S),
+                                       RoadChange("hoang-snow", at_time_s=4.0, duration_s=TRANSITION_S)])
+    return BrakingScenario(roads, speed_m_s=25.0, name="hoang-fig4", vehicle=QuarterCar.hoang2014(),
+                           controller=FivePhaseABS(tracking=True, stall_timeout_s=STALL_TIMEOUT_S),
+                           speed_profile=PrescribedSpeed(1.96), duration_s=7.0)
+
+
+def _aguado_sec34() -> BrakingScenario:
+    roads = RoadSchedule("dry-asphalt", [RoadChange("wet-asphalt", at_time_s=3.0, duration_s=TRANSITION_S),
+                                         RoadChange("dry-concrete", at_time_s=6.0, duration_s=TRANSITION_S)])
+    return BrakingScenario(roads, speed_m_s=25.0, name="aguado-sec34",
+                           controller=FivePhaseABS(stall_timeout_s=STALL_TIMEOUT_S),
+                           speed_profile=PrescribedSpeed(1.96), duration_s=10.0)
+
+
+SCENARIOS: dict[str, _Spec] = {
+    "hoang-fig3": _Spec("seed 000 Fig. 3: dry road for 3 s then wet road (Table I), 25 ms transition; "
+                        "rig of Fig. 2 (Fz = 2500 N), drum at 25 m/s - 1.96 m/s² t; five-phase ABS; "
+                        "4D observer of Sec. IV", _hoang_fig3, "xbs4"),
+    "hoang-fig4": _Spec("seed 000 Fig. 4: dry 3 s, wet 1 s, then snow (Table I); five-phase ABS with "
+                        "wheel-acceleration tracking (21)-(22) in phases 1, 3, 4 fed by the 4D observer",
+                        _hoang_fig4, "xbs4"),
+    "aguado-sec34": _Spec("seed 001 Sec. 3.4: 25 m/s with a constant deceleration of 1.96 m/s², dry asphalt, "
+                          "wet asphalt at 3 s, dry concrete at 6 s (Table 2.1); five-phase ABS; switched "
+                          "adaptive observer (3.4)", _aguado_sec34, "adaptive"),
+}
+
+
+def scenario_observer(name: str) -> str:
+    """The observer a built-in scenario uses by default (``xbs4`` or ``adaptive``)."""
+    scenario(name)
+    return SCENARIOS[name].observer
+
+
+def scenario_description(name: str) -> str:
+    """What a built-in scenario reproduces and the settings chosen for it."""
+    scenario(name)
+    return SCENARIOS[name].description
+
+
+def scenario_names() -> tuple[str, ...]:
+    """Names accepted by :func:`scenario` (``table41`` is run by :func:`table41`)."""
+    return (*SCENARIOS, "table41")
+
+
+def scenario(name: str) -> BrakingScenario:
+    """A built-in scenario by name.
+
+    Raises
+    ------
+    SimulationError
+        For an unknown name; the message lists the known ones.
+    """
+    spec = SCENARIOS.get(name)
+    if spec is None:
+        raise SimulationError(f"unknown scenario {name!r}; known: {', '.join(scenario_names())}")
+    return spec.build()
+
+
+#: The roads and speeds of seed 001 Table 4.1.
+TABLE41_ROADS = ("dry-asphalt", "wet-asphalt", "dry-concrete", "dry-cobblestones", "wet-cobblestones")
+TABLE41_SPEEDS_KMH = (60.0, 120.0, 180.0)
+#: Seed 001 Table 4.1: braking distance [m] (five-phase, two-phase) per (speed, road).
+TABLE41_SEED: dict[tuple[float, str], tuple[float, float]] = {
+    (60.0, "dry-asphalt"): (12.31, 12.18), (60.0, "wet-asphalt"): (18.09, 17.86),
+    (60.0, "dry-concrete"): (13.24, 13.08), (60.0, "dry-cobblestones"): (14.34, 14.28),
+    (60.0, "wet-cobblestones"): (38.46, 38.30),
+    (120.0, "dry-asphalt"): (49.27, 48.78), (120.0, "wet-asphalt"): (72.38, 71.58),
+    (120.0, "dry-concrete"): (52.97, 52.40), (120.0, "dry-cobblestones"): (57.34, 57.11),
+    (120.0, "wet-cobblestones"): (153.88, 153.41),
+    (180.0, "dry-asphalt"): (110.87, 109.90), (180.0, "wet-asphalt"): (162.88, 161.37),
+    (180.0, "dry-concrete"): (119.27, 118.10), (180.0, "dry-cobblestones"): (129.01, 128.51),
+    (180.0, "wet-cobblestones"): (346.08, 345.57),
+}
+
+
+@dataclass(frozen=True)
+class Table41Row:
+    """One cell pair of Table 4.1: our braking distances beside the seed's."""
+
+    speed_kmh: float
+    road: str
+    five_phase_m: float
+    two_phase_m: float
+    seed_five_phase_m: float | None
+    seed_two_phase_m: float | None
+    five_phase_stopping_m: float
+    two_phase_stopping_m: float
+
+    @property
+    def difference_m(self) -> float:
+        return self.two_phase_m - self.five_phase_m
+
+    @property
+    def two_phase_shorter(self) -> bool:
+        return self.two_phase_m < self.five_phase_m
+
+    def to_json(self) -> dict[str, Any]:
+        return {"speed_kmh": self.speed_kmh, "road": self.road, "five_phase_m": self.five_phase_m,
+                "two_phase_m": self.two_phase_m, "difference_m": self.difference_m,
+                "seed_five_phase_m": self.seed_five_phase_m, "seed_two_phase_m": self.seed_two_phase_m,
+                "seed_difference_m": None if self.seed_five_phase_m is None else
+                round(self.seed_two_phase_m - self.seed_five_phase_m, 2),
+                "five_phase_stopping_m": self.five_phase_stopping_m,
+                "two_phase_stopping_m": self.two_phase_stopping_m, "two_phase_shorter": self.two_phase_shorter}
+
+
+@dataclass(frozen=True)
+class Table41Result:
+    """Seed 001 Table 4.1 reproduced: braking distance ``vx(0)² / (2 g mū)`` per road and speed."""
+
+    rows: tuple[Table41Row, ...]
+    five_phase: FivePhaseABS
+    two_phase: TwoPhaseABS
+    observer: str
+    wall_time_s: float
+
+    @property
+    def two_phase_always_shorter(self) -> bool:
+        return all(r.two_phase_shorter for r in self.rows)
+
+    def to_json(self) -> dict[str, Any]:
+        return {"rows": [r.to_json() for r in self.rows], "five_phase": self.five_phase.to_json(),
+                "two_phase": self.two_phase.to_json(), "observer": self.observer,
+                "two_phase_always_shorter": self.two_phase_always_shorter, "wall_time_s": self.wall_time_s}
+
+    def __str__(self) -> str:
+        def seed(v: float | None) -> str:
+            return "   n/a" if v is None else f"{v:7.2f}"
+        lines = ["Seed 001 Table 4.1, braking distance vx(0)^2/(2 g mu_bar) [m] (ours | seed)",
+                 f"{'speed':>6} {'road':<17} {'five-phase':>17} {'two-phase':>17} {'difference':>17}"]
+        for r in self.rows:
+            sd = None if r.seed_five_phase_m is None else r.seed_two_phase_m - r.seed_five_phase_m
+            lines.append(f"{r.speed_kmh:6.0f} {r.road:<17} {r.five_phase_m:8.2f} |{seed(r.seed_five_phase_m)} "
+                         f"{r.two_phase_m:8.2f} |{seed(r.seed_two_phase_m)} {r.difference_m:8.2f} |{seed(sd)}")
+        lines.append(f"two-phase shorter on every road and speed: {self.two_phase_always_shorter} "
+                     f"(observer: {self.observer}; {self.wall_time_s:.1f} s wall)")
+        return "\n".join(lines)
+
+
+def table41(*, roads: Sequence[str] = TABLE41_ROADS, speeds_kmh: Sequence[float] = TABLE41_SPEEDS_KMH,
+            five_phase: FivePhaseABS | None = None, two_phase: TwoPhaseABS | None = None, dt_s: float = 1e-3,
+            estimator_factory: Callable[[BrakingScenario], XbsEstimator] | None = None,
+            observer: str = "none") -> Table41Result:
+    """Run the Table 4.1 campaign: each road and speed with both ABS algorithms, free quarter car to 2.5 km/h.
+
+    Parameters
+    ----------
+    roads, speeds_kmh : sequences
+        Subsets of the table (defaults: all five roads, 60/120/180 km/h).
+    five_phase, two_phase : controllers, optional
+        Defaults: :class:`FivePhaseABS` and :class:`TwoPhaseABS` defaults.
+    dt_s : float
+        Integration step.
+    estimator_factory : callable, optional
+        ``scenario -> XbsEstimator`` to close the two-phase loop on an observer
+        (output feedback); default: the true XBS (state feedback).
+    observer : str
+        Label of the estimator for the report.
+
+    Returns
+    -------
+    Table41Result
+    """
+    five_phase = five_phase or FivePhaseABS()
+    two_phase = two_phase or TwoPhaseABS()
+    t0 = time.perf_counter()
+    rows = []
+    for v in speeds_kmh:
+        if not (isinstance(v, (int, float)) and math.isfinite(v) and v > 0):
+            raise SimulationError(f"Table 4.1 speeds must be positive numbers in km/h, got {v!r}")
+        for name in roads:
+            out: list[BrakingResult] = []
+            for ctrl in (five_phase, two_phase):
+                sc = BrakingScenario(name, speed_m_s=v / 3.6, controller=ctrl, dt_s=dt_s,
+                                     name=f"table41-{name}-{v:g}")
+                est = estimator_factory(sc) if (estimator_factory is not None and ctrl.uses_xbs) else None
+                out.append(simulate(sc, estimator=est))
+            seed = TABLE41_SEED.get((float(v), name))
+            rows.append(Table41Row(speed_kmh=float(v), road=name,
+                                   five_phase_m=out[0].metrics.braking_distance_m,
+                                   two_phase_m=out[1].metrics.braking_distance_m,
+                                   seed_five_phase_m=None if seed is None else seed[0],
+                                   seed_two_phase_m=None if seed is None else seed[1],
+                                   five_phase_stopping_m=out[0].metrics.stopping_distance_m,
+                                   two_phase_stopping_m=out[1].metrics.stopping_distance_m))
+    return Table41Result(rows=tuple(rows), five_phase=five_phase, two_phase=two_phase, observer=observer,
+                         wall_time_s=time.perf_counter() - t0)
+
