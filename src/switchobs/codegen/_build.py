@@ -281,13 +281,22 @@ class CObserver:
             # the checks of the first step, also when there is no row (as the reference does)
             code = StepStatus.BAD_DT if not (math.isfinite(dt_f) and dt_f > 0.0) else StepStatus.NONFINITE_STATE
             raise self._fail(int(code), x, rows_c[0] if k else np.zeros(0), dt_f, 0)
-        traj = np.full((k, self.size), np.nan, dtype=self._dtype)
-        code = self._run(x.ctypes.data_as(self._ptr), rows_c.ctypes.data_as(self._ptr), k, self._params_ptr,
-                         self._ctype(dt_f), traj.ctypes.data_as(self._ptr))
+        x_start = x.copy()
+        traj = np.empty((k, self.size), dtype=self._dtype)
+        code = self._call_run(x, rows_c, traj, dt_f)
         if code != 0:
+            # rare path: run again on a NaN-filled trajectory to find the first failing row (rows before it are
+            # written, finite)
+            x = x_start
+            traj.fill(np.nan)
+            self._call_run(x, rows_c, traj, dt_f)
             done = int(np.argmin(np.isfinite(traj).all(axis=1))) if k else 0
             raise self._fail(code, x, rows_c[done], dt_f, done)
-        return traj.astype(float)
+        return traj if traj.dtype == np.float64 else traj.astype(float)
+
+    def _call_run(self, x: np.ndarray, rows: np.ndarray, traj: np.ndarray, dt: float) -> int:
+        return self._run(x.ctypes.data_as(self._ptr), rows.ctypes.data_as(self._ptr), rows.shape[0],
+                         self._params_ptr, self._ctype(dt), traj.ctypes.data_as(self._ptr))
 
     def readout(self, xhat: npt.ArrayLike) -> Any:
         """The readout given at construction (e.g. the XBS estimate) of a state or trajectory."""

@@ -101,7 +101,7 @@ class GeneratedObserver:
         Scalar temporaries of the step kernel (casadi ``sz_w``).
     stack_reals : int
         Upper bound of the reals one ``_step`` call keeps on the stack
-        (temporaries + the new state + one guard value).
+        (temporaries + the new state + ``s`` + one guard value).
     header, source, readme : str
         Text of ``<prefix>.h``, ``<prefix>.c`` and ``README.md``.
     casadi_version : str
@@ -326,8 +326,10 @@ def _assemble(tr: Translation, *, info: _Info, kind: str, real: str, method: str
     s_macros = _macro_names("signal", tr.signal_names)
     p_macros = _macro_names("parameter", tr.param_names)
     step_expr = _step_expression(tr, method)
-    step_k = kernel(f"{prefix}_kernel", [("x", tr.x), ("sig", tr.signals), ("par", tr.params), ("dt", tr.dt)],
-                    step_expr, real=real, prefix=prefix)
+    inputs = [("x", tr.x), ("sig", tr.signals), ("par", tr.params), ("dt", tr.dt)]
+    if tr.s is not None:
+        inputs.append(("s", tr.s))
+    step_k = kernel(f"{prefix}_kernel", inputs, step_expr, real=real, prefix=prefix, scalars=("dt", "s"))
     kernels = [step_k]
     if tr.scale.is_constant():
         scale_check: list[str] = []
@@ -335,8 +337,8 @@ def _assemble(tr: Translation, *, info: _Info, kind: str, real: str, method: str
         scale_k = kernel(f"{prefix}_scale", [("sig", tr.signals), ("par", tr.params)], tr.scale, real=real,
                          prefix=prefix)
         kernels.append(scale_k)
-        scale_check = ["    " + scale_k.call("&g", sig="sig", par="par"),
-                       f"    if (!isfinite(g)) return {P}_ERR_UNDEFINED_TIME_SCALE;  /* s must be finite */"]
+        scale_check = ["    " + scale_k.call("&s", sig="sig", par="par"),
+                       f"    if (!isfinite(s)) return {P}_ERR_UNDEFINED_TIME_SCALE;  /* s must be finite */"]
     checks: list[str] = []
     scale_done = False
     for i, (guard, expr) in enumerate(tr.guards):
@@ -353,9 +355,10 @@ def _assemble(tr: Translation, *, info: _Info, kind: str, real: str, method: str
     if not scale_done:
         checks += scale_check
 
-    step_fn = ca.Function(f"{prefix}_step", [tr.x, tr.signals, tr.params, tr.dt], [step_expr],
+    full = step_expr if tr.s is None else ca.substitute(step_expr, tr.s, tr.scale)
+    step_fn = ca.Function(f"{prefix}_step", [tr.x, tr.signals, tr.params, tr.dt], [full],
                           ["x", "signals", "params", "dt"], ["x_next"])
-    stack_reals = max(k.temporaries for k in kernels) + len(tr.state_names) + 1
+    stack_reals = max(k.temporaries for k in kernels) + len(tr.state_names) + 2
     text_args = dict(tr=tr, info=info, kind=kind, real=real, method=method, prefix=prefix, P=P,
                      x_macros=x_macros, s_macros=s_macros, p_macros=p_macros, command=command,
                      temporaries=step_k.temporaries, stack_reals=stack_reals)
@@ -596,13 +599,14 @@ def _source(*, tr: Translation, info: _Info, kind: str, real: str, method: str, 
         f"{real} *next)",
         "{",
         f"    {real} g;" if any("&g" in c for c in checks) else None,
+        f"    {real} s;" if any("&s" in c for c in checks) else None,
         "    int i;",
         f"    if (!(dt > {zero}) || !isfinite(dt)) return {P}_ERR_BAD_DT;",
         f"    for (i = 0; i < {nx}; ++i) if (!isfinite(x[i])) return {P}_ERR_NONFINITE_STATE;",
         f"    for (i = 0; i < {P}_NS; ++i) if (!isfinite(sig[i])) return {P}_ERR_NONFINITE_SIGNAL;",
         f"    for (i = 0; i < {P}_NP; ++i) if (!isfinite(par[i])) return {P}_ERR_BAD_PARAM;",
         *checks,
-        "    " + kernels[0].call("next", x="x", sig="sig", par="par", dt="dt"),
+        "    " + kernels[0].call("next", x="x", sig="sig", par="par", dt="dt", s="s"),
         f"    for (i = 0; i < {nx}; ++i) if (!isfinite(next[i])) return {P}_ERR_NONFINITE_RESULT;",
         "    return 0;",
         "}",

@@ -243,7 +243,11 @@ class Translation:
         ``rhs(x) -> dx/dt`` at the same signals and parameters (casadi SX column);
         None when ``advance`` gives the step directly.
     scale : casadi.SX
-        The time scaling ``s``.
+        The time scaling ``s`` as an expression of the signals and parameters.
+    s : casadi.SX or None
+        The symbol standing for ``s`` in ``rhs`` and ``advance``: the step
+        kernel takes the checked value of ``scale`` as an input, so ``s`` is
+        computed (and divided) once per step.
     guards : tuple of (Guard, casadi.SX)
         The conditions with their casadi expression.
     state_names, signal_names, param_names : tuple of str
@@ -267,6 +271,7 @@ class Translation:
     default_params: tuple[float, ...]
     advance: Callable[[str], ca.SX] | None = None
     methods: tuple[str, ...] = ("rk4", "euler")
+    s: ca.SX | None = None
 
 
 def _environment(model: Model, extra_params: Sequence[str]) -> tuple[ca.SX, ca.SX, ca.SX, dict, dict]:
@@ -283,10 +288,12 @@ def _environment(model: Model, extra_params: Sequence[str]) -> tuple[ca.SX, ca.S
 def _affine_parts(model: Model, env: Mapping[sp.Symbol, ca.SX], sig: ca.SX, unknown: Sequence[str] = ()):
     """``s``, ``A``, ``C`` and ``c = s d + b u`` (with ``theta = 0``) and ``Psi = dc/dtheta``, as casadi.
 
-    ``A`` and ``C`` keep structural zeros as ``None`` so that no term is
-    generated for them, as in the reference.
+    ``s`` is returned twice: as a symbol (used in ``c`` and ``Psi``) and as
+    its expression.  ``A`` and ``C`` keep structural zeros as ``None`` so
+    that no term is generated for them, as in the reference.
     """
-    s = to_casadi(model.time_scale, env, what="time_scale")
+    s_expr = to_casadi(model.time_scale, env, what="time_scale")
+    s = ca.SX.sym("s")
     n = model.n
     A = [[None if model.A[i, j] == 0 else to_casadi(model.A[i, j], env, what=f"A[{i + 1}][{j + 1}]")
           for j in range(n)] for i in range(n)]
@@ -307,7 +314,7 @@ def _affine_parts(model: Model, env: Mapping[sp.Symbol, ca.SX], sig: ca.SX, unkn
          for i, e in enumerate(c_sym)]
     psi = [[None if sp.expand(q := sp.diff(e, t)) == 0 else to_casadi(q, env_s, what="regressor Psi")
             for t in theta] for e in c_sym]
-    return s, A, C, c, psi
+    return s, s_expr, A, C, c, psi
 
 
 def _lin(coeffs: Sequence[ca.SX | None], xs: Sequence[ca.SX]) -> ca.SX | None:
@@ -358,7 +365,7 @@ def translate_switched(model: Model, K_plus: Sequence[float], K_minus: Sequence[
     gain_names = [f"K_plus_{z}" for z in model.states] + [f"K_minus_{z}" for z in model.states]
     sig, par, dt, env, index = _environment(model, gain_names)
     x = ca.SX.sym("x", n)
-    s, A, C, c, _ = _affine_parts(model, env, sig)
+    s, s_expr, A, C, c, _ = _affine_parts(model, env, sig)
     y = sig[0]
     g = [ca.if_else(s > 0, s * par[index[f"K_plus_{z}"]], s * par[index[f"K_minus_{z}"]]) for z in model.states]
 
@@ -372,7 +379,7 @@ def translate_switched(model: Model, K_plus: Sequence[float], K_minus: Sequence[
         return ca.vertcat(*rows)
 
     values = [defaults[name] for name in model.parameters] + [float(k) for k in K_plus] + [float(k) for k in K_minus]
-    return Translation(x=x, signals=sig, params=par, dt=dt, rhs=rhs, scale=s, guards=_guards(model, env),
+    return Translation(x=x, signals=sig, params=par, dt=dt, rhs=rhs, scale=s_expr, s=s, guards=_guards(model, env),
                        state_names=tuple(model.states), signal_names=tuple(model.signals),
                        param_names=tuple(index), default_params=tuple(values))
 
@@ -415,7 +422,7 @@ def translate_adaptive(model: Model, K_plus: Sequence[float], K_minus: Sequence[
     sig, par, dt, env, index = _environment(reduced, [*gain_names, *gamma_names])
     N = n + p + n * p
     x = ca.SX.sym("x", N)
-    s, A, C, c, psi = _affine_parts(model, env, sig, unknown)
+    s, s_expr, A, C, c, psi = _affine_parts(model, env, sig, unknown)
     y = sig[0]
     g = [ca.if_else(s > 0, s * par[index[f"K_plus_{z}"]], s * par[index[f"K_minus_{z}"]]) for z in model.states]
     G = [[par[index[f"Gamma_{a}_{b}"]] for b in unknown] for a in unknown]
@@ -446,7 +453,7 @@ def translate_adaptive(model: Model, K_plus: Sequence[float], K_minus: Sequence[
     values = ([defaults[name] for name in known] + [float(k) for k in K_plus] + [float(k) for k in K_minus]
               + flat_gamma)
     states = (*model.states, *unknown, *[f"Upsilon_{z}_{u}" for z in model.states for u in unknown])
-    return Translation(x=x, signals=sig, params=par, dt=dt, rhs=rhs, scale=s, guards=_guards(reduced, env),
+    return Translation(x=x, signals=sig, params=par, dt=dt, rhs=rhs, scale=s_expr, s=s, guards=_guards(reduced, env),
                        state_names=states, signal_names=tuple(model.signals), param_names=tuple(index),
                        default_params=tuple(values))
 
