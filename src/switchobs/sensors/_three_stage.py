@@ -260,7 +260,8 @@ def three_stage(
     >>> ev = Encoder(ppr=60, eccentricity=0.004).events(constant_speed(1020, 3.0))
     >>> tsa = time_stamping(ev.times, ev.angles, controller_times(0.0, 3.0, 1000.0))
     >>> est = three_stage(tsa, harmonics=5)
-    >>> abs(est.omega[-1] - 106.8) < abs(tsa.omega[-1] - 106.8) + 0.05
+    >>> late = slice(2000, None)  # after two seconds: the eccentricity ripple is gone
+    >>> bool(np.std(est.omega[late]) < 0.2 * np.std(tsa.omega[late]))
     True
     """
     est = ThreeStageEstimator(harmonics, dt_s=_dt(tsa), kappa=kappa, beta=beta, gamma0=gamma0,
