@@ -91,8 +91,9 @@ class FivePhaseABS:
         distance, so that the threshold is crossed in finite time.
     stall_timeout_s : float, optional
         Not in the seeds (``None``, the default, is the figure as printed):
-        leave a release or hold phase (1, 2, 5) for the apply phase 4 after
-        this long.  Without it the algorithm can stall in a hold after a change
+        leave the release phase 1 or the hold phase 5 after this long, for the
+        release phase 1 if a hold 5 is still below ``-eps4`` (a slow slide on
+        the flat post-peak side), for the apply phase 4 otherwise.  Without it the algorithm can stall in a hold after a change
         to a higher-friction road (the wheel settles in the stable zone at a
         constant pressure), the failure seed 000 Sec. V reports ("might fail to
         cycle correctly ... considerable changes in the environment").
@@ -234,13 +235,19 @@ class _FivePhaseRuntime:
         self._enter(self.table[self.phase][index][2], t, x2, v_wheel)
 
     def expire(self, t: float, x2: float, v_wheel: float, vx: float) -> None:
-        """The stall timeout of the current phase has run out: re-apply (phase 4)."""
-        self._enter(4, t, x2, v_wheel)
+        """The stall timeout of the current phase has run out.
+
+        A hold 5 still below ``-eps4`` is a slow slide on the flat side of the
+        characteristic: release (phase 1).  Otherwise the wheel is under-braked:
+        re-apply (phase 4).
+        """
+        self._enter(1 if self.phase == 5 and x2 <= self.table[4][0][1] else 4, t, x2, v_wheel)
 
     def _enter(self, p: int, t: float, x2: float, v_wheel: float) -> None:
         self.phase = p
         self.t0 = t
-        self.deadline = t + self.timeout if self.timeout is not None and p in (1, 2, 5) else math.inf
+        # phase 2 always ends: x2 > 0 there, the wheel recovers and x2 decays below eps1 in the stable zone
+        self.deadline = t + self.timeout if self.timeout is not None and p in (1, 5) else math.inf
         if self.tracking and p in (1, 3, 4):
             exit_thr = self.table[p][0][1]
             target = exit_thr + self.overshoot * (exit_thr - x2)

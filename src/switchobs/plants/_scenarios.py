@@ -29,7 +29,7 @@ __all__ = ["SCENARIOS", "scenario", "scenario_names", "scenario_observer", "scen
 #: Transition length of the road changes (seed 000 Sec. IV-D: "transitions, (which last 25 ms)").
 TRANSITION_S = 0.025
 #: Stall timeout used by the scenarios with road changes (see :class:`FivePhaseABS`).
-STALL_TIMEOUT_S = 0.3
+STALL_TIMEOUT_S = 0.1
 
 
 @dataclass(frozen=True)

@@ -157,8 +157,9 @@ class BrakingResult:
     ----------
     scenario : BrakingScenario
     status : str
-        ``stopped`` (reached the stop speed), ``duration`` (time bound reached)
-        or ``controller-singular`` (the continuous law became undefined).
+        ``stopped`` (reached the stop speed), ``duration`` (time bound reached),
+        ``controller-singular`` (the continuous law became undefined) or
+        ``observer-failed`` (the estimator refused a step, e.g. a non-finite state).
     message : str
         Details of the status.
     series : dict of str -> ndarray
@@ -382,7 +383,13 @@ class _Loop:
             steps += 1
             if est is not None:
                 t_obs = time.perf_counter()
-                self.xbs_hat = est.update(t, self.o_x2, y[1], (y[3] - rows[-1][4]) / h, h)
+                try:
+                    self.xbs_hat = est.update(t, self.o_x2, y[1], (y[3] - rows[-1][4]) / h, h)
+                except SimulationError as exc:     # e.g. ObserverInputError: keep the run, report the refusal
+                    obs_time += time.perf_counter() - t_obs
+                    record()
+                    status, message = "observer-failed", str(exc)
+                    break
                 obs_time += time.perf_counter() - t_obs
             record()
             changed = self.use_hat
@@ -407,14 +414,14 @@ class _Loop:
                 fire = found[2]
             else:
                 fire = -1
-            if changed and fire < 0:
+            # k_end must be the derivative at (t, y) under the current phase, road and estimate
+            if changed:
                 k_end = rhs(t, y)
             if fire < 0 and t >= ctrl.deadline - 1e-12:
                 before = ctrl.phase
                 ctrl.expire(t, self.o_x2, R * y[0], y[1])
                 events.append((t, f"phase {before} -> {ctrl.phase} (stall timeout)"))
                 k_end = rhs(t, y)
-                changed = True
             cascade = 0
             while True:
                 if fire < 0:
@@ -432,7 +439,6 @@ class _Loop:
                         f"scenario {sc.name!r}: the controller switched {cascade} times at t = {t:.6f} s "
                         f"without time passing (phase {ctrl.phase}); check its thresholds")
                 k_end = rhs(t, y)
-                changed = True
             failure = getattr(ctrl, "failure", None)
             if failure:
                 status, message = "controller-singular", failure
@@ -443,7 +449,7 @@ class _Loop:
                 if len(self.hist_t) > 4096:
                     keep = bisect.bisect_left(self.hist_t, t - 2.0 * self.delay - dt)
                     del self.hist_t[:keep], self.hist_u[:keep]
-            k1 = k_end if not changed else rhs(t, y)
+            k1 = k_end
             if t >= t_end - 1e-12:
                 break
         wall = time.perf_counter() - wall0

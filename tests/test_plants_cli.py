@@ -1,0 +1,70 @@
+"""``switchobs simulate``: scenarios, JSON, plots and one-line errors."""
+
+import json
+
+import pytest
+
+from switchobs.cli.main import main
+
+
+def run(capsys, *argv):
+    code = main(["simulate", *argv])
+    out = capsys.readouterr()
+    return code, out.out, out.err
+
+
+def test_simulate_single_road_json_and_plot(capsys, tmp_path):
+    png = tmp_path / "run.png"
+    code, out, err = run(capsys, "--road", "wet-asphalt", "--speed-kmh", "60", "--controller", "two-phase",
+                         "--observer", "adaptive", "--json", "--plot", str(png))
+    assert code == 0 and err == ""
+    data = json.loads(out)
+    m = data["metrics"]
+    assert data["status"] == "stopped" and data["observer_in_loop"] is True
+    assert data["scenario"]["roads"]["initial"] == "wet-asphalt" and data["scenario"]["speed_kmh"] == pytest.approx(60)
+    assert m["braking_distance_m"] == pytest.approx((60 / 3.6) ** 2 / (2 * 9.81 * m["mean_friction"]))
+    assert 17.0 < m["braking_distance_m"] < 19.0          # seed 001 Table 4.1: 17.86 m
+    assert m["xbs_rms_error"] is not None and m["assumption1"]["holds"] is True
+    assert png.stat().st_size > 20_000 and png.read_bytes()[:4] == b"\x89PNG"
+
+
+def test_simulate_scenario_text_reports_reconvergence(capsys):
+    code, out, _ = run(capsys, "hoang-fig3", "--duration", "3.5", "--observer", "xbs3")
+    assert code == 0
+    assert out.startswith("seed 000 Fig. 3")
+    assert "-> hoang-wet" in out and "re-convergence within 10 %" in out and "Assumption 1" in out
+
+
+def test_simulate_series_in_json(capsys):
+    code, out, _ = run(capsys, "--speed-kmh", "40", "--json", "--series")
+    series = json.loads(out)["series"]
+    assert code == 0 and len(series["t"]) == len(series["x2"]) > 100 and series["xbs_hat"][0] is None
+
+
+@pytest.mark.slow
+def test_simulate_table41_cli(capsys, tmp_path):
+    png = tmp_path / "t41.png"
+    code, out, _ = run(capsys, "table41", "--json", "--plot", str(png))
+    data = json.loads(out)
+    assert code == 0 and data["two_phase_always_shorter"] is True and len(data["rows"]) == 15
+    row = next(r for r in data["rows"] if r["road"] == "dry-asphalt" and r["speed_kmh"] == 120)
+    assert row["seed_five_phase_m"] == 49.27 and row["seed_two_phase_m"] == 48.78
+    assert png.exists()
+
+
+@pytest.mark.parametrize("argv, message", [
+    (["--road", "gravel"], "unknown road surface 'gravel'"),
+    (["--speed-kmh", "-5"], "--speed-kmh must be > 0, got -5"),
+    (["--duration", "-1"], "--duration must be > 0 s, got -1"),
+    (["--observer", "xbs3", "--observer-impl", "c"], "--observer-impl 'c' is not available yet"),
+    (["--controller", "two-phase", "--tracking"], "--tracking applies to the five-phase ABS"),
+    (["fig99"], "unknown scenario 'fig99'"),
+    (["aguado-sec34", "--road", "snow"], "--road does not apply to the scenario 'aguado-sec34'"),
+    (["table41", "--speed-kmh", "60"], "--speed-kmh does not apply to table41"),
+    (["--dt", "0.5"], "dt_s = 0.5 s is too coarse"),
+    (["--series"], "--series only applies with --json"),
+])
+def test_simulate_bad_input_one_line_exit_2(capsys, argv, message):
+    code, out, err = run(capsys, *argv)
+    assert code == 2 and out == ""
+    assert err.count("\n") == 1 and err.startswith("switchobs simulate: error: ") and message in err
