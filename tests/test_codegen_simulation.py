@@ -98,3 +98,19 @@ def test_msirdi2008_super_twisting_c_on_encoder_events(chain):
         expected = np.array([ref.x1_hat[i + 1], ref.x2_hat[i + 1], ref.z2[i]])
         worst = max(worst, np.max(np.abs(x - expected)) / np.max(np.abs(expected)))
     assert worst <= 1e-12
+
+
+def test_simulate_cli_observer_impl_c_gives_the_python_results(capsys):
+    """`switchobs simulate hoang-fig4 --observer-impl c` runs the generated C observer: same metrics."""
+    import json
+
+    from switchobs.cli.main import main
+
+    out = {}
+    for impl in ("python", "c"):
+        assert main(["simulate", "hoang-fig4", "--observer-impl", impl, "--json"]) == 0
+        out[impl] = json.loads(capsys.readouterr().out)
+    assert "generated C" in out["c"]["observer"] and "generated C" not in out["python"]["observer"]
+    for key in ("stopping_distance_m", "braking_distance_m", "xbs_rms_error", "abs_cycles"):
+        a, b = out["c"]["metrics"][key], out["python"]["metrics"][key]
+        assert _same(a, b, 1e-12), key

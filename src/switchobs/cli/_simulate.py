@@ -2,8 +2,9 @@
 
 Without SCENARIO: a straight-line emergency braking on one road from a given
 speed to standstill (the set-up of seed 001 Table 4.1).  Scenarios:
-``hoang-fig3``, ``hoang-fig4``, ``aguado-sec34`` and ``table41`` (both ABS
-algorithms on every road and speed of seed 001 Table 4.1).
+``hoang-fig3``, ``hoang-fig4``, ``aguado-sec34``, ``aguado-sec36`` (the
+two-axle vehicle) and ``table41`` (both ABS algorithms on every road and speed
+of seed 001 Table 4.1).
 """
 
 from __future__ import annotations
@@ -14,8 +15,9 @@ from typing import Any
 
 from ..exceptions import SimulationError
 from ..plants import (TABLE41_ROADS, TABLE41_SPEEDS_KMH, BrakeActuator, BrakingScenario, ContinuousXbsControl,
-                      FivePhaseABS, TwoPhaseABS, XbsEstimator, plot_braking, plot_table41, road, road_names,
-                      scenario, scenario_description, scenario_names, scenario_observer, simulate, table41)
+                      FivePhaseABS, TwoPhaseABS, XbsEstimator, aguado_sec36, plot_braking, plot_table41,
+                      plot_two_axle, road, road_names, scenario, scenario_description, scenario_names,
+                      scenario_observer, simulate, simulate_two_axle, table41)
 from ._common import emit_json
 
 __all__ = ["register", "make_estimator", "OBSERVERS"]
@@ -45,7 +47,8 @@ def register(sub: argparse._SubParsersAction) -> None:
                    help="XBS observer (default: none, or the scenario's); controllers that need an XBS read "
                         "its estimate, or the true XBS with --observer none")
     p.add_argument("--observer-impl", choices=("python", "c"), default="python",
-                   help="observer implementation (the generated C arrives with issue 6)")
+                   help="observer implementation: the Python reference or the generated C (switchobs codegen, "
+                        "double, compiled with the system gcc)")
     p.add_argument("--parallel", action="store_true",
                    help="run the observer beside the loop: the controller reads the true XBS (seed 001 Fig. 4.5)")
     p.add_argument("--beta", type=float, help="observer rate beta in the rescaled time (default per observer)")
@@ -71,9 +74,8 @@ def make_estimator(kind: str, sc: BrakingScenario, *, beta: float | None = None,
         return None
     if kind not in OBSERVERS:
         raise SimulationError(f"unknown observer {kind!r}; choose one of {', '.join(OBSERVERS)}")
-    if impl != "python":
-        raise SimulationError(f"--observer-impl {impl!r} is not available yet: the generated C observers "
-                              f"come with issue 6; use --observer-impl python")
+    if impl not in ("python", "c"):
+        raise SimulationError(f"unknown --observer-impl {impl!r}; choose python or c")
     from ..observers import ObserverXbsEstimator, adaptive_xbs_observer, xbs3_observer, xbs4_observer
 
     beta = DEFAULT_BETA[kind] if beta is None else beta
@@ -85,6 +87,10 @@ def make_estimator(kind: str, sc: BrakingScenario, *, beta: float | None = None,
     else:
         g = DEFAULT_GAMMA if gamma is None else gamma
         obs = adaptive_xbs_observer(beta, [g, g], params={"a": veh.a, "b": veh.b})
+    if impl == "c":
+        from ..codegen import CObserver
+
+        obs = CObserver.like(obs)  # the generated C twin: same model, gains, parameters and readout
     return ObserverXbsEstimator(obs, initial_state=INITIAL_STATE[kind])
 
 
@@ -151,11 +157,50 @@ def _table41(args: argparse.Namespace) -> int:
     return 0 if result.two_phase_always_shorter else 1
 
 
+def _two_axle(args: argparse.Namespace) -> int:
+    for opt in ("road", "controller", "delay"):
+        if getattr(args, opt) is not None or (opt == "controller" and args.tracking):
+            raise SimulationError(f"--{opt} does not apply to the two-axle scenario {args.scenario!r}")
+    sc = aguado_sec36()
+    changes: dict[str, Any] = {}
+    if args.speed_kmh is not None:
+        if not args.speed_kmh > 0:
+            raise SimulationError(f"--speed-kmh must be > 0, got {args.speed_kmh:g}")
+        changes["speed_m_s"] = args.speed_kmh / 3.6
+    if args.duration is not None:
+        if not args.duration > 0:
+            raise SimulationError(f"--duration must be > 0 s, got {args.duration:g}")
+        changes["duration_s"] = args.duration
+    if args.dt is not None:
+        changes["dt_s"] = args.dt
+    sc = replace(sc, **changes)
+    kind = args.observer or scenario_observer(args.scenario)
+    # each observer knows its wheel's static load: a = R^2 Fz / J of the corner
+    ests = tuple(make_estimator(kind, BrakingScenario(sc.roads, speed_m_s=sc.speed_m_s,
+                                                      vehicle=sc.vehicle.corner(axle)),
+                                beta=args.beta, gamma=args.gamma, impl=args.observer_impl)
+                 for axle in ("front", "rear"))
+    result = simulate_two_axle(sc, estimators=ests, observer_in_loop=not args.parallel)
+    if args.plot:
+        plot_two_axle(result, args.plot)
+    if args.json:
+        data = result.to_json(include_series=args.series)
+        data["description"] = scenario_description(args.scenario)
+        data["observer"] = kind
+        emit_json(data)
+    else:
+        print(scenario_description(args.scenario))
+        print(result)
+    return 0
+
+
 def run(args: argparse.Namespace) -> int:
     if args.series and not args.json:
         raise SimulationError("--series only applies with --json")
     if args.scenario == "table41":
         return _table41(args)
+    if args.scenario == "aguado-sec36":
+        return _two_axle(args)
     sc, kind = _scenario(args)
     est = make_estimator(kind, sc, beta=args.beta, gamma=args.gamma, impl=args.observer_impl)
     result = simulate(sc, estimator=est, observer_in_loop=not args.parallel)
