@@ -13,18 +13,22 @@ Observer interface
 Simulation
     :class:`BrakingScenario`, :func:`simulate`, :class:`BrakingResult`,
     :class:`BrakingMetrics`, :class:`Assumption1Status`, :func:`assumption1`
+Two-axle vehicle (seed 001 Sec. 3.6)
+    :class:`TwoAxleVehicle`, :class:`Accelerometer`, :class:`TwoAxleScenario`,
+    :func:`simulate_two_axle`, :class:`TwoAxleResult`
 Scenarios and figures
-    :func:`scenario`, :func:`scenario_names`, :func:`table41` (seed 001 Table 4.1),
-    :func:`plot_braking`, :func:`plot_table41`
+    :func:`scenario`, :func:`scenario_names`, :func:`aguado_sec36`, :func:`table41`
+    (seed 001 Table 4.1), :func:`plot_braking`, :func:`plot_two_axle`, :func:`plot_table41`
 Limit cycle of the two-phase ABS
     :class:`PoincareMap` (seed 001 eqs. (4.13)-(4.14)), :func:`simulate_return_map`
 """
 
 from ._controllers import ContinuousXbsControl, FivePhaseABS, TwoPhaseABS
 from ._estimator import TrueXbs, XbsEstimator
-from ._plot import plot_braking, plot_table41
+from ._plot import plot_braking, plot_table41, plot_two_axle
 from ._poincare import PoincareFixedPoint, PoincareMap, simulate_return_map
-from ._scenarios import (TABLE41_ROADS, TABLE41_SEED, TABLE41_SPEEDS_KMH, Table41Result, Table41Row, scenario,
+from ._two_axle import Accelerometer, TwoAxleResult, TwoAxleScenario, TwoAxleVehicle, simulate_two_axle
+from ._scenarios import (TABLE41_ROADS, aguado_sec36, TABLE41_SEED, TABLE41_SPEEDS_KMH, Table41Result, Table41Row, scenario,
                          scenario_description, scenario_names, scenario_observer, table41)
 from ._metrics import Assumption1Status, BrakingMetrics, Reconvergence, assumption1, pe_level, zero_crossings
 from ._road import RoadChange, RoadSchedule
@@ -44,4 +48,6 @@ __all__ = [
     "scenario", "scenario_names", "scenario_observer", "scenario_description", "table41", "Table41Result",
     "Table41Row", "TABLE41_SEED", "TABLE41_ROADS", "TABLE41_SPEEDS_KMH", "plot_braking", "plot_table41",
     "PoincareMap", "PoincareFixedPoint", "simulate_return_map",
+    "TwoAxleVehicle", "Accelerometer", "TwoAxleScenario", "TwoAxleResult", "simulate_two_axle", "aguado_sec36",
+    "plot_two_axle",
 ]

@@ -9,8 +9,9 @@ import numpy as np
 from ..exceptions import SimulationError
 from ._scenarios import Table41Result
 from ._simulate import BrakingResult
+from ._two_axle import TwoAxleResult
 
-__all__ = ["plot_braking", "plot_table41"]
+__all__ = ["plot_braking", "plot_table41", "plot_two_axle"]
 
 
 def _save(fig, path: str | Path) -> Path:  # noqa: ANN001 - matplotlib figure
@@ -111,6 +112,51 @@ def plot_table41(result: Table41Result, path: str | Path) -> Path:
         ax.set_ylabel("braking distance [m]")
     axes[0][0].legend(fontsize=8)
     fig.suptitle("seed 001 Table 4.1: braking distance vx(0)²/(2 g μ̄)")
+    fig.tight_layout()
+    try:
+        return _save(fig, path)
+    finally:
+        plt.close(fig)
+
+
+def plot_two_axle(result: TwoAxleResult, path: str | Path) -> Path:
+    """Speeds and speed estimate, slips, pressures, loads and XBS of both axles (seed 001 Figs. 3.15-3.19)."""
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    s = result.series
+    t = s["t"]
+    r = result.scenario.vehicle.radius_m
+    fig, axes = plt.subplots(5, 1, figsize=(10, 12), sharex=True)
+    axes[0].plot(t, s["vx"], label="vx")
+    axes[0].plot(t, s["vx_hat"], "--", label="vx estimate")
+    axes[0].plot(t, r * s["omega_f"], lw=0.8, label="R ω front")
+    axes[0].plot(t, r * s["omega_r"], lw=0.8, label="R ω rear")
+    axes[0].set_ylabel("speed [m/s]")
+    axes[1].plot(t, s["lambda_f"], label="front")
+    axes[1].plot(t, s["lambda_r"], label="rear")
+    axes[1].set_ylabel("slip λ")
+    axes[2].plot(t, s["P_f"], label="front")
+    axes[2].plot(t, s["P_r"], label="rear")
+    axes[2].set_ylabel("P_b [bar]")
+    axes[3].plot(t, s["Fz_f"], label="front (3.36)")
+    axes[3].plot(t, s["Fz_r"], label="rear (3.36)")
+    axes[3].set_ylabel("Fz [N]")
+    axes[4].plot(t, s["xbs_f"], label="μ' front")
+    axes[4].plot(t, s["xbs_r"], label="μ' rear")
+    for key, label in (("xbs_hat_f", "estimate front"), ("xbs_hat_r", "estimate rear")):
+        if not np.all(np.isnan(s[key])):
+            axes[4].plot(t, s[key], "--", lw=0.8, label=label)
+    axes[4].set_ylim(-1.0, 4.0)
+    axes[4].set_ylabel("XBS")
+    axes[4].set_xlabel("t [s]")
+    for ax in axes:
+        ax.legend(loc="upper right", fontsize=7)
+        for when, what in result.events:
+            if what.startswith("road"):
+                ax.axvline(when, color="tab:red", lw=0.6, ls=":")
+    fig.suptitle(str(result.scenario), fontsize=9)
     fig.tight_layout()
     try:
         return _save(fig, path)

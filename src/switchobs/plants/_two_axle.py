@@ -1,0 +1,513 @@
+"""Two-axle vehicle of seed 001 Sec. 3.6, at the level supported here.
+
+Modelled: one front and one rear wheel, each standing for the two wheels of its
+axle, with their own brake, ABS controller and (optionally) XBS observer; the
+vertical loads follow the quasi-static load transfer (3.36)::
+
+    Fzf = Wf - ΔFz a_x,    Fzr = Wr + ΔFz a_x,    ΔFz = M h / (2 L)
+
+solved together with ``M a_x = 2 (Fzf mu_f + Fzr mu_r)``; the vehicle speed fed
+to the controllers and observers is not the true one but the output of a
+scalar Kalman filter driven by a biased accelerometer (turn-on bias 0.5 m/s²
+plus a slow random walk) and corrected by the fastest wheel's ``R ω`` (the
+approach of seed 001 Sec. 3.6, whose filter [19] is not specified further).
+The measured wheel-acceleration offset is ``R dω/dt - a_x^meas``.
+
+Not modelled (seed 001 simulates them with a full vehicle model [30]):
+suspension and pitch dynamics (the load transfer is instantaneous), tyre
+relaxation length, left/right differences, position-triggered road changes.
+The observers keep the static-load ``a`` (the seed recomputes it on line from
+(3.36)); the loads the controllers would need are reported instead.
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from dataclasses import asdict, dataclass, field
+from typing import Any
+
+import numpy as np
+import numpy.typing as npt
+
+from ..exceptions import SimulationError
+from ._controllers import FivePhaseABS, TwoPhaseABS
+from ._estimator import XbsEstimator
+from ._hybrid import locate_event, rk4_step
+from ._metrics import _cumtrapz
+from ._road import RoadSchedule, _RoadState
+from ._vehicle import GRAVITY, BrakeActuator, QuarterCar
+
+__all__ = ["TwoAxleVehicle", "Accelerometer", "TwoAxleScenario", "TwoAxleResult", "simulate_two_axle"]
+
+
+def _positive(owner: str, **values: float) -> None:
+    for key, value in values.items():
+        if not isinstance(value, (int, float)) or isinstance(value, bool) or not math.isfinite(value) or value <= 0:
+            raise SimulationError(f"{owner}: {key} must be a finite number > 0, got {value!r}")
+
+
+@dataclass(frozen=True)
+class TwoAxleVehicle:
+    """Mass, geometry and wheels of a two-axle passenger car (illustrative values).
+
+    Parameters
+    ----------
+    mass_kg, wheelbase_m, cg_to_front_m, cg_height_m : float
+        ``M``, ``L``, the distance from the centre of gravity to the front axle, ``h``.
+    inertia_kg_m2, radius_m : float
+        Wheel ``J`` and ``R``.
+    brake_gain_front_nm_bar, brake_gain_rear_nm_bar : float
+        ``γ_b`` of the front and rear brakes.
+    """
+
+    mass_kg: float = 1400.0
+    wheelbase_m: float = 2.6
+    cg_to_front_m: float = 1.1
+    cg_height_m: float = 0.55
+    inertia_kg_m2: float = 1.2
+    radius_m: float = 0.3
+    brake_gain_front_nm_bar: float = 17.5
+    brake_gain_rear_nm_bar: float = 10.0
+
+    def __post_init__(self) -> None:
+        _positive("TwoAxleVehicle", **{k: v for k, v in asdict(self).items()})
+        if self.cg_to_front_m >= self.wheelbase_m:
+            raise SimulationError(f"TwoAxleVehicle: the centre of gravity ({self.cg_to_front_m} m behind the front "
+                                  f"axle) must lie within the wheelbase {self.wheelbase_m} m")
+
+    @property
+    def static_loads(self) -> tuple[float, float]:
+        """``(Wf, Wr)``: static load of one front and one rear wheel [N]."""
+        w = self.mass_kg * GRAVITY / (2.0 * self.wheelbase_m)
+        return (w * (self.wheelbase_m - self.cg_to_front_m), w * self.cg_to_front_m)
+
+    @property
+    def load_transfer(self) -> float:
+        """``ΔFz = M h / (2 L)`` [N per m/s²] of (3.36), per wheel."""
+        return self.mass_kg * self.cg_height_m / (2.0 * self.wheelbase_m)
+
+    def loads(self, ax: float) -> tuple[float, float]:
+        """Per-wheel vertical loads (3.36) at the longitudinal acceleration ``ax``."""
+        wf, wr = self.static_loads
+        dz = self.load_transfer
+        return (wf - dz * ax, wr + dz * ax)
+
+    def corner(self, axle: str) -> QuarterCar:
+        """The quarter car of one wheel at its static load (gives ``a`` and ``b`` to controllers and observers)."""
+        wf, wr = self.static_loads
+        load, gain = (wf, self.brake_gain_front_nm_bar) if axle == "front" else (wr, self.brake_gain_rear_nm_bar)
+        return QuarterCar(inertia_kg_m2=self.inertia_kg_m2, radius_m=self.radius_m, load_n=load,
+                          brake_gain_nm_bar=gain, mass_kg=self.mass_kg / 4.0)
+
+    def to_json(self) -> dict[str, Any]:
+        return {**asdict(self), "static_loads_n": list(self.static_loads), "load_transfer_n_per_m_s2":
+                self.load_transfer}
+
+
+@dataclass(frozen=True)
+class Accelerometer:
+    """Longitudinal accelerometer with a turn-on bias and a slow random-walk drift.
+
+    ``a_meas(t) = a_x(t) + bias_m_s2 + w(t)``, ``w`` a random walk of intensity
+    ``drift_m_s2_per_sqrt_s`` sampled every 10 ms and interpolated linearly
+    (reproducible through ``seed``).  Seed 001 Sec. 3.6: "an additive dynamic
+    bias with a turn-on component of 0.5 m/s²".
+    """
+
+    bias_m_s2: float = 0.5
+    drift_m_s2_per_sqrt_s: float = 0.02
+    seed: int = 0
+
+    def __post_init__(self) -> None:
+        for key in ("bias_m_s2", "drift_m_s2_per_sqrt_s"):
+            value = getattr(self, key)
+            if not isinstance(value, (int, float)) or not math.isfinite(value):
+                raise SimulationError(f"Accelerometer: {key} must be a finite number, got {value!r}")
+        if self.drift_m_s2_per_sqrt_s < 0:
+            raise SimulationError(f"Accelerometer: drift must be >= 0, got {self.drift_m_s2_per_sqrt_s}")
+
+    def bias_profile(self, duration_s: float) -> tuple[npt.NDArray[np.float64], npt.NDArray[np.float64]]:
+        grid = np.arange(0.0, duration_s + 0.02, 0.01)
+        rng = np.random.default_rng(self.seed)
+        steps = rng.normal(0.0, self.drift_m_s2_per_sqrt_s * math.sqrt(0.01), len(grid))
+        steps[0] = 0.0
+        return grid, self.bias_m_s2 + np.cumsum(steps)
+
+
+@dataclass(frozen=True)
+class TwoAxleScenario:
+    """A straight-line braking of the two-axle vehicle (seed 001 Sec. 3.6).
+
+    Parameters
+    ----------
+    roads : RoadSchedule or str
+        Time-triggered changes only (both axles change together).
+    speed_m_s : float
+    front, rear : controllers
+        One per axle (default: :class:`FivePhaseABS` with the stall timeout of the scenarios).
+    vehicle, actuator, accelerometer
+    brake_start_s : float
+        The driver starts braking (seed: 0.25 s).
+    speed_filter_q, speed_filter_r : float
+        Kalman filter intensities: accelerometer noise [(m/s²)² s] and wheel-speed noise [(m/s)²].
+    duration_s, stop_speed_m_s, dt_s, low_speed_m_s : float
+        As in :class:`BrakingScenario` (the seed stops at 15 km/h).
+    name : str
+    """
+
+    roads: RoadSchedule
+    speed_m_s: float
+    front: FivePhaseABS | TwoPhaseABS = field(default_factory=lambda: FivePhaseABS(stall_timeout_s=0.1))
+    rear: FivePhaseABS | TwoPhaseABS = field(default_factory=lambda: FivePhaseABS(stall_timeout_s=0.1))
+    vehicle: TwoAxleVehicle = field(default_factory=TwoAxleVehicle)
+    actuator: BrakeActuator = field(default_factory=BrakeActuator)
+    accelerometer: Accelerometer = field(default_factory=Accelerometer)
+    brake_start_s: float = 0.25
+    speed_filter_q: float = 0.5
+    speed_filter_r: float = 0.05
+    duration_s: float = 30.0
+    stop_speed_m_s: float = 15.0 / 3.6
+    dt_s: float = 1e-3
+    low_speed_m_s: float = 5.0
+    name: str = "two-axle"
+
+    def __post_init__(self) -> None:
+        if isinstance(self.roads, str):
+            object.__setattr__(self, "roads", RoadSchedule(self.roads))
+        if not isinstance(self.roads, RoadSchedule):
+            raise SimulationError(f"roads must be a RoadSchedule or a road name, got {self.roads!r}")
+        if any(c.at_time_s is None for c in self.roads.changes):
+            raise SimulationError("the two-axle vehicle supports road changes at given times only "
+                                  "(at_position_m would reach the two axles at different times)")
+        for ctrl in (self.front, self.rear):
+            if not isinstance(ctrl, (FivePhaseABS, TwoPhaseABS)):
+                raise SimulationError(f"two-axle controllers must be FivePhaseABS or TwoPhaseABS, got {ctrl!r}")
+        _positive(f"scenario {self.name!r}", speed_m_s=self.speed_m_s, duration_s=self.duration_s,
+                  stop_speed_m_s=self.stop_speed_m_s, dt_s=self.dt_s, speed_filter_q=self.speed_filter_q,
+                  speed_filter_r=self.speed_filter_r, low_speed_m_s=self.low_speed_m_s)
+        if not (isinstance(self.brake_start_s, (int, float)) and 0 <= self.brake_start_s < self.duration_s):
+            raise SimulationError(f"brake_start_s must lie in [0, duration_s), got {self.brake_start_s!r}")
+        if self.stop_speed_m_s >= self.speed_m_s:
+            raise SimulationError(f"the stop speed {self.stop_speed_m_s:g} m/s must be below the initial speed "
+                                  f"{self.speed_m_s:g} m/s")
+        if self.dt_s > 0.01:
+            raise SimulationError(f"dt_s = {self.dt_s} s is too coarse; use at most 0.01 s")
+        if self.actuator.delay_s > 0:
+            raise SimulationError("the two-axle simulation has no actuator delay; use delay_s = 0")
+
+    def to_json(self) -> dict[str, Any]:
+        return {"name": self.name, "roads": self.roads.to_json(), "speed_m_s": self.speed_m_s,
+                "front": self.front.to_json(), "rear": self.rear.to_json(), "vehicle": self.vehicle.to_json(),
+                "actuator": self.actuator.to_json(), "accelerometer": asdict(self.accelerometer),
+                "brake_start_s": self.brake_start_s, "speed_filter_q": self.speed_filter_q,
+                "speed_filter_r": self.speed_filter_r, "duration_s": self.duration_s,
+                "stop_speed_m_s": self.stop_speed_m_s, "dt_s": self.dt_s}
+
+    def __str__(self) -> str:
+        return (f"two-axle scenario {self.name}: {self.roads}, {self.speed_m_s * 3.6:.0f} km/h, "
+                f"front {self.front.name}, rear {self.rear.name}, speed from a Kalman filter "
+                f"(accelerometer bias {self.accelerometer.bias_m_s2:g} m/s²)")
+
+
+#: Columns of :attr:`TwoAxleResult.series`.
+TWO_AXLE_SERIES = ("t", "vx", "vx_hat", "ax", "ax_meas", "x", "omega_f", "omega_r", "lambda_f", "lambda_r",
+                   "x2_f", "x2_r", "xbs_f", "xbs_r", "xbs_hat_f", "xbs_hat_r", "P_f", "P_r", "Fz_f", "Fz_r",
+                   "phase_f", "phase_r")
+
+
+@dataclass(frozen=True)
+class TwoAxleResult:
+    """Time histories and figures of a two-axle braking.
+
+    Metrics (``metrics`` dict): ``stopping_distance_m``, ``stop_time_s``,
+    ``mean_deceleration_m_s2``, ``speed_error_mean_pct`` (mean of
+    ``(vx_hat - vx)/vx`` over the braking, in %; seed 001 reports -18 %),
+    ``speed_error_max_pct``, per axle: ``load_min_n``/``load_max_n``,
+    ``slip_mean``, ``abs_cycles``, ``xbs_rms_error`` (after braking starts, until
+    the observer failed if it did), ``observer_failure`` (``None`` or when and why
+    the observer refused a step; it is then dropped for the rest of the run).
+    """
+
+    scenario: TwoAxleScenario
+    status: str
+    series: dict[str, npt.NDArray[np.float64]]
+    events: tuple[tuple[float, str], ...]
+    metrics: dict[str, Any]
+    wall_time_s: float
+    steps: int
+
+    def to_json(self, *, include_series: bool = False) -> dict[str, Any]:
+        out = {"scenario": self.scenario.to_json(), "status": self.status, "metrics": self.metrics,
+               "events": [{"t": t, "event": e} for t, e in self.events],
+               "cost": {"steps": self.steps, "wall_time_s": self.wall_time_s}}
+        if include_series:
+            out["series"] = {k: [None if math.isnan(v) else float(v) for v in a] for k, a in self.series.items()}
+        return out
+
+    def __str__(self) -> str:
+        m = self.metrics
+        lines = [str(self.scenario), f"  status: {self.status}; stopping distance {m['stopping_distance_m']:.2f} m,"
+                 f" mean deceleration {m['mean_deceleration_m_s2']:.2f} m/s²",
+                 f"  speed estimate error: mean {m['speed_error_mean_pct']:.1f} %, worst "
+                 f"{m['speed_error_max_pct']:.1f} %"]
+        for axle in ("front", "rear"):
+            a = m[axle]
+            xbs = "" if a["xbs_rms_error"] is None else f", XBS RMS error {a['xbs_rms_error']:.3g}"
+            if a["observer_failure"]:
+                xbs += f", observer failed at {a['observer_failure'].split(':')[0]}"
+            lines.append(f"  {axle}: load {a['load_min_n']:.0f}-{a['load_max_n']:.0f} N, {a['abs_cycles']} cycles, "
+                         f"mean slip {a['slip_mean']:.3f}{xbs}")
+        lines.append(f"  cost: {self.steps} steps, {self.wall_time_s:.3f} s wall")
+        return "\n".join(lines)
+
+
+def simulate_two_axle(scenario: TwoAxleScenario, *,
+                      estimators: tuple[XbsEstimator | None, XbsEstimator | None] = (None, None),
+                      observer_in_loop: bool = True) -> TwoAxleResult:
+    """Simulate a straight-line braking of the two-axle vehicle (seed 001 Sec. 3.6).
+
+    Parameters
+    ----------
+    scenario : TwoAxleScenario
+    estimators : (front, rear)
+        XBS observers fed with the measured ``x2`` of their wheel, the
+        estimated speed and the wheel's pressure rate.
+    observer_in_loop : bool
+        Two-phase controllers read the estimate (else the true XBS).
+
+    Returns
+    -------
+    TwoAxleResult
+    """
+    if not isinstance(scenario, TwoAxleScenario):
+        raise SimulationError(f"simulate_two_axle() needs a TwoAxleScenario, got {type(scenario).__name__}")
+    return _TwoAxleLoop(scenario, estimators, observer_in_loop).run()
+
+
+class _TwoAxleLoop:
+    def __init__(self, sc: TwoAxleScenario, estimators: tuple[XbsEstimator | None, XbsEstimator | None],
+                 in_loop: bool):
+        if len(estimators) != 2:
+            raise SimulationError(f"give one estimator (or None) per axle, got {len(estimators)}")
+        for est in estimators:
+            if est is not None and not isinstance(est, XbsEstimator):
+                raise SimulationError(f"the estimator {est!r} lacks reset(t0, y0, vx0) and update(t, y, vx, u, dt)")
+        veh = sc.vehicle
+        self.sc = sc
+        self.veh = veh
+        self.R, self.J = veh.radius_m, veh.inertia_kg_m2
+        self.gains = (veh.brake_gain_front_nm_bar, veh.brake_gain_rear_nm_bar)
+        self.W = veh.static_loads
+        self.dz = veh.load_transfer
+        self.M = veh.mass_kg
+        self.road = _RoadState(sc.roads)
+        self.ctrls = (sc.front.runtime(veh.corner("front"), sc.actuator),
+                      sc.rear.runtime(veh.corner("rear"), sc.actuator))
+        self.est = estimators
+        self.use_hat = tuple(bool(e is not None and in_loop and c.uses_xbs) for e, c in zip(estimators,
+                                                                                          (sc.front, sc.rear)))
+        self.hat = [math.nan, math.nan]
+        self.failed: list[str | None] = [None, None]
+        self.vx_hat = sc.speed_m_s
+        self.bias_t, self.bias_v = sc.accelerometer.bias_profile(sc.duration_s)
+        self.max_rate, self.p_max = sc.actuator.max_rate_bar_s, sc.actuator.max_pressure_bar
+        self.out: tuple[float, ...] = ()
+
+    def bias(self, t: float) -> float:
+        return float(np.interp(t, self.bias_t, self.bias_v))
+
+    def rhs(self, t: float, y: tuple[float, ...]) -> tuple[float, ...]:
+        omf, omr, vx, _x, pf, pr = y
+        R = self.R
+        lf, lr = (R * omf - vx) / vx, (R * omr - vx) / vx
+        muf, xf = self.road.eval(lf, t)
+        mur, xr = self.road.eval(lr, t)
+        wf, wr = self.W
+        ax = 2.0 * (wf * muf + wr * mur) / (self.M + 2.0 * self.dz * (muf - mur))
+        fzf, fzr = wf - self.dz * ax, wr + self.dz * ax
+        dof = (-R * fzf * muf - self.gains[0] * pf) / self.J
+        dor = (-R * fzr * mur - self.gains[1] * pr) / self.J
+        if omf <= 0.0 and dof < 0.0:
+            dof = 0.0
+        if omr <= 0.0 and dor < 0.0:
+            dor = 0.0
+        ax_meas = ax + self.bias(t)
+        x2f, x2r = R * dof - ax_meas, R * dor - ax_meas
+        rates = []
+        for k, (ctrl, x2, om, p, xbs) in enumerate(((self.ctrls[0], x2f, omf, pf, xf),
+                                                    (self.ctrls[1], x2r, omr, pr, xr))):
+            if t < self.sc.brake_start_s:
+                u = 0.0
+            else:
+                u = ctrl.rate(t, x2, R * om, self.vx_hat, self.hat[k] if self.use_hat[k] else xbs)
+                u = min(max(u, -self.max_rate), self.max_rate)
+                if (p <= 0.0 and u < 0.0) or (p >= self.p_max and u > 0.0):
+                    u = 0.0
+            rates.append(u)
+        self.out = (lf, lr, muf, mur, xf, xr, ax, ax_meas, fzf, fzr, x2f, x2r, dof, dor)
+        return (dof, dor, ax, vx, rates[0], rates[1])
+
+    def guards(self) -> list[tuple[float, ...]]:
+        o = self.out
+        return [c.guards(o[10 + k], self.hat[k] if self.use_hat[k] else o[4 + k]) for k, c in enumerate(self.ctrls)]
+
+    def run(self) -> TwoAxleResult:
+        sc = self.sc
+        wall0 = time.perf_counter()
+        R = self.R
+        t = 0.0
+        v0 = sc.speed_m_s
+        y: tuple[float, ...] = (v0 / R, v0 / R, v0, 0.0, 0.0, 0.0)
+        rows: list[tuple[float, ...]] = []
+        events: list[tuple[float, str]] = []
+        p_var = sc.speed_filter_r
+        k1 = self.rhs(t, y)
+        for k, est in enumerate(self.est):
+            if est is not None:
+                est.reset(t, self.out[10 + k], self.vx_hat)
+
+        def record() -> None:
+            o = self.out
+            rows.append((t, y[2], self.vx_hat, o[6], o[7], y[3], y[0], y[1], o[0], o[1], o[10], o[11], o[4], o[5],
+                         self.hat[0], self.hat[1], y[4], y[5], o[8], o[9], float(self.ctrls[0].phase),
+                         float(self.ctrls[1].phase)))
+        record()
+        g_old = self.guards()
+        status = "duration"
+        steps = 0
+        while True:
+            vx = y[2]
+            h = sc.dt_s if vx >= sc.low_speed_m_s else sc.dt_s * vx / sc.low_speed_m_s
+            tb = sc.duration_s
+            road, pending = self.road, self.road.pending
+            if road.blending:
+                tb = min(tb, road.t0 + road.duration)
+            elif pending is not None:
+                tb = min(tb, pending.at_time_s)
+            for c in self.ctrls:
+                kink = c.breakpoint()
+                if kink > t + 1e-12:
+                    tb = min(tb, kink)
+            if t < sc.brake_start_s:
+                tb = min(tb, sc.brake_start_s)
+            at_break = t + h >= tb - 1e-12
+            if at_break:
+                h = tb - t
+            y1 = rk4_step(self.rhs, t, y, h, k1)
+            k_end = self.rhs(t + h, y1)
+            g_new = self.guards()
+            cand: list[tuple[int, int, float, float]] = [
+                (w, i, g0, g1) for w in (0, 1) for i, (g0, g1) in enumerate(zip(g_old[w], g_new[w]))
+                if g1 > 0.0 and not (self.use_hat[w] and self.ctrls[w].guards_use_xbs)]
+            stop = y1[2] <= sc.stop_speed_m_s
+            found: tuple[float, int, int] | None = None
+            for w, i, g0, g1 in cand:
+                def guard(tt: float, yy: tuple[float, ...], w: int = w, i: int = i) -> float:
+                    self.rhs(tt, yy)
+                    return self.guards()[w][i]
+                theta = locate_event(self.rhs, t, y, h, k1, guard, min(g0, 0.0), g1)
+                if found is None or theta < found[0]:
+                    found = (theta, w, i)
+            if stop:
+                theta = locate_event(self.rhs, t, y, h, k1, lambda tt, yy: sc.stop_speed_m_s - yy[2],
+                                     sc.stop_speed_m_s - vx, sc.stop_speed_m_s - y1[2])
+                if found is None or theta <= found[0]:
+                    found = (theta, -1, 0)
+            if found is not None and found[0] < 1.0:
+                h *= found[0]
+                at_break = False
+                y1 = rk4_step(self.rhs, t, y, h, k1)
+                k_end = self.rhs(t + h, y1)
+            t += h
+            y = (max(y1[0], 0.0), max(y1[1], 0.0), y1[2], y1[3], min(max(y1[4], 0.0), self.p_max),
+                 min(max(y1[5], 0.0), self.p_max))
+            k_end = self.rhs(t, y)
+            steps += 1
+            # speed estimate: predict with the biased accelerometer, correct with the fastest wheel
+            self.vx_hat += h * self.out[7]
+            p_var += sc.speed_filter_q * h
+            gain = p_var / (p_var + sc.speed_filter_r)
+            self.vx_hat += gain * (R * max(y[0], y[1]) - self.vx_hat)
+            p_var *= 1.0 - gain
+            for k, est in enumerate(self.est):
+                if est is not None and not self.failed[k]:
+                    u = (y[4 + k] - rows[-1][16 + k]) / h
+                    try:
+                        self.hat[k] = est.update(t, self.out[10 + k], self.vx_hat, u, h)
+                    except SimulationError as exc:    # e.g. ObserverInputError: drop this observer, go on
+                        self.failed[k] = f"t = {t:.4f} s: {exc}"
+                        self.hat[k] = math.nan
+                        events.append((t, f"{('front', 'rear')[k]} observer failed: {exc}"))
+            record()
+            if found is not None and found[1] == -1:
+                status = "stopped"
+                break
+            if at_break:
+                if road.blending and t >= road.t0 + road.duration - 1e-12:
+                    road.end_change()
+                elif not road.blending and pending is not None and t >= pending.at_time_s - 1e-12:
+                    road.start_change(t)
+                    events.append((t, f"road -> {pending.road.name}"))
+            k_end = self.rhs(t, y)
+            fired = [(found[1], found[2])] if found is not None and found[1] >= 0 else []
+            for _ in range(8):
+                if not fired:
+                    if t < sc.brake_start_s:
+                        break
+                    g = self.guards()
+                    fired = [(w, next(i for i, v in enumerate(g[w]) if v > 0.0)) for w in (0, 1)
+                             if any(v > 0.0 for v in g[w])]
+                    if not fired:
+                        break
+                for w, i in fired:
+                    c = self.ctrls[w]
+                    before = c.phase
+                    c.fire(t, i, self.out[10 + w], R * y[w], self.vx_hat)
+                    events.append((t, f"{'front' if w == 0 else 'rear'} phase {before} -> {c.phase}"))
+                fired = []
+                k_end = self.rhs(t, y)
+            for w, c in enumerate(self.ctrls):
+                if t >= c.deadline - 1e-12:
+                    before = c.phase
+                    c.expire(t, self.out[10 + w], R * y[w], self.vx_hat)
+                    events.append((t, f"{'front' if w == 0 else 'rear'} phase {before} -> {c.phase} (stall timeout)"))
+                    k_end = self.rhs(t, y)
+            g_old = self.guards()
+            k1 = k_end
+            if t >= sc.duration_s - 1e-12:
+                break
+        data = np.array(rows, dtype=float)
+        series = {name: data[:, i].copy() for i, name in enumerate(TWO_AXLE_SERIES)}
+        return TwoAxleResult(scenario=sc, status=status, series=series, events=tuple(events),
+                             metrics=_metrics(series, sc, status, self.est, self.failed),
+                             wall_time_s=time.perf_counter() - wall0,
+                             steps=steps)
+
+
+def _metrics(s: dict[str, npt.NDArray[np.float64]], sc: TwoAxleScenario, status: str,
+             estimators: tuple[XbsEstimator | None, XbsEstimator | None],
+             failed: list[str | None]) -> dict[str, Any]:
+    t = s["t"]
+    braking = t >= sc.brake_start_s
+    tb = t[braking]
+    rel = (s["vx_hat"] - s["vx"]) / s["vx"]
+    span = float(tb[-1] - tb[0]) if len(tb) > 1 else 0.0
+    out: dict[str, Any] = {
+        "stopping_distance_m": float(s["x"][-1]), "stop_time_s": float(t[-1]) if status == "stopped" else None,
+        "mean_deceleration_m_s2": float(-_cumtrapz(tb, s["ax"][braking])[-1] / span) if span > 0 else 0.0,
+        "speed_error_mean_pct": float(100 * np.mean(rel[braking])),
+        "speed_error_max_pct": float(100 * rel[braking][np.argmax(np.abs(rel[braking]))]),
+    }
+    for k, axle in enumerate(("front", "rear")):
+        sfx = "_f" if k == 0 else "_r"
+        phase = s["phase" + sfx]
+        err = None
+        if estimators[k] is not None:
+            e = (s["xbs_hat" + sfx] - s["xbs" + sfx])[braking]
+            err = float(np.sqrt(np.nanmean(e ** 2))) if np.any(np.isfinite(e)) else None
+        out[axle] = {"load_min_n": float(np.min(s["Fz" + sfx])), "load_max_n": float(np.max(s["Fz" + sfx])),
+                     "slip_mean": float(np.mean(s["lambda" + sfx][phase >= 1])) if np.any(phase >= 1) else None,
+                     "abs_cycles": int(np.count_nonzero((phase[1:] == 1) & (phase[:-1] != 1))),
+                     "xbs_rms_error": err, "observer_failure": failed[k]}
+    return out
