@@ -35,6 +35,16 @@ def test_simulate_scenario_text_reports_reconvergence(capsys):
     assert "-> hoang-wet" in out and "re-convergence within 10 %" in out and "Assumption 1" in out
 
 
+def test_simulate_two_axle_scenario_json(capsys, tmp_path):
+    png = tmp_path / "sec36.png"
+    code, out, _ = run(capsys, "aguado-sec36", "--duration", "1.5", "--json", "--plot", str(png))
+    data = json.loads(out)
+    assert code == 0 and data["observer"] == "xbs4" and data["description"].startswith("seed 001 Sec. 3.6")
+    m = data["metrics"]
+    assert m["front"]["load_max_n"] > data["scenario"]["vehicle"]["static_loads_n"][0]
+    assert m["speed_error_mean_pct"] < 0 and png.exists()
+
+
 def test_simulate_series_in_json(capsys):
     code, out, _ = run(capsys, "--speed-kmh", "40", "--json", "--series")
     series = json.loads(out)["series"]
@@ -56,7 +66,8 @@ def test_simulate_table41_cli(capsys, tmp_path):
     (["--road", "gravel"], "unknown road surface 'gravel'"),
     (["--speed-kmh", "-5"], "--speed-kmh must be > 0, got -5"),
     (["--duration", "-1"], "--duration must be > 0 s, got -1"),
-    (["--observer", "xbs3", "--observer-impl", "c"], "--observer-impl 'c' is not available yet"),
+    (["--observer", "xbs3", "--beta", "-1"], "beta1 = -1.0 must be finite and > 0"),
+    (["aguado-sec36", "--controller", "two-phase"], "--controller does not apply to the two-axle scenario"),
     (["--controller", "two-phase", "--tracking"], "--tracking applies to the five-phase ABS"),
     (["fig99"], "unknown scenario 'fig99'"),
     (["aguado-sec34", "--road", "snow"], "--road does not apply to the scenario 'aguado-sec34'"),
