@@ -140,8 +140,9 @@ def test_domain_guards_of_d_and_b_match_the_reference(tmp_path):
         ("m", "nonzero", StepStatus.BAD_PARAM), ("w - 3", "nonzero", StepStatus.UNDEFINED_TIME_SCALE),
         ("y - 1", "nonzero", StepStatus.NONFINITE_RESULT), ("y + 2", "positive", StepStatus.NONFINITE_RESULT)]
     c, ref = compile_observer(gen), SwitchedObserver(model, [1.0, 2.0], [3.0, 4.0])
-    for sig, status in [([1.0, 5.0, 0.0], StepStatus.NONFINITE_RESULT), ([-2.0, 5.0, 0.0], StepStatus.NONFINITE_RESULT),
-                        ([-3.0, 5.0, 0.0], StepStatus.NONFINITE_RESULT), ([0.5, 3.0, 0.0], StepStatus.UNDEFINED_TIME_SCALE)]:
+    cases = [([1.0, 5.0, 0.0], StepStatus.NONFINITE_RESULT), ([-2.0, 5.0, 0.0], StepStatus.NONFINITE_RESULT),
+             ([-3.0, 5.0, 0.0], StepStatus.NONFINITE_RESULT), ([0.5, 3.0, 0.0], StepStatus.UNDEFINED_TIME_SCALE)]
+    for sig, status in cases:
         for obs in (c, ref):
             with pytest.raises(ObserverInputError) as err:
                 obs.step([0.1, 0.2], sig, 1e-3)

@@ -149,7 +149,10 @@ static double urand(void)
     state ^= state << 13; state ^= state >> 7; state ^= state << 17;
     return (double)(state >> 11) * (1.0 / 9007199254740992.0);
 }
-static real gauss(double scale) { return (real)(scale * sqrt(-2.0 * log(urand() + 1e-300)) * cos(6.283185307179586 * urand())); }
+static real gauss(double scale)
+{
+    return (real)(scale * sqrt(-2.0 * log(urand() + 1e-300)) * cos(6.283185307179586 * urand()));
+}
 
 static real hostile(void)
 {
@@ -205,7 +208,10 @@ int main(void)
     x[0] = (real)NAN; printf("case xnan %d\n", @P@_step(x, sig, par, (real)1e-3)); x[0] = (real)0.1;
     sig[0] = (real)INFINITY; printf("case siginf %d\n", @P@_step(x, sig, par, (real)1e-3)); sig[0] = (real)1;
     par[0] = (real)NAN; printf("case parnan %d\n", @P@_step(x, sig, par, (real)1e-3)); par[0] = @P@_default_params[0];
-    if (SIGNED_SIGNAL >= 0) { sig[SIGNED_SIGNAL] = (real)0; printf("case scale0 %d\n", @P@_step(x, sig, par, (real)1e-3)); }
+    if (SIGNED_SIGNAL >= 0) {
+        sig[SIGNED_SIGNAL] = (real)0;
+        printf("case scale0 %d\n", @P@_step(x, sig, par, (real)1e-3));
+    }
     printf("case null %d\n", @P@_step(NULL, sig, par, (real)1e-3));
     return 0;
 }

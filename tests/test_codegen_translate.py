@@ -262,6 +262,24 @@ def test_random_toml_models_up_to_n6_match_pure_python_rk4(tmp_path, n, seed, me
         assert rel_err(got, reference_observer.step(x, sig, dt)) <= RTOL_DOUBLE
 
 
+def test_constant_and_parameter_time_scalings(tmp_path):
+    """s = 2 (no switching at all) and s = -k (always the K_minus branch) are generated and match the reference."""
+    for scale, expect_minus in (("2", False), ("-k", True)):
+        path = tmp_path / "const.toml"
+        path.write_text(f'name = "const"\nstates = ["z1", "z2"]\nA = [["0", "1"], ["-k", "0"]]\nC = ["1", "0"]\n'
+                        f'time_scale = "{scale}"\nparameters = ["k"]\npositive = ["k"]\n[values]\nk = "3"\n')
+        model = Model.from_toml(path)
+        Kp, Km = [1.0, 2.0], [-5.0, 7.0]
+        c, ref = compile_observer(generate_observer(model, (Kp, Km))), SwitchedObserver(model, Kp, Km)
+        unused = c.with_params({"K_plus_z1" if expect_minus else "K_minus_z1": 1e6})
+        rng = np.random.default_rng(9)
+        for _ in range(20):
+            x, _, dt = random_inputs(rng, 2)
+            sig = [rng.normal()]
+            assert rel_err(c.step(x, sig, dt), ref.step(x, sig, dt)) <= RTOL_DOUBLE
+            assert np.array_equal(unused.step(x, sig, dt), c.step(x, sig, dt))
+
+
 # --------------------------------------------------------------------------- super-twisting (seed 003)
 def test_msirdi2008_eq13_super_twisting_c_equals_sensors_reference():
     g = super_twisting_gains(1000.0)

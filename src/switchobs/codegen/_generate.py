@@ -18,7 +18,6 @@ scheme as the Python reference observers, so that the two agree to rounding.
 from __future__ import annotations
 
 import dataclasses
-import json
 import re
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
@@ -327,7 +326,9 @@ def _assemble(tr: Translation, *, info: _Info, kind: str, real: str, method: str
     p_macros = _macro_names("parameter", tr.param_names)
     step_expr = _step_expression(tr, method)
     inputs = [("x", tr.x), ("sig", tr.signals), ("par", tr.params), ("dt", tr.dt)]
-    if tr.s is not None:
+    if tr.s is not None and tr.scale.is_constant():  # a constant time scaling needs no check: fold it in
+        step_expr = ca.substitute(step_expr, tr.s, tr.scale)
+    elif tr.s is not None:
         inputs.append(("s", tr.s))
     step_k = kernel(f"{prefix}_kernel", inputs, step_expr, real=real, prefix=prefix, scalars=("dt", "s"))
     kernels = [step_k]
@@ -651,8 +652,3 @@ def _source(*, tr: Translation, info: _Info, kind: str, real: str, method: str, 
         "",
     ]
     return "\n".join(line for line in body if line is not None)
-
-
-def describe_command(argv: Sequence[str]) -> str:
-    """The command line as it would be typed (for the files' comments)."""
-    return " ".join(json.dumps(a) if re.search(r"[\s\"'$]", a) else a for a in argv)
