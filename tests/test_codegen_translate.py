@@ -317,3 +317,13 @@ def test_error_codes_shared_with_python_reference():
     for code in ErrorCode:
         assert StepStatus[code.name] == int(code)
     assert {StepStatus.BAD_PARAM, StepStatus.BAD_ARGUMENT}.isdisjoint(set(map(int, ErrorCode)))
+
+
+def test_docstring_examples_of_the_codegen_modules_run():
+    import doctest
+
+    from switchobs.codegen import _build, _generate
+
+    for module in (_generate, _build):
+        result = doctest.testmod(module)
+        assert result.attempted > 0 and result.failed == 0, module.__name__

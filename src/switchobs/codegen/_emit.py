@@ -65,14 +65,12 @@ class Kernel:
         The C definition.
     temporaries : int
         Number of scalar temporaries (casadi's ``sz_w``): the stack the kernel needs, in reals.
-    n_out : int
     """
 
     name: str
     inputs: tuple[str, ...]
     body: str
     temporaries: int
-    n_out: int
 
     def call(self, out: str, **args: str) -> str:
         """The C call with the given argument expressions (by input name)."""
@@ -156,4 +154,4 @@ def kernel(name: str, inputs: Sequence[tuple[str, ca.SX]], output: ca.SX, *, rea
     body_text = "\n".join(f"    {line}" for line in rewritten)
     definition = f"{signature}\n{{\n{body_text}\n}}\n"
     return Kernel(name=name, inputs=tuple(inputs[i][0] for i in order), body=definition,
-                  temporaries=int(fn.sz_w()), n_out=out.numel())
+                  temporaries=int(fn.sz_w()))
