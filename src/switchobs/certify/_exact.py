@@ -212,13 +212,15 @@ def definiteness(M: Sequence[Sequence[Any]], *, strict: bool) -> Definiteness:
     n = len(M)
     if any(len(row) != n for row in M):
         raise DimensionError(f"definiteness needs a square matrix, got {n} rows of lengths {[len(r) for r in M]}")
-    F = [[Fraction(x) for x in row] for row in M]
     for i in range(n):
         for j in range(i):
-            if F[i][j] != F[j][i]:
-                raise DimensionError(f"matrix is not symmetric: entry ({i + 1},{j + 1}) = {F[i][j]} but "
-                                     f"({j + 1},{i + 1}) = {F[j][i]}")
-    a, _ = integer_form(F)
+            if M[i][j] != M[j][i]:
+                raise DimensionError(f"matrix is not symmetric: entry ({i + 1},{j + 1}) = {M[i][j]} but "
+                                     f"({j + 1},{i + 1}) = {M[j][i]}")
+    if all(type(x) is int for row in M for x in row):
+        a = [list(row) for row in M]
+    else:
+        a, _ = integer_form([[Fraction(x) for x in row] for row in M])
     prev = 1
     kept: list[int] = []
     for k in range(n):
@@ -315,6 +317,23 @@ def observable(A: Sequence[Sequence[Fraction]], C: Sequence[Sequence[Fraction]])
 
 
 # ----------------------------------------------------------- matrix exponential
+def _up(x: Fraction, bits: int = 64) -> Fraction:
+    """``x`` rounded up to a dyadic with about ``bits`` significant bits (keeps error bounds short)."""
+    if x <= 0:
+        return Fraction(0) if x == 0 else -_down(-x, bits)
+    e = bits - (x.numerator.bit_length() - x.denominator.bit_length())
+    return Fraction(-((-x.numerator << e) // x.denominator), 1 << e) if e >= 0 else \
+        Fraction(-((-x.numerator) // (x.denominator << -e)) << -e)
+
+
+def _down(x: Fraction, bits: int = 64) -> Fraction:
+    if x <= 0:
+        return -_up(-x, bits)
+    e = bits - (x.numerator.bit_length() - x.denominator.bit_length())
+    return Fraction((x.numerator << e) // x.denominator, 1 << e) if e >= 0 else \
+        Fraction((x.numerator // (x.denominator << -e)) << -e)
+
+
 def expm_enclosure(A: Sequence[Sequence[Fraction]], T: Fraction, bits: int = 160
                    ) -> tuple[list[list[int]], int, Fraction]:
     """Rigorous enclosure of ``exp(A T)``: ``(E, w, err)`` with ``||exp(AT) - E/2**w||_inf <= err``.
@@ -337,18 +356,18 @@ def expm_enclosure(A: Sequence[Sequence[Fraction]], T: Fraction, bits: int = 160
     while nb / 2 ** s > Fraction(1, 2):
         s += 1
     Bs = [[x / 2 ** s for x in row] for row in B]
-    nu = nb / 2 ** s
+    nu = _up(nb / 2 ** s)
     one = 1 << bits
     unit = Fraction(1, one)
     Bh = [[round(x * one) for x in row] for row in Bs]
     beta = Fraction(n, 2) * unit  # ||Bs - Bh/2^w||_inf
-    nu_hat = inf_norm(Bh) * unit
+    nu_hat = _up(inf_norm(Bh) * unit)
     # degree: tail < 2^-w
     K = 1
     fact = Fraction(1)
     while True:
         fact *= K + 1
-        tail = nu ** (K + 1) / fact / (1 - nu / (K + 2))
+        tail = _up(nu ** (K + 1) / fact / (1 - nu / (K + 2)))
         if tail < unit:
             break
         K += 1
@@ -361,16 +380,16 @@ def expm_enclosure(A: Sequence[Sequence[Fraction]], T: Fraction, bits: int = 160
         prod = matmul(term, Bh)
         div = k * one
         term = [[x // div for x in row] for row in prod]
-        e_k = (e_prev * nu_hat + t_norm * beta) / k + n * unit
-        err += e_k
+        e_k = _up((e_prev * nu_hat + t_norm * beta) / k + n * unit)
+        err = _up(err + e_k)
         e_prev = e_k
-        t_norm = t_norm * nu / k
+        t_norm = _up(t_norm * nu / k)
         total = [[x + y for x, y in zip(r1, r2)] for r1, r2 in zip(total, term)]
-    err += tail
+    err = _up(err + tail)
     E = total
     for _ in range(s):
-        norm_E = inf_norm(E) * unit
+        norm_E = _up(inf_norm(E) * unit)
         sq = matmul(E, E)
         E = [[x >> bits for x in row] for row in sq]
-        err = (2 * norm_E + err) * err + n * unit
+        err = _up((2 * norm_E + err) * err + n * unit)
     return E, bits, err

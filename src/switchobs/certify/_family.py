@@ -54,7 +54,7 @@ def format_spectrum(M: np.ndarray) -> str:
     eig = eig[np.lexsort((eig.imag, eig.real))]
     parts = []
     for z in eig:
-        parts.append(f"{z.real:.6g}" if abs(z.imag) <= 1e-12 * max(1.0, abs(z)) else f"{z.real:.6g}{z.imag:+.6g}j")
+        parts.append(f"{z.real:.6g}" if abs(z.imag) <= 1e-6 * max(1.0, abs(z)) else f"{z.real:.6g}{z.imag:+.6g}j")
     return "[" + ", ".join(parts) + "]"
 
 

@@ -77,13 +77,15 @@ def balance(matrices: Sequence[np.ndarray]) -> Balanced:
 
 
 def solve(build: Callable[[], tuple[cp.Problem, dict]], *, solvers: Sequence[str] = DEFAULT_SOLVERS,
-          what: str) -> tuple[dict, SolveInfo]:
+          what: str, infeasible_ok: bool = False) -> tuple[dict, SolveInfo]:
     """Solve the problem made by ``build`` with the first solver that returns an accurate optimum.
 
     ``build()`` returns ``(problem, variables)`` and is called afresh for each
     solver, so a failed attempt leaves no state behind.  An
     ``optimal_inaccurate`` answer is kept only if no later solver does better;
-    the exact re-check decides anyway.
+    the exact re-check decides anyway.  With ``infeasible_ok`` an accurate
+    ``infeasible`` status is returned as an answer (the variables then hold
+    no values); the callers prove infeasibility separately, exactly.
 
     Returns
     -------
@@ -113,7 +115,7 @@ def solve(build: Callable[[], tuple[cp.Problem, dict]], *, solvers: Sequence[str
         compile_s = float(getattr(prob, "compilation_time", None) or max(wall - solve_s, 0.0))
         attempts.append(f"{name}: {prob.status}")
         info = SolveInfo(name, str(prob.status), tuple(attempts), (t1 - t0) + compile_s, solve_s)
-        if prob.status == cp.OPTIMAL:
+        if prob.status == cp.OPTIMAL or (infeasible_ok and prob.status == cp.INFEASIBLE):
             return variables, info
         if prob.status == cp.OPTIMAL_INACCURATE and fallback is None:
             fallback = (variables, info)
@@ -130,7 +132,10 @@ def _sym(M: cp.Expression) -> cp.Expression:
 
 def primal_margin(mats: Sequence[np.ndarray], H: Sequence[np.ndarray | None], *,
                   solvers: Sequence[str] = DEFAULT_SOLVERS, what: str) -> tuple[np.ndarray, float, SolveInfo]:
-    """Maximise ``t``: ``tr P = n``, ``P >= t I``, ``A_p' P + P A_p <= -t H_p`` (``H_p = None``: ``<= 0``)."""
+    """Maximise ``t``: ``tr P = n``, ``P >= t I``, ``A_p' P + P A_p <= -t H_p`` (``H_p = None``: ``<= 0``).
+
+    With some ``H_p = None`` the problem can be infeasible; ``t = -inf`` is then returned.
+    """
     n = mats[0].shape[0]
     eye = np.eye(n)
 
@@ -143,7 +148,9 @@ def primal_margin(mats: Sequence[np.ndarray], H: Sequence[np.ndarray | None], *,
             cons.append((lhs - t * Hp if Hp is not None else lhs) >> 0)
         return cp.Problem(cp.Maximize(t), cons), {"P": P, "t": t}
 
-    v, info = solve(fn, solvers=solvers, what=what)
+    v, info = solve(fn, solvers=solvers, what=what, infeasible_ok=not all(Hp is not None for Hp in H))
+    if info.status == cp.INFEASIBLE:
+        return np.full((n, n), np.nan), -np.inf, info
     P = np.asarray(v["P"].value, dtype=float)
     return (P + P.T) / 2, float(v["t"].value), info
 

@@ -154,7 +154,14 @@ def _per_mode(cert: Mapping[str, Any], key: str, names: Sequence[str], n: int) -
 
 
 def _defin(M: Matrix, *, strict: bool, negate: bool = False) -> Any:
-    return definiteness(scale(-1, M) if negate else M, strict=strict)
+    r = definiteness(scale(-1, M) if negate else M, strict=strict)
+    if negate and not r.holds:
+        return type(r)(r.holds, r.index, r.reason + " (of the negated left-hand side)")
+    return r
+
+
+def _out_name(nm: str) -> str:
+    return "C_" + nm[2:] if nm.startswith("A_") else f"C_{nm}"
 
 
 def _fail(name: str, claim: str, res: Any) -> Check:
@@ -188,11 +195,12 @@ def _check_hespanha(names: Sequence[str], As: Sequence[Matrix], cert: Mapping[st
         C = fraction_matrix(Craw, what=f"C[{nm}]", cols=n)
         M = add(lyapunov_form(A, P), matmul(transpose(C), C))
         r = _defin(M, strict=False, negate=True)
+        cn = _out_name(nm)
         if not r.holds:
-            return _fail("hespanha", f"{nm}' P + P {nm} + C_{nm}' C_{nm} <= 0", r)
+            return _fail("hespanha", f"{nm}' P + P {nm} + {cn}' {cn} <= 0", r)
         obs, dim = observable(A, C)
         if not obs:
-            return Check("hespanha", False, f"({nm}, C_{nm}) is not observable: the observable subspace has "
+            return Check("hespanha", False, f"({nm}, {cn}) is not observable: the observable subspace has "
                                             f"dimension {dim} < {n}")
     return Check("hespanha", True)
 
@@ -253,22 +261,34 @@ def _check_dwell(names: Sequence[str], As: Sequence[Matrix], cert: Mapping[str, 
 
 
 def _jump_condition(A: Matrix, T: Fraction, Pq: Matrix, Pp: Matrix) -> tuple[bool, str]:
-    """``exp(A'T) Pq exp(AT) - Pp < 0`` with a rigorous enclosure, refining the precision twice."""
+    """``exp(A'T) Pq exp(AT) - Pp < 0`` with a rigorous enclosure, refining the precision twice.
+
+    With ``E = Ê / 2^w + Delta`` and ``||Delta||_inf <= err``:
+    ``E' Pq E <= Ê' Pq Ê / 4^w + eta I`` where
+    ``eta = 2 ||Ê||_2 ||Pq||_2 d + ||Pq||_2 d^2``, ``d = sqrt(n) err`` bounds ``||Delta||_2``,
+    ``||Ê||_2 <= (||Ê||_1 + ||Ê||_inf) / 2`` and ``||Pq||_2 <= ||Pq||_inf``.  All
+    products are done on integers (``Pq = Nq / dq``, ``Pp = Np / dp``).
+    """
     n = len(A)
+    Nq, dq = integer_form(Pq)
+    Np, dp = integer_form(Pp)
+    p2 = inf_norm(Pq)
     reason = ""
     for bits in (128, 256, 512):
         E_int, w, err = expm_enclosure(A, T, bits)
-        E = [[Fraction(x, 1 << w) for x in row] for row in E_int]
-        nominal = sub(matmul(matmul(transpose(E), Pq), E), Pp)
-        r = definiteness(scale(-1, nominal), strict=True)
+        # 4^w dq dp (Ê'PqÊ/4^w - Pp) = dp Ê' Nq Ê - 4^w dq Np
+        core = matmul(matmul(transpose(E_int), Nq), E_int)
+        big = (1 << (2 * w)) * dq
+        nominal = [[dp * core[i][j] - big * Np[i][j] for j in range(n)] for i in range(n)]
+        r = definiteness([[-x for x in row] for row in nominal], strict=True)
         if not r.holds:
             return False, r.reason
-        # ||Delta||_2 <= sqrt(n) ||Delta||_inf ;  ||E||_2 <= (||E||_1 + ||E||_inf)/2 ;  ||Pq||_2 <= ||Pq||_inf
         d2 = sqrt_upper(Fraction(n)) * err
-        e2 = (inf_norm(transpose(E)) + inf_norm(E)) / 2
-        p2 = inf_norm(Pq)
+        e2 = Fraction(inf_norm(transpose(E_int)) + inf_norm(E_int), 2 << w)
         eta = 2 * e2 * p2 * d2 + p2 * d2 * d2
-        r = definiteness(scale(-1, add(nominal, scale(eta, identity(n)))), strict=True)
+        shift = -((-eta * big * dp).numerator // (eta * big * dp).denominator)  # ceil: eta I, same scaling
+        r = definiteness([[-nominal[i][j] - (shift if i == j else 0) for j in range(n)] for i in range(n)],
+                         strict=True)
         if r.holds:
             return True, ""
         reason = (f"the nominal inequality holds but the enclosure of exp(A tau_D) (error {float(err):.2e}) "

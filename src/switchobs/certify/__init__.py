@@ -1,0 +1,53 @@
+"""Numerical certification of switched error dynamics, re-checked in exact arithmetic.
+
+cvxpy (Clarabel, then SCS) finds the matrices; every answer is rationalised
+and re-checked exactly by an independent checker before it is called
+certified; certificates are JSON documents that ``switchobs verify``
+re-checks from their matrices alone.
+
+Public API
+----------
+certify                   -- every applicable check on a family {A_p}, one verified certificate
+certify_model             -- the same for a model's observer: A_plus = A - K_plus C, A_minus = -A + K_minus C
+common_lyapunov           -- Hespanha's non-strict common Lyapunov condition (LMI + exact check)
+strict_common_lyapunov    -- strict CQLF, or an exact dual proof that none exists
+infeasibility_certificate -- the dual (theorem of alternatives) certificate alone
+dwell_time                -- Geromel–Colaneri dwell-time bound, bisected on tau, certified exactly
+classify_planar           -- Balde–Boscain–Mason cases i–iv with Gamma, det, tr(A1 A2) and R
+verify_certificate        -- independent exact check of a certificate document
+load_certificate          -- read a certificate JSON file
+trajectory_conditions     -- Assumption 1 (PE, transversal zero crossings, dwell time in t and tau)
+time_rescaling            -- tau(t) = ∫|s| dt
+pe_level                  -- min over windows of ∫ y^2
+zero_crossings            -- sign changes of y with their slopes
+regressor_excitation      -- eigenvalues of windowed ∫ Psi'Psi (seed 001 Fig. 3.1)
+admissible_constants      -- alpha (and dwell-time bounds for a beta) of Theorem 3, seed 004
+as_family                 -- the validation gate for a family of matrices
+
+Results: CertificationReport, LyapunovResult, DualCertificate, DwellTimeResult,
+PlanarClassification, VerificationReport, TrajectoryReport, AdmissibleConstants,
+ZeroCrossing, Family.
+"""
+
+from ._certify import CertificationReport, certify, certify_model, verdict_text
+from ._dwell import DwellTimeResult, dwell_time
+from ._family import Family, as_family
+from ._lyapunov import (DEFAULT_EPS, DualCertificate, LyapunovResult, common_lyapunov,
+                        infeasibility_certificate, strict_common_lyapunov)
+from ._planar import PlanarClassification, classify_planar
+from ._trajectory import (AdmissibleConstants, TrajectoryReport, ZeroCrossing, admissible_constants, pe_level,
+                          regressor_excitation, time_rescaling, trajectory_conditions, windowed_energy,
+                          zero_crossings)
+from ._verify import Check, VerificationReport, load_certificate, verify_certificate
+
+__all__ = [
+    "CertificationReport", "certify", "certify_model", "verdict_text",
+    "DwellTimeResult", "dwell_time",
+    "Family", "as_family",
+    "DEFAULT_EPS", "DualCertificate", "LyapunovResult", "common_lyapunov", "infeasibility_certificate",
+    "strict_common_lyapunov",
+    "PlanarClassification", "classify_planar",
+    "AdmissibleConstants", "TrajectoryReport", "ZeroCrossing", "admissible_constants", "pe_level",
+    "regressor_excitation", "time_rescaling", "trajectory_conditions", "windowed_energy", "zero_crossings",
+    "Check", "VerificationReport", "load_certificate", "verify_certificate",
+]

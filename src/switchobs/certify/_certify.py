@@ -1,0 +1,314 @@
+"""The full certification run: every applicable check, one JSON certificate, one verdict.
+
+:func:`certify` runs, for a family ``{A_p}``: the strict CQLF LMI (with its
+dual when infeasible), Hespanha's non-strict condition, the Geromel–Colaneri
+dwell time (when no strict CQLF is certified) and, for two ``2 x 2`` matrices,
+the Balde–Boscain–Mason classification.  The certificates that hold exactly
+are collected in a JSON document whose verdict is the one they imply, and
+the document is passed through the independent checker before it is
+returned.  :func:`certify_model` builds the family ``A_plus = A - K_plus C``,
+``A_minus = -A + K_minus C`` of a model's switched observer first.
+"""
+
+from __future__ import annotations
+
+import json
+import time
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass, field
+from fractions import Fraction
+from pathlib import Path
+from typing import Any
+
+import sympy as sp
+
+from ..exceptions import FreeSymbolError, SpectrumError
+from ..model import Model
+from ._exact import fraction_matrix, matrix_strings
+from ._family import Family, FamilyLike, as_family, format_spectrum
+from ._dwell import DwellTimeResult, dwell_time
+from ._lmi import DEFAULT_SOLVERS
+from ._lyapunov import DEFAULT_EPS, LyapunovResult, common_lyapunov, strict_common_lyapunov
+from ._planar import PlanarClassification, classify_planar
+from ._verify import FORMAT, VERSION, VerificationReport, implied_verdict, verify_certificate
+
+__all__ = ["CertificationReport", "certify", "certify_model", "verdict_text"]
+
+
+def verdict_text(verdict: Mapping[str, Any], planar: PlanarClassification | None = None) -> str:
+    """One sentence for an implied verdict (and the numerical planar case iv, if any)."""
+    arb = verdict.get("arbitrary_switching")
+    dwell = verdict.get("dwell_time")
+    parts = []
+    if arb == "UGES":
+        parts.append("uniformly exponentially stable under arbitrary switching (strict common quadratic "
+                     "Lyapunov function)")
+    else:
+        if dwell == "any":
+            parts.append("uniformly exponentially stable for every switching signal with a positive dwell time "
+                         "(Hespanha, non-strict common Lyapunov function)")
+        elif dwell is not None:
+            parts.append(f"uniformly exponentially stable for every switching signal with dwell time >= "
+                         f"{dwell} = {float(Fraction(dwell)):.6g} (Geromel-Colaneri)")
+        if arb == "UGS":
+            parts.append("uniformly stable under arbitrary switching")
+        elif arb == "UGS-not-UGES":
+            parts.append("under arbitrary switching: uniformly stable but not exponentially (planar case ii)")
+        elif arb == "unbounded":
+            parts.append("some fast switching signal gives unbounded trajectories (planar case i)")
+        elif planar is not None and planar.case == "iv":
+            parts.append(f"under arbitrary switching: {planar.verdict} (planar case iv, R = {planar.R:.6g}, "
+                         "computed numerically)")
+        elif not parts:
+            parts.append("nothing certified")
+        if not any("arbitrary" in p for p in parts) and arb == "unknown" and dwell is not None:
+            parts.append("arbitrary switching not decided")
+    return "; ".join(parts)
+
+
+@dataclass(frozen=True)
+class CertificationReport:
+    """Everything :func:`certify` found, the JSON certificate and its independent check.
+
+    Attributes
+    ----------
+    family : Family
+    strict : LyapunovResult
+    hespanha : LyapunovResult
+    dwell : DwellTimeResult or None
+        Run when no strict CQLF is certified.
+    planar : PlanarClassification or None
+        For two 2 x 2 matrices.
+    document : dict
+        The certificate (JSON types only); write it with :meth:`write`.
+    verification : VerificationReport
+        The independent exact check of ``document``.
+    verdict : dict
+        The verdict implied by the certificates that hold.
+    text : str
+        The verdict in one sentence.
+    timings : dict
+        Wall time [s] of each check.
+    """
+
+    family: Family
+    strict: LyapunovResult
+    hespanha: LyapunovResult
+    dwell: DwellTimeResult | None
+    planar: PlanarClassification | None
+    document: dict[str, Any]
+    verification: VerificationReport
+    verdict: dict[str, Any]
+    text: str
+    timings: dict[str, float] = field(default_factory=dict)
+
+    @property
+    def certified(self) -> bool:
+        """Some stability certificate (strict, Hespanha or dwell time) holds and the document checks out."""
+        kinds = {c["kind"] for c in self.document["certificates"]}
+        return self.verification.holds and bool(kinds & {"strict-cqlf", "hespanha", "dwell-time"})
+
+    def write(self, path: str | Path) -> None:
+        Path(path).write_text(json.dumps(self.document, indent=2) + "\n", encoding="utf-8")
+
+    def to_json(self) -> dict[str, Any]:
+        return {"verdict": self.verdict, "text": self.text, "certified": self.certified,
+                "strict": self.strict.to_json(), "hespanha": self.hespanha.to_json(),
+                "dwell_time": None if self.dwell is None else self.dwell.to_json(),
+                "planar": None if self.planar is None else self.planar.to_json(),
+                "verification": self.verification.to_json(), "timings": self.timings,
+                "spectra": {nm: format_spectrum(M) for nm, M in zip(self.family.names, self.family.numeric)},
+                "certificate": self.document}
+
+    def __str__(self) -> str:
+        rows = [("check", "result", "margin", "solver", "exact")]
+        s = self.strict
+        if s.certified:
+            strict_res = "exists"
+        elif s.dual is not None and s.dual.certified:
+            strict_res = "none (dual certificate)" if s.dual.kind == "no-strict-cqlf" else "none (not even non-strict)"
+        else:
+            strict_res = "not found" if not s.feasible else "feasible, not certified"
+        rows.append(("strict common P", strict_res, f"{s.margin:.3g}", _solver(s), _exact_col(s.certified or (
+            s.dual is not None and s.dual.certified))))
+        h = self.hespanha
+        h_res = "certified" if h.certified else ("not found" if not h.feasible else "feasible, not certified")
+        rows.append(("Hespanha non-strict P", h_res, f"{h.margin:.3g}", _solver(h), _exact_col(h.certified)))
+        if self.dwell is not None:
+            d = self.dwell
+            d_res = f"tau_D = {float(d.tau_D):.5g}" if d.certified and d.tau_D is not None else "not certified"
+            rows.append(("dwell time (Geromel-Colaneri)", d_res, f"{d.margin:.3g}",
+                         "-" if d.solver is None else d.solver.solver, _exact_col(d.certified)))
+        if self.planar is not None:
+            p = self.planar
+            rows.append(("planar (Balde-Boscain-Mason)", f"case {p.case}: {p.stability}",
+                         "-" if p.R is None else f"R={p.R:.4g}", "-", "exact" if p.case != "iv" else "R numeric"))
+        widths = [max(len(r[i]) for r in rows) for i in range(5)]
+        lines = ["  ".join(c.ljust(w) for c, w in zip(r, widths)).rstrip() for r in rows]
+        lines.insert(1, "  ".join("-" * w for w in widths))
+        head = [f"{self.family} (spectra: " + "; ".join(f"{nm} {format_spectrum(M)}" for nm, M in
+                                                         zip(self.family.names, self.family.numeric)) + ")"]
+        tail = [f"verdict: {self.text}",
+                f"independent exact check of the certificate: {'holds' if self.verification.holds else 'FAILS'}"]
+        if not self.verification.holds:
+            tail += [f"  {c}" for c in self.verification.checks if not c.holds]
+        return "\n".join(head + lines + tail)
+
+
+def _solver(r: LyapunovResult) -> str:
+    return "-" if r.solver is None else r.solver.solver
+
+
+def _exact_col(ok: bool) -> str:
+    return "holds" if ok else "-"
+
+
+def certify(family: FamilyLike, *, names: Sequence[str] | None = None, output: Any = None,
+            dwell: bool = True, eps: float = DEFAULT_EPS, solvers: Sequence[str] = DEFAULT_SOLVERS,
+            observer: Mapping[str, Any] | None = None, provenance: Mapping[str, Any] | None = None
+            ) -> CertificationReport:
+    """Run every applicable check on a switched family and return the verified certificate.
+
+    Parameters
+    ----------
+    family : matrices, mapping name -> matrix, or Family (all Hurwitz)
+    names : names of the matrices
+    output : matrix, optional
+        Output rows for Hespanha's LMI (the model's ``C`` for an observer).
+    dwell : bool
+        Compute the Geromel–Colaneri dwell time when no strict CQLF is certified.
+    eps : float
+        Numerical margin threshold.
+    solvers : cvxpy solvers in order of preference
+    observer : mapping, optional
+        ``A``, ``C``, ``K_plus``, ``K_minus`` (rational strings): the checker then
+        also re-derives ``A_plus``, ``A_minus`` from them.
+    provenance : mapping, optional
+        Free-form information stored in the document (model, values, spectrum).
+
+    Returns
+    -------
+    CertificationReport
+
+    Raises
+    ------
+    DimensionError, ModelError, NotHurwitzError, SolverFailure
+
+    Examples
+    --------
+    >>> rep = certify([[[-1, -1], [1, 0]], [[-1, 1], [-1, 0]]], output=[[1, 0]])
+    >>> rep.verdict["dwell_time"], rep.planar.case
+    ('any', 'ii')
+    """
+    fam = as_family(family, names)
+    timings: dict[str, float] = {}
+    t0 = time.perf_counter()
+    strict = strict_common_lyapunov(fam, eps=eps, solvers=solvers)
+    timings["strict"] = time.perf_counter() - t0
+    t0 = time.perf_counter()
+    hesp = common_lyapunov(fam, output=output, eps=eps, solvers=solvers, dual=False)
+    timings["hespanha"] = time.perf_counter() - t0
+    dw = None
+    if dwell and not strict.certified:
+        t0 = time.perf_counter()
+        dw = dwell_time(fam, eps=eps, solvers=solvers)
+        timings["dwell_time"] = time.perf_counter() - t0
+    planar = None
+    if len(fam) == 2 and fam.n == 2:
+        t0 = time.perf_counter()
+        planar = classify_planar(fam.exact[0], fam.exact[1], names=fam.names)
+        timings["planar"] = time.perf_counter() - t0
+    certs = [c for c in (strict.certificate(), hesp.certificate(),
+                         strict.dual.certificate() if strict.dual is not None else None,
+                         dw.certificate() if dw is not None else None) if c is not None]
+    if planar is not None:
+        certs.append({"kind": "planar", "case": planar.case, "Gamma": str(planar.gamma),
+                      "R": planar.R, "verdict": planar.verdict})
+    holding = [c["kind"] for c in certs if c["kind"] != "planar"]
+    tau = [Fraction(c["tau_D"]) for c in certs if c["kind"] == "dwell-time"]
+    verdict = implied_verdict(holding, planar.case if planar is not None else None, tau)
+    doc: dict[str, Any] = {"format": FORMAT, "version": VERSION, "family": fam.to_json()}
+    if observer is not None:
+        doc["observer"] = dict(observer)
+    doc["certificates"] = certs
+    doc["verdict"] = verdict
+    doc["provenance"] = dict(provenance or {})
+    doc["provenance"]["produced_by"] = "switchobs certify"
+    t0 = time.perf_counter()
+    if certs:
+        check = verify_certificate(doc)
+    else:
+        check = VerificationReport(False, (), verdict, verdict)
+    timings["verify"] = time.perf_counter() - t0
+    return CertificationReport(fam, strict, hesp, dw, planar, doc, check, verdict, verdict_text(verdict, planar),
+                               timings)
+
+
+def certify_model(model: Model, *, values: Mapping[str, Any] | None = None, spectrum: str | Sequence | None = None,
+                  K_plus: Any = None, K_minus: Any = None, dwell: bool = True, eps: float = DEFAULT_EPS,
+                  solvers: Sequence[str] = DEFAULT_SOLVERS) -> CertificationReport:
+    """Certify the switched observer of a numeric model (seed 004; seed 000 eq. (13)).
+
+    The error dynamics in the rescaled time are ``A_plus = A - K_plus C`` and
+    ``A_minus = -A + K_minus C``.  Give ``spectrum`` (gains by
+    :func:`switchobs.design.design`, Theorem 1 of seed 004) or ``K_plus`` (and
+    optionally any ``K_minus``; omitted, the Theorem 1 choice).
+
+    Parameters
+    ----------
+    model : Model
+        Parameters take the model's stored ``[values]``, overridden by ``values``.
+    values : mapping name -> number, optional
+        Parameter values (``--param``), exact (``"187.5"`` is ``375/2``).
+    spectrum : str or sequence, optional
+        Poles of ``A_plus``, e.g. ``"-10,-20,-20"``.
+    K_plus, K_minus : str or sequence, optional
+        Numeric gains, e.g. ``"84,-7312/375,-64/3"``.
+    dwell, eps, solvers
+        As in :func:`certify`.
+
+    Returns
+    -------
+    CertificationReport
+
+    Raises
+    ------
+    SpectrumError
+        Neither a spectrum nor gains, or both.
+    FreeSymbolError
+        A parameter or design symbol has no value.
+    NotHurwitzError
+        ``A_plus`` or ``A_minus`` is not Hurwitz (named, with its spectrum).
+    """
+    from ..design import design, observer_normal_form, parse_gains, theorem1_K_minus
+
+    if (spectrum is None) == (K_plus is None):
+        raise SpectrumError("give either a spectrum (--spectrum) or the gains (--gains-plus [--gains-minus])")
+    if K_minus is not None and K_plus is None:
+        raise SpectrumError("--gains-minus needs --gains-plus")
+    used = {k: str(v) for k, v in model.values.items()}
+    used.update({k: str(v) for k, v in (values or {}).items()})
+    model = model.with_values(dict(values or {})).numeric()
+    if spectrum is not None:
+        d = design(model, spectrum)
+        Kp, Km = d.K_plus, d.K_minus
+    else:
+        Kp = parse_gains(K_plus, model, what="K_plus")
+        Km = parse_gains(K_minus, model, what="K_minus") if K_minus is not None else \
+            theorem1_K_minus(observer_normal_form(model), Kp)
+    A_plus = sp.Matrix(model.A - Kp * model.C)
+    A_minus = sp.Matrix(-model.A + Km * model.C)
+    free = sorted({str(s) for M in (A_plus, A_minus) for s in M.free_symbols})
+    if free:
+        raise FreeSymbolError(f"the error matrices still depend on {free}; give their values "
+                              f"(e.g. --param {free[0]}=... or a numeric spectrum)")
+    observer = {"A": matrix_strings(fraction_matrix(model.A, what="A")),
+                "C": matrix_strings(fraction_matrix(model.C, what="C")),
+                "K_plus": [str(x[0]) for x in fraction_matrix([[e] for e in Kp], what="K_plus")],
+                "K_minus": [str(x[0]) for x in fraction_matrix([[e] for e in Km], what="K_minus")]}
+    provenance = {"model": model.name, "parameters": used,
+                  "spectrum": None if spectrum is None else (spectrum if isinstance(spectrum, str)
+                                                             else [str(p) for p in spectrum]),
+                  "references": dict(model.references)}
+    return certify([A_plus, A_minus], names=["A_plus", "A_minus"], output=model.C, dwell=dwell, eps=eps,
+                   solvers=solvers, observer=observer, provenance=provenance)
