@@ -102,6 +102,15 @@ def test_aguado2020_table41_two_phase_shorter():
     assert "two-phase shorter on every road and speed: True" in str(res)
 
 
+def test_aguado2020_table41_two_phase_shorter_with_the_adaptive_observer_in_the_loop():
+    from switchobs.cli._simulate import make_estimator
+    res = table41(speeds_kmh=(60.0,), estimator_factory=lambda sc: make_estimator("adaptive", sc),
+                  observer="adaptive")
+    assert all(r.complete for r in res.rows) and res.two_phase_always_shorter
+    for row in res.rows:
+        assert row.two_phase_m == pytest.approx(TABLE41_SEED[(60.0, row.road)][1], rel=0.04)
+
+
 def test_braking_distance_definition_of_table41(dry60):
     m = dry60.metrics
     t, mu = dry60.series["t"], dry60.series["mu"]

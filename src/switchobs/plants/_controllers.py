@@ -276,7 +276,8 @@ class TwoPhaseABS:
     tracks ``z1* = -z_ref`` until it drops below ``chi_a``; the tracking law is
     ``u = (1/b)(-(a/vx) z1 z2 + (kp/vx)(z1 - z1*))`` (seed 001 eq. (4.3) with
     ``dz1*/dt = 0`` almost everywhere, Sec. 4.4).  A phase 0 builds the pressure
-    up at the driver's rate until the XBS first drops below ``chi_a``.
+    up at the driver's rate until the XBS first drops below ``chi_a`` (or the
+    wheel decelerates past ``start_decel_m_s2``).
 
     Parameters
     ----------
@@ -287,6 +288,10 @@ class TwoPhaseABS:
     kp : float
         Gain of (4.3) [m/s]; ``alpha = kp`` in the Poincaré analysis (Sec. 4.3).
     initial_rate_bar_s : float
+    start_decel_m_s2 : float, optional
+        Start-up safeguard (ours): phase 0 also ends when ``x2 <= -start_decel_m_s2``,
+        so that an observer that has not converged during the pressure build-up
+        (no excitation yet) cannot let the wheel lock; ``None`` disables it.
 
     Raises
     ------
@@ -299,6 +304,7 @@ class TwoPhaseABS:
     chi_b: float = 0.1
     kp: float = 3000.0
     initial_rate_bar_s: float = 1000.0
+    start_decel_m_s2: float | None = 110.0
 
     name = "two-phase"
     uses_xbs = True
@@ -306,6 +312,8 @@ class TwoPhaseABS:
     def __post_init__(self) -> None:
         _positive("two-phase ABS", z_ref=self.z_ref, kp=self.kp, initial_rate_bar_s=self.initial_rate_bar_s)
         _finite("two-phase ABS", chi_a=self.chi_a, chi_b=self.chi_b)
+        if self.start_decel_m_s2 is not None:
+            _positive("two-phase ABS", start_decel_m_s2=self.start_decel_m_s2)
         if not self.chi_a <= 0.0 < self.chi_b:
             raise SimulationError(
                 f"two-phase ABS thresholds out of order: need chi_a <= 0 < chi_b (seed 001 Sec. 4.2), "
@@ -323,7 +331,7 @@ class TwoPhaseABS:
 
 
 class _TwoPhaseRuntime:
-    __slots__ = ("phase", "a", "b", "r0", "z_ref", "chi_a", "chi_b", "kp")
+    __slots__ = ("phase", "a", "b", "r0", "z_ref", "chi_a", "chi_b", "kp", "start")
     guards_use_xbs = True
     deadline = math.inf
 
@@ -336,6 +344,7 @@ class _TwoPhaseRuntime:
         self.chi_a = cfg.chi_a
         self.chi_b = cfg.chi_b
         self.kp = cfg.kp
+        self.start = -cfg.start_decel_m_s2 if cfg.start_decel_m_s2 is not None else -math.inf
 
     def rate(self, t: float, x2: float, v_wheel: float, vx: float, xbs: float) -> float:
         p = self.phase
@@ -347,6 +356,8 @@ class _TwoPhaseRuntime:
     def guards(self, x2: float, xbs: float) -> tuple[float, ...]:
         if self.phase == 1:
             return (xbs - self.chi_b,)
+        if self.phase == 0:
+            return (self.chi_a - xbs, self.start - x2)
         return (self.chi_a - xbs,)
 
     def fire(self, t: float, index: int, x2: float, v_wheel: float, vx: float) -> None:

@@ -277,7 +277,8 @@ def braking_metrics(series: dict[str, npt.NDArray[np.float64]], scenario: Brakin
         a1 = assumption1(ta, series["x2"][sel], vx[sel], series["u"][sel], a=veh.a, b=veh.b)
         if have_estimate:
             err = series["xbs_hat"] - series["xbs"]
-            rms = float(np.sqrt(np.mean(err[sel] ** 2)))
+            with np.errstate(over="ignore", invalid="ignore"):
+                rms = float(np.sqrt(np.mean(err[sel] ** 2)))
             changes = scenario.roads.changes
             bounds = [t_abs] + [s + c.duration_s for s, c in zip(road_starts, changes)]
             labels = ["initial"] + [f"-> {c.road.name}" for c in changes[:len(road_starts)]]

@@ -58,7 +58,8 @@ def plot_braking(result: BrakingResult, path: str | Path) -> Path:
     axes[4].plot(t, s["xbs"], label="μ' (true)")
     if not np.all(np.isnan(s["xbs_hat"])):
         axes[4].plot(t, s["xbs_hat"], "--", label="μ' estimate")
-    lo, hi = np.nanpercentile(np.r_[s["xbs"], s["xbs_hat"]], [1, 97])
+    both = np.r_[s["xbs"], s["xbs_hat"]]
+    lo, hi = np.percentile(both[np.isfinite(both)], [1, 97])
     axes[4].set_ylim(lo - 0.5, hi + 0.5)
     axes[4].set_ylabel("XBS")
     axes[4].set_xlabel("t [s]")

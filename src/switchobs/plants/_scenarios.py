@@ -168,14 +168,21 @@ class Table41Row:
     seed_two_phase_m: float | None
     five_phase_stopping_m: float
     two_phase_stopping_m: float
+    five_phase_status: str = "stopped"
+    two_phase_status: str = "stopped"
 
     @property
     def difference_m(self) -> float:
         return self.two_phase_m - self.five_phase_m
 
     @property
+    def complete(self) -> bool:
+        """Both runs reached the stop speed (otherwise the distances describe a truncated run)."""
+        return self.five_phase_status == self.two_phase_status == "stopped"
+
+    @property
     def two_phase_shorter(self) -> bool:
-        return self.two_phase_m < self.five_phase_m
+        return self.complete and self.two_phase_m < self.five_phase_m
 
     def to_json(self) -> dict[str, Any]:
         return {"speed_kmh": self.speed_kmh, "road": self.road, "five_phase_m": self.five_phase_m,
@@ -184,7 +191,8 @@ class Table41Row:
                 "seed_difference_m": None if self.seed_five_phase_m is None else
                 round(self.seed_two_phase_m - self.seed_five_phase_m, 2),
                 "five_phase_stopping_m": self.five_phase_stopping_m,
-                "two_phase_stopping_m": self.two_phase_stopping_m, "two_phase_shorter": self.two_phase_shorter}
+                "two_phase_stopping_m": self.two_phase_stopping_m, "five_phase_status": self.five_phase_status,
+                "two_phase_status": self.two_phase_status, "two_phase_shorter": self.two_phase_shorter}
 
 
 @dataclass(frozen=True)
@@ -213,8 +221,9 @@ class Table41Result:
                  f"{'speed':>6} {'road':<17} {'five-phase':>17} {'two-phase':>17} {'difference':>17}"]
         for r in self.rows:
             sd = None if r.seed_five_phase_m is None else r.seed_two_phase_m - r.seed_five_phase_m
+            flag = "" if r.complete else f"  (runs: {r.five_phase_status}, {r.two_phase_status})"
             lines.append(f"{r.speed_kmh:6.0f} {r.road:<17} {r.five_phase_m:8.2f} |{seed(r.seed_five_phase_m)} "
-                         f"{r.two_phase_m:8.2f} |{seed(r.seed_two_phase_m)} {r.difference_m:8.2f} |{seed(sd)}")
+                         f"{r.two_phase_m:8.2f} |{seed(r.seed_two_phase_m)} {r.difference_m:8.2f} |{seed(sd)}{flag}")
         lines.append(f"two-phase shorter on every road and speed: {self.two_phase_always_shorter} "
                      f"(observer: {self.observer}; {self.wall_time_s:.1f} s wall)")
         return "\n".join(lines)
@@ -260,12 +269,13 @@ def table41(*, roads: Sequence[str] = TABLE41_ROADS, speeds_kmh: Sequence[float]
                 out.append(simulate(sc, estimator=est))
             seed = TABLE41_SEED.get((float(v), name))
             rows.append(Table41Row(speed_kmh=float(v), road=name,
-                                   five_phase_m=out[0].metrics.braking_distance_m,
-                                   two_phase_m=out[1].metrics.braking_distance_m,
+                                   five_phase_m=out[0].metrics.braking_distance_m or math.nan,
+                                   two_phase_m=out[1].metrics.braking_distance_m or math.nan,
                                    seed_five_phase_m=None if seed is None else seed[0],
                                    seed_two_phase_m=None if seed is None else seed[1],
                                    five_phase_stopping_m=out[0].metrics.stopping_distance_m,
-                                   two_phase_stopping_m=out[1].metrics.stopping_distance_m))
+                                   two_phase_stopping_m=out[1].metrics.stopping_distance_m,
+                                   five_phase_status=out[0].status, two_phase_status=out[1].status))
     return Table41Result(rows=tuple(rows), five_phase=five_phase, two_phase=two_phase, observer=observer,
                          wall_time_s=time.perf_counter() - t0)
 
