@@ -42,7 +42,12 @@ class XbsEstimator(Protocol):
         ...
 
     def update(self, t: float, y: float, vx: float, u: float, dt: float) -> float:
-        """Advance from ``t - dt`` to ``t`` and return the XBS estimate ``mu_hat'(t)``."""
+        """Advance from ``t - dt`` to ``t`` and return the XBS estimate ``mu_hat'(t)``.
+
+        May raise :class:`switchobs.exceptions.SimulationError` (e.g.
+        ``ObserverInputError``) to refuse a step; the simulation then stops with
+        status ``observer-failed`` (two-axle: drops that wheel's estimator).
+        """
         ...
 
 
@@ -52,8 +57,8 @@ class TrueXbs:
     Parameters
     ----------
     truth : callable
-        ``truth() -> float`` giving the plant's current ``mu'(lambda)``; the
-        simulation provides :meth:`switchobs.plants.BrakingSimulation.true_xbs`.
+        ``truth() -> float`` giving the plant's current ``mu'(lambda)``;
+        ``simulate(..., estimator="true")`` binds it to the simulated wheel.
 
     Examples
     --------

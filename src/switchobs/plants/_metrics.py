@@ -21,7 +21,6 @@ Definitions (all over the recorded samples, trapezoidal integrals):
 
 from __future__ import annotations
 
-import math
 from dataclasses import asdict, dataclass
 from typing import TYPE_CHECKING, Any
 

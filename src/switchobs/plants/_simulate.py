@@ -25,7 +25,6 @@ from __future__ import annotations
 import bisect
 import math
 import time
-from collections.abc import Sequence
 from dataclasses import dataclass, field, replace
 from typing import Any
 
@@ -37,9 +36,9 @@ from ._controllers import ContinuousXbsControl, Controller, FivePhaseABS, TwoPha
 from ._estimator import TrueXbs, XbsEstimator
 from ._hybrid import locate_event, rk4_step
 from ._metrics import BrakingMetrics, braking_metrics
-from ._road import RoadChange, RoadSchedule, _RoadState
+from ._road import RoadSchedule, _RoadState
 from ._tyre import Burckhardt
-from ._vehicle import GRAVITY, BrakeActuator, PrescribedSpeed, QuarterCar
+from ._vehicle import BrakeActuator, PrescribedSpeed, QuarterCar
 
 __all__ = ["BrakingScenario", "BrakingResult", "simulate", "SERIES"]
 
