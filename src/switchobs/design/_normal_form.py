@@ -63,6 +63,11 @@ class ObserverNormalForm:
     observability_conditions: tuple[sp.Basic, ...]
 
     @property
+    def is_identity(self) -> bool:
+        """True when the model is already in observer normal form (``T = I``)."""
+        return self.T == sp.eye(self.T.rows)
+
+    @property
     def A(self) -> sp.ImmutableMatrix:
         """The normal-form matrix ``T A T^-1``."""
         return normal_form_matrix(list(self.a))

@@ -11,6 +11,7 @@ e.g. the four inequalities of seed 000 (15) for n = 3.
 from __future__ import annotations
 
 from collections.abc import Sequence
+from functools import lru_cache
 
 import sympy as sp
 from sympy.polys.matrices import DomainMatrix
@@ -43,16 +44,25 @@ def hurwitz_determinants(alpha: Sequence[sp.Expr], orders: Sequence[int]) -> dic
     return out
 
 
+@lru_cache(maxsize=32)
+def _generic_conditions(n: int) -> tuple[tuple[sp.Symbol, ...], tuple[sp.Expr, ...]]:
+    alpha = sp.symbols(f"alpha_1:{n + 1}")
+    orders = list(range(n - 1, 1, -2))
+    dets = hurwitz_determinants(alpha, orders)
+    return alpha, (*alpha, *(dets[k] for k in sorted(orders)))
+
+
 def hurwitz_conditions(alpha: Sequence[sp.Expr]) -> list[sp.Expr]:
     """Expressions ``g_i`` such that the polynomial is Hurwitz iff every ``g_i > 0``.
 
     Returns ``[alpha_1, ..., alpha_n, Delta_(n-1), Delta_(n-3), ...]`` (Hurwitz
-    determinants of order >= 2 only; ``Delta_1 = alpha_1``).
+    determinants of order >= 2 only; ``Delta_1 = alpha_1``).  The determinants
+    are computed once per degree in generic coefficients and then substituted,
+    so large symbolic coefficients are never expanded.
     """
-    n = len(alpha)
-    orders = [k for k in range(n - 1, 1, -2)]
-    dets = hurwitz_determinants(alpha, orders)
-    return [*alpha, *(dets[k] for k in sorted(orders))]
+    generic, conditions = _generic_conditions(len(alpha))
+    subs = dict(zip(generic, (sp.sympify(a) for a in alpha)))
+    return [g.xreplace(subs) for g in conditions]
 
 
 def is_hurwitz_exact(alpha: Sequence[sp.Expr]) -> bool | None:
@@ -65,15 +75,16 @@ def is_hurwitz_exact(alpha: Sequence[sp.Expr]) -> bool | None:
     return None
 
 
-def readable_condition(g: sp.Expr, unknowns: Sequence[sp.Symbol] = (), *, max_ops: int = 400) -> sp.Basic:
+def readable_condition(g: sp.Expr, unknowns: Sequence[sp.Symbol] = (), *, max_ops: int = 80) -> sp.Basic:
     """Turn ``g > 0`` into a readable relational.
 
-    Positive factors are dropped, negative ones flip the inequality, and when
-    ``g`` is linear in one of ``unknowns`` (the gains, tried last to first)
-    with a coefficient of known sign, that unknown is isolated, as the seeds
-    write their Routh conditions (``k_3^+ < 0``, ``k_1^+ > c``).  Large
-    expressions (more than ``max_ops`` operations) are returned as ``g > 0``
-    untouched, because factoring them costs more than it clarifies.
+    Common factors of known sign are dropped (a negative one flips the
+    inequality), and when ``g`` is linear in one of ``unknowns`` (the gains,
+    tried last to first) with a coefficient of known sign, that unknown is
+    isolated, as the seeds write their Routh conditions (``k_3^+ < 0``,
+    ``k_1^+ > c``).  Expressions of more than ``max_ops`` operations are
+    returned as ``g > 0`` untouched: expanding and factoring them costs more
+    than it clarifies.
     """
     g = sp.sympify(g)
     if g.is_positive is True:
@@ -82,23 +93,21 @@ def readable_condition(g: sp.Expr, unknowns: Sequence[sp.Symbol] = (), *, max_op
         return sp.false
     if sp.count_ops(g) > max_ops:
         return sp.StrictGreaterThan(g, 0, evaluate=False)
-    g = sp.factor(sp.cancel(g))
     sign = 1
     kept = []
-    for factor in sp.Mul.make_args(g):
+    for factor in sp.Mul.make_args(sp.factor_terms(sp.cancel(g))):
         if factor.is_positive:
             continue
         if factor.is_negative:
             sign = -sign
             continue
         kept.append(factor)
-    core = sp.expand(sp.Mul(*kept))
-    num, den = sp.fraction(sp.cancel(core))
-    if den.is_positive is not True and den.is_negative is not True:
-        return sp.StrictGreaterThan(sign * core, 0, evaluate=False)
+    num, den = sp.fraction(sp.cancel(sp.Mul(*kept)))
     if den.is_negative:
         sign = -sign
-    core = sp.expand(num)
+    elif den.is_positive is not True:
+        return sp.StrictGreaterThan(sign * sp.Mul(*kept), 0, evaluate=False)
+    core = sp.expand(sign * num)
     for k in reversed(list(unknowns)):
         if k not in core.free_symbols:
             continue
@@ -106,10 +115,14 @@ def readable_condition(g: sp.Expr, unknowns: Sequence[sp.Symbol] = (), *, max_op
         if poly.degree() != 1:
             continue
         coef, rest = poly.all_coeffs()
-        coef_sign = (sign * coef).is_positive
-        if coef_sign is None:
+        if coef.is_positive is None and coef.is_negative is None:
             continue
-        bound = sp.factor(-rest / coef)
-        return sp.StrictGreaterThan(k, bound, evaluate=False) if coef_sign else \
+        bound = _tidy(-rest / coef)
+        return sp.StrictGreaterThan(k, bound, evaluate=False) if coef.is_positive else \
             sp.StrictLessThan(k, bound, evaluate=False)
-    return sp.StrictGreaterThan(sp.factor(sign * core), 0, evaluate=False)
+    return sp.StrictGreaterThan(_tidy(core), 0, evaluate=False)
+
+
+def _tidy(expr: sp.Expr, max_ops: int = 40) -> sp.Expr:
+    """Factor small expressions for display; leave larger ones alone (factoring is costly)."""
+    return sp.factor(expr) if sp.count_ops(expr) <= max_ops else sp.cancel(expr)
