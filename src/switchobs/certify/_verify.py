@@ -140,9 +140,13 @@ def _family(doc: Mapping[str, Any]) -> tuple[list[str], list[Matrix]]:
     names = fam.get("names") or [f"A_{i + 1}" for i in range(len(mats))]
     if len(names) != len(mats):
         raise CertificateError(f"'family.names' has {len(names)} names for {len(mats)} matrices")
-    first = fraction_matrix(mats[0], what=names[0])
-    n = len(first)
-    As = [fraction_matrix(M, what=str(nm), rows=n, cols=n) for M, nm in zip(mats, names)]
+    As = [fraction_matrix(M, what=str(nm)) for M, nm in zip(mats, names)]
+    n = len(As[0])
+    for nm, M in zip(names, As):
+        if len(M) != len(M[0]):
+            raise CertificateError(f"{nm} is not square ({len(M)}x{len(M[0])})")
+        if len(M) != n:
+            raise CertificateError(f"{nm} is {len(M)}x{len(M)} but {names[0]} is {n}x{n}")
     return [str(x) for x in names], As
 
 
