@@ -8,9 +8,7 @@ import pytest
 from switchobs.exceptions import SimulationError
 from switchobs.plants import (GRAVITY, TABLE41_SEED, BrakeActuator, BrakingScenario, ContinuousXbsControl,
                               FivePhaseABS, PrescribedSpeed, QuarterCar, RoadChange, RoadSchedule, TrueXbs,
-                              TwoPhaseABS, XbsEstimator, assumption1, road, scenario, simulate, table41,
-                              zero_crossings)
-from switchobs.plants import pe_level as pe
+                              TwoPhaseABS, XbsEstimator, assumption1, road, scenario, simulate, table41)
 
 
 def _braking(name="dry-asphalt", kmh=60.0, **kw):
@@ -234,17 +232,18 @@ def test_actuator_delay_and_rate_limit():
     assert first == pytest.approx(0.01, abs=2e-3)
 
 
-def test_assumption1_helpers_on_known_signals():
+def test_assumption1_on_known_signals():
     t = np.linspace(0.0, 2.0, 20001)
     y = 10.0 * np.sin(2 * np.pi * 5 * t)
-    times, slopes = zero_crossings(t, y)
-    np.testing.assert_allclose(times, np.arange(1, 20) * 0.1, atol=1e-6)
-    np.testing.assert_allclose(np.abs(slopes), 100 * np.pi, rtol=1e-3)
-    assert pe(t, y, 0.2) == pytest.approx(10.0, rel=1e-3)       # ∫ 100 sin² over 0.2 s
     st = assumption1(t, y, np.full_like(t, 20.0))
-    assert st.holds and st.dwell_time_s == pytest.approx(0.1, abs=1e-6) and st.crossings == 19
+    assert st.crossings == 19 and st.dwell_time_s == pytest.approx(0.1, abs=1e-6)
+    assert st.min_crossing_slope == pytest.approx(100 * np.pi, rel=1e-3)
+    assert st.pe_level == pytest.approx(10.0, rel=1e-3)          # ∫ 100 sin² over 0.2 s
     assert st.tau_final == pytest.approx(2 * 10 * 2 / np.pi / 20, rel=1e-3)
-    assert not assumption1(t, 1e-3 * y, np.full_like(t, 20.0)).holds
+    assert st.holds and st.regressor_pe is None
+    assert not assumption1(t, 1e-3 * y, np.full_like(t, 20.0)).holds       # PE level 1e-5 < 1
+    short = assumption1(t[:1000], y[:1000], np.full(1000, 20.0))             # 0.1 s < T0
+    assert short.pe_level is None and not short.holds
 
 
 @pytest.mark.parametrize("make, match", [

@@ -30,7 +30,7 @@ from ._poincare import PoincareFixedPoint, PoincareMap, simulate_return_map
 from ._two_axle import Accelerometer, TwoAxleResult, TwoAxleScenario, TwoAxleVehicle, simulate_two_axle
 from ._scenarios import (TABLE41_ROADS, aguado_sec36, TABLE41_SEED, TABLE41_SPEEDS_KMH, Table41Result, Table41Row, scenario,
                          scenario_description, scenario_names, scenario_observer, table41)
-from ._metrics import Assumption1Status, BrakingMetrics, Reconvergence, assumption1, pe_level, zero_crossings
+from ._metrics import Assumption1Status, BrakingMetrics, Reconvergence, assumption1
 from ._road import RoadChange, RoadSchedule
 from ._simulate import SERIES, BrakingResult, BrakingScenario, simulate
 from ._tyre import (D1_HOANG, D2_HOANG, ROADS, Burckhardt, ExponentialTyre, fit_exponential, relation19_alphas,
@@ -44,7 +44,7 @@ __all__ = [
     "FivePhaseABS", "TwoPhaseABS", "ContinuousXbsControl",
     "XbsEstimator", "TrueXbs",
     "BrakingScenario", "BrakingResult", "simulate", "SERIES",
-    "BrakingMetrics", "Assumption1Status", "Reconvergence", "assumption1", "pe_level", "zero_crossings",
+    "BrakingMetrics", "Assumption1Status", "Reconvergence", "assumption1",
     "scenario", "scenario_names", "scenario_observer", "scenario_description", "table41", "Table41Result",
     "Table41Row", "TABLE41_SEED", "TABLE41_ROADS", "TABLE41_SPEEDS_KMH", "plot_braking", "plot_table41",
     "PoincareMap", "PoincareFixedPoint", "simulate_return_map",

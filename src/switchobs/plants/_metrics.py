@@ -21,6 +21,7 @@ Definitions (all over the recorded samples, trapezoidal integrals):
 
 from __future__ import annotations
 
+import math
 from dataclasses import asdict, dataclass
 from typing import TYPE_CHECKING, Any
 
@@ -32,8 +33,7 @@ from ._vehicle import GRAVITY
 if TYPE_CHECKING:
     from ._simulate import BrakingScenario
 
-__all__ = ["BrakingMetrics", "Assumption1Status", "Reconvergence", "braking_metrics", "assumption1",
-           "pe_level", "zero_crossings", "regressor_pe"]
+__all__ = ["BrakingMetrics", "Assumption1Status", "Reconvergence", "braking_metrics", "assumption1"]
 
 #: Defaults of the Assumption 1 check.
 PE_WINDOW_S = 0.2
@@ -47,60 +47,6 @@ def _cumtrapz(t: npt.NDArray[np.float64], f: npt.NDArray[np.float64]) -> npt.NDA
     if len(t) > 1:
         out[1:] = np.cumsum(0.5 * (f[1:] + f[:-1]) * np.diff(t))
     return out
-
-
-def _window_min(t: npt.NDArray[np.float64], cum: npt.NDArray[np.float64], window: float) -> float | None:
-    """``min_t (F(t + window) - F(t))`` for a cumulative integral ``F`` sampled at ``t``."""
-    if len(t) < 2 or t[-1] - t[0] < window:
-        return None
-    starts = t[t <= t[-1] - window]
-    return float(np.min(np.interp(starts + window, t, cum) - np.interp(starts, t, cum)))
-
-
-def pe_level(t: npt.ArrayLike, y: npt.ArrayLike, window_s: float = PE_WINDOW_S) -> float | None:
-    """PE level of (3.17): ``min_t ∫_t^{t+T0} y(ς)² dς`` (None if the record is shorter than ``T0``)."""
-    t = np.asarray(t, dtype=float)
-    y = np.asarray(y, dtype=float)
-    return _window_min(t, _cumtrapz(t, y * y), window_s)
-
-
-def zero_crossings(t: npt.ArrayLike, y: npt.ArrayLike) -> tuple[npt.NDArray[np.float64], npt.NDArray[np.float64]]:
-    """Times of the sign changes of ``y`` (linear interpolation) and ``dy/dt`` there (3.18)."""
-    t = np.asarray(t, dtype=float)
-    y = np.asarray(y, dtype=float)
-    s = np.sign(y)
-    # a sample exactly at zero carries the previous sign, so a touch is one crossing, not two
-    nz = np.where(s != 0, np.arange(len(s)), 0)
-    s = s[np.maximum.accumulate(nz)]
-    idx = np.nonzero(s[:-1] * s[1:] < 0)[0]
-    t0, t1, y0, y1 = t[idx], t[idx + 1], y[idx], y[idx + 1]
-    times = t0 - y0 * (t1 - t0) / (y1 - y0)
-    slopes = (y1 - y0) / (t1 - t0)
-    return times, slopes
-
-
-def regressor_pe(t: npt.ArrayLike, y: npt.ArrayLike, vx: npt.ArrayLike, u: npt.ArrayLike, *, a: float,
-                 b: float, window_s: float = PSI_WINDOW_S) -> float | None:
-    """Smallest eigenvalue of ``∫_t^{t+T1} Ψᵀ Ψ`` over ``t`` (seed 001 eq. (3.7), Fig. 3.1).
-
-    ``Ψ = [[y²/vx, 0], [-(b/a) u, y/vx]]`` (eq. (3.3)), ``b = R γ_b / J``.
-    """
-    t = np.asarray(t, dtype=float)
-    y = np.asarray(y, dtype=float)
-    vx = np.asarray(vx, dtype=float)
-    u = np.asarray(u, dtype=float)
-    p, q, r = y * y / vx, -(b / a) * u, y / vx
-    if len(t) < 2 or t[-1] - t[0] < window_s:
-        return None
-    starts = t[t <= t[-1] - window_s]
-
-    def window(f: npt.NDArray[np.float64]) -> npt.NDArray[np.float64]:
-        cum = _cumtrapz(t, f)
-        return np.interp(starts + window_s, t, cum) - np.interp(starts, t, cum)
-
-    m11, m12, m22 = window(p * p + q * q), window(q * r), window(r * r)
-    eig_min = 0.5 * (m11 + m22 - np.sqrt((m11 - m22) ** 2 + 4.0 * m12 ** 2))
-    return float(np.min(eig_min))
 
 
 @dataclass(frozen=True)
@@ -122,7 +68,8 @@ class Assumption1Status:
     regressor_pe : float | None
         Smallest eigenvalue of the windowed ``∫ Ψᵀ Ψ`` (3.7), ``T1 = 1 s``.
     holds : bool
-        ``pe_level >= pe_min``, at least two crossings, and ``dwell_time_s >= dwell_min_s``.
+        ``pe_level >= pe_min``, transversal crossings (3.18), at least two of
+        them, and ``dwell_time_s >= dwell_min_s``.
     """
 
     pe_window_s: float
@@ -152,22 +99,43 @@ class Assumption1Status:
 def assumption1(t: npt.ArrayLike, y: npt.ArrayLike, vx: npt.ArrayLike, u: npt.ArrayLike | None = None, *,
                 a: float | None = None, b: float | None = None, pe_window_s: float = PE_WINDOW_S,
                 pe_min: float = PE_MIN, dwell_min_s: float = DWELL_MIN_S) -> Assumption1Status:
-    """Check Assumption 1 (seed 001 Sec. 3.2) on a sampled output ``y`` (the regressor PE needs ``u, a, b``)."""
+    """Check Assumption 1 (seed 001 Sec. 3.2) on a sampled output ``y`` of the ABS.
+
+    The measurements are those of :func:`switchobs.certify.trajectory_conditions`
+    with the time scale ``s = y / vx``; the regressor ``Ψ = [[y²/vx, 0], [-(b/a) u, y/vx]]``
+    of (3.3) is added when ``u, a, b`` are given (window ``T1 = 1 s``, Fig. 3.1).
+    Windows longer than the record give ``None``.
+    """
+    # imported here: switchobs.certify pulls in cvxpy (about a second), which a simulation without
+    # metrics does not need
+    from ..certify import trajectory_conditions
+
     t = np.asarray(t, dtype=float)
     y = np.asarray(y, dtype=float)
     vx = np.asarray(vx, dtype=float)
-    level = pe_level(t, y, pe_window_s)
-    times, slopes = zero_crossings(t, y)
-    dwell = float(np.min(np.diff(times))) if len(times) >= 2 else None
-    slope = float(np.min(np.abs(slopes))) if len(slopes) else None
-    tau = float(_cumtrapz(t, np.abs(y) / vx)[-1]) if len(t) else 0.0
+    duration = float(t[-1] - t[0]) if len(t) > 1 else 0.0
+    if duration <= 0.0:
+        return Assumption1Status(pe_window_s=pe_window_s, pe_level=None, crossings=0, dwell_time_s=None,
+                                 min_crossing_slope=None, tau_final=0.0, regressor_pe=None, pe_min=pe_min,
+                                 dwell_min_s=dwell_min_s, holds=False)
     psi = None
-    if u is not None and a is not None and b is not None:
-        psi = regressor_pe(t, y, vx, u, a=a, b=b)
-    holds = bool(level is not None and level >= pe_min and dwell is not None and dwell >= dwell_min_s)
-    return Assumption1Status(pe_window_s=pe_window_s, pe_level=level, crossings=int(len(times)),
-                             dwell_time_s=dwell, min_crossing_slope=slope, tau_final=tau, regressor_pe=psi,
-                             pe_min=pe_min, dwell_min_s=dwell_min_s, holds=holds)
+    if u is not None and a is not None and b is not None and duration >= PSI_WINDOW_S:
+        u = np.asarray(u, dtype=float)
+        psi = np.zeros((len(t), 2, 2))
+        psi[:, 0, 0] = y * y / vx
+        psi[:, 1, 0] = -(b / a) * u
+        psi[:, 1, 1] = y / vx
+    report = trajectory_conditions(t, y, window=min(pe_window_s, duration), vx=vx, psi=psi,
+                                   psi_window=PSI_WINDOW_S)
+    level = report.pe_level_y if duration >= pe_window_s else None
+    dwell = report.dwell_time_t if math.isfinite(report.dwell_time_t) else None
+    slope = report.min_abs_slope if math.isfinite(report.min_abs_slope) else None
+    holds = bool(level is not None and level >= pe_min and report.transversal and dwell is not None
+                 and dwell >= dwell_min_s)
+    return Assumption1Status(pe_window_s=pe_window_s, pe_level=level, crossings=len(report.crossings),
+                             dwell_time_s=dwell, min_crossing_slope=slope, tau_final=report.tau_final,
+                             regressor_pe=report.psi_pe_level, pe_min=pe_min, dwell_min_s=dwell_min_s,
+                             holds=holds)
 
 
 @dataclass(frozen=True)
