@@ -35,7 +35,10 @@ from ._lmi import DEFAULT_SOLVERS, SolveInfo, balance, solve
 from ._rounding import dyadic
 from ._verify import _check_dwell
 
-__all__ = ["DwellTimeResult", "dwell_time", "gc_margin"]
+__all__ = ["DwellTimeResult", "dwell_time", "gc_margin", "CERTIFY_ATTEMPTS"]
+
+#: Candidates ``tau_numeric * 1.1^k`` tried for the exact certificate (up to a factor of about 6.7).
+CERTIFY_ATTEMPTS = 20
 
 
 @dataclass(frozen=True)
@@ -51,6 +54,11 @@ class DwellTimeResult:
     certified : bool
     tau_lower : float
         Largest ``T`` found infeasible by the bisection (the LMI bound cannot go below it).
+    tau_numeric : float
+        Smallest ``T`` found feasible by the bisection (numerical LMI bound).  ``tau_D``
+        is the first of ``tau_numeric * 1.1^k`` (rounded up to 4 digits) whose rounded
+        ``P_p`` pass the exact check: near ``tau_numeric`` the margin is at the
+        solver's accuracy and rounding may break it.
     P : tuple of Matrix or None
         The exact ``P_p``.
     margin : float
@@ -66,6 +74,7 @@ class DwellTimeResult:
     tau_D: Fraction | None
     certified: bool
     tau_lower: float
+    tau_numeric: float
     P: tuple[Matrix, ...] | None
     margin: float
     solver: SolveInfo | None
@@ -84,7 +93,7 @@ class DwellTimeResult:
     def to_json(self) -> dict[str, Any]:
         return {"tau_D": None if self.tau_D is None else str(self.tau_D),
                 "tau_D_float": None if self.tau_D is None else float(self.tau_D),
-                "certified": self.certified, "tau_lower": self.tau_lower,
+                "certified": self.certified, "tau_lower": self.tau_lower, "tau_numeric": self.tau_numeric,
                 "P": None if self.P is None else [matrix_strings(P) for P in self.P],
                 "margin": self.margin, "iterations": self.iterations, "solve_s": self.solve_s,
                 "exact_s": self.exact_s, "detail": self.detail,
@@ -93,7 +102,8 @@ class DwellTimeResult:
     def __str__(self) -> str:
         if self.certified and self.tau_D is not None:
             return (f"dwell time (Geromel-Colaneri): tau_D = {self.tau_D} = {float(self.tau_D):.6g} certified exactly "
-                    f"(bisection: infeasible at {self.tau_lower:.6g}; {self.iterations} LMI solves)")
+                    f"(LMI bound {self.tau_numeric:.6g}, infeasible at {self.tau_lower:.6g}; "
+                    f"{self.iterations} LMI solves)")
         return f"dwell time (Geromel-Colaneri): not certified ({self.detail})"
 
 
@@ -185,8 +195,8 @@ def dwell_time(family: FamilyLike, *, names: Sequence[str] | None = None, eps: f
             last = res
             break
         if hi >= limit:
-            return DwellTimeResult(fam, None, False, hi / bal.sigma, None, res[1], res[2], iterations, solve_s, 0.0,
-                                   f"the LMIs are infeasible up to tau = {hi / bal.sigma:.4g}")
+            return DwellTimeResult(fam, None, False, hi / bal.sigma, np.inf, None, res[1], res[2], iterations,
+                                   solve_s, 0.0, f"the LMIs are infeasible up to tau = {hi / bal.sigma:.4g}")
         hi = min(2 * hi, limit)
     lo = 0.0
     while hi - lo > rel_tol * hi and hi > 1e-9:
@@ -199,18 +209,19 @@ def dwell_time(family: FamilyLike, *, names: Sequence[str] | None = None, eps: f
         else:
             lo = mid
     t0 = time.perf_counter()
-    tau = _round_up(hi / bal.sigma)
     detail = ""
-    for _ in range(4):
+    for k in range(CERTIFY_ATTEMPTS):
+        tau = _round_up(hi / bal.sigma * 1.1 ** k)
         Ps_b, t, info = gc_margin(mats, float(tau) * bal.sigma, solvers=solvers)
         iterations += 1
-        if t > eps:
-            Ps = [dyadic(P / np.outer(bal.d, bal.d)) for P in Ps_b]
-            check = _check_dwell(fam.names, fam.exact, {"tau_D": str(tau), "P": Ps})
-            if check.holds:
-                return DwellTimeResult(fam, tau, True, lo / bal.sigma, tuple(Ps), t, info, iterations, solve_s,
-                                       time.perf_counter() - t0)
-            detail = check.detail
-        tau = _round_up(float(tau) * 1.05)
-    return DwellTimeResult(fam, None, False, lo / bal.sigma, None, 0.0, last[2] if last else None, iterations,
-                           solve_s, time.perf_counter() - t0, detail or "the rounded P_p fail the exact check")
+        if t <= eps:
+            continue
+        Ps = [dyadic(P / np.outer(bal.d, bal.d), 52) for P in Ps_b]
+        check = _check_dwell(fam.names, fam.exact, {"tau_D": str(tau), "P": Ps})
+        if check.holds:
+            return DwellTimeResult(fam, tau, True, lo / bal.sigma, hi / bal.sigma, tuple(Ps), t, info, iterations,
+                                   solve_s, time.perf_counter() - t0)
+        detail = check.detail
+    return DwellTimeResult(fam, None, False, lo / bal.sigma, hi / bal.sigma, None, 0.0,
+                           last[2] if last else None, iterations, solve_s, time.perf_counter() - t0,
+                           f"no rounded P_p passed the exact check up to tau = {float(tau):.4g} ({detail})")

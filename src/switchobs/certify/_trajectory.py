@@ -68,7 +68,7 @@ def time_rescaling(t: Any, s: Any) -> np.ndarray:
 
     Examples
     --------
-    >>> time_rescaling([0, 1, 2], [1, -1, -1])[-1]
+    >>> float(time_rescaling([0, 1, 2], [1, -1, -1])[-1])
     1.5
     """
     tt = _time(t)
@@ -513,5 +513,7 @@ def admissible_constants(model: Model, *, bounds: Mapping[str, Sequence[float]],
         up = scipy.integrate.quad(abs_s_min, 0.0, max(y_hi, 0.0), limit=200)[0] if y_hi > 0 else 0.0
         down = scipy.integrate.quad(abs_s_min, min(y_lo, 0.0), 0.0, limit=200)[0] if y_lo < 0 else 0.0
         T_tau = 2 * min(up, down) / v
-    return AdmissibleConstants(a0=a0, d0=d0, s0=s0, b0=b0, b1=b1, alpha=alpha, beta=beta, epsilon=float(epsilon),
-                               dwell_time_t=T_t, dwell_time_tau=T_tau, b_sign=b_sign)
+    return AdmissibleConstants(a0=float(a0), d0=float(d0), s0=float(s0), b0=float(b0), b1=float(b1),
+                               alpha=float(alpha), beta=None if beta is None else float(beta),
+                               epsilon=float(epsilon), dwell_time_t=None if T_t is None else float(T_t),
+                               dwell_time_tau=None if T_tau is None else float(T_tau), b_sign=b_sign)
