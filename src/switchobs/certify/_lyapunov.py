@@ -396,6 +396,10 @@ def infeasibility_certificate(family: FamilyLike, *, names: Sequence[str] | None
         if proj is None:
             continue
         Rs, S = proj
+        top = max(R[i][i] for R in Rs for i in range(len(R)))
+        if top > 0:  # the alternative is homogeneous: show R with largest diagonal entry 1
+            Rs = [[[x / top for x in row] for row in R] for R in Rs]
+            S = [[x / top for x in row] for row in S]
         kind = "no-strict-cqlf" if all(x == 0 for row in S for x in row) else "no-common-lyapunov"
         check = _check_dual(fam.names, fam.exact, {"kind": kind, "R": Rs}, kind=kind)
         if check.holds:
