@@ -46,7 +46,7 @@ from pathlib import Path
 from typing import Any
 
 from ..exceptions import CertificateError
-from ._exact import (Matrix, add, definiteness, expm_enclosure, fraction_matrix, identity, inf_norm,
+from ._exact import (Matrix, add, definiteness, expm_enclosure, fraction_matrix, inf_norm,
                      integer_form, is_zero, lyapunov_form, matmul, observable, scale, sqrt_upper, sub,
                      transpose)
 
