@@ -9,7 +9,7 @@ import sympy as sp
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from switchobs.certify import classify_planar, strict_common_lyapunov
+from switchobs.certify import classify_planar, common_lyapunov, strict_common_lyapunov
 from switchobs.exceptions import DimensionError, NotHurwitzError
 
 LIBERZON = ([["-0.1", -1], [2, "-0.1"]], [["-0.1", -2], [1, "-0.1"]])   # unstable under fast switching
@@ -90,6 +90,8 @@ def test_classification_agrees_with_the_strict_lmi(mats):
     else:
         assert not strict.certified
         assert strict.dual is not None and strict.dual.certified
+    if res.stability == "unbounded":  # BBM (i) or (iv) with R > 1: not even a non-strict common P
+        assert not common_lyapunov(mats).certified
 
 
 def test_bad_input():
