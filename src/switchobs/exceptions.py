@@ -22,6 +22,7 @@ __all__ = [
     "SimulationError",
     "ObserverInputError",
     "CodegenError",
+    "PrerequisiteError",
 ]
 
 
@@ -84,3 +85,7 @@ class ObserverInputError(SimulationError):
 
 class CodegenError(SwitchobsError, RuntimeError):
     """C code generation or compilation failed."""
+
+
+class PrerequisiteError(SwitchobsError, RuntimeError):
+    """A pipeline stage cannot start: a package does not import or a tool (C compiler) is missing."""

@@ -1,0 +1,496 @@
+"""The main job end to end: design, certify, export to C, brake a car with the C observer in the loop, report.
+
+Stages (``switchobs demo``, ``make demo``):
+
+1. **rig** -- the built-in models abs-xbs3 (seed 000 eq. (7)) and abs-xbs4
+   (eq. (20)) with the TU Delft rig of seed 000 Fig. 2 (``I = 1.2``,
+   ``R = 0.3``, ``Fz = 2500``, ``gamma_b = 17.5``, ``c = 34``):
+   ``a = R^2 Fz / I``, ``b = -R gamma_b / I``.
+2. **design** -- symbolic gains for the spectra of seed 000 Sec. III-E / IV-D
+   (``-beta1,-beta2,-beta2`` and ``-beta1,-beta1,-beta2,-beta2``, Theorem 1 of
+   seed 004 for ``K_minus``), re-checked exactly (:meth:`GainDesign.verify`),
+   evaluated at ``beta1 = beta2 = 100`` (``docs/observers.md``).
+3. **certify** -- LMIs and dwell time re-checked in exact arithmetic
+   (:func:`switchobs.certify.certify_model`); the certificate is written to
+   JSON and checked again from the file by :func:`switchobs.certify.verify_certificate`,
+   the function behind ``switchobs verify``.
+4. **codegen** -- C99 observers (:func:`switchobs.codegen.generate_observer`),
+   compiled, compared with the Python reference observers and timed.
+5. **braking** -- the quarter car of seed 001 (2.1) on the Table I roads of
+   seed 000, dry -> wet -> snow, five-phase ABS with wheel-acceleration
+   tracking (21)-(22), the generated C 4D observer in the loop, fed by a
+   60-ppr encoder with three-stage compensation
+   (:class:`switchobs.report.EncoderLoopEstimator`).
+6. **report** -- ``report.md``, ``report.json`` and the figures.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import time
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import numpy.typing as npt
+
+from ..exceptions import SimulationError
+from ._progress import Progress, Stage, check_prerequisites
+
+__all__ = ["DEMO_BETAS", "DEMO_MODELS", "DemoSettings", "DemoReport", "ModelResult", "BrakingSummary",
+           "ErrorRow", "run_demo", "demo_scenario", "STAGES"]
+
+Array = npt.NDArray[np.float64]
+
+#: beta1 = beta2 = 100: the defaults docs/observers.md recommends for the quarter car at 1 ms.
+DEMO_BETAS: Mapping[str, int] = {"beta1": 100, "beta2": 100}
+#: The built-in models of the demo and their symbolic spectra (seed 000 Sec. III-E and IV-D).
+DEMO_MODELS: tuple[tuple[str, str], ...] = (("abs-xbs3", "-beta1,-beta2,-beta2"),
+                                           ("abs-xbs4", "-beta1,-beta1,-beta2,-beta2"))
+#: ``c = -c2 = 34`` of the rig in seed 000 (the value of the abs-xbs3 model file).
+RIG_C = 34
+
+STAGES: tuple[Stage, ...] = (
+    Stage("rig", ("sympy", "switchobs.model", "switchobs.plants")),
+    Stage("design", ("sympy", "switchobs.design")),
+    Stage("certify", ("cvxpy", "clarabel", "switchobs.certify")),
+    Stage("codegen", ("casadi", "switchobs.codegen", "switchobs.observers"), compiler=True),
+    Stage("braking", ("numpy", "scipy", "switchobs.plants", "switchobs.sensors", "switchobs.observers")),
+    Stage("report", ("matplotlib",)),
+)
+
+
+@dataclass(frozen=True)
+class DemoSettings:
+    """The braking scenario and chain of the demo (defaults: the full run; :meth:`fast` for CI).
+
+    Attributes
+    ----------
+    fast : bool
+    speed_m_s : float
+        Initial speed (40 m/s = 144 km/h).
+    wet_at_s, snow_at_s : float
+        Road changes (25 ms transitions, seed 000 Sec. IV-D).
+    stop_speed_m_s : float
+        The run ends at 10 km/h, where an ABS hands back to the driver.
+    duration_s : float
+        Bound on the simulated time (fast mode ends shortly after the change to snow).
+    encoder_ppr, dnl_cycles, eccentricity, clock_hz, encoder_seed : encoder (docs/encoders.md defaults)
+    tsa_window, harmonics : TSA window ``n`` and harmonics ``M`` (seed 001: 15 and 5)
+    timing_steps : int
+        Steps of the C ``_run`` timing.
+    """
+
+    fast: bool = False
+    speed_m_s: float = 40.0
+    wet_at_s: float = 1.5
+    snow_at_s: float = 3.0
+    stop_speed_m_s: float = 10.0 / 3.6
+    duration_s: float = 30.0
+    encoder_ppr: int = 60
+    dnl_cycles: float = 0.01
+    eccentricity: float = 0.003
+    clock_hz: float = 1e6
+    encoder_seed: int = 1
+    tsa_window: int = 15
+    harmonics: int = 5
+    timing_steps: int = 200_000
+
+    @classmethod
+    def for_mode(cls, fast: bool) -> DemoSettings:
+        return cls(fast=True, duration_s=3.6, timing_steps=20_000) if fast else cls()
+
+    def to_json(self) -> dict[str, Any]:
+        return dict(self.__dict__)
+
+
+@dataclass(frozen=True)
+class ModelResult:
+    """Design, certificate and C code of one model."""
+
+    model: str
+    spectrum: str
+    K_plus_symbolic: tuple[str, ...]
+    K_minus_symbolic: tuple[str, ...]
+    exact_checks: Mapping[str, bool]
+    K_plus: tuple[float, ...]
+    K_minus: tuple[float, ...]
+    spectral_radius: float
+    certificate: str
+    certified: bool
+    verdict: str
+    verified: bool
+    verification: tuple[tuple[str, bool], ...]
+    c_prefix: str = ""
+    c_files: tuple[str, ...] = ()
+    c_run_ns: float = math.nan
+    c_step_us: float = math.nan
+    c_vs_python: float = math.nan
+
+    def to_json(self) -> dict[str, Any]:
+        out = dict(self.__dict__)
+        out["exact_checks"] = dict(self.exact_checks)
+        out["verification"] = [list(v) for v in self.verification]
+        return {k: (list(v) if isinstance(v, tuple) else v) for k, v in out.items()}
+
+
+@dataclass(frozen=True)
+class ErrorRow:
+    """RMS / median / 90th percentile of ``|XBS estimate - XBS|`` on one road segment."""
+
+    estimator: str
+    segment: str
+    rms: float
+    median: float
+    p90: float
+    rms_settled: float
+
+    def to_json(self) -> dict[str, Any]:
+        return dict(self.__dict__)
+
+
+@dataclass(frozen=True)
+class BrakingSummary:
+    """What the braking stage measured."""
+
+    scenario: str
+    status: str
+    stop_time_s: float | None
+    stopping_distance_m: float
+    braking_distance_m: float | None
+    mean_friction: float
+    abs_activation_s: float | None
+    abs_cycles: int
+    slip_mean: float | None
+    errors: tuple[ErrorRow, ...]
+    x2_rms: Mapping[str, Mapping[str, float]]
+    omega_reconstruction_max: float
+    lag_mean_ms: float
+    encoder_events: int
+    max_substeps: int
+    reference_segments: int
+    wall_time_s: float
+
+    def to_json(self) -> dict[str, Any]:
+        out = dict(self.__dict__)
+        out["errors"] = [e.to_json() for e in self.errors]
+        out["x2_rms"] = {k: dict(v) for k, v in self.x2_rms.items()}
+        return out
+
+
+@dataclass(frozen=True)
+class DemoReport:
+    """Everything the demo produced (``report.md`` is its readable form)."""
+
+    out_dir: str
+    settings: DemoSettings
+    models: tuple[ModelResult, ...]
+    braking: BrakingSummary
+    files: tuple[str, ...]
+    timings: Mapping[str, float] = field(default_factory=dict)
+
+    @property
+    def ok(self) -> bool:
+        """Every exact check, certificate and re-verification holds and the car stopped (or ran its time)."""
+        return (all(all(m.exact_checks.values()) and m.certified and m.verified for m in self.models)
+                and self.braking.status in ("stopped", "duration"))
+
+    def to_json(self) -> dict[str, Any]:
+        return {"out_dir": self.out_dir, "ok": self.ok, "settings": self.settings.to_json(),
+                "models": [m.to_json() for m in self.models], "braking": self.braking.to_json(),
+                "files": list(self.files), "timings": dict(self.timings)}
+
+    def __str__(self) -> str:
+        lines = [f"switchobs demo ({'fast' if self.settings.fast else 'full'}): report in {self.out_dir}"]
+        for m in self.models:
+            lines.append(f"  {m.model}: exact checks {'ok' if all(m.exact_checks.values()) else 'FAILED'}; "
+                         f"certificate {'verified' if m.verified else 'NOT verified'}: {m.verdict}; "
+                         f"C step {m.c_run_ns:.0f} ns")
+        b = self.braking
+        dist = "n/a" if b.braking_distance_m is None else f"{b.braking_distance_m:.1f} m"
+        lines.append(f"  braking: {b.status}, stopping distance {b.stopping_distance_m:.1f} m, braking distance "
+                     f"(Table 4.1 definition) {dist}")
+        for e in b.errors:
+            if e.segment == "whole run":
+                lines.append(f"  XBS error, {e.estimator}: median {e.median:.3f}, RMS {e.rms:.3f}")
+        lines.append(f"  {'all checks hold' if self.ok else 'SOME CHECKS FAILED'}")
+        return "\n".join(lines)
+
+
+def demo_scenario(settings: DemoSettings):  # noqa: ANN201 - BrakingScenario, imported lazily
+    """The braking scenario of the demo: dry -> wet -> snow (seed 000 Table I), five-phase ABS with tracking."""
+    from ..plants import BrakingScenario, FivePhaseABS, QuarterCar, RoadChange, RoadSchedule
+
+    roads = RoadSchedule("hoang-dry", [RoadChange("hoang-wet", at_time_s=settings.wet_at_s, duration_s=0.025),
+                                       RoadChange("hoang-snow", at_time_s=settings.snow_at_s, duration_s=0.025)])
+    return BrakingScenario(roads, speed_m_s=settings.speed_m_s, name="demo", vehicle=QuarterCar.hoang2014(),
+                           controller=FivePhaseABS(tracking=True, stall_timeout_s=0.1),
+                           duration_s=settings.duration_s, stop_speed_m_s=settings.stop_speed_m_s)
+
+
+# ---------------------------------------------------------------------- stages
+def _rig_models() -> dict[str, Any]:
+    from ..model import builtin_model
+    from ..plants import QuarterCar
+
+    rig = QuarterCar.hoang2014()
+    values = {"a": rig.a, "b": -rig.b}      # seed 000 writes b = -R gamma_b / I with +b u
+    models = {}
+    for name, _ in DEMO_MODELS:
+        model = builtin_model(name)
+        for key, value in values.items():
+            stored = float(model.values[key])
+            if not math.isclose(stored, value, rel_tol=1e-12):
+                raise SimulationError(f"model {name}: stored {key} = {stored} differs from the rig's {value}")
+        models[name] = model
+    if float(models["abs-xbs3"].values["c"]) != RIG_C:
+        raise SimulationError(f"abs-xbs3 stores c = {models['abs-xbs3'].values['c']}, the rig has c = {RIG_C}")
+    return models
+
+
+def _design(model: Any, spectrum: str) -> tuple[Any, dict[str, np.ndarray]]:
+    from ..design import design
+
+    d = design(model, spectrum)
+    return d, d.numeric(dict(DEMO_BETAS))
+
+
+def _exact_gains(d: Any) -> tuple[list[str], list[str]]:
+    """The designed gains at the rig values and the demo betas, as exact rationals."""
+    import sympy as sp
+
+    subs = {**{d.model.symbols[k]: v for k, v in d.model.values.items()},
+            **{s: sp.Integer(DEMO_BETAS[s.name]) for s in d.design_symbols}}
+    return [str(k.subs(subs)) for k in d.K_plus], [str(k.subs(subs)) for k in d.K_minus]
+
+
+def _certify(model: Any, d: Any, out: Path) -> dict[str, Any]:
+    from ..certify import certify_model, verify_certificate
+
+    K_plus, K_minus = _exact_gains(d)
+    report = certify_model(model, K_plus=K_plus, K_minus=K_minus)
+    path = out / f"certificate-{model.name}.json"
+    report.write(path)
+    check = verify_certificate(path)          # from the file, as `switchobs verify` does
+    return {"path": path, "certified": report.certified, "verdict": report.text, "verified": check.holds,
+            "checks": tuple((c.name, c.holds) for c in check.checks)}
+
+
+def _abs_like_rows(n: int) -> np.ndarray:
+    """ABS-like signals (y, vx, u) at 1 kHz for timing and the C-vs-Python comparison."""
+    t = np.arange(n) * 1e-3
+    return np.column_stack([30.0 * np.sin(2 * np.pi * 6 * (t % 10)), 30.0 - 0.5 * (t % 10),
+                            400.0 * np.cos(2 * np.pi * 6 * (t % 10))])
+
+
+def _codegen(model: Any, d: Any, numeric: dict[str, np.ndarray], out: Path, settings: DemoSettings) -> dict[str, Any]:
+    from ..codegen import compile_observer, generate_observer
+    from ..observers import SwitchedObserver
+
+    gen = generate_observer(model, d, values=dict(DEMO_BETAS),
+                            command=f"switchobs demo (spectrum {dict(DEMO_MODELS)[model.name]}, beta1 = beta2 = 100)")
+    target = out / "c" / gen.prefix
+    target.mkdir(parents=True, exist_ok=True)
+    gen.write(target)
+    z2 = gen.state_names.index("z2")
+    c_obs = compile_observer(gen, readout=lambda x, i=z2: np.asarray(x)[..., i])
+    ref = SwitchedObserver(model, numeric["K_plus"], numeric["K_minus"], readout="z2")
+    rows = _abs_like_rows(2000)
+    x0 = np.zeros(model.n)
+    x0[1] = 0.5
+    c_traj, py_traj = c_obs.run(x0, rows, 1e-3), ref.run(x0, rows, 1e-3)
+    diff = float(np.max(np.abs(c_traj - py_traj)) / max(np.max(np.abs(py_traj)), 1e-300))
+    timing_rows = _abs_like_rows(settings.timing_steps)
+    best = math.inf
+    for _ in range(3):
+        t0 = time.perf_counter()
+        c_obs.run(x0, timing_rows, 1e-3)
+        best = min(best, time.perf_counter() - t0)
+    calls = 2000
+    t0 = time.perf_counter()
+    x = x0
+    for row in rows[:calls]:
+        x = c_obs.step(x, row, 1e-3)
+    step_us = (time.perf_counter() - t0) / calls * 1e6
+    return {"observer": c_obs, "prefix": gen.prefix,
+            "files": tuple(str(target / name) for name in sorted(gen.files)),
+            "run_ns": best / settings.timing_steps * 1e9, "step_us": step_us, "c_vs_python": diff}
+
+
+def _braking(c_observers: dict[str, Any], spectral_radius: float, settings: DemoSettings) -> tuple[Any, Any, Any]:
+    from ..observers import ObserverXbsEstimator
+    from ..plants import simulate
+    from ..sensors import Encoder
+    from ._encoder_loop import EncoderLoopEstimator
+
+    sc = demo_scenario(settings)
+    encoder = Encoder(ppr=settings.encoder_ppr, dnl_cycles=settings.dnl_cycles, eccentricity=settings.eccentricity,
+                      clock_hz=settings.clock_hz, seed=settings.encoder_seed)
+    estimator = EncoderLoopEstimator(
+        [("xbs4 (C), encoder, in the loop", c_observers["abs-xbs4"], {"z2": 0.5}),
+         ("xbs3 (C, c = 34), encoder, beside", c_observers["abs-xbs3"], {"z2": 0.5})],
+        spectral_radius=spectral_radius, encoder=encoder, radius_m=sc.vehicle.radius_m,
+        window=settings.tsa_window, harmonics=settings.harmonics,
+        beside=[("xbs4 (C), exact x2, beside", ObserverXbsEstimator(c_observers["abs-xbs4"],
+                                                                     initial_state={"z2": 0.5}))])
+    result = simulate(sc, estimator=estimator)
+    return sc, result, estimator.record()
+
+
+def _segments(sc: Any, t_end: float, t_abs: float) -> list[tuple[str, float, float]]:
+    starts = [t_abs] + [c.at_time_s for c in sc.roads.changes]
+    names = [sc.roads.initial.name] + [c.road.name for c in sc.roads.changes]
+    ends = starts[1:] + [t_end]
+    segs = [(n, a, b) for n, a, b in zip(names, starts, ends) if b > a]
+    return segs + [("whole run", t_abs, t_end)]
+
+
+def _error_rows(label: str, t: Array, err: Array, segs: list[tuple[str, float, float]],
+                changes: Sequence[float]) -> list[ErrorRow]:
+    rows = []
+    settled = np.ones(t.size, dtype=bool)
+    for tc in changes:       # the transients after a road change (seed 000 Fig. 3: "highly perturbed")
+        settled &= ~((t >= tc) & (t < tc + 0.25))
+    for name, a, b in segs:
+        sel = (t >= a) & (t < b) & np.isfinite(err)
+        if not np.any(sel):
+            continue
+        e = np.abs(err[sel])
+        es = np.abs(err[sel & settled])
+        rows.append(ErrorRow(label, name, float(np.sqrt(np.mean(e ** 2))), float(np.median(e)),
+                             float(np.percentile(e, 90)),
+                             float(np.sqrt(np.mean(es ** 2))) if es.size else math.nan))
+    return rows
+
+
+def _summarise(sc: Any, result: Any, record: Any, wall: float) -> BrakingSummary:
+    from ._reference import tracking_reference
+
+    s = result.series
+    m = result.metrics
+    t_abs = m.abs_activation_s if m.abs_activation_s is not None else 0.0
+    segs = _segments(sc, float(s["t"][-1]), t_abs)
+    changes = [c.at_time_s for c in sc.roads.changes]
+    errors: list[ErrorRow] = []
+    for label, est in record.estimates.items():
+        errors += _error_rows(label, record.t, est - np.interp(record.t, s["t"], s["xbs"]), segs, changes)
+    for label, est in record.beside.items():
+        errors += _error_rows(label, record.steps_t, est - np.interp(record.steps_t, s["t"], s["xbs"]), segs,
+                              changes)
+    ok = np.isfinite(record.t_measured)
+    x2_at = np.interp(record.t_measured[ok], s["t"], s["x2"])
+    x2_rms: dict[str, dict[str, float]] = {}
+    for label, series in (("raw TSA", record.x2_tsa), ("three-stage", record.x2_measured)):
+        x2_rms[label] = {}
+        for name, a, b in segs:
+            sel = (record.t[ok] >= a) & (record.t[ok] < b)
+            if np.any(sel):
+                x2_rms[label][name] = float(np.sqrt(np.mean((series[ok][sel] - x2_at[sel]) ** 2)))
+    omega_true = np.interp(record.steps_t, s["t"], s["omega"])
+    ref, _ = tracking_reference(result)
+    tracked = np.isfinite(ref)
+    reference_segments = int(np.count_nonzero(tracked[1:] & ~tracked[:-1]) + (1 if tracked[0] else 0))
+    return BrakingSummary(
+        scenario=str(sc), status=result.status, stop_time_s=m.stop_time_s,
+        stopping_distance_m=m.stopping_distance_m, braking_distance_m=m.braking_distance_m,
+        mean_friction=m.mean_friction, abs_activation_s=m.abs_activation_s, abs_cycles=m.abs_cycles,
+        slip_mean=m.slip_mean, errors=tuple(errors), x2_rms=x2_rms,
+        omega_reconstruction_max=float(np.max(np.abs(omega_true - record.omega_steps))),
+        lag_mean_ms=float(np.nanmean(record.lag_s) * 1e3), encoder_events=record.events,
+        max_substeps=int(record.substeps.max()), reference_segments=reference_segments, wall_time_s=wall)
+
+
+# ---------------------------------------------------------------------- driver
+def run_demo(out_dir: str | Path = "out/demo", *, fast: bool = False,
+             progress: Progress | None = None) -> DemoReport:
+    """Run the demo and write its report.
+
+    Parameters
+    ----------
+    out_dir : path
+        Created if needed; receives ``report.md``, ``report.json``, the
+        certificates, the generated C sources and the figures.
+    fast : bool
+        Shorter braking (ends shortly after the change to snow) and a shorter
+        C timing: for CI.
+    progress : Progress, optional
+        Stage lines on stderr (default) or quiet (``Progress(6, stream=None)``).
+
+    Returns
+    -------
+    DemoReport
+
+    Raises
+    ------
+    PrerequisiteError
+        Before anything runs, if a stage's package does not import or no C compiler is found.
+    SwitchobsError
+        If a stage fails on purpose (e.g. the compiler rejects the code).
+
+    References
+    ----------
+    seed 000 eq. (7), (20), (21)-(22), Sec. III-E, IV-D, Figs. 2-4, Table I; seed 001 (2.1), Ch. 5-6;
+    seed 004 Theorem 1.
+    """
+    settings = DemoSettings.for_mode(fast)
+    progress = progress if progress is not None else Progress(len(STAGES))
+    check_prerequisites(STAGES)
+    out = Path(out_dir)
+    out.mkdir(parents=True, exist_ok=True)
+
+    with progress.stage("rig", "built-in models abs-xbs3, abs-xbs4 with the TU Delft rig of seed 000"):
+        models = _rig_models()
+    designs: dict[str, Any] = {}
+    with progress.stage("design", "symbolic K+ / K- (Theorem 1), exact re-check"):
+        for name, spectrum in DEMO_MODELS:
+            designs[name] = _design(models[name], spectrum)
+            progress.note(f"{name}: K+ = [{', '.join(map(str, designs[name][0].K_plus))}]")
+    certs: dict[str, dict[str, Any]] = {}
+    with progress.stage("certify", "LMIs + exact re-check, certificate JSON re-verified from the file"):
+        for name, _ in DEMO_MODELS:
+            certs[name] = _certify(models[name], designs[name][0], out)
+            progress.note(f"{name}: {'verified' if certs[name]['verified'] else 'NOT verified'}")
+    code: dict[str, dict[str, Any]] = {}
+    with progress.stage("codegen", "C99 observers, compiled, compared with Python, timed"):
+        for name, _ in DEMO_MODELS:
+            code[name] = _codegen(models[name], *designs[name], out, settings)
+            progress.note(f"{name}: {code[name]['prefix']}, {code[name]['run_ns']:.0f} ns per step")
+    rho = max(float(np.max(np.abs(np.linalg.eigvals(designs[n][1][k])))) for n, _ in DEMO_MODELS
+              for k in ("A_plus", "A_minus"))
+    with progress.stage("braking", "dry -> wet -> snow, encoder chain, C observer in the loop"):
+        t0 = time.perf_counter()
+        sc, result, record = _braking({n: c["observer"] for n, c in code.items()}, rho, settings)
+        braking = _summarise(sc, result, record, time.perf_counter() - t0)
+        progress.note(f"{result.status}, {float(result.series['t'][-1]):.2f} s simulated, "
+                      f"{record.events} encoder edges")
+    model_results = tuple(
+        ModelResult(model=name, spectrum=spectrum,
+                    K_plus_symbolic=tuple(str(k) for k in designs[name][0].K_plus),
+                    K_minus_symbolic=tuple(str(k) for k in designs[name][0].K_minus),
+                    exact_checks=designs[name][0].verify(),
+                    K_plus=tuple(float(k) for k in designs[name][1]["K_plus"]),
+                    K_minus=tuple(float(k) for k in designs[name][1]["K_minus"]),
+                    spectral_radius=rho, certificate=str(certs[name]["path"]), certified=certs[name]["certified"],
+                    verdict=certs[name]["verdict"], verified=certs[name]["verified"],
+                    verification=certs[name]["checks"], c_prefix=code[name]["prefix"], c_files=code[name]["files"],
+                    c_run_ns=code[name]["run_ns"], c_step_us=code[name]["step_us"],
+                    c_vs_python=code[name]["c_vs_python"])
+        for name, spectrum in DEMO_MODELS)
+    with progress.stage("report", "figures, report.md, report.json"):
+        from ._plots import plot_demo
+
+        figures = plot_demo(out, sc, result, record)
+        report = DemoReport(out_dir=str(out), settings=settings, models=model_results, braking=braking,
+                            files=tuple(sorted([*map(str, figures), str(out / "report.md"), str(out / "report.json"),
+                                                *(m.certificate for m in model_results),
+                                                *(f for m in model_results for f in m.c_files)])),
+                            timings=progress.summary())
+        from ._markdown import demo_markdown
+
+        (out / "report.json").write_text(json.dumps(report.to_json(), indent=2) + "\n", encoding="utf-8")
+        (out / "report.md").write_text(demo_markdown(report), encoding="utf-8")
+    return DemoReport(out_dir=report.out_dir, settings=settings, models=model_results, braking=braking,
+                      files=report.files, timings=progress.summary())

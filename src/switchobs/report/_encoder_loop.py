@@ -1,0 +1,311 @@
+"""The wheel-encoder chain inside the ABS loop, as an :class:`~switchobs.plants.XbsEstimator`.
+
+:func:`switchobs.plants.simulate` hands its estimator the plant's signals
+``(t, x2, vx, u, dt)`` after every integration step, not the wheel angle.  The
+angle is recovered from them: with ``x2 = R dω/dt - a_x`` and ``a_x = dvx/dt``
+(seed 001 eq. (2.1)-(2.2)),
+
+    R ω(t) = R ω(t - dt) + (vx(t) - vx(t - dt)) + ∫ x2 dt,
+
+the integral by the trapezoidal rule (``x2`` is continuous: the pressure and the
+tyre characteristic are), and ``θ`` by integrating ``ω`` linearly over the step,
+from free rolling, ``ω(0) = vx(0) / R`` (the initial state of ``simulate``).
+The simulation records the true ``ω``; :attr:`EncoderLoopRecord.omega_steps`
+keeps the reconstruction so that the two can be compared after the run.
+
+From that angle the encoder's edges are generated as the wheel turns (the
+transition locations of :meth:`switchobs.sensors.Encoder.rotation_angles`, time
+stamps floored to the capture timer), pushed into the streaming
+:class:`~switchobs.sensors.TimeStamper` and, at each controller sample,
+compensated by :class:`~switchobs.sensors.ThreeStageEstimator` (seed 001
+Fig. 6.2).  The measured ``x2 = R α̂ - a_x`` drives the XBS observers.
+
+Measurement time line.  A TSA estimate of order 2 fits one acceleration to the
+last ``n`` edges: it describes the wheel at the centre of the window, about
+half the window (10-30 ms in ABS braking) before the sample.  Feeding it to the
+observer together with the *current* pressure rate would misalign the
+observer's input and output by that lag, and the observer would explain the
+mismatch by a wrong XBS.  So the observers advance in the measurement's time
+line: from one window centre ``t_c`` (the mean time stamp of the window) to
+the next, with ``u`` and ``vx`` averaged over the same interval from the
+history of the plant signals.  Their estimate is then the XBS at ``t_c``, and
+that delayed estimate is what the controller reads (seed 001 Fig. 4.6, output
+feedback).
+"""
+
+from __future__ import annotations
+
+import bisect
+import math
+from collections import deque
+from collections.abc import Sequence
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+import numpy.typing as npt
+
+from ..exceptions import SimulationError
+from ..observers import ObserverXbsEstimator, SteppingObserver
+from ..sensors import Encoder, ThreeStageEstimator, TimeStamper
+
+__all__ = ["EncoderLoopEstimator", "EncoderLoopRecord"]
+
+Array = npt.NDArray[np.float64]
+
+#: Largest ``|s| h rho`` of one observer sub-step (``rho`` the spectral radius of A_plus, A_minus):
+#: well inside the real-axis stability interval (-2.78, 0) of RK4, with room for the Jordan blocks.
+STIFFNESS_LIMIT = 1.0
+
+
+@dataclass(frozen=True, eq=False)
+class EncoderLoopRecord:
+    """What the encoder chain and the observers saw.
+
+    Attributes
+    ----------
+    t : ndarray
+        Controller sample times [s].
+    t_measured : ndarray
+        Time the measurement of each sample describes: the mean time stamp of the TSA window
+        (NaN until the window is full).
+    x2_tsa, x2_measured : ndarray
+        ``R α - a_x`` from the raw TSA and after three-stage compensation [m/s²].
+    omega_tsa, omega_measured : ndarray
+        Raw TSA and compensated wheel speed [rad/s].
+    vx : ndarray
+        Vehicle speed at the samples [m/s].
+    estimates : dict of str -> ndarray
+        XBS estimate of each encoder-fed observer at the samples (NaN before the first measurement).
+    substeps : ndarray of int
+        Observer sub-steps of each sample (more where ``|s| = |x2| / vx`` is large).
+    events : int
+        Encoder edges generated.
+    steps_t : ndarray
+        Plant step ends.
+    omega_steps : ndarray
+        Reconstructed wheel speed at ``steps_t`` (compare with the simulated ``omega``).
+    beside : dict of str -> ndarray
+        Estimates at ``steps_t`` of the observers fed with the plant's exact ``x2``.
+    """
+
+    t: Array
+    t_measured: Array
+    x2_tsa: Array
+    x2_measured: Array
+    omega_tsa: Array
+    omega_measured: Array
+    vx: Array
+    estimates: dict[str, Array]
+    substeps: npt.NDArray[np.int_]
+    events: int
+    steps_t: Array
+    omega_steps: Array
+    beside: dict[str, Array]
+
+    @property
+    def lag_s(self) -> Array:
+        """Age of the measurement at each sample, ``t - t_measured`` [s]."""
+        return self.t - self.t_measured
+
+
+class EncoderLoopEstimator:
+    """XBS observers fed by a simulated wheel encoder with three-stage compensation, inside the ABS loop.
+
+    Parameters
+    ----------
+    observers : sequence of (label, observer, initial_state)
+        Observers with signals ``(y, vx, u)`` and a readout (the XBS): Python
+        reference observers or compiled C observers (:class:`switchobs.codegen.CObserver`).
+        The first one's estimate is returned to the controller; the others run beside it on
+        the same measurements.  ``initial_state`` maps state names to initial values; the first
+        state (the measured ``z1``) starts at the first measurement.
+    spectral_radius : float
+        Largest ``|eigenvalue|`` of ``A_plus`` and ``A_minus`` over the observers: a step is
+        split into sub-steps so that ``|s| h rho <= STIFFNESS_LIMIT`` (the observer's
+        real-time eigenvalues are ``s spec(A_±)``, RK4 needs ``|s| h rho < 2.78``).
+    encoder : Encoder
+    radius_m : float
+        Wheel radius ``R`` [m].
+    rate_hz : float
+        Controller rate of the TSA and the three-stage estimator.
+    order, window, harmonics : int
+        TSA order ``m`` and window ``n`` (seed 001 (5.2)-(5.5)), harmonics ``M`` of (6.2).
+    initial_xbs : float
+        Estimate returned before the first measurement.
+    beside : sequence of (label, ObserverXbsEstimator)
+        Observers stepped with the plant's exact signals, for comparison.
+
+    Raises
+    ------
+    SimulationError
+        Bad settings, no observer, or an observer whose signals are not ``(y, vx, u)``.
+    """
+
+    def __init__(self, observers: Sequence[tuple[str, SteppingObserver, dict[str, float]]], *,
+                 spectral_radius: float, encoder: Encoder, radius_m: float, rate_hz: float = 1000.0,
+                 order: int = 2, window: int = 15, harmonics: int = 5, initial_xbs: float = 0.5,
+                 beside: Sequence[tuple[str, ObserverXbsEstimator]] = ()):
+        if not observers:
+            raise SimulationError("EncoderLoopEstimator needs at least one observer")
+        for label, obs, _ in observers:
+            if tuple(obs.signal_names) != ("y", "vx", "u"):
+                raise SimulationError(f"observer {label!r} has signals {tuple(obs.signal_names)}; an XBS "
+                                      "observer takes (y, vx, u)")
+        for name, value in (("spectral_radius", spectral_radius), ("rate_hz", rate_hz), ("radius_m", radius_m)):
+            if not (isinstance(value, (int, float)) and math.isfinite(value) and value > 0):
+                raise SimulationError(f"{name} must be finite and > 0, got {value!r}")
+        self._observers = list(observers)
+        self._beside = list(beside)
+        self._rho = float(spectral_radius)
+        self._encoder = encoder
+        self._R = float(radius_m)
+        self._rate = float(rate_hz)
+        self._order, self._window, self._harmonics = order, window, harmonics
+        self._initial_xbs = float(initial_xbs)
+        self._base = encoder.rotation_angles()
+        self._nominal = encoder.nominal_angles()
+        # validate the chain settings now rather than at the first sample
+        TimeStamper(order=order, window=window)
+        ThreeStageEstimator(harmonics, dt_s=1.0 / rate_hz)
+
+    def describe(self) -> str:
+        first = str(self._observers[0][1]).splitlines()[0]
+        return (f"{first} on x2 from a {self._encoder.ppr}-ppr encoder (TSA n = {self._window}, "
+                f"three-stage M = {self._harmonics}, {self._rate:g} Hz)")
+
+    # ------------------------------------------------------------------ XbsEstimator protocol
+    def reset(self, t0: float, y0: float, vx0: float) -> None:
+        """Start at free rolling (``ω = vx / R``, ``θ = 0``), as :func:`switchobs.plants.simulate` does."""
+        self._t, self._x2, self._vx = float(t0), float(y0), float(vx0)
+        self._omega = self._vx / self._R
+        self._theta = 0.0
+        self._U = 0.0                                  # ∫ u dt since t0: the pressure change [bar]
+        self._rev, self._edge = 0, 0
+        while self._level() <= 0.0:
+            self._next_edge()
+        self._pending: deque[tuple[float, float]] = deque()
+        self._stamps: deque[float] = deque(maxlen=self._window)
+        self._tsa = TimeStamper(order=self._order, window=self._window)
+        self._comp = ThreeStageEstimator(self._harmonics, dt_s=1.0 / self._rate)
+        self._k = math.floor(t0 * self._rate + 1e-9) + 1          # next controller sample
+        self._hist_t, self._hist_vx, self._hist_U = [self._t], [self._vx], [0.0]
+        self._last: tuple[float, float, float, float] | None = None   # (t_c, y, vx, ∫u) of the last measurement
+        self._states: list[Any] = [None] * len(self._observers)
+        self._estimate = self._initial_xbs
+        self._events = 0
+        self._rows: list[tuple[float, ...]] = []
+        self._omega_steps: list[float] = [self._omega]
+        self._beside_rows: list[list[float]] = []
+        for _, est in self._beside:
+            est.reset(t0, y0, vx0)
+        self._beside_rows.append([est.estimate for _, est in self._beside])
+
+    def update(self, t: float, y: float, vx: float, u: float, dt: float) -> float:
+        """Advance the wheel over ``[t - dt, t]``, process the controller samples in it, return the estimate."""
+        if dt <= 0.0:
+            return self._estimate
+        t0, x20, om0, th0 = self._t, self._x2, self._omega, self._theta
+        om1 = max(om0 + ((vx - self._vx) + 0.5 * (x20 + y) * dt) / self._R, 0.0)   # the plant clamps ω >= 0 too
+        th1 = th0 + 0.5 * (om0 + om1) * dt
+        self._edges(t0, dt, om0, om1, th0, th1)
+        self._t, self._x2, self._vx, self._omega, self._theta = float(t), float(y), float(vx), om1, th1
+        self._U += u * dt
+        self._hist_t.append(self._t)
+        self._hist_vx.append(self._vx)
+        self._hist_U.append(self._U)
+        while (ts := self._k / self._rate) <= t + 1e-12:
+            self._sample(ts)
+            self._k += 1
+        self._omega_steps.append(om1)
+        self._beside_rows.append([est.update(t, y, vx, u, dt) for _, est in self._beside])
+        return self._estimate
+
+    # ------------------------------------------------------------------ internals
+    def _level(self) -> float:
+        return float(self._base[self._edge]) + 2.0 * math.pi * self._rev
+
+    def _next_edge(self) -> None:
+        self._edge += 1
+        if self._edge == self._base.size:
+            self._edge, self._rev = 0, self._rev + 1
+
+    def _edges(self, t0: float, h: float, om0: float, om1: float, th0: float, th1: float) -> None:
+        """Edges crossed while θ goes from th0 to th1, ω linear in time over the step."""
+        k = 0.5 * (om1 - om0) / h
+        clock = self._encoder.clock_hz
+        while (level := self._level()) <= th1:
+            d = level - th0
+            # root of th0 + om0 τ + k τ² = level, in the form without cancellation
+            root = om0 + math.sqrt(max(om0 * om0 + 4.0 * k * d, 0.0))
+            tau = min(2.0 * d / root, h) if root > 0.0 else h
+            stamp = t0 + tau
+            if clock is not None:
+                stamp = math.floor(stamp * clock) / clock
+            self._pending.append((stamp, float(self._nominal[self._edge]) + 2.0 * math.pi * self._rev))
+            self._events += 1
+            self._next_edge()
+
+    def _history(self, tq: float) -> tuple[float, float, float]:
+        """``(vx, ∫u, a_x)`` at ``tq`` from the plant's step ends (linear within a step)."""
+        ht = self._hist_t
+        i = min(max(bisect.bisect_right(ht, tq) - 1, 0), len(ht) - 2)
+        span = ht[i + 1] - ht[i]
+        w = (tq - ht[i]) / span
+        vx = self._hist_vx[i] + w * (self._hist_vx[i + 1] - self._hist_vx[i])
+        U = self._hist_U[i] + w * (self._hist_U[i + 1] - self._hist_U[i])
+        return vx, U, (self._hist_vx[i + 1] - self._hist_vx[i]) / span
+
+    def _sample(self, ts: float) -> None:
+        while self._pending and self._pending[0][0] <= ts:
+            stamp, angle = self._pending.popleft()
+            self._tsa.push(stamp, angle)
+            self._stamps.append(stamp)
+        vx_s = self._history(ts)[0]
+        th_m, om_m, al_m = self._tsa.estimate(ts)
+        if math.isnan(om_m):
+            self._rows.append((ts, math.nan, math.nan, math.nan, math.nan, math.nan, vx_s, 0.0,
+                               *(math.nan for _ in self._observers)))
+            return
+        om_c, al_c = self._comp.update(th_m, om_m, al_m)
+        tc = sum(self._stamps) / len(self._stamps)
+        vx_c, U_c, ax_c = self._history(tc)
+        y_meas = self._R * al_c - ax_c
+        n_sub = 0
+        if self._last is None:
+            for i, (_, obs, init) in enumerate(self._observers):
+                names = tuple(obs.state_names)
+                x = np.zeros(len(names))
+                x[0] = y_meas
+                for name, value in init.items():
+                    x[names.index(name)] = value
+                self._states[i] = x
+            self._last = (tc, y_meas, vx_c, U_c)
+        elif tc > self._last[0]:
+            # held over [t_c_prev, t_c]: the mean of the bounding measurements (as ObserverXbsEstimator
+            # does), vx likewise, and u the interval's mean pressure rate, so that ∫u is exact
+            tc0, y0, vx0, U0 = self._last
+            span = tc - tc0
+            y_hold, vx_hold, u_mean = 0.5 * (y0 + y_meas), 0.5 * (vx0 + vx_c), (U_c - U0) / span
+            n_sub = max(1, math.ceil(abs(y_hold) / vx_hold * span * self._rho / STIFFNESS_LIMIT))
+            h = span / n_sub
+            for i, (_, obs, _) in enumerate(self._observers):
+                x = self._states[i]
+                for _ in range(n_sub):
+                    x = obs.step(x, (y_hold, vx_hold, u_mean), h)
+                self._states[i] = x
+            self._last = (tc, y_meas, vx_c, U_c)
+        estimates = [float(obs.readout(self._states[i])) for i, (_, obs, _) in enumerate(self._observers)]
+        self._estimate = estimates[0]
+        self._rows.append((ts, tc, self._R * al_m - ax_c, y_meas, om_m, om_c, vx_s, float(n_sub), *estimates))
+
+    def record(self) -> EncoderLoopRecord:
+        """What happened so far (call after the simulation)."""
+        data = np.array(self._rows, dtype=float).reshape(-1, 8 + len(self._observers))
+        beside = np.array(self._beside_rows, dtype=float).reshape(-1, len(self._beside))
+        return EncoderLoopRecord(
+            t=data[:, 0], t_measured=data[:, 1], x2_tsa=data[:, 2], x2_measured=data[:, 3],
+            omega_tsa=data[:, 4], omega_measured=data[:, 5], vx=data[:, 6], substeps=data[:, 7].astype(int),
+            estimates={label: data[:, 8 + i] for i, (label, _, _) in enumerate(self._observers)},
+            events=self._events, steps_t=np.array(self._hist_t), omega_steps=np.array(self._omega_steps),
+            beside={label: beside[:, i] for i, (label, _) in enumerate(self._beside)})
