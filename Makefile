@@ -3,6 +3,7 @@ PYTHON ?= python3
 VENV := .venv
 PY := $(VENV)/bin/python
 STAMP := $(VENV)/.installed
+DEMO_ARGS ?=
 
 .PHONY: demo test bench docs install clean
 
@@ -15,7 +16,7 @@ $(STAMP): pyproject.toml
 install: $(STAMP)
 
 demo: $(STAMP)
-	$(VENV)/bin/switchobs demo
+	$(VENV)/bin/switchobs demo $(DEMO_ARGS)
 
 test: $(STAMP)
 	$(PY) -m pytest -n 2 -q

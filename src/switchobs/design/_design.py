@@ -29,7 +29,7 @@ import sympy as sp
 from sympy.polys.matrices import DomainMatrix
 
 from ..exceptions import CertificateError, DimensionError, NotHurwitzError, SpectrumError
-from ..model import Model, make_symbol, numeric, parse_expression
+from ..model import Model, free_names, make_symbol, numeric, parse_expression
 from ._lyapunov import _generic_solution, observer_form_gramian
 from ._normal_form import ObserverNormalForm, observer_normal_form
 from ._routh import hurwitz_conditions, readable_condition
@@ -39,7 +39,7 @@ __all__ = ["GainDesign", "design", "theorem1_K_minus", "hoang_family_constraints
            "plus_coefficients", "parse_gains"]
 
 
-#: Coupling constraints are factored up to this dimension (readability vs cost).
+#: Coupling constraints are expanded and tidied up to this dimension (readability vs cost).
 _FACTOR_MAX_DIMENSION = 4
 
 
@@ -98,9 +98,10 @@ def hoang_family_constraints(alpha_plus: Sequence[sp.Expr], alpha_minus: Sequenc
     out = []
     for m in range(1, n):
         expr = plus[m] * minus[0] - plus[0] * minus[m]
-        # Factoring shows the structure of (17) in the seeds' dimensions; beyond them
-        # it dominates the whole design time, so the product form is kept.
-        out.append(sp.factor(sp.expand(expr)) if n <= _FACTOR_MAX_DIMENSION else expr)
+        # Pulling out the common monomial shows the structure of (17) in the seeds'
+        # dimensions.  Full factorisation is avoided: sympy's multivariate factoring
+        # time varies by orders of magnitude from run to run on these polynomials.
+        out.append(sp.factor_terms(sp.expand(expr)) if n <= _FACTOR_MAX_DIMENSION else expr)
     return out
 
 
@@ -119,25 +120,12 @@ def parse_gains(gains: str | Sequence, model: Model, *, what: str) -> sp.Immutab
             out.append(g)
             continue
         text = str(g).strip()
-        for name in _free_names(text):
+        for name in free_names(text):
             if name in forbidden:
                 raise DimensionError(f"{what} entry {i + 1} uses {name!r}, a state or signal; gains are constants")
             names.setdefault(name, make_symbol(name))
         out.append(parse_expression(text, names, what=f"{what} entry {i + 1}"))
     return _column(out)
-
-
-def _free_names(text: str) -> list[str]:
-    import ast
-
-    from ..model import EXPRESSION_FUNCTIONS
-
-    try:
-        tree = ast.parse(text, mode="eval")
-    except SyntaxError:
-        return []
-    return [n.id for n in ast.walk(tree) if isinstance(n, ast.Name)
-            and n.id not in EXPRESSION_FUNCTIONS and n.id not in {"pi", "E", "I"}]
 
 
 def _gain_symbols(K: sp.MatrixBase, model: Model) -> list[sp.Symbol]:

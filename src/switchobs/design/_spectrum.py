@@ -2,13 +2,12 @@
 
 from __future__ import annotations
 
-import ast
 from collections.abc import Sequence
 
 import sympy as sp
 
 from ..exceptions import SpectrumError
-from ..model import EXPRESSION_FUNCTIONS, Model, make_symbol, parse_expression
+from ..model import Model, free_names, make_symbol, parse_expression
 from ._routh import is_hurwitz_exact
 
 __all__ = ["parse_spectrum", "spectrum_coefficients", "polynomial_coefficients", "LAPLACE"]
@@ -28,17 +27,13 @@ def _names_for(model: Model, texts: Sequence[str]) -> dict[str, sp.Symbol]:
     names = {p: model.symbols[p] for p in model.parameters}
     forbidden = set(model.states) | {model.output} | set(model.external) | set(model.inputs) | {"t"}
     for text in texts:
-        try:
-            tree = ast.parse(str(text).strip(), mode="eval")
-        except SyntaxError:
-            continue  # parse_expression reports it with context
-        for node in ast.walk(tree):
-            if isinstance(node, ast.Name) and node.id not in names:
-                if node.id in forbidden:
-                    raise SpectrumError(f"the spectrum uses {node.id!r}, a state or signal of model "
-                                        f"{model.name!r}; poles may only use parameters and new design symbols")
-                if node.id not in EXPRESSION_FUNCTIONS and node.id not in {"pi", "E", "I"}:
-                    names[node.id] = make_symbol(node.id, positive=True)
+        for name in free_names(text):
+            if name in names:
+                continue
+            if name in forbidden:
+                raise SpectrumError(f"the spectrum uses {name!r}, a state or signal of model "
+                                    f"{model.name!r}; poles may only use parameters and new design symbols")
+            names[name] = make_symbol(name, positive=True)
     return names
 
 

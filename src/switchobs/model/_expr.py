@@ -15,7 +15,7 @@ import sympy as sp
 
 from ..exceptions import ExpressionError
 
-__all__ = ["parse_expression", "FUNCTIONS"]
+__all__ = ["parse_expression", "free_names", "FUNCTIONS"]
 
 #: Functions an expression string may call, by name.
 FUNCTIONS: Mapping[str, sp.Basic] = {
@@ -39,7 +39,6 @@ _BINOPS = {
     ast.Mult: lambda a, b: a * b,
     ast.Div: lambda a, b: a / b,
     ast.Pow: lambda a, b: a**b,
-    ast.BitXor: lambda a, b: a**b,  # engineers write x^2
 }
 
 
@@ -70,10 +69,25 @@ def parse_expression(text: str | int | float, names: Mapping[str, sp.Symbol], *,
     if not isinstance(text, str):
         raise ExpressionError(f"{what}: expected an expression string, got {type(text).__name__} {text!r}")
     try:
-        tree = ast.parse(text.strip(), mode="eval")
+        # Engineers write x^2; Python's ^ binds looser than + and *, so it is
+        # rewritten before parsing rather than mapped on the syntax tree.
+        tree = ast.parse(text.strip().replace("^", "**"), mode="eval")
     except SyntaxError as exc:
         raise ExpressionError(f"{what}: cannot parse {text!r} ({exc.msg})") from None
     return _Translator(names, what, text).visit(tree.body)
+
+
+def free_names(text: str) -> list[str]:
+    """Names an expression string uses, other than functions and constants (``[]`` if it does not parse).
+
+    Lets callers declare new design symbols (``beta1``) before parsing.
+    """
+    try:
+        tree = ast.parse(str(text).strip().replace("^", "**"), mode="eval")
+    except SyntaxError:
+        return []  # parse_expression reports the syntax error with context
+    return [node.id for node in ast.walk(tree)
+            if isinstance(node, ast.Name) and node.id not in FUNCTIONS and node.id not in _CONSTANTS]
 
 
 class _Translator(ast.NodeVisitor):

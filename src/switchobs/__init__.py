@@ -1,0 +1,61 @@
+"""switchobs: design, certify and export switched observers via singular time-rescaling.
+
+Systems ``dz/dt = s(y,t) (A z + d(y)) + b(y) u, y = C z`` whose time scaling
+``s`` changes sign get an observer that switches between ``K_plus`` (s > 0) and
+``K_minus`` (s < 0); in the rescaled time ``tau = ∫|s| dt`` its error obeys
+``de/dtau = A_sigma e``, ``A_plus = A - K_plus C``, ``A_minus = -A + K_minus C``.
+
+Public API (sub-packages follow the pipeline; each has its own ``__all__``)
+---------------------------------------------------------------------------
+Model, builtin_model, load_model            -- switchobs.model
+design, GainDesign, observer_normal_form    -- switchobs.design (sympy, exact)
+certify_model, common_lyapunov, strict_common_lyapunov, dwell_time,
+classify_planar, verify_certificate, trajectory_conditions
+                                            -- switchobs.certify (cvxpy + exact re-check)
+generate_observer, compile_observer, CObserver
+                                            -- switchobs.codegen (casadi -> C)
+SwitchedObserver, AdaptiveSwitchedObserver, xbs3_observer, xbs4_observer,
+adaptive_xbs_observer                       -- switchobs.observers
+simulate, scenario, table41, road, PoincareMap
+                                            -- switchobs.plants (ABS)
+Encoder, encoder_chain, ThreeStageEstimator, super_twisting
+                                            -- switchobs.sensors (wheel encoders)
+
+Names are loaded on first use, so ``import switchobs`` stays cheap (cvxpy and
+casadi are imported only by the layers that need them).
+"""
+
+from __future__ import annotations
+
+import importlib
+from typing import Any
+
+__version__ = "0.1.0"
+
+_EXPORTS = {
+    "switchobs.model": ("Model", "builtin_model", "load_model"),
+    "switchobs.design": ("design", "GainDesign", "observer_normal_form"),
+    "switchobs.certify": ("certify_model", "common_lyapunov", "strict_common_lyapunov", "dwell_time",
+                          "classify_planar", "verify_certificate", "trajectory_conditions"),
+    "switchobs.codegen": ("generate_observer", "compile_observer", "CObserver"),
+    "switchobs.observers": ("SwitchedObserver", "AdaptiveSwitchedObserver", "xbs3_observer", "xbs4_observer",
+                            "adaptive_xbs_observer"),
+    "switchobs.plants": ("simulate", "scenario", "table41", "road", "PoincareMap"),
+    "switchobs.sensors": ("Encoder", "encoder_chain", "ThreeStageEstimator", "super_twisting"),
+}
+_WHERE = {name: module for module, names in _EXPORTS.items() for name in names}
+
+__all__ = sorted(_WHERE)
+
+
+def __getattr__(name: str) -> Any:
+    module = _WHERE.get(name)
+    if module is None:
+        raise AttributeError(f"module 'switchobs' has no attribute {name!r}")
+    value = getattr(importlib.import_module(module), name)
+    globals()[name] = value
+    return value
+
+
+def __dir__() -> list[str]:
+    return sorted(set(globals()) | set(__all__))

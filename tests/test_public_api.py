@@ -1,0 +1,40 @@
+"""The top-level public API resolves to the sub-packages' objects and the layers stay ordered."""
+
+import ast
+import pathlib
+
+import pytest
+
+import switchobs
+
+LAYERS = ["model", "design", "certify", "codegen", "plants", "sensors", "observers", "report", "cli"]
+RANK = {"model": 0, "design": 1, "certify": 2, "codegen": 3, "plants": 4, "sensors": 4, "observers": 4,
+        "report": 5, "cli": 6}
+
+
+@pytest.mark.parametrize("name", switchobs.__all__)
+def test_every_exported_name_resolves(name):
+    assert getattr(switchobs, name) is not None
+
+
+def test_unknown_attribute_is_an_attribute_error():
+    with pytest.raises(AttributeError, match="no attribute 'nope'"):
+        switchobs.nope  # noqa: B018
+
+
+@pytest.mark.parametrize("layer", [name for name in LAYERS if name != "cli"])
+def test_lower_layers_never_import_higher_ones(layer):
+    root = pathlib.Path(switchobs.__file__).parent / layer
+    if not root.exists():
+        pytest.fail(f"layer {layer} is missing")
+    for path in root.rglob("*.py"):
+        tree = ast.parse(path.read_text())
+        for node in ast.walk(tree):
+            target = None
+            if isinstance(node, ast.ImportFrom) and node.module:
+                if node.level == 2:
+                    target = node.module.split(".")[0]
+                elif node.level == 0 and node.module.startswith("switchobs."):
+                    target = node.module.split(".")[1]
+            if target in RANK:
+                assert RANK[target] <= RANK[layer], f"{path} imports the higher layer {target}"
