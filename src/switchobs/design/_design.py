@@ -40,7 +40,7 @@ __all__ = ["GainDesign", "design", "theorem1_K_minus", "hoang_family_constraints
 
 
 #: Coupling constraints are expanded and tidied up to this dimension (readability vs cost).
-_FACTOR_MAX_DIMENSION = 4
+_FACTOR_MAX_DIMENSION = 3
 
 
 def _column(values: Sequence[sp.Expr]) -> sp.ImmutableMatrix:
@@ -389,7 +389,7 @@ def design(model: Model, spectrum: str | Sequence | None = None, *,
 
     family = tuple(make_symbol(f"k{i}_minus") for i in range(1, model.n + 1))
     alpha_family = minus_coefficients(nf, sp.Matrix(family))
-    constraints = tuple(sp.Eq(c, 0) for c in hoang_family_constraints(alpha_plus, alpha_family))
+    constraints = tuple(sp.Eq(c, 0, evaluate=False) for c in hoang_family_constraints(alpha_plus, alpha_family))
 
     P_nf, nums, den = observer_form_gramian(alpha_plus)
     P = P_nf if nf.is_identity else sp.ImmutableMatrix((nf.T.T * P_nf * nf.T).applyfunc(sp.cancel))
@@ -415,7 +415,8 @@ def design(model: Model, spectrum: str | Sequence | None = None, *,
         _, nums_minus, den_minus = observer_form_gramian(alpha_minus)
         ratio = sp.cancel((nums[0] / den) / (nums_minus[0] / den_minus))
         C_minus = sp.ImmutableMatrix(sp.sqrt(ratio) * C)
-    hurwitz_minus = _readable(alpha_minus, _gain_symbols(Km, model))
+    # Theorem 1 gives A_minus the characteristic polynomial of A_plus: same conditions.
+    hurwitz_minus = hurwitz_plus if choice == "theorem1" else _readable(alpha_minus, _gain_symbols(Km, model))
     if any(c is sp.false for c in hurwitz_minus):
         _raise_not_hurwitz("A_minus", -model.A + Km * model.C)
     return GainDesign(

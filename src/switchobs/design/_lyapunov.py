@@ -66,7 +66,7 @@ def _generic_solution(n: int) -> tuple[tuple[sp.Symbol, ...], tuple[sp.Expr, ...
     br = b.convert_to(Mr.domain)
     num, den = Mr.solve_den(br)
     to = Mr.domain.to_sympy
-    return alpha, tuple(sp.factor(to(num[m, 0].element)) for m in range(n)), sp.factor(to(den))
+    return alpha, tuple(to(num[m, 0].element) for m in range(n)), to(den)
 
 
 def observer_form_gramian(alpha: Sequence[sp.Expr]) -> tuple[sp.ImmutableMatrix, tuple[sp.Expr, ...], sp.Expr]:
