@@ -1,0 +1,39 @@
+"""``switchobs theory [--out DIR] [--check]``: write (or check) the theory documents generated from the code."""
+
+from __future__ import annotations
+
+import argparse
+import sys
+from pathlib import Path
+
+from ..report import theory_documents, write_theory
+
+__all__ = ["register"]
+
+
+def register(sub: argparse._SubParsersAction) -> None:
+    p = sub.add_parser(
+        "theory", help="write theory/*.md (model, normal form, gains, Routh, P, coupling) from the symbolic core",
+        description="Generate the theory documents of the built-in models (abs-xbs3, abs-xbs4, abs-adaptive2) and "
+                    "of the generic normal form (N = 3) from switchobs.design, as Markdown with LaTeX math. "
+                    "The output is deterministic. With --check, write nothing and exit 1 if a file in DIR "
+                    "differs from what the code generates now.")
+    p.add_argument("--out", default="theory", metavar="DIR", help="output directory (default: theory)")
+    p.add_argument("--check", action="store_true", help="compare DIR with the generated documents instead")
+    p.set_defaults(func=run)
+
+
+def run(args: argparse.Namespace) -> int:
+    out = Path(args.out)
+    if args.check:
+        stale = [doc.filename for doc in theory_documents()
+                 if not (out / doc.filename).is_file() or (out / doc.filename).read_text("utf-8") != doc.text]
+        for name in stale:
+            print(f"{out / name}: differs from the generated document; run `switchobs theory --out {out}`",
+                  file=sys.stderr)
+        if not stale:
+            print(f"{out}: up to date")
+        return 1 if stale else 0
+    for path in write_theory(out):
+        print(f"wrote {path}")
+    return 0
