@@ -35,7 +35,21 @@ def _design_time(n: int, queue) -> None:
         start = time.perf_counter()
         ok = all(result.verify().values())
         verify_s = time.perf_counter() - start if ok else float("nan")
-    queue.put((elapsed, verify_s))
+    queue.put((elapsed, verify_s, None))
+
+
+def _p_only_time(n: int, queue) -> None:
+    """The common P alone by the structured solve (cold cache), for a like-for-like ratio."""
+    import sympy as sp
+
+    from switchobs.design import observer_form_gramian, observer_normal_form, plus_coefficients
+    from switchobs.model import builtin_model
+
+    model = builtin_model(f"normal-form-{n}")
+    gains = sp.Matrix(sp.symbols(" ".join(f"k{i}" for i in range(1, n + 1)), real=True))
+    start = time.perf_counter()
+    observer_form_gramian(plus_coefficients(observer_normal_form(model), gains))
+    queue.put((time.perf_counter() - start, None, None))
 
 
 def _naive_time(n: int, queue) -> None:
@@ -49,10 +63,10 @@ def _naive_time(n: int, queue) -> None:
     A_plus = model.A - gains * model.C
     start = time.perf_counter()
     naive_lyapunov(A_plus, model.C.T * model.C)
-    queue.put((time.perf_counter() - start, None))
+    queue.put((time.perf_counter() - start, None, None))
 
 
-def _timed(target, n: int, limit: float) -> tuple[float | None, float | None]:
+def _timed(target, n: int, limit: float) -> tuple:
     queue = mp.Queue()
     proc = mp.Process(target=target, args=(n, queue))
     proc.start()
@@ -60,7 +74,7 @@ def _timed(target, n: int, limit: float) -> tuple[float | None, float | None]:
     if proc.is_alive():
         proc.terminate()
         proc.join()
-        return None, None
+        return None, None, None
     return queue.get()
 
 
@@ -70,22 +84,26 @@ def main() -> None:
     parser.add_argument("--repeats", type=int, default=3)
     parser.add_argument("--baseline-limit", type=float, default=120.0)
     args = parser.parse_args()
-    print(f"{'N':>2} | {'design [s]':>10} | {'exact re-check [s]':>18} | {'naive linsolve [s]':>18} | {'speed-up':>8}")
-    print("---|---:|---:|---:|---:")
+    print(f"{'N':>2} | {'P only [s]':>10} | {'full design [s]':>15} | {'exact re-check [s]':>18} | "
+          f"{'naive P [s]':>11} | {'P speed-up':>10} | {'design speed-up':>15}")
+    print("---|---:|---:|---:|---:|---:|---:")
     naive_done = True
     for n in range(2, args.max_n + 1):
         runs = [_timed(_design_time, n, 600) for _ in range(args.repeats)]
         design_s = statistics.median(r[0] for r in runs)
+        p_s = statistics.median(_timed(_p_only_time, n, 600)[0] for _ in range(args.repeats))
         verify = [r[1] for r in runs if r[1] is not None]
         verify_s = f"{statistics.median(verify):.3f}" if verify else "-"
         naive = None
         if naive_done:
-            naive, _ = _timed(_naive_time, n, args.baseline_limit)
+            naive, _, _ = _timed(_naive_time, n, args.baseline_limit)
             naive_done = naive is not None
         naive_s = f"{naive:.3f}" if naive is not None else f"> {args.baseline_limit:.0f}"
-        ratio = f"{naive / design_s:.0f}x" if naive is not None else (
-            f"> {args.baseline_limit / design_s:.0f}x" if n > 2 else "-")
-        print(f"{n:>2} | {design_s:10.3f} | {verify_s:>18} | {naive_s:>18} | {ratio:>8}", flush=True)
+        def ratio(ours: float) -> str:
+            return f"{naive / ours:.1f}x" if naive is not None else f"> {args.baseline_limit / ours:.0f}x"
+
+        print(f"{n:>2} | {p_s:10.4f} | {design_s:15.3f} | {verify_s:>18} | {naive_s:>11} | {ratio(p_s):>10} | "
+              f"{ratio(design_s):>15}", flush=True)
 
 
 if __name__ == "__main__":
