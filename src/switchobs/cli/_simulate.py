@@ -120,7 +120,15 @@ def _scenario(args: argparse.Namespace) -> tuple[BrakingScenario, str]:
         sc = BrakingScenario(road(args.road or "dry-asphalt"), speed_m_s=120 / 3.6,
                              name=f"braking-{args.road or 'dry-asphalt'}")
         observer = "none"
-    changes: dict[str, Any] = {"controller": _controller(args, sc.controller)}
+    changes: dict[str, Any] = {"controller": _controller(args, sc.controller), **_timing_changes(args)}
+    if args.delay is not None:
+        changes["actuator"] = BrakeActuator(delay_s=args.delay)
+    return replace(sc, **changes), (args.observer or observer)
+
+
+def _timing_changes(args: argparse.Namespace) -> dict[str, Any]:
+    """Scenario fields set by --speed-kmh, --duration and --dt, validated."""
+    changes: dict[str, Any] = {}
     if args.speed_kmh is not None:
         if not args.speed_kmh > 0:
             raise SimulationError(f"--speed-kmh must be > 0, got {args.speed_kmh:g}")
@@ -131,9 +139,7 @@ def _scenario(args: argparse.Namespace) -> tuple[BrakingScenario, str]:
         changes["duration_s"] = args.duration
     if args.dt is not None:
         changes["dt_s"] = args.dt
-    if args.delay is not None:
-        changes["actuator"] = BrakeActuator(delay_s=args.delay)
-    return replace(sc, **changes), (args.observer or observer)
+    return changes
 
 
 def _table41(args: argparse.Namespace) -> int:
@@ -162,17 +168,7 @@ def _two_axle(args: argparse.Namespace) -> int:
         if getattr(args, opt) is not None or (opt == "controller" and args.tracking):
             raise SimulationError(f"--{opt} does not apply to the two-axle scenario {args.scenario!r}")
     sc = aguado_sec36()
-    changes: dict[str, Any] = {}
-    if args.speed_kmh is not None:
-        if not args.speed_kmh > 0:
-            raise SimulationError(f"--speed-kmh must be > 0, got {args.speed_kmh:g}")
-        changes["speed_m_s"] = args.speed_kmh / 3.6
-    if args.duration is not None:
-        if not args.duration > 0:
-            raise SimulationError(f"--duration must be > 0 s, got {args.duration:g}")
-        changes["duration_s"] = args.duration
-    if args.dt is not None:
-        changes["dt_s"] = args.dt
+    changes = _timing_changes(args)
     sc = replace(sc, **changes)
     kind = args.observer or scenario_observer(args.scenario)
     # each observer knows its wheel's static load: a = R^2 Fz / J of the corner

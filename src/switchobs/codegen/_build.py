@@ -22,6 +22,7 @@ from typing import Any
 import numpy as np
 import numpy.typing as npt
 
+from .._validate import named_vector
 from ..exceptions import CodegenError, DimensionError, ModelError, ObserverInputError
 from ._generate import GeneratedObserver, generate_observer
 from ._status import STATUS_TEXT, StepStatus
@@ -198,13 +199,7 @@ class CObserver:
 
     # ------------------------------------------------------------------ numerics
     def _vector(self, values: Any, names: Sequence[str], what: str) -> np.ndarray:
-        try:
-            arr = np.asarray(values, dtype=float)
-        except (TypeError, ValueError):
-            raise DimensionError(f"{what} must be {len(names)} numbers ({', '.join(names)}), got {values!r}") from None
-        if arr.shape != (len(names),):
-            raise DimensionError(f"{what} has the wrong shape; expected ({len(names)},) for ({', '.join(names)}) "
-                                 f"instead of {arr.shape}")
+        arr = named_vector(values, names, what)
         with np.errstate(over="ignore"):
             return np.ascontiguousarray(arr, dtype=self._dtype)
 

@@ -29,6 +29,7 @@ import numpy as np
 import sympy as sp
 
 from ..design import GainDesign
+from .._validate import adaptation_gain
 from ..exceptions import CodegenError, DimensionError, ModelError
 from ..model import Model, numeric, rational_value
 from ._emit import Kernel, float_literal, kernel
@@ -445,23 +446,7 @@ def generate_observer(model: Model, gains: GainDesign | tuple[Sequence[float], S
     Kp, Km = _gains(model, gains, num_values)
     if unknown:
         unknown = tuple(unknown)
-        p = len(unknown)
-        if Gamma is None:
-            raise CodegenError(f"the adaptive observer needs Gamma, a {p} x {p} symmetric positive definite "
-                               f"adaptation gain for ({', '.join(unknown)}) (seed 001 eq. (3.4))")
-        try:
-            G = np.asarray(Gamma, dtype=float)
-        except (TypeError, ValueError):
-            raise DimensionError(f"Gamma must be a {p} x {p} matrix of numbers, got {Gamma!r}") from None
-        if G.shape == (p,):
-            G = np.diag(G)
-        if G.shape != (p, p):
-            raise DimensionError(f"Gamma has the wrong shape; expected ({p}, {p}) for the unknowns {list(unknown)} "
-                                 f"instead of {G.shape}")
-        if not np.all(np.isfinite(G)) or not np.allclose(G, G.T, rtol=1e-12, atol=0) \
-                or np.min(np.linalg.eigvalsh((G + G.T) / 2)) <= 0:
-            raise CodegenError(f"Gamma = {G.tolist()} must be finite, symmetric and positive definite "
-                               "(seed 001 eq. (3.4): Gamma = Gamma' > 0)")
+        G = adaptation_gain(Gamma, unknown, error=CodegenError)
         tr = translate_adaptive(model, Kp, Km, defaults, unknown, G.tolist())
         kind = "adaptive"
     else:

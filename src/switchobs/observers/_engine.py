@@ -39,7 +39,8 @@ import sympy as sp
 from sympy.printing.numpy import NumPyPrinter
 from sympy.printing.pycode import PythonCodePrinter
 
-from ..exceptions import DimensionError, ObserverInputError, SimulationError
+from .._validate import named_vector
+from ..exceptions import ObserverInputError, SimulationError
 
 __all__ = ["ErrorCode", "METHODS", "Kernel", "KernelSpec"]
 
@@ -350,14 +351,7 @@ class Kernel:
     @staticmethod
     def floats(values, names: Sequence[str], what: str) -> list[float]:
         """``values`` as a list of Python floats, one per name (DimensionError otherwise)."""
-        try:
-            arr = np.asarray(values, dtype=float)
-        except (TypeError, ValueError):
-            raise DimensionError(f"{what} must be {len(names)} numbers ({', '.join(names)}), got {values!r}") from None
-        if arr.shape != (len(names),):
-            raise DimensionError(f"{what} has the wrong shape; expected ({len(names)},) for ({', '.join(names)}) "
-                                 f"instead of {arr.shape}")
-        return arr.tolist()
+        return named_vector(values, names, what).tolist()
 
     def check_dt(self, dt) -> float:
         try:

@@ -9,6 +9,7 @@ import numpy as np
 import numpy.typing as npt
 import sympy as sp
 
+from .._validate import adaptation_gain
 from ..exceptions import DimensionError, FreeSymbolError, ModelError, SimulationError
 from ..model import Model, numeric, parse_expression, rational_value
 from ._engine import SCALE, ErrorCode, Kernel, KernelSpec, _ArrayPrinter, signal_symbols
@@ -112,7 +113,7 @@ class _Observer:
             drift.append(Fi.xreplace({th: 0 for th in theta}).xreplace(to_S))
         p = len(unknown)
         if p:
-            G = _gamma(Gamma, unknown)
+            G = adaptation_gain(Gamma, unknown, error=SimulationError)
         else:
             G = np.zeros((0, 0))
         self.K_plus = _gain(K_plus, n, "K_plus")
@@ -293,29 +294,6 @@ class _Observer:
         return f"<{type(self).__name__} {self.model.name} {self.method} n={self.size}>"
 
 
-def _gamma(Gamma: Any, unknown: Sequence[str]) -> np.ndarray:
-    p = len(unknown)
-    if Gamma is None:
-        raise SimulationError(f"the adaptive observer needs Gamma, a {p} x {p} symmetric positive definite "
-                              f"adaptation gain for ({', '.join(unknown)})")
-    try:
-        G = np.asarray(Gamma, dtype=float)
-    except (TypeError, ValueError):
-        raise DimensionError(f"Gamma must be a {p} x {p} matrix of numbers, got {Gamma!r}") from None
-    if G.ndim == 1 and G.shape == (p,):
-        G = np.diag(G)
-    if G.shape != (p, p):
-        raise DimensionError(f"Gamma has the wrong shape; expected ({p}, {p}) (or a diagonal of {p}) "
-                             f"instead of {G.shape}")
-    if not np.isfinite(G).all():
-        raise SimulationError(f"Gamma = {G.tolist()} has a non-finite entry")
-    if not np.allclose(G, G.T, rtol=1e-12, atol=0.0):
-        raise SimulationError(f"Gamma = {G.tolist()} is not symmetric (seed 001 eq. (3.4) needs Gamma = Gamma' > 0)")
-    eig = np.linalg.eigvalsh(G)
-    if eig.min() <= 0.0:
-        raise SimulationError(f"Gamma is not positive definite: its eigenvalues are {eig.tolist()} "
-                              "(seed 001 eq. (3.4) needs Gamma = Gamma' > 0)")
-    return G
 
 
 class SwitchedObserver(_Observer):
