@@ -125,7 +125,7 @@ class ModelResult:
     verified: bool
     verification: tuple[tuple[str, bool], ...]
     c_prefix: str = ""
-    c_files: tuple[str, ...] = ()
+    c_files: tuple[str, ...] = ()         # relative to the output directory
     c_run_ns: float = math.nan
     c_step_us: float = math.nan
     c_vs_python: float = math.nan
@@ -316,7 +316,7 @@ def _codegen(model: Any, d: Any, numeric: dict[str, np.ndarray], out: Path, sett
         x = c_obs.step(x, row, 1e-3)
     step_us = (time.perf_counter() - t0) / calls * 1e6
     return {"observer": c_obs, "prefix": gen.prefix,
-            "files": tuple(str(target / name) for name in sorted(gen.files)),
+            "files": tuple(str((target / name).relative_to(out)) for name in sorted(gen.files)),
             "run_ns": best / settings.timing_steps * 1e9, "step_us": step_us, "c_vs_python": diff}
 
 
@@ -447,7 +447,7 @@ def run_demo(out_dir: str | Path = "out/demo", *, fast: bool = False,
     with progress.stage("design", "symbolic K+ / K- (Theorem 1), exact re-check"):
         for name, spectrum in DEMO_MODELS:
             designs[name] = _design(models[name], spectrum)
-            progress.note(f"{name}: K+ = [{', '.join(map(str, designs[name][0].K_plus))}]")
+            progress.note(f"{name}: at beta1 = beta2 = 100, K+ = [{', '.join(f'{k:.6g}' for k in designs[name][1]['K_plus'])}]")
     certs: dict[str, dict[str, Any]] = {}
     with progress.stage("certify", "LMIs + exact re-check, certificate JSON re-verified from the file"):
         for name, _ in DEMO_MODELS:
@@ -486,7 +486,7 @@ def run_demo(out_dir: str | Path = "out/demo", *, fast: bool = False,
         report = DemoReport(out_dir=str(out), settings=settings, models=model_results, braking=braking,
                             files=tuple(sorted([*map(str, figures), str(out / "report.md"), str(out / "report.json"),
                                                 *(m.certificate for m in model_results),
-                                                *(f for m in model_results for f in m.c_files)])),
+                                                *(str(out / f) for m in model_results for f in m.c_files)])),
                             timings=progress.summary())
         from ._markdown import demo_markdown
 

@@ -32,6 +32,8 @@ def demo_markdown(report: Any) -> str:
     st = report.settings
     b = report.braking
     rig = QuarterCar.hoang2014()
+    # edges per second at the initial speed: ppr revolutions of omega = v / R
+    window_ms = 1e3 * st.tsa_window / (st.encoder_ppr * st.speed_m_s / rig.radius_m / (2.0 * math.pi))
     out: list[str] = [
         "# switchobs demo report",
         "",
@@ -121,9 +123,10 @@ def demo_markdown(report: Any) -> str:
             "![encoder compensation](encoder.png)", "",
             "![braking overview](braking.png)", "",
             "## 6. Limits", "",
-            "* The 60-ppr encoder's TSA window spans 15 edges (19 ms at 144 km/h, more when slower): it smooths "
-            "the fast x2 swings of the ABS cycle, so the encoder-fed estimate is an order of magnitude worse "
-            "than with the exact x2 (table above); docs/encoders.md shows the same on the seed scenarios.",
+            f"* The {st.encoder_ppr}-ppr encoder's TSA window spans {st.tsa_window} edges ({window_ms:.0f} ms at "
+            f"{3.6 * st.speed_m_s:.0f} km/h, longer when slower): it smooths the fast x2 swings of the ABS cycle, so "
+            "the encoder-fed estimate is an order of magnitude worse than with the exact x2 (table above); "
+            "docs/encoders.md shows the same on the seed scenarios.",
             "* The estimate the controller reads describes the wheel at the window centre (measurement time "
             "line), i.e. it is late by the lag above.",
             "* The five-phase thresholds read the plant's x2 (see *What is in the loop*).",
