@@ -133,10 +133,34 @@ def test_demo_stops_cleanly_when_a_package_does_not_import(monkeypatch, capsys, 
     assert len(err) == 1 and err[0].startswith("switchobs demo: error: stage 'codegen' cannot run: importing casadi")
 
 
+def test_demo_cli_stops_cleanly_when_matplotlib_is_broken(tmp_path):
+    # a package earlier on sys.path that fails to import, as a broken installation would
+    fake = tmp_path / "fake" / "matplotlib"
+    fake.mkdir(parents=True)
+    (fake / "__init__.py").write_text('raise ImportError("matplotlib is broken (simulated)")\n')
+    env = {**os.environ, "PYTHONPATH": str(tmp_path / "fake")}
+    proc = subprocess.run([sys.executable, "-m", "switchobs", "demo", "--fast", "--out", str(tmp_path / "o")],
+                          capture_output=True, text=True, env=env, timeout=120)
+    assert proc.returncode == 2
+    assert proc.stderr.strip().splitlines() == [
+        "switchobs demo: error: stage 'report' cannot run: importing matplotlib failed (matplotlib is broken "
+        "(simulated)); reinstall with `make install` (or pip install -e .)"]
+    assert not (tmp_path / "o").exists()
+
+
 def test_prerequisites_name_the_first_stage_that_cannot_run(monkeypatch):
     monkeypatch.setitem(sys.modules, "no_such_package_xyz", None)
     with pytest.raises(PrerequisiteError, match="stage 'b' cannot run: importing no_such_package_xyz"):
         check_prerequisites([Stage("a", ("math",)), Stage("b", ("no_such_package_xyz",)), Stage("c", ("os",))])
+
+
+@pytest.mark.parametrize("module", ["_progress", "_markdown", "_theory"])
+def test_report_docstring_examples(module):
+    import doctest
+    import importlib
+
+    result = doctest.testmod(importlib.import_module(f"switchobs.report.{module}"), optionflags=doctest.ELLIPSIS)
+    assert result.attempted > 0 and result.failed == 0
 
 
 def test_progress_reports_each_stage_and_a_failure():

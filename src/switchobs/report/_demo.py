@@ -30,15 +30,18 @@ import json
 import math
 import time
 from collections.abc import Mapping, Sequence
-from dataclasses import dataclass, field
+from dataclasses import asdict, dataclass, field, fields
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 import numpy.typing as npt
 
 from ..exceptions import SimulationError
 from ._progress import Progress, Stage, check_prerequisites
+
+if TYPE_CHECKING:       # the plants layer is imported when a stage needs it (its prerequisites are checked first)
+    from ..plants import BrakingScenario
 
 __all__ = ["DEMO_BETAS", "DEMO_MODELS", "DemoSettings", "DemoReport", "ModelResult", "BrakingSummary",
            "ErrorRow", "run_demo", "demo_scenario", "STAGES"]
@@ -104,7 +107,12 @@ class DemoSettings:
         return cls(fast=True, duration_s=3.6, timing_steps=20_000) if fast else cls()
 
     def to_json(self) -> dict[str, Any]:
-        return dict(self.__dict__)
+        return asdict(self)
+
+    def __str__(self) -> str:
+        return (f"demo settings ({'fast' if self.fast else 'full'}): {3.6 * self.speed_m_s:g} km/h, wet at "
+                f"{self.wet_at_s:g} s, snow at {self.snow_at_s:g} s, stop at {3.6 * self.stop_speed_m_s:g} km/h, "
+                f"{self.encoder_ppr}-ppr encoder, TSA n = {self.tsa_window}, M = {self.harmonics}")
 
 
 @dataclass(frozen=True)
@@ -131,10 +139,17 @@ class ModelResult:
     c_vs_python: float = math.nan
 
     def to_json(self) -> dict[str, Any]:
-        out = dict(self.__dict__)
+        out = {f.name: getattr(self, f.name) for f in fields(self)}
         out["exact_checks"] = dict(self.exact_checks)
         out["verification"] = [list(v) for v in self.verification]
         return {k: (list(v) if isinstance(v, tuple) else v) for k, v in out.items()}
+
+    def __str__(self) -> str:
+        return (f"{self.model}: spectrum {{{self.spectrum}}}, K_plus = [{', '.join(f'{k:.6g}' for k in self.K_plus)}], "
+                f"K_minus = [{', '.join(f'{k:.6g}' for k in self.K_minus)}]; exact checks "
+                f"{'hold' if all(self.exact_checks.values()) else 'FAIL'}; certificate "
+                f"{'verified' if self.verified else 'NOT verified'} ({self.certificate}); "
+                f"C {self.c_prefix}: {self.c_run_ns:.0f} ns per step")
 
 
 @dataclass(frozen=True)
@@ -149,7 +164,11 @@ class ErrorRow:
     rms_settled: float
 
     def to_json(self) -> dict[str, Any]:
-        return dict(self.__dict__)
+        return asdict(self)
+
+    def __str__(self) -> str:
+        return (f"{self.estimator}, {self.segment}: median {self.median:.3f}, 90th percentile {self.p90:.3f}, "
+                f"RMS {self.rms:.3f} (settled {self.rms_settled:.3f})")
 
 
 @dataclass(frozen=True)
@@ -175,10 +194,18 @@ class BrakingSummary:
     wall_time_s: float
 
     def to_json(self) -> dict[str, Any]:
-        out = dict(self.__dict__)
+        out = {f.name: getattr(self, f.name) for f in fields(self)}
         out["errors"] = [e.to_json() for e in self.errors]
         out["x2_rms"] = {k: dict(v) for k, v in self.x2_rms.items()}
         return out
+
+    def __str__(self) -> str:
+        dist = "n/a" if self.braking_distance_m is None else f"{self.braking_distance_m:.2f} m"
+        lines = [self.scenario, f"  {self.status}; stopping distance {self.stopping_distance_m:.2f} m, braking "
+                 f"distance v0²/(2gμ̄) {dist}; {self.abs_cycles} ABS cycles; {self.encoder_events} encoder edges, "
+                 f"measurement lag {self.lag_mean_ms:.1f} ms"]
+        lines += [f"  {e}" for e in self.errors]
+        return "\n".join(lines)
 
 
 @dataclass(frozen=True)
@@ -220,7 +247,7 @@ class DemoReport:
         return "\n".join(lines)
 
 
-def demo_scenario(settings: DemoSettings):  # noqa: ANN201 - BrakingScenario, imported lazily
+def demo_scenario(settings: DemoSettings) -> BrakingScenario:
     """The braking scenario of the demo: dry -> wet -> snow (seed 000 Table I), five-phase ABS with tracking."""
     from ..plants import BrakingScenario, FivePhaseABS, QuarterCar, RoadChange, RoadSchedule
 

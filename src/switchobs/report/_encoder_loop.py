@@ -108,6 +108,24 @@ class EncoderLoopRecord:
         """Age of the measurement at each sample, ``t - t_measured`` [s]."""
         return self.t - self.t_measured
 
+    def to_json(self) -> dict[str, Any]:
+        """Arrays as lists (NaN as None)."""
+        def clean(a: Array) -> list[float | None]:
+            return [None if math.isnan(v) else float(v) for v in np.asarray(a, dtype=float)]
+        return {"t": clean(self.t), "t_measured": clean(self.t_measured), "x2_tsa": clean(self.x2_tsa),
+                "x2_measured": clean(self.x2_measured), "omega_tsa": clean(self.omega_tsa),
+                "omega_measured": clean(self.omega_measured), "vx": clean(self.vx),
+                "estimates": {k: clean(v) for k, v in self.estimates.items()},
+                "substeps": [int(v) for v in self.substeps], "events": self.events,
+                "steps_t": clean(self.steps_t), "omega_steps": clean(self.omega_steps),
+                "beside": {k: clean(v) for k, v in self.beside.items()}}
+
+    def __str__(self) -> str:
+        ok = np.isfinite(self.t_measured)
+        lag = f"{1e3 * float(np.mean(self.lag_s[ok])):.1f} ms" if np.any(ok) else "n/a"
+        return (f"encoder loop: {self.t.size} samples, {self.events} edges, mean measurement lag {lag}, "
+                f"observers {', '.join(self.estimates)}" + (f"; beside {', '.join(self.beside)}" if self.beside else ""))
+
 
 class EncoderLoopEstimator:
     """XBS observers fed by a simulated wheel encoder with three-stage compensation, inside the ABS loop.

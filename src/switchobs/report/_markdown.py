@@ -10,7 +10,16 @@ __all__ = ["md_table", "demo_markdown"]
 
 
 def md_table(headers: Sequence[str], rows: Sequence[Sequence[Any]]) -> str:
-    """A GitHub-flavoured Markdown table; numbers right-aligned."""
+    """A GitHub-flavoured Markdown table; columns of numbers right-aligned.
+
+    Examples
+    --------
+    >>> print(md_table(["road", "mu"], [["dry", 1.2], ["snow", 0.3]]))
+    | road | mu |
+    | --- | ---: |
+    | dry | 1.2 |
+    | snow | 0.3 |
+    """
     def cell(v: Any) -> str:
         return str(v).replace("|", "\\|")
     numeric = [all(isinstance(r[i], (int, float)) or str(r[i]).lstrip("-").replace(".", "", 1).isdigit()

@@ -42,6 +42,14 @@ def check_prerequisites(stages: Sequence[Stage]) -> None:
     ------
     PrerequisiteError
         Naming the first stage that cannot run, what it misses and how to get it.
+
+    Examples
+    --------
+    >>> check_prerequisites([Stage("design", ("sympy",))])      # nothing missing: returns None
+    >>> check_prerequisites([Stage("plot", ("no_such_module",))])
+    Traceback (most recent call last):
+    ...
+    switchobs.exceptions.PrerequisiteError: stage 'plot' cannot run: importing no_such_module failed (No module named 'no_such_module'); reinstall with `make install` (or pip install -e .)
     """
     for stage in stages:
         for module in stage.modules:
@@ -69,6 +77,16 @@ class Progress:
         Number of stages.
     stream : text stream, optional
         Default ``sys.stderr``; ``None`` keeps quiet.
+
+    Examples
+    --------
+    >>> import io
+    >>> out = io.StringIO()
+    >>> progress = Progress(1, stream=out)
+    >>> with progress.stage("design", "symbolic gains"):
+    ...     progress.note("abs-xbs3 done")
+    >>> out.getvalue().splitlines()[:2]
+    ['[1/1] design: symbolic gains', '      abs-xbs3 done']
     """
 
     total: int

@@ -47,6 +47,12 @@ class TheoryDocument:
     def filename(self) -> str:
         return f"{self.name}.md"
 
+    def to_json(self) -> dict[str, str]:
+        return {"name": self.name, "filename": self.filename, "text": self.text}
+
+    def __str__(self) -> str:
+        return f"{self.filename}: {self.text.splitlines()[0].lstrip('# ')} ({len(self.text.splitlines())} lines)"
+
 
 def _names(*exprs: sp.Basic) -> dict[sp.Symbol, str]:
     """LaTeX names: ``vx`` -> ``v_x``, ``k1_minus`` -> ``k^{-}_{1}``."""
@@ -121,6 +127,14 @@ def theory_document(model: Model, spectrum: str, spectrum_source: str) -> Theory
     References
     ----------
     seed 004 (time rescaling, normal form, Theorem 1); the model's own ``references``.
+
+    Examples
+    --------
+    >>> doc = theory_document(builtin_model("normal-form-2"), "-q,-q", "a double pole")
+    >>> print(doc)
+    normal-form-2.md: Theory of the `normal-form-2` model (155 lines)
+    >>> "a_{2} + q^{2}" in doc.text     # K_plus[2] = a_2 + q^2 (normal form: a + alpha)
+    True
     """
     n = model.n
     d: GainDesign = design(model, spectrum)
