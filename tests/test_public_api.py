@@ -38,3 +38,22 @@ def test_lower_layers_never_import_higher_ones(layer):
                     target = node.module.split(".")[1]
             if target in RANK:
                 assert RANK[target] <= RANK[layer], f"{path} imports the higher layer {target}"
+
+
+def test_a_broken_dependency_disables_only_its_commands(tmp_path):
+    """A casadi that fails to import must not crash `switchobs design` (which does not need it)."""
+    import os
+    import subprocess
+    import sys
+
+    fake = tmp_path / "casadi"
+    fake.mkdir()
+    (fake / "__init__.py").write_text("raise ImportError('broken casadi')\n")
+    env = {**os.environ, "PYTHONPATH": str(tmp_path)}
+    ok = subprocess.run([sys.executable, "-m", "switchobs", "design", "abs-xbs3", "--spectrum=-1,-2,-3"],
+                        capture_output=True, text=True, env=env, timeout=120)
+    assert ok.returncode == 0, ok.stderr
+    broken = subprocess.run([sys.executable, "-m", "switchobs", "codegen", "abs-xbs3", "--out", str(tmp_path / "c")],
+                            capture_output=True, text=True, env=env, timeout=120)
+    assert broken.returncode == 2 and "Traceback" not in broken.stderr
+    assert "command 'codegen' cannot run" in broken.stderr and "broken casadi" in broken.stderr

@@ -20,6 +20,7 @@ simulate, scenario, table41, road, PoincareMap
                                             -- switchobs.plants (ABS)
 Encoder, encoder_chain, ThreeStageEstimator, super_twisting
                                             -- switchobs.sensors (wheel encoders)
+run_demo, write_theory, theory_documents    -- switchobs.report (main job, theory/)
 
 Names are loaded on first use, so ``import switchobs`` stays cheap (cvxpy and
 casadi are imported only by the layers that need them).
@@ -42,6 +43,7 @@ _EXPORTS = {
                             "adaptive_xbs_observer"),
     "switchobs.plants": ("simulate", "scenario", "table41", "road", "PoincareMap"),
     "switchobs.sensors": ("Encoder", "encoder_chain", "ThreeStageEstimator", "super_twisting"),
+    "switchobs.report": ("run_demo", "write_theory", "theory_documents"),
 }
 _WHERE = {name: module for module, names in _EXPORTS.items() for name in names}
 

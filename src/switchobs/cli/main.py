@@ -16,7 +16,7 @@ import os
 import sys
 from collections.abc import Sequence
 
-from ..exceptions import SwitchobsError
+from ..exceptions import PrerequisiteError, SwitchobsError
 
 __all__ = ["main", "build_parser"]
 
@@ -31,8 +31,26 @@ def build_parser() -> argparse.ArgumentParser:
     sub = parser.add_subparsers(dest="command", metavar="COMMAND")
     sub.required = True
     for name in COMMANDS:
-        importlib.import_module(f"switchobs.cli._{name}").register(sub)
+        try:
+            module = importlib.import_module(f"switchobs.cli._{name}")
+        except ImportError as exc:  # a broken casadi/cvxpy must not take every command down
+            _register_unavailable(sub, name, exc)
+        else:
+            module.register(sub)
     return parser
+
+
+def _register_unavailable(sub: argparse._SubParsersAction, name: str, exc: ImportError) -> None:
+    what = f"importing {exc.name} failed" if exc.name else "a dependency failed to import"
+    message = (f"command {name!r} cannot run: {what} ({exc}); "
+               "reinstall with `make install` (or pip install -e .)")
+
+    def unavailable(args: argparse.Namespace) -> int:
+        raise PrerequisiteError(message)
+
+    p = sub.add_parser(name, help=f"(unavailable: {exc})", add_help=False)
+    p.add_argument("rest", nargs=argparse.REMAINDER)
+    p.set_defaults(func=unavailable)
 
 
 #: Options whose value may start with "-" (a pole "-beta1", a gain "-2"); argparse would

@@ -12,12 +12,12 @@ StepStatus          -- status codes of ``<prefix>_step`` / ``<prefix>_run``
 default_prefix      -- ``switchobs_<model>`` with non-identifier characters as ``_``
 """
 
-from ._build import CObserver, cache_directory, compile_observer
+from ._build import CObserver, cache_directory, compile_observer, find_compiler
 from ._generate import (METHODS, REALS, GeneratedObserver, default_prefix, generate_observer,
                         generate_super_twisting)
 from ._status import STATUS_TEXT, StepStatus
 from ._translate import Guard, domain_guards
 
 __all__ = ["CObserver", "GeneratedObserver", "Guard", "METHODS", "REALS", "STATUS_TEXT", "StepStatus",
-           "cache_directory", "compile_observer", "default_prefix", "domain_guards", "generate_observer",
+           "cache_directory", "compile_observer", "find_compiler", "default_prefix", "domain_guards", "generate_observer",
            "generate_super_twisting"]

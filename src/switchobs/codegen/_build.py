@@ -55,7 +55,7 @@ def find_compiler(compiler: str | None = None) -> str:
         path = shutil.which(cand)
         if path:
             return path
-    raise CodegenError(f"no C compiler found (tried {candidates}); install gcc or set CC")
+    raise CodegenError(f"no C compiler found (tried {', '.join(candidates)} on PATH); install gcc or set CC")
 
 
 def compile_shared(gen: GeneratedObserver, *, compiler: str | None = None,

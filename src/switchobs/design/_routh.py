@@ -120,6 +120,8 @@ def readable_condition(g: sp.Expr, unknowns: Sequence[sp.Symbol] = (), *, max_op
         bound = _tidy(-rest / coef)
         return sp.StrictGreaterThan(k, bound, evaluate=False) if coef.is_positive else \
             sp.StrictLessThan(k, bound, evaluate=False)
+    if core.is_positive or core.is_negative:  # e.g. 1 > 0 once positive factors are dropped
+        return sp.true if core.is_positive else sp.false
     return sp.StrictGreaterThan(_tidy(core), 0, evaluate=False)
 
 

@@ -3,8 +3,6 @@
 from __future__ import annotations
 
 import importlib
-import os
-import shutil
 import sys
 import time
 from collections.abc import Iterator, Mapping, Sequence
@@ -12,7 +10,7 @@ from contextlib import contextmanager
 from dataclasses import dataclass, field
 from typing import TextIO
 
-from ..exceptions import PrerequisiteError
+from ..exceptions import CodegenError, PrerequisiteError
 
 __all__ = ["Progress", "Stage", "check_prerequisites"]
 
@@ -60,11 +58,12 @@ def check_prerequisites(stages: Sequence[Stage]) -> None:
                     f"stage {stage.name!r} cannot run: importing {module} failed ({exc}); "
                     "reinstall with `make install` (or pip install -e .)") from None
         if stage.compiler:
-            names = [c for c in (os.environ.get("CC"), "gcc", "cc") if c]
-            if not any(shutil.which(c) for c in names):
-                raise PrerequisiteError(
-                    f"stage {stage.name!r} cannot run: no C compiler found (tried {', '.join(names)} on PATH); "
-                    "install gcc or set CC")
+            from ..codegen import find_compiler  # importable: the stage's modules were checked above
+
+            try:
+                find_compiler()
+            except CodegenError as exc:
+                raise PrerequisiteError(f"stage {stage.name!r} cannot run: {exc}") from None
 
 
 @dataclass
