@@ -9,7 +9,7 @@ import numpy as np
 
 from .exceptions import DimensionError
 
-__all__ = ["named_vector", "adaptation_gain"]
+__all__ = ["named_vector", "signal_matrix", "adaptation_gain"]
 
 
 def named_vector(values: Any, names: Sequence[str], what: str) -> np.ndarray:
@@ -21,6 +21,18 @@ def named_vector(values: Any, names: Sequence[str], what: str) -> np.ndarray:
     if arr.shape != (len(names),):
         raise DimensionError(f"{what} has the wrong shape; expected ({len(names)},) for ({', '.join(names)}) "
                              f"instead of {arr.shape}")
+    return arr
+
+
+def signal_matrix(rows: Any, names: Sequence[str]) -> np.ndarray:
+    """Rows of signals (one column per name) as a float array; DimensionError naming the shape otherwise."""
+    try:
+        arr = np.asarray(rows, dtype=float)
+    except (TypeError, ValueError):
+        raise DimensionError(f"signal_rows must be a k x {len(names)} array of numbers") from None
+    if arr.ndim != 2 or arr.shape[1] != len(names):
+        raise DimensionError(f"signal_rows has the wrong shape; expected (k, {len(names)}) "
+                             f"for ({', '.join(names)}) instead of {arr.shape}")
     return arr
 
 

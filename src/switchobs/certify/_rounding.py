@@ -238,9 +238,7 @@ def project_primal(As: Sequence[Matrix], P_num: np.ndarray, rel_tol: float
     for p, (U, r) in enumerate(zip(faces, ranks)):
         if r == 0:
             continue
-        Uf = np.array([[float(x) for x in row] for row in U])
-        pinv = np.linalg.pinv(Uf)
-        start += [Fraction(x) for x in _vech_coords(pinv @ W_nums[p] @ pinv.T, r)]
+        start += _face_start(U, W_nums[p], r)
         for a, b in _sym_units(r):
             img = _unit_image(U, a, b)
             columns.append([img if q == p else zero for q in range(len(As))])
@@ -250,18 +248,9 @@ def project_primal(As: Sequence[Matrix], P_num: np.ndarray, rel_tol: float
     P = _assemble(p_units, z[:len(p_units)], n)
     if not definiteness(P, strict=True).holds:
         return None
-    Ws = []
-    pos = len(p_units)
-    for U, r in zip(faces, ranks):
-        if r == 0:
-            Ws.append(zero)
-            continue
-        m = r * (r + 1) // 2
-        X = _assemble(_sym_units(r), z[pos:pos + m], r)
-        pos += m
-        if not definiteness(X, strict=False).holds:
-            return None
-        Ws.append(matmul(matmul(U, X), transpose(U)))
+    Ws, _ = _face_matrices(faces, ranks, z, len(p_units), n)
+    if Ws is None:
+        return None
     return P, Ws
 
 
@@ -289,36 +278,23 @@ def project_dual(As: Sequence[Matrix], R_nums: Sequence[np.ndarray], rel_tol: fl
     for U, r, R in zip(faces, ranks, R_nums):
         if r == 0:
             continue
-        Uf = np.array([[float(x) for x in row] for row in U])
-        pinv = np.linalg.pinv(Uf)
-        start += [Fraction(x) for x in _vech_coords(pinv @ R @ pinv.T, r)]
+        start += _face_start(U, R, r)
     for A, U, r in zip(As, faces, ranks):
         for a, b in _sym_units(r):
             img = _unit_image(U, a, b)
             AR = matmul(A, img)
             columns.append([[[AR[i][j] + AR[j][i] for j in range(n)] for i in range(n)]])
     if s_rank:
-        Uf = np.array([[float(x) for x in row] for row in S_face])
-        pinv = np.linalg.pinv(Uf)
-        start += [Fraction(x) for x in _vech_coords(pinv @ S_num @ pinv.T, s_rank)]
+        start += _face_start(S_face, S_num, s_rank)
         for a, b in _sym_units(s_rank):
             img = _unit_image(S_face, a, b)
             columns.append([[[-x for x in row] for row in img]])
     z = _project(columns, start)
     if z is None:
         return None
-    Rs = []
-    pos = 0
-    for U, r in zip(faces, ranks):
-        if r == 0:
-            Rs.append([[Fraction(0)] * n for _ in range(n)])
-            continue
-        m = r * (r + 1) // 2
-        X = _assemble(_sym_units(r), z[pos:pos + m], r)
-        pos += m
-        if not definiteness(X, strict=False).holds:
-            return None
-        Rs.append(matmul(matmul(U, X), transpose(U)))
+    Rs, pos = _face_matrices(faces, ranks, z, 0, n)
+    if Rs is None:
+        return None
     S = [[Fraction(0)] * n for _ in range(n)]
     if s_rank:
         Y = _assemble(_sym_units(s_rank), z[pos:], s_rank)
@@ -326,3 +302,26 @@ def project_dual(As: Sequence[Matrix], R_nums: Sequence[np.ndarray], rel_tol: fl
             return None
         S = matmul(matmul(S_face, Y), transpose(S_face))
     return Rs, S
+
+
+def _face_start(U: Matrix, W: np.ndarray, r: int) -> list[Fraction]:
+    """Coordinates of the numeric matrix ``W`` on the face spanned by ``U`` (the projection's start point)."""
+    pinv = np.linalg.pinv(np.array([[float(x) for x in row] for row in U]))
+    return [Fraction(x) for x in _vech_coords(pinv @ W @ pinv.T, r)]
+
+
+def _face_matrices(faces: Sequence[Matrix], ranks: Sequence[int], z: Sequence[Fraction], pos: int,
+                   n: int) -> tuple[list[Matrix] | None, int]:
+    """``U X U'`` for each face from the projected coordinates ``z[pos:]``; None if an ``X`` is not PSD."""
+    out = []
+    for U, r in zip(faces, ranks):
+        if r == 0:
+            out.append([[Fraction(0)] * n for _ in range(n)])
+            continue
+        m = r * (r + 1) // 2
+        X = _assemble(_sym_units(r), z[pos:pos + m], r)
+        pos += m
+        if not definiteness(X, strict=False).holds:
+            return None, pos
+        out.append(matmul(matmul(U, X), transpose(U)))
+    return out, pos

@@ -22,8 +22,8 @@ from typing import Any
 import numpy as np
 import numpy.typing as npt
 
-from .._validate import named_vector
-from ..exceptions import CodegenError, DimensionError, ModelError, ObserverInputError
+from .._validate import named_vector, signal_matrix
+from ..exceptions import CodegenError, ModelError, ObserverInputError
 from ._generate import GeneratedObserver, generate_observer
 from ._status import STATUS_TEXT, StepStatus
 
@@ -261,13 +261,7 @@ class CObserver:
             The status of the first failing step; the message names the row.
         """
         x = self._vector(xhat0, self.state_names, "xhat0").copy()
-        try:
-            rows = np.asarray(signal_rows, dtype=float)
-        except (TypeError, ValueError):
-            raise DimensionError(f"signal_rows must be a k x {len(self.signal_names)} array of numbers") from None
-        if rows.ndim != 2 or rows.shape[1] != len(self.signal_names):
-            raise DimensionError(f"signal_rows has the wrong shape; expected (k, {len(self.signal_names)}) "
-                                 f"for ({', '.join(self.signal_names)}) instead of {rows.shape}")
+        rows = signal_matrix(signal_rows, self.signal_names)
         dt_f = self._dt(dt)
         with np.errstate(over="ignore"):
             rows_c = np.ascontiguousarray(rows, dtype=self._dtype)

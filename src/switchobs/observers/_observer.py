@@ -9,7 +9,7 @@ import numpy as np
 import numpy.typing as npt
 import sympy as sp
 
-from .._validate import adaptation_gain
+from .._validate import adaptation_gain, signal_matrix
 from ..exceptions import DimensionError, FreeSymbolError, ModelError, SimulationError
 from ..model import Model, numeric, parse_expression, rational_value
 from ._engine import SCALE, ErrorCode, Kernel, KernelSpec, _ArrayPrinter, signal_symbols
@@ -221,13 +221,7 @@ class _Observer:
         """
         k = self._kernel
         x0 = k.floats(xhat0, self.state_names, "xhat0")
-        try:
-            rows = np.asarray(signal_rows, dtype=float)
-        except (TypeError, ValueError):
-            raise DimensionError(f"signal_rows must be a k x {len(self.signal_names)} array of numbers") from None
-        if rows.ndim != 2 or rows.shape[1] != len(self.signal_names):
-            raise DimensionError(f"signal_rows has the wrong shape; expected (k, {len(self.signal_names)}) "
-                                 f"for ({', '.join(self.signal_names)}) instead of {rows.shape}")
+        rows = signal_matrix(signal_rows, self.signal_names)
         return k.run(x0, rows, dt)
 
     # ------------------------------------------------------------------ readout
