@@ -59,11 +59,7 @@ def plot_xbs(path: Path, scenario: Any, result: Any, record: Any) -> Path:
         ax.grid(alpha=0.3)
     axes[0].set_title("extended braking stiffness: true and estimated (estimates clipped to the plot)")
     axes[1].set_xlabel("t [s]")
-    mark_road_changes(axes, scenario)
-    fig.tight_layout()
-    fig.savefig(path, dpi=110)
-    plt.close(fig)
-    return path
+    return _save(fig, axes, scenario, path)
 
 
 def plot_wheel_acceleration(path: Path, scenario: Any, result: Any, record: Any) -> Path:
@@ -88,11 +84,7 @@ def plot_wheel_acceleration(path: Path, scenario: Any, result: Any, record: Any)
     ph.set_ylabel("ABS phase")
     axes[1].set_xlabel("t [s]")
     axes[0].set_title("closed-loop wheel-acceleration control (seed 000 (21)-(22)) on the C observer's XBS")
-    mark_road_changes(axes, scenario)
-    fig.tight_layout()
-    fig.savefig(path, dpi=110)
-    plt.close(fig)
-    return path
+    return _save(fig, axes, scenario, path)
 
 
 def plot_switching(path: Path, scenario: Any, result: Any, record: Any) -> Path:
@@ -118,11 +110,7 @@ def plot_switching(path: Path, scenario: Any, result: Any, record: Any) -> Path:
     axes[2].set_xlabel("t [s]")
     axes[2].legend(loc="upper left", fontsize=8)
     axes[0].set_title("switching signal: K_plus when s = y/vx > 0, K_minus when s < 0; rescaled time τ")
-    mark_road_changes(axes, scenario)
-    fig.tight_layout()
-    fig.savefig(path, dpi=110)
-    plt.close(fig)
-    return path
+    return _save(fig, axes, scenario, path)
 
 
 def plot_encoder(path: Path, scenario: Any, result: Any, record: Any) -> Path:
@@ -146,11 +134,7 @@ def plot_encoder(path: Path, scenario: Any, result: Any, record: Any) -> Path:
         ax.grid(alpha=0.3)
     axes[0].set_title(f"{scenario.vehicle.radius_m:g} m wheel, 60-ppr encoder: harmonic compensation "
                       "(seed 001 Ch. 6)")
-    mark_road_changes(axes, scenario)
-    fig.tight_layout()
-    fig.savefig(path, dpi=110)
-    plt.close(fig)
-    return path
+    return _save(fig, axes, scenario, path)
 
 
 def plot_demo(out: Path, scenario: Any, result: Any, record: Any) -> list[Path]:
@@ -162,3 +146,12 @@ def plot_demo(out: Path, scenario: Any, result: Any, record: Any) -> list[Path]:
             plot_switching(out / "switching.png", scenario, result, record),
             plot_encoder(out / "encoder.png", scenario, result, record),
             plot_braking(result, out / "braking.png")]
+
+
+def _save(fig: Any, axes: Any, scenario: Any, path: Path) -> Path:
+    """Mark the road changes, write the figure and free it (every demo plot ends this way)."""
+    mark_road_changes(axes, scenario)
+    fig.tight_layout()
+    fig.savefig(path, dpi=110)
+    _pyplot().close(fig)
+    return path
