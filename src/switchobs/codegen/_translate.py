@@ -206,23 +206,21 @@ def domain_guards(model: Model) -> tuple[Guard, ...]:
                 return
         guards.append(Guard(sp.sympify(expr), kind, status, reason))
 
-    for name in model.parameters:
+    def declared_sign(name: str, status: StepStatus, label: str) -> None:
         sym = model.symbols[name]
-        if sym.is_positive:
-            add(sym, "positive", StepStatus.BAD_PARAM, f"parameter {name} is declared positive")
-        elif sym.is_negative:
-            add(sym, "negative", StepStatus.BAD_PARAM, f"parameter {name} is declared negative")
+        for kind in ("positive", "negative"):
+            if getattr(sym, f"is_{kind}"):
+                add(sym, kind, status, f"{label} {name} is declared {kind}")
+
+    for name in model.parameters:
+        declared_sign(name, StepStatus.BAD_PARAM, "parameter")
     everything = [model.time_scale, *model.A, *model.C, *model.d, *model.b]
     for expr in everything:
         for arg, kind, reason in _domain_conditions(expr):
             if arg.free_symbols <= params:
                 add(arg, kind, StepStatus.BAD_PARAM, reason)
     for name in model.external:
-        sym = model.symbols[name]
-        if sym.is_positive:
-            add(sym, "positive", StepStatus.UNDEFINED_TIME_SCALE, f"signal {name} is declared positive")
-        elif sym.is_negative:
-            add(sym, "negative", StepStatus.UNDEFINED_TIME_SCALE, f"signal {name} is declared negative")
+        declared_sign(name, StepStatus.UNDEFINED_TIME_SCALE, "signal")
     for arg, kind, reason in _domain_conditions(model.time_scale):
         add(arg, kind, StepStatus.UNDEFINED_TIME_SCALE, f"{reason} in the time scaling s = {model.time_scale}")
     for expr in [*model.d, *model.b]:
