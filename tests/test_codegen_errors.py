@@ -65,7 +65,7 @@ def _raw(c: CObserver):
     real = ctypes.c_float if c.real == "float" else ctypes.c_double
     fn = getattr(lib, f"{c.generated.prefix}_step")
     fn.argtypes = [ctypes.c_void_p, ctypes.c_void_p, ctypes.c_void_p, real]
-    fn.restype = ctypes.c_int
+    fn.restype = ctypes.c_int32
     dtype = np.float32 if c.real == "float" else np.float64
     return fn, dtype
 
@@ -113,7 +113,7 @@ def test_run_stops_at_the_first_failing_row_and_names_it(xbs4):
     # the C run: xhat holds the state after the 6 good steps, rows 0..5 are written, the rest untouched
     lib = ctypes.CDLL(str(c.library_path))
     run = getattr(lib, f"{c.generated.prefix}_run")
-    run.argtypes = [ctypes.c_void_p, ctypes.c_void_p, ctypes.c_long, ctypes.c_void_p, ctypes.c_double,
+    run.argtypes = [ctypes.c_void_p, ctypes.c_void_p, ctypes.c_int32, ctypes.c_void_p, ctypes.c_double,
                     ctypes.c_void_p]
     x = np.array(X0, dtype=float)
     traj = np.full((10, 4), -7.0)
@@ -240,7 +240,7 @@ def test_cli_codegen_writes_the_files_and_json(tmp_path, capsys):
     assert sorted(p.name for p in out.iterdir()) == ["README.md", "switchobs_abs_xbs3.c", "switchobs_abs_xbs3.h"]
     assert data["real"] == "float" and data["parameters"]["K_plus_z1"] == 194.0
     header = (out / "switchobs_abs_xbs3.h").read_text()
-    assert "int switchobs_abs_xbs3_step(float *xhat, const float *signals, const float *params, float dt);" in header
+    assert "int32_t switchobs_abs_xbs3_step(float *xhat, const float *signals, const float *params, float dt);" in header
     assert "--spectrum=-beta1,-beta2,-beta2" in header  # the command that regenerates the files
     assert main(["codegen", "abs-adaptive2", "--spectrum", "-15,-15", "--unknown", "c,d", "--gamma", "50,0;0,20",
                  "--prefix", "adapt", "--out", str(tmp_path / "ad")]) == 0

@@ -2,14 +2,20 @@
 
 from __future__ import annotations
 
+import math
 from collections.abc import Sequence
+from fractions import Fraction
 from typing import Any
 
 import numpy as np
 
 from .exceptions import DimensionError
 
-__all__ = ["named_vector", "signal_matrix", "adaptation_gain"]
+__all__ = ["named_vector", "signal_matrix", "adaptation_gain", "substep_bound", "round_down",
+           "DEFAULT_MAX_SUBSTEPS"]
+
+#: Sub-steps allowed per step when a step bound h_max is given and max_substeps is not.
+DEFAULT_MAX_SUBSTEPS = 64
 
 
 def named_vector(values: Any, names: Sequence[str], what: str) -> np.ndarray:
@@ -64,3 +70,48 @@ def adaptation_gain(Gamma: Any, unknown: Sequence[str], *, error: type[Exception
         raise error(f"Gamma is not positive definite: its eigenvalues are {eig.tolist()} "
                     "(seed 001 eq. (3.4) needs Gamma = Gamma' > 0)")
     return G
+
+
+def substep_bound(h_max: Any, max_substeps: Any, *, error: type[Exception]) -> tuple[Fraction, int] | None:
+    """The certified step bound in rescaled time as an exact rational, and the sub-step limit.
+
+    ``h_max`` is a positive finite number, a :class:`fractions.Fraction` or a
+    decimal / fraction string (``"1/100"``); a float is read as the decimal it
+    prints as (``0.01`` is 1/100), like every number of a model.  ``None``
+    means no bound (no sub-stepping) and then ``max_substeps`` must be ``None``
+    too; otherwise ``max_substeps`` defaults to :data:`DEFAULT_MAX_SUBSTEPS`.
+    """
+    if h_max is None:
+        if max_substeps is not None:
+            raise error(f"max_substeps = {max_substeps!r} has no effect without h_max; give h_max too")
+        return None
+    try:
+        if isinstance(h_max, bool):
+            raise TypeError
+        exact = Fraction(repr(h_max)) if isinstance(h_max, float) else Fraction(h_max)
+    except (TypeError, ValueError, ZeroDivisionError):
+        raise error(f"h_max = {h_max!r} must be a positive finite number such as 0.01 or 1/100") from None
+    if exact <= 0:
+        raise error(f"h_max = {h_max!r} must be > 0 (a step bound in the rescaled time tau)")
+    limit = DEFAULT_MAX_SUBSTEPS if max_substeps is None else max_substeps
+    if isinstance(limit, bool) or not isinstance(limit, (int, np.integer)) or not 1 <= limit <= 2**31 - 1:
+        raise error(f"max_substeps = {max_substeps!r} must be an integer in 1 .. 2147483647")
+    return exact, int(limit)
+
+
+def round_down(value: Fraction, real: str = "double", *, error: type[Exception]) -> float:
+    """The largest ``real`` (double or IEEE single) not above the positive rational ``value``.
+
+    A certified bound must not grow when it is written as a floating-point
+    literal, so it is rounded towards zero, not to nearest.
+    """
+    single = real == "float"
+    try:
+        near = float(np.float32(float(value))) if single else float(value)
+    except OverflowError:
+        near = math.inf
+    while Fraction(near) > value if math.isfinite(near) else True:
+        near = float(np.nextafter(np.float32(near), np.float32(0.0))) if single else math.nextafter(near, 0.0)
+    if not near > 0.0:
+        raise error(f"h_max = {value} is below the smallest positive {real}; give a larger bound")
+    return near

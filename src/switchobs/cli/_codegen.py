@@ -4,11 +4,15 @@ from __future__ import annotations
 
 import argparse
 import shlex
+from fractions import Fraction
+from typing import Any
+
+import sympy as sp
 
 from ..codegen import generate_observer, generate_super_twisting
-from ..design import design
-from ..exceptions import CodegenError, SpectrumError
-from ..model import load_model
+from ..design import GainDesign, design
+from ..exceptions import CodegenError, FreeSymbolError, PrerequisiteError, SpectrumError
+from ..model import Model, load_model, rational_value
 from ._common import emit_json, parse_params
 
 __all__ = ["register"]
@@ -39,6 +43,12 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--real", choices=("double", "float"), default="double", help="C real type (default double)")
     p.add_argument("--method", choices=("rk4", "euler"), default=None,
                    help="discretisation, signals held over the step (default rk4; super-twisting: euler)")
+    p.add_argument("--h-max", metavar="auto|VALUE",
+                   help="certified bound on the step |s|*dt in the rescaled time: a step beyond it is split into "
+                        "sub-steps (H_MAX in the header, rounded down); VALUE is exact (0.01 or 1/100), auto takes "
+                        "the h_max of the discrete certificate of A_plus, A_minus (default: no sub-stepping)")
+    p.add_argument("--max-substeps", type=int, metavar="N",
+                   help="most sub-steps per step with --h-max (default 64); beyond: status SUBSTEP_LIMIT")
     p.add_argument("--prefix", help="C prefix (default switchobs_<model>, non-identifier characters as _)")
     p.add_argument("--out", required=True, metavar="DIR", help="directory for <prefix>.c, <prefix>.h, README.md")
     p.add_argument("--json", action="store_true", help="print the description as JSON")
@@ -56,6 +66,10 @@ def _command(args: argparse.Namespace) -> str:
     words += [f"--real={args.real}"]
     if args.method:
         words.append(f"--method={args.method}")
+    if args.h_max is not None:
+        words.append(f"--h-max={args.h_max}")
+    if args.max_substeps is not None:
+        words.append(f"--max-substeps={args.max_substeps}")
     if args.prefix:
         words.append(f"--prefix={args.prefix}")
     words.append("--out=DIR")
@@ -69,6 +83,25 @@ def _gamma(text: str) -> list[list[float]] | list[float]:
         return [float(v) for v in text.split(",")]
     except ValueError:
         raise CodegenError(f"--gamma expects numbers like \"50,20\" or \"50,0;0,20\", got {text!r}") from None
+
+
+def _certified_h_max(model: Model, gains: GainDesign, values: dict[str, str], method: str) -> Fraction:
+    """``h_max`` of the discrete certificate of the exact A_plus, A_minus at the given values."""
+    try:
+        from ..certify import discrete_certificate
+    except ImportError as exc:
+        raise PrerequisiteError(f"--h-max auto needs switchobs.certify.discrete_certificate, which is not "
+                                f"available ({exc}); give --h-max VALUE") from None
+    merged: dict[str, Any] = {**model.values, **{k: rational_value(v, what=k) for k, v in values.items()}}
+
+    def exact(M: sp.MatrixBase, name: str) -> sp.ImmutableMatrix:
+        free = sorted(str(x) for x in M.free_symbols if str(x) not in merged)
+        if free:
+            raise FreeSymbolError(f"{name} depends on {free}; give their values with --param")
+        return sp.ImmutableMatrix(M.xreplace({x: merged[str(x)] for x in M.free_symbols}))
+
+    cert = discrete_certificate(exact(gains.A_plus, "A_plus"), exact(gains.A_minus, "A_minus"), method=method)
+    return cert.h_max
 
 
 def run(args: argparse.Namespace) -> int:
@@ -85,6 +118,9 @@ def run(args: argparse.Namespace) -> int:
         if args.method not in (None, "euler"):
             raise CodegenError(f"{SUPER_TWISTING} is discretised by the Euler scheme of seed 003 (13); "
                                f"--method {args.method} is not available")
+        if args.h_max is not None or args.max_substeps is not None:
+            raise CodegenError(f"{SUPER_TWISTING} has no rescaled-time certificate; --h-max and --max-substeps "
+                               "apply to the switched observers")
         try:
             lam, alpha = float(values["lam"]), float(values["alpha"])
         except ValueError:
@@ -100,9 +136,12 @@ def run(args: argparse.Namespace) -> int:
         unknown = [u.strip() for u in args.unknown.split(",")] if args.unknown else []
         if args.gamma and not unknown:
             raise CodegenError("--gamma is the adaptation gain of the adaptive observer; give --unknown too")
-        gen = generate_observer(model, gains, values=values, real=args.real, method=args.method or "rk4",
+        method = args.method or "rk4"
+        h_max = (_certified_h_max(model, gains, values, method) if args.h_max == "auto" else args.h_max)
+        gen = generate_observer(model, gains, values=values, real=args.real, method=method,
                                 prefix=args.prefix, unknown=unknown,
-                                Gamma=_gamma(args.gamma) if args.gamma else None, command=command)
+                                Gamma=_gamma(args.gamma) if args.gamma else None, h_max=h_max,
+                                max_substeps=args.max_substeps, command=command)
     paths = gen.write(args.out)
     if args.json:
         data = gen.to_json()

@@ -23,7 +23,7 @@ import numpy as np
 import numpy.typing as npt
 
 from .._validate import named_vector, signal_matrix
-from ..exceptions import CodegenError, ModelError, ObserverInputError
+from ..exceptions import CodegenError, DimensionError, ModelError, ObserverInputError
 from ._generate import GeneratedObserver, generate_observer
 from ._status import STATUS_TEXT, StepStatus
 
@@ -33,6 +33,8 @@ __all__ = ["CObserver", "compile_observer", "compile_shared", "cache_directory",
 BUILD_FLAGS: tuple[str, ...] = ("-std=c99", "-O2", "-fPIC", "-shared")
 
 _LIBRARIES: dict[Path, ctypes.CDLL] = {}
+#: Largest n_steps of ``<prefix>_run`` (an int32_t, so that the API is the same on 16/32/64-bit targets).
+_INT32_MAX = 2**31 - 1
 
 
 def cache_directory() -> Path:
@@ -99,10 +101,10 @@ def _library(path: Path, gen: GeneratedObserver) -> ctypes.CDLL:
         ptr = ctypes.POINTER(real)
         step = getattr(lib, f"{gen.prefix}_step")
         step.argtypes = [ptr, ptr, ptr, real]
-        step.restype = ctypes.c_int
+        step.restype = ctypes.c_int32
         run = getattr(lib, f"{gen.prefix}_run")
-        run.argtypes = [ptr, ptr, ctypes.c_long, ptr, real, ptr]
-        run.restype = ctypes.c_int
+        run.argtypes = [ptr, ptr, ctypes.c_int32, ptr, real, ptr]
+        run.restype = ctypes.c_int32
         _LIBRARIES[path] = lib
     return lib
 
@@ -161,12 +163,14 @@ class CObserver:
         ``reference`` is a ``switchobs.observers.SwitchedObserver`` or
         ``AdaptiveSwitchedObserver`` (read through its public attributes
         ``model``, ``K_plus``, ``K_minus``, ``values``, ``method``, ``unknown``,
-        ``Gamma``, ``readout``).
+        ``Gamma``, ``readout``, ``h_max``, ``max_substeps``).
         """
         unknown = tuple(getattr(reference, "unknown", ()))
         gen = generate_observer(reference.model, (reference.K_plus, reference.K_minus),
                                 values=dict(reference.values), real=real, method=reference.method, prefix=prefix,
-                                unknown=unknown, Gamma=reference.Gamma if unknown else None)
+                                unknown=unknown, Gamma=reference.Gamma if unknown else None,
+                                h_max=getattr(reference, "h_max", None),
+                                max_substeps=getattr(reference, "max_substeps", None))
         has_readout = getattr(reference, "readout_expression", None) is not None
         return cls(gen, readout=reference.readout if has_readout else None, compiler=compiler, cache_dir=cache_dir)
 
@@ -222,6 +226,10 @@ class CObserver:
             StepStatus.NONFINITE_RESULT: f"signals {named(self.signal_names, sig)}; reduce dt or check the signals",
             StepStatus.BAD_PARAM: f"params {named(self.generated.param_names, self.params)}",
             StepStatus.BAD_ARGUMENT: "a NULL pointer or negative count reached the C code",
+            StepStatus.SUBSTEP_LIMIT: f"signals {named(self.signal_names, sig)}, dt = {dt!r}: |s|*dt needs more "
+                                      f"than MAX_SUBSTEPS = {self.generated.max_substeps} sub-steps of H_MAX = "
+                                      f"{self.generated.h_max_c!r}; reduce dt or regenerate with a larger "
+                                      "max_substeps",
         }.get(status, "")
         return ObserverInputError(f"C observer step refused ({status.name}, code {int(status)}): {where}"
                                   f"{STATUS_TEXT[status]}: {detail}", int(status))
@@ -266,6 +274,9 @@ class CObserver:
         with np.errstate(over="ignore"):
             rows_c = np.ascontiguousarray(rows, dtype=self._dtype)
         k = rows_c.shape[0]
+        if k > _INT32_MAX:
+            raise DimensionError(f"signal_rows has {k} rows; the C _run takes at most {_INT32_MAX} (int32_t) "
+                                 "per call: split the record")
         if not (math.isfinite(dt_f) and dt_f > 0.0) or not np.isfinite(x).all():
             # the checks of the first step, also when there is no row (as the reference does)
             code = StepStatus.BAD_DT if not (math.isfinite(dt_f) and dt_f > 0.0) else StepStatus.NONFINITE_STATE

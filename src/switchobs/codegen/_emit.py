@@ -42,6 +42,11 @@ _ARG = re.compile(r"arg\[(\d+)\]\? arg\[\1\]\[(\d+)\] : 0")
 _RES = re.compile(r"if \(res\[0\]!=0\) res\[0\]\[(\d+)\]=")
 _LOCAL = re.compile(r"^a\d+$")
 _NUMBER = re.compile(r"(?<![\w.])\d+(?:\.\d*)?(?:[eE][+-]?\d+)?[fF]?(?![\w.])")
+# casadi tests reals for truth (``a1=(a0?a2:0);``, ``a1=(!a0);``): clang's -Wfloat-conversion refuses the
+# implicit real -> _Bool conversion, so the tests are written as comparisons with 0.
+_TRUTH = re.compile(r"\((a\d+)\?")
+_NOT = re.compile(r"\(!(a\d+)\)")
+_BOOLEAN = re.compile(r"\?|!(?!=)|&&|\|\|")
 
 
 def float_literal(value: float, real: str) -> str:
@@ -128,6 +133,10 @@ def kernel(name: str, inputs: Sequence[tuple[str, ca.SX]], output: ca.SX, *, rea
         line = _ARG.sub(arg, line)
         line = _RES.sub(lambda m: f"out[{m.group(1)}]=", line)
         line = line.replace("casadi_real", real)
+        line = _NOT.sub(r"(\1==0)", _TRUTH.sub(r"(\1!=0?", line))
+        if _BOOLEAN.search(line.replace("!=0?", "")):
+            raise CodegenError(f"unexpected logical operator in casadi's C for {name} ({line!r}); "
+                               f"casadi {ca.__version__} output is not supported by switchobs.codegen")
         for helper, repl in _HELPERS.items():
             line = re.sub(rf"\b{helper}\(", repl.format(p=prefix, f=suffix) + "(", line)
         if real == "float":

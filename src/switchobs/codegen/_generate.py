@@ -13,6 +13,13 @@ its exact flow: error O(dt^5) per step, stable for ``|s| dt |lambda| < 2.78``
 on the real axis (Euler: first order, ``< 2``), a fixed count of operations,
 no iteration and no allocation -- what a brake ECU wants -- and the same
 scheme as the Python reference observers, so that the two agree to rounding.
+
+With a certified step bound ``h_max`` (in the rescaled time ``tau = ∫|s| dt``,
+where the signals-held step is ``h = |s| dt``), a step whose ``|s| dt``
+exceeds ``H_MAX`` is split into ``n = ceil(|s| dt / H_MAX)`` sub-steps of
+``dt / n`` with the same held signals (at most ``MAX_SUBSTEPS``, else the
+status ``SUBSTEP_LIMIT``), so that every step the C takes is one the discrete
+certificate covers.
 """
 
 from __future__ import annotations
@@ -21,6 +28,7 @@ import dataclasses
 import re
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
+from fractions import Fraction
 from pathlib import Path
 from typing import Any
 
@@ -29,7 +37,7 @@ import numpy as np
 import sympy as sp
 
 from ..design import GainDesign
-from .._validate import adaptation_gain
+from .._validate import adaptation_gain, round_down, substep_bound
 from ..exceptions import CodegenError, DimensionError, ModelError
 from ..model import Model, numeric, rational_value
 from ._emit import Kernel, float_literal, kernel
@@ -112,8 +120,15 @@ class GeneratedObserver:
     signal_roles : tuple of str
         What each signal is (measured output, external signal, input).
     references : mapping str -> str
+    h_max : Fraction or None
+        Certified bound on the step ``|s| dt`` in rescaled time (exact); None: no sub-stepping.
+    h_max_c : float or None
+        ``<PREFIX>_H_MAX``: ``h_max`` rounded down to ``real``.
+    max_substeps : int or None
+        ``<PREFIX>_MAX_SUBSTEPS``: most sub-steps of one step before ``SUBSTEP_LIMIT``.
     step_function : casadi.Function
-        The same step as a casadi Function ``(x, signals, params, dt) -> x_next`` (not compared, not in JSON).
+        One step *without* sub-stepping as a casadi Function ``(x, signals, params, dt) -> x_next``
+        (not compared, not in JSON).
     """
 
     prefix: str
@@ -136,6 +151,9 @@ class GeneratedObserver:
     equations: tuple[str, ...] = ()
     signal_roles: tuple[str, ...] = ()
     references: Mapping[str, str] = field(default_factory=dict)
+    h_max: Fraction | None = None
+    h_max_c: float | None = None
+    max_substeps: int | None = None
     step_function: ca.Function | None = field(default=None, repr=False, compare=False)
 
     @property
@@ -193,6 +211,8 @@ class GeneratedObserver:
             "guards": [g.to_json() for g in self.guards],
             "status_codes": {s.name: int(s) for s in StepStatus},
             "temporaries": self.temporaries, "stack_reals": self.stack_reals,
+            "h_max": None if self.h_max is None else str(self.h_max), "h_max_c": self.h_max_c,
+            "max_substeps": self.max_substeps,
             "files": sorted(self.files), "casadi_version": self.casadi_version,
             "references": dict(self.references),
         }
@@ -208,6 +228,10 @@ class GeneratedObserver:
             f"  NP = {self.np}: {params}",
             "  checks: " + ("; ".join(str(g) for g in self.guards) or "none beyond finiteness"),
             f"  stack: {self.temporaries} temporaries, at most {self.stack_reals} reals per step",
+            "  sub-steps: " + ("none (one step per dt)" if self.h_max is None else
+                               f"|s|*dt <= H_MAX = {self.h_max_c!r} (certified h_max = {self.h_max}) per step, "
+                               f"at most MAX_SUBSTEPS = {self.max_substeps}, else SUBSTEP_LIMIT = "
+                               f"{int(StepStatus.SUBSTEP_LIMIT)}"),
         ]
         return "\n".join(lines)
 
@@ -317,8 +341,26 @@ def _model_info(model: Model, kind: str) -> _Info:
                  signal_roles=tuple(roles), references=dict(model.references))
 
 
+def _substep_check(tr: Translation, real: str, P: str) -> list[str]:
+    """C lines choosing the sub-steps: ``a = |s| dt`` (the step in tau), ``n``, ``h = dt / n``.
+
+    The non-stiff path costs one multiplication and one comparison; the Python
+    reference (``switchobs.observers``) makes the same float operations
+    (``a <= H_MAX``, else ``n = ceil(a / H_MAX)``), so both choose the same ``n``.
+    """
+    f = "f" if real == "float" else ""
+    scale = "s" if not tr.scale.is_constant() else float_literal(abs(float(tr.scale)), real)
+    return [f"    a = fabs{f}({scale}) * dt;  /* this step in the rescaled time tau */",
+            f"    if (!(a <= {P}_H_MAX)) {{",
+            f"        q = a / {P}_H_MAX;",
+            f"        if (!(q <= ({real}){P}_MAX_SUBSTEPS)) return {P}_ERR_SUBSTEP_LIMIT;",
+            f"        n = (int32_t)ceil{f}(q);",
+            f"        h = dt / ({real})n;",
+            "    }"]
+
+
 def _assemble(tr: Translation, *, info: _Info, kind: str, real: str, method: str, prefix: str,
-              command: str | None) -> GeneratedObserver:
+              command: str | None, bound: tuple[Fraction, int] | None = None) -> GeneratedObserver:
     if method not in tr.methods:
         raise CodegenError(f"the {kind} observer admits only method {list(tr.methods)}, got {method!r}")
     P = prefix.upper()
@@ -341,6 +383,11 @@ def _assemble(tr: Translation, *, info: _Info, kind: str, real: str, method: str
         kernels.append(scale_k)
         scale_check = ["    " + scale_k.call("&s", sig="sig", par="par"),
                        f"    if (!isfinite(s)) return {P}_ERR_UNDEFINED_TIME_SCALE;  /* s must be finite */"]
+    h_max_c = None
+    if bound is not None:
+        # after s is known and before the domain of d and b: the order of the Python reference's checks
+        scale_check += _substep_check(tr, real, P)
+        h_max_c = round_down(bound[0], real, error=CodegenError)
     checks: list[str] = []
     scale_done = False
     for i, (guard, expr) in enumerate(tr.guards):
@@ -361,9 +408,11 @@ def _assemble(tr: Translation, *, info: _Info, kind: str, real: str, method: str
     step_fn = ca.Function(f"{prefix}_step", [tr.x, tr.signals, tr.params, tr.dt], [full],
                           ["x", "signals", "params", "dt"], ["x_next"])
     stack_reals = max(k.temporaries for k in kernels) + len(tr.state_names) + 2
+    if bound is not None:  # the sub-step's input state, a, q, h
+        stack_reals += len(tr.state_names) + 3
     text_args = dict(tr=tr, info=info, kind=kind, real=real, method=method, prefix=prefix, P=P,
                      x_macros=x_macros, s_macros=s_macros, p_macros=p_macros, command=command,
-                     temporaries=step_k.temporaries, stack_reals=stack_reals)
+                     temporaries=step_k.temporaries, stack_reals=stack_reals, bound=bound, h_max_c=h_max_c)
     header = _header(**text_args)
     source = _source(kernels=kernels, checks=checks, **text_args)
     gen = GeneratedObserver(
@@ -372,6 +421,7 @@ def _assemble(tr: Translation, *, info: _Info, kind: str, real: str, method: str
         guards=tuple(g for g, _ in tr.guards), temporaries=step_k.temporaries, stack_reals=stack_reals,
         header=header, source=source, readme="", casadi_version=ca.__version__, description=info.description,
         equations=info.equations, signal_roles=info.signal_roles, references=dict(info.references),
+        h_max=None if bound is None else bound[0], h_max_c=h_max_c, max_substeps=None if bound is None else bound[1],
         step_function=step_fn)
     return dataclasses.replace(gen, readme=readme(gen, command=command))
 
@@ -384,6 +434,7 @@ def generate_observer(model: Model, gains: GainDesign | tuple[Sequence[float], S
                       values: Mapping[str, Any] | None = None, real: str = "double", method: str = "rk4",
                       prefix: str | None = None, unknown: Sequence[str] = (),
                       Gamma: Sequence[Sequence[float]] | np.ndarray | None = None,
+                      h_max: float | Fraction | str | None = None, max_substeps: int | None = None,
                       command: str | None = None) -> GeneratedObserver:
     """Generate the C observer of a model and its gain pair.
 
@@ -409,6 +460,16 @@ def generate_observer(model: Model, gains: GainDesign | tuple[Sequence[float], S
     Gamma : (p, p) array or its diagonal, optional
         Adaptation gain of (3.4b), symmetric positive definite, required with
         ``unknown``; its entries are runtime parameters ``Gamma_<u>_<v>``.
+    h_max : number, Fraction or str, optional
+        Certified bound on the step ``h = |s| dt`` in rescaled time (e.g. the
+        ``h_max`` of a discrete certificate).  The step splits ``dt`` into
+        ``ceil(|s| dt / H_MAX)`` sub-steps when ``|s| dt > H_MAX``, where
+        ``<PREFIX>_H_MAX`` is ``h_max`` rounded *down* to ``real``.  None (the
+        default): one step per ``dt``, no bound.
+    max_substeps : int, optional
+        ``<PREFIX>_MAX_SUBSTEPS`` (default 64, only with ``h_max``): a step
+        needing more returns ``SUBSTEP_LIMIT`` with the state unchanged; it
+        bounds the worst-case time of one step.
     command : str, optional
         Command line recorded in the files' comments.
 
@@ -439,6 +500,7 @@ def generate_observer(model: Model, gains: GainDesign | tuple[Sequence[float], S
     """
     _check_options(real, method)
     prefix = _check_prefix(default_prefix(model.name) if prefix is None else prefix)
+    bound = substep_bound(h_max, max_substeps, error=CodegenError)
     values = dict(values or {})
     design_syms = [s.name for s in gains.design_symbols] if isinstance(gains, GainDesign) else []
     defaults = _defaults(model, values, design_syms)
@@ -455,7 +517,7 @@ def generate_observer(model: Model, gains: GainDesign | tuple[Sequence[float], S
         tr = translate_switched(model, Kp, Km, defaults)
         kind = "switched"
     return _assemble(tr, info=_model_info(model, kind), kind=kind, real=real, method=method, prefix=prefix,
-                     command=command)
+                     command=command, bound=bound)
 
 
 def generate_super_twisting(lam: float, alpha: float, *, real: str = "double",
@@ -499,7 +561,7 @@ def generate_super_twisting(lam: float, alpha: float, *, real: str = "double",
 # ----------------------------------------------------------------------------- text
 def _header(*, tr: Translation, info: _Info, kind: str, real: str, method: str, prefix: str, P: str,
             x_macros: Sequence[str], s_macros: Sequence[str], p_macros: Sequence[str], command: str | None,
-            temporaries: int, stack_reals: int) -> str:
+            temporaries: int, stack_reals: int, bound: tuple[Fraction, int] | None, h_max_c: float | None) -> str:
     guard = f"{P}_H"
     scheme = ("classic RK4" if method == "rk4" else "forward Euler") + ", signals held over the step (zero-order hold)"
     lines = [
@@ -511,13 +573,22 @@ def _header(*, tr: Translation, info: _Info, kind: str, real: str, method: str, 
     ]
     if command:
         lines.append(f" * Regenerate with: {_comment(command)}")
-    lines += [" */", f"#ifndef {guard}", f"#define {guard}", "", "#ifdef __cplusplus", 'extern "C" {', "#endif", "",
+    lines += [" */", f"#ifndef {guard}", f"#define {guard}", "", "#include <stdint.h>", "",
+              "#ifdef __cplusplus", 'extern "C" {', "#endif", "",
               f"#define {P}_NX {len(tr.state_names)}  /* observer state size */",
               f"#define {P}_NS {len(tr.signal_names)}  /* signals per step: y, external signals, inputs */",
               f"#define {P}_NP {len(tr.param_names)}  /* runtime parameters */",
               f"#define {P}_SZ_W {temporaries}  /* scalar temporaries of the step kernel (casadi sz_w) */",
-              f"#define {P}_STACK_REALS {stack_reals}  /* bound on the {real}s one step keeps on the stack */",
-              "", "/* Observer state (xhat), in the model's coordinates. */"]
+              f"#define {P}_STACK_REALS {stack_reals}  /* bound on the {real}s one step keeps on the stack */"]
+    if bound is not None:
+        lines += ["",
+                  f"/* Certified step: the discrete certificate holds for every step h = |s|*dt in tau up to",
+                  f" * h_max = {bound[0]} (exact).  H_MAX is h_max rounded DOWN to {real}, so that no step",
+                  " * exceeds the certified bound; a step with |s|*dt > H_MAX is split into ceil(|s|*dt / H_MAX)",
+                  " * sub-steps of dt / n with the signals held; more than MAX_SUBSTEPS: ERR_SUBSTEP_LIMIT. */",
+                  f"#define {P}_H_MAX {float_literal(h_max_c, real)}",
+                  f"#define {P}_MAX_SUBSTEPS {bound[1]}  /* worst case: this many kernel evaluations per step */"]
+    lines += ["", "/* Observer state (xhat), in the model's coordinates. */"]
     lines += [f"#define {P}_X_{m} {i}" for i, m in enumerate(x_macros)]
     lines += ["", "/* Signals, one row per step. */"]
     lines += [f"#define {P}_S_{m} {i}  /* {role} */" for i, (m, role) in
@@ -537,23 +608,24 @@ def _header(*, tr: Translation, info: _Info, kind: str, real: str, method: str, 
         "",
         f"/* Advance xhat[{P}_NX] in place by one step of dt seconds with signals[{P}_NS] held;",
         f" * params[{P}_NP] may be NULL for the defaults.  Returns {P}_OK or an error code. */",
-        f"int {prefix}_step({real} *xhat, const {real} *signals, const {real} *params, {real} dt);",
+        f"int32_t {prefix}_step({real} *xhat, const {real} *signals, const {real} *params, {real} dt);",
         "",
         f"/* n_steps steps through the rows of signals (row-major, {P}_NS per row), writing each new",
         f" * state to trajectory (row-major, {P}_NX per row; may be NULL).  On error, returns the code of",
         " * the first failing step k: xhat holds the state after the k steps that succeeded and rows",
         " * 0..k-1 of trajectory are written. */",
-        f"int {prefix}_run({real} *xhat, const {real} *signals, long n_steps, const {real} *params, {real} dt,",
-        f"    {real} *trajectory);",
+        f"int32_t {prefix}_run({real} *xhat, const {real} *signals, int32_t n_steps, const {real} *params,",
+        f"    {real} dt, {real} *trajectory);",
         "",
         "/* A static description of a status code. */",
-        f"const char *{prefix}_status_message(int status);",
+        f"const char *{prefix}_status_message(int32_t status);",
         "", "#ifdef __cplusplus", "}", "#endif", "", f"#endif /* {guard} */", ""]
     return "\n".join(lines)
 
 
 def _source(*, tr: Translation, info: _Info, kind: str, real: str, method: str, prefix: str, P: str,
-            kernels: Sequence[Kernel], checks: Sequence[str], command: str | None, **_: Any) -> str:
+            kernels: Sequence[Kernel], checks: Sequence[str], command: str | None,
+            bound: tuple[Fraction, int] | None, **_: Any) -> str:
     nx = f"{P}_NX"
     used = "\n".join(k.body for k in kernels)
     helpers = []
@@ -566,6 +638,15 @@ def _source(*, tr: Translation, info: _Info, kind: str, real: str, method: str, 
     defaults = ",\n".join(f"    {float_literal(v, real)}  /* {n} */" for n, v in zip(tr.param_names,
                                                                                        tr.default_params))
     status_cases = "\n".join(f"    case {int(s)}: return \"{STATUS_TEXT[s]}\";" for s in StepStatus)
+    call = kernels[0].call
+    if bound is None:
+        stepping = ["    " + call("next", x="x", sig="sig", par="par", dt="dt", s="s")]
+    else:
+        stepping = ["    " + call("next", x="x", sig="sig", par="par", dt="h", s="s"),
+                    "    for (j = 1; j < n; ++j) {  /* sub-steps, signals held */",
+                    f"        for (i = 0; i < {nx}; ++i) cur[i] = next[i];",
+                    "        " + call("next", x="cur", sig="sig", par="par", dt="h", s="s"),
+                    "    }"]
     body = [
         f"/* {prefix}.c -- generated by switchobs with casadi {ca.__version__}; do not edit.",
         f" * Kernels: casadi C of the {'RK4' if method == 'rk4' else 'Euler'} step, post-processed for {real}.",
@@ -575,32 +656,39 @@ def _source(*, tr: Translation, info: _Info, kind: str, real: str, method: str, 
         "#include <math.h>",
         "#include <stddef.h>",
         "",
+        "#if defined(__FAST_MATH__) || (defined(__FINITE_MATH_ONLY__) && __FINITE_MATH_ONLY__)",
+        f'#error "{prefix}.c must not be compiled with -ffast-math or -ffinite-math-only: they let the compiler '
+        'assume that no value is NaN or infinite and delete the checks that refuse NaN and infinite inputs '
+        '(a NaN speed would then return OK with a NaN state)"',
+        "#endif",
+        "",
         *helpers,
         "" if helpers else None,
         f"const {real} {prefix}_default_params[{P}_NP] = {{\n{defaults}\n}};",
         "",
         used,
         "/* All checks of one step, then the step into next; nothing is written unless every check passes. */",
-        f"static int {prefix}_advance(const {real} *x, const {real} *sig, const {real} *par, {real} dt, "
+        f"static int32_t {prefix}_advance(const {real} *x, const {real} *sig, const {real} *par, {real} dt, "
         f"{real} *next)",
         "{",
         f"    {real} g;" if any("&g" in c for c in checks) else None,
         f"    {real} s;" if any("&s" in c for c in checks) else None,
-        "    int i;",
+        None if bound is None else f"    {real} cur[{nx}], a, q, h = dt;",
+        "    int32_t i;" if bound is None else "    int32_t i, j, n = 1;",
         f"    if (!(dt > {zero}) || !isfinite(dt)) return {P}_ERR_BAD_DT;",
         f"    for (i = 0; i < {nx}; ++i) if (!isfinite(x[i])) return {P}_ERR_NONFINITE_STATE;",
         f"    for (i = 0; i < {P}_NS; ++i) if (!isfinite(sig[i])) return {P}_ERR_NONFINITE_SIGNAL;",
         f"    for (i = 0; i < {P}_NP; ++i) if (!isfinite(par[i])) return {P}_ERR_BAD_PARAM;",
         *checks,
-        "    " + kernels[0].call("next", x="x", sig="sig", par="par", dt="dt", s="s"),
+        *stepping,
         f"    for (i = 0; i < {nx}; ++i) if (!isfinite(next[i])) return {P}_ERR_NONFINITE_RESULT;",
         "    return 0;",
         "}",
         "",
-        f"int {prefix}_step({real} *xhat, const {real} *signals, const {real} *params, {real} dt)",
+        f"int32_t {prefix}_step({real} *xhat, const {real} *signals, const {real} *params, {real} dt)",
         "{",
         f"    {real} next[{nx}];",
-        "    int i, status;",
+        "    int32_t i, status;",
         f"    if (xhat == NULL || signals == NULL) return {P}_ERR_BAD_ARGUMENT;",
         f"    status = {prefix}_advance(xhat, signals, params != NULL ? params : {prefix}_default_params, dt, next);",
         "    if (status != 0) return status;",
@@ -608,26 +696,25 @@ def _source(*, tr: Translation, info: _Info, kind: str, real: str, method: str, 
         "    return 0;",
         "}",
         "",
-        f"int {prefix}_run({real} *xhat, const {real} *signals, long n_steps, const {real} *params, {real} dt,",
-        f"    {real} *trajectory)",
+        f"int32_t {prefix}_run({real} *xhat, const {real} *signals, int32_t n_steps, const {real} *params,",
+        f"    {real} dt, {real} *trajectory)",
         "{",
         f"    {real} next[{nx}];",
-        "    long k;",
-        "    int i, status;",
+        "    int32_t i, k, status;",
         f"    if (xhat == NULL || n_steps < 0 || (signals == NULL && n_steps > 0)) return {P}_ERR_BAD_ARGUMENT;",
         f"    if (params == NULL) params = {prefix}_default_params;",
         "    for (k = 0; k < n_steps; ++k) {",
-        f"        status = {prefix}_advance(xhat, signals + k * {P}_NS, params, dt, next);",
+        f"        status = {prefix}_advance(xhat, signals + (size_t)k * {P}_NS, params, dt, next);",
         "        if (status != 0) return status;",
         f"        for (i = 0; i < {nx}; ++i) xhat[i] = next[i];",
         "        if (trajectory != NULL) {",
-        f"            for (i = 0; i < {nx}; ++i) trajectory[k * {nx} + i] = next[i];",
+        f"            for (i = 0; i < {nx}; ++i) trajectory[(size_t)k * {nx} + (size_t)i] = next[i];",
         "        }",
         "    }",
         "    return 0;",
         "}",
         "",
-        f"const char *{prefix}_status_message(int status)",
+        f"const char *{prefix}_status_message(int32_t status)",
         "{",
         "    switch (status) {",
         status_cases,

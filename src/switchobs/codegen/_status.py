@@ -14,10 +14,12 @@ class StepStatus(IntEnum):
     (``switchobs.observers`` ``ErrorCode``, table in ``docs/observers.md``), so
     that the C binding raises the same :class:`~switchobs.exceptions.ObserverInputError`.
     Codes 6 and 7 exist only in C, where parameters are runtime inputs and
-    pointers may be NULL.  The checks run in the order ``BAD_ARGUMENT``,
+    pointers may be NULL.  Code 8 (``SUBSTEP_LIMIT``) exists only with a
+    certified step bound ``H_MAX``; the Python reference observers built with
+    ``h_max`` return it too.  The checks run in the order ``BAD_ARGUMENT``,
     ``BAD_DT``, ``NONFINITE_STATE``, ``NONFINITE_SIGNAL``, ``BAD_PARAM``,
-    ``UNDEFINED_TIME_SCALE``, then the domain of ``d`` and ``b`` and the
-    result (``NONFINITE_RESULT``); the first failing check is reported.
+    ``UNDEFINED_TIME_SCALE``, ``SUBSTEP_LIMIT``, then the domain of ``d`` and
+    ``b`` and the result (``NONFINITE_RESULT``); the first failing check is reported.
     """
 
     OK = 0
@@ -31,6 +33,8 @@ class StepStatus(IntEnum):
     BAD_PARAM = 6             # a parameter is not finite, violates its declared sign, or a parameter-only
                               # denominator is 0
     BAD_ARGUMENT = 7          # xhat or signals is NULL, or n_steps < 0 (C only)
+    SUBSTEP_LIMIT = 8         # |s|*dt exceeds MAX_SUBSTEPS*H_MAX (or is not finite): the step would need more
+                              # sub-steps than allowed to stay within the certified bound
 
 
 #: One-line description of each status (also returned by ``<prefix>_status_message``).
@@ -43,4 +47,5 @@ STATUS_TEXT: dict[StepStatus, str] = {
     StepStatus.NONFINITE_RESULT: "d(y) or b(y) is undefined, or the new state is not finite",
     StepStatus.BAD_PARAM: "a parameter is not finite or violates its declared sign",
     StepStatus.BAD_ARGUMENT: "a required pointer is NULL or n_steps < 0",
+    StepStatus.SUBSTEP_LIMIT: "|s|*dt exceeds MAX_SUBSTEPS*H_MAX (more sub-steps than allowed)",
 }

@@ -25,6 +25,13 @@ float arithmetic.  ``run`` evaluates the per-step quantities (``s``, ``g``,
 ``c``, ``Psi``) for all rows at once with NumPy and then executes the very same
 stage code as ``step`` in a loop; for rational models the two agree bit for
 bit.
+
+With a step bound ``h_max`` (a double, already rounded down from the
+certified rational), a step whose ``|s| dt`` in rescaled time exceeds it is
+split into ``n = ceil(|s| dt / h_max)`` sub-steps of ``dt / n`` with the same
+held signals, with the very float operations of the generated C
+(``switchobs.codegen``), so that both choose the same ``n`` and agree bit for
+bit; more than ``max_substeps`` is refused (``SUBSTEP_LIMIT``).
 """
 
 from __future__ import annotations
@@ -39,7 +46,7 @@ import sympy as sp
 from sympy.printing.numpy import NumPyPrinter
 from sympy.printing.pycode import PythonCodePrinter
 
-from .._validate import named_vector
+from .._validate import DEFAULT_MAX_SUBSTEPS, named_vector
 from ..exceptions import ObserverInputError, SimulationError
 
 __all__ = ["ErrorCode", "METHODS", "Kernel", "KernelSpec"]
@@ -61,6 +68,7 @@ class ErrorCode(IntEnum):
     NONFINITE_SIGNAL = 3      # a signal (y, external, input) is NaN or +-inf
     UNDEFINED_TIME_SCALE = 4  # a signal declared positive/negative has the wrong sign, or s(sig) is not finite
     NONFINITE_RESULT = 5      # an intermediate or the new state is not finite (overflow, domain error)
+    SUBSTEP_LIMIT = 8         # with h_max: |s| dt > max_substeps * h_max (checked after s, before the step)
 
 
 # --------------------------------------------------------------------------- printing
@@ -326,9 +334,14 @@ _NONFINITE = ("the step produced a non-finite state (overflow, or a domain error
 
 
 class Kernel:
-    """Compiled step / derivative / run of one observer, with the input checks of :class:`ErrorCode`."""
+    """Compiled step / derivative / run of one observer, with the input checks of :class:`ErrorCode`.
 
-    def __init__(self, spec: KernelSpec, method: str):
+    ``h_max`` (a positive double or None) and ``max_substeps`` bound the step in rescaled time (see the
+    module docstring).
+    """
+
+    def __init__(self, spec: KernelSpec, method: str, *, h_max: float | None = None,
+                 max_substeps: int = DEFAULT_MAX_SUBSTEPS):
         if method not in METHODS:
             raise SimulationError(f"unknown discretisation method {method!r}; choose one of {list(METHODS)}")
         self.spec = spec
@@ -342,6 +355,8 @@ class Kernel:
         self._prelude = namespace["prelude"]
         self._loop = namespace["loop"]
         self._signed = tuple((i, sg) for i, sg in enumerate(spec.signal_signs) if sg)
+        self.h_max = h_max
+        self.max_substeps = max_substeps
 
     # -------------------------------------------------------------- checks
     def _fail(self, code: ErrorCode, detail: str, row: int | None = None) -> ObserverInputError:
@@ -388,6 +403,26 @@ class Kernel:
                              + ", ".join(f"{k} = {v!r}" for k, v in zip(names, sig)), row)
         return s
 
+    def substeps(self, s: float, dt: float, row: int | None = None) -> int:
+        """Sub-steps of a step of ``dt`` at the time scaling ``s`` (1 without ``h_max``); SUBSTEP_LIMIT beyond."""
+        if self.h_max is None:
+            return 1
+        a = abs(s) * dt  # the same float operations as the generated C, so that both choose the same n
+        if a <= self.h_max:
+            return 1
+        q = a / self.h_max
+        if not q <= self.max_substeps:
+            raise self._fail(ErrorCode.SUBSTEP_LIMIT, f"|s|*dt = {a!r} needs {q:.6g} sub-steps of h_max = "
+                             f"{self.h_max!r}, more than max_substeps = {self.max_substeps}; reduce dt or raise "
+                             "max_substeps", row)
+        return math.ceil(q)
+
+    def _substepped(self, x: list[float], sig: list[float], s: float, dt: float, n: int):
+        h = dt / n
+        for _ in range(n):
+            x = self._advance(x, sig, s, h)
+        return x
+
     def _result(self, fn, *args) -> list[float]:
         try:
             out = fn(*args)
@@ -403,7 +438,10 @@ class Kernel:
         dt = self.check_dt(dt)
         self.check_state(x)
         s = self.check_signals(sig)
-        return self._result(self._advance, x, sig, s, dt)
+        n = self.substeps(s, dt)
+        if n == 1:
+            return self._result(self._advance, x, sig, s, dt)
+        return self._result(self._substepped, x, sig, s, dt, n)
 
     def derivative(self, x: list[float], sig: list[float]) -> list[float]:
         self.check_state(x)
@@ -427,15 +465,35 @@ class Kernel:
         bad = ~np.isfinite(rows).all(axis=1) | ~np.isfinite(pre[0])
         for i, sign in self._signed:
             bad |= ~(rows[:, i] * sign > 0.0)
+        stiff = np.zeros(k, dtype=bool)
+        if self.h_max is not None:
+            with np.errstate(all="ignore"):
+                a = np.abs(pre[0]) * dt
+                stiff = ~(a <= self.h_max)
+                bad |= stiff & ~(a / self.h_max <= self.max_substeps)
         valid = int(np.argmax(bad)) if bad.any() else k
         lists = [c[:valid].tolist() for c in cols] + [c[:valid].tolist() for c in pre]
         # The loop only adds and multiplies floats, so it cannot raise; overflow shows up as inf/nan.
-        traj = np.array(self._loop(x0, lists, dt), dtype=float).reshape(valid, self.spec.size)
+        traj = np.empty((valid, self.spec.size))
+        start = 0
+        for i in [*np.flatnonzero(stiff[:valid]).tolist(), valid]:  # stretches of one step each, then a stiff row
+            if i > start:
+                traj[start:i] = self._loop(x0, [c[start:i] for c in lists], dt)
+                x0 = traj[i - 1].tolist()
+            if i < valid:
+                s = float(pre[0][i])
+                try:
+                    traj[i] = self._substepped(x0, rows[i].tolist(), s, dt, self.substeps(s, dt, i))
+                except (ArithmeticError, ValueError):
+                    traj[i] = math.nan
+                x0 = traj[i].tolist()
+            start = i + 1
         finite = np.isfinite(traj).all(axis=1)
         if not finite.all():
             raise self._fail(ErrorCode.NONFINITE_RESULT, _NONFINITE, int(np.argmin(finite)))
         if valid < k:
             self.check_signals(rows[valid].tolist(), valid)
+            self.substeps(float(pre[0][valid]), dt, valid)
             # numpy found s non-finite where math did not (never seen; refuse rather than skip rows)
             raise self._fail(ErrorCode.UNDEFINED_TIME_SCALE, "time scaling is not finite", valid)
         return traj

@@ -9,7 +9,7 @@ import numpy as np
 import numpy.typing as npt
 import sympy as sp
 
-from .._validate import adaptation_gain, signal_matrix
+from .._validate import adaptation_gain, round_down, signal_matrix, substep_bound
 from ..exceptions import DimensionError, FreeSymbolError, ModelError, SimulationError
 from ..model import Model, numeric, parse_expression, rational_value
 from ._engine import SCALE, ErrorCode, Kernel, KernelSpec, _ArrayPrinter, signal_symbols
@@ -71,7 +71,9 @@ class _Observer:
     _readout_text: str | None
 
     def __init__(self, model: Model, K_plus: Any, K_minus: Any, *, params: Mapping[str, Any] | None,
-                 method: str, readout: str | None, unknown: Sequence[str], Gamma: Any):
+                 method: str, readout: str | None, unknown: Sequence[str], Gamma: Any, h_max: Any = None,
+                 max_substeps: int | None = None):
+        bound = substep_bound(h_max, max_substeps, error=SimulationError)
         unknown = tuple(unknown)
         for name in unknown:
             if name not in model.parameters:
@@ -129,7 +131,11 @@ class _Observer:
                           time_scale=m.time_scale.xreplace(to_S), drift=tuple(drift), regressor=tuple(regressor),
                           Gamma=G, n_signals=len(S), signal_signs=signs, signal_names=tuple(model.signals),
                           state_names=names)
-        self._kernel = Kernel(spec, method)
+        #: Certified bound on |s| dt (exact) and the sub-step limit, as given (None: one step per dt).
+        self.h_max, self.max_substeps = bound if bound is not None else (None, None)
+        self._kernel = (Kernel(spec, method) if bound is None else
+                        Kernel(spec, method, h_max=round_down(bound[0], error=SimulationError),
+                               max_substeps=bound[1]))
         self._readout_text = readout
         self._readout_fn = self._compile_readout(readout, values) if readout is not None else None
 
@@ -269,6 +275,8 @@ class _Observer:
             "unknown": list(self.unknown),
             "Gamma": self.Gamma.tolist(),
             "readout": self._readout_text,
+            "h_max": None if self.h_max is None else str(self.h_max),
+            "max_substeps": self.max_substeps,
             "error_codes": {c.name: int(c) for c in ErrorCode},
         }
 
@@ -282,6 +290,8 @@ class _Observer:
             lines.append(f"  estimated: {', '.join(self.unknown)}, Gamma = {self.Gamma.tolist()}")
         if self._readout_text:
             lines.append(f"  readout: {self._readout_text}")
+        if self.h_max is not None:
+            lines.append(f"  sub-steps: |s|*dt <= h_max = {self.h_max} per step, at most {self.max_substeps}")
         return "\n".join(lines)
 
     def __repr__(self) -> str:
@@ -320,6 +330,15 @@ class SwitchedObserver(_Observer):
     readout : str, optional
         An expression in the state names and parameters evaluated by
         :meth:`readout` (e.g. ``"z2"``, the XBS estimate of abs-xbs3).
+    h_max : number, Fraction or str, optional
+        Certified bound on the step ``h = |s| dt`` in the rescaled time (e.g.
+        the ``h_max`` of a discrete certificate): a step with ``|s| dt`` above
+        it (rounded down to a double) is split into ``ceil(|s| dt / h_max)``
+        sub-steps of ``dt / n``, signals held -- the arithmetic of the generated
+        C with ``--h-max``.  None (default): one step per ``dt``.
+    max_substeps : int, optional
+        Most sub-steps per step (default 64, only with ``h_max``); a step
+        needing more is refused with ``ErrorCode.SUBSTEP_LIMIT``.
 
     Raises
     ------
@@ -351,9 +370,10 @@ class SwitchedObserver(_Observer):
     """
 
     def __init__(self, model: Model, K_plus: Any, K_minus: Any, *, params: Mapping[str, Any] | None = None,
-                 method: str = "rk4", readout: str | None = None):
+                 method: str = "rk4", readout: str | None = None, h_max: Any = None,
+                 max_substeps: int | None = None):
         super().__init__(model, K_plus, K_minus, params=params, method=method, readout=readout,
-                         unknown=(), Gamma=None)
+                         unknown=(), Gamma=None, h_max=h_max, max_substeps=max_substeps)
 
 
 class AdaptiveSwitchedObserver(_Observer):
@@ -382,7 +402,7 @@ class AdaptiveSwitchedObserver(_Observer):
         Parameters to estimate (``("c", "d")`` for abs-adaptive2).
     Gamma : array_like, p x p (or its diagonal)
         Symmetric positive definite adaptation gain.
-    params, method, readout
+    params, method, readout, h_max, max_substeps
         As for :class:`SwitchedObserver`; ``readout`` may use the estimated
         parameters by name (they denote the estimates).
 
@@ -399,8 +419,9 @@ class AdaptiveSwitchedObserver(_Observer):
     """
 
     def __init__(self, model: Model, K_plus: Any, K_minus: Any, *, unknown: Sequence[str], Gamma: Any,
-                 params: Mapping[str, Any] | None = None, method: str = "rk4", readout: str | None = None):
+                 params: Mapping[str, Any] | None = None, method: str = "rk4", readout: str | None = None,
+                 h_max: Any = None, max_substeps: int | None = None):
         if isinstance(unknown, str) or not unknown:
             raise ModelError(f"unknown must be a non-empty list of parameter names, got {unknown!r}")
         super().__init__(model, K_plus, K_minus, params=params, method=method, readout=readout,
-                         unknown=unknown, Gamma=Gamma)
+                         unknown=unknown, Gamma=Gamma, h_max=h_max, max_substeps=max_substeps)
