@@ -357,7 +357,7 @@ def test_to_json_and_str(xbs3, toy_adaptive):
     assert data["model"] == "abs-xbs3" and data["method"] == "rk4"
     assert data["K_plus"] == xbs3.K_plus.tolist()
     assert data["error_codes"] == {"OK": 0, "BAD_DT": 1, "NONFINITE_STATE": 2, "NONFINITE_SIGNAL": 3,
-                                   "UNDEFINED_TIME_SCALE": 4, "NONFINITE_RESULT": 5}
+                                   "UNDEFINED_TIME_SCALE": 4, "NONFINITE_RESULT": 5, "SUBSTEP_LIMIT": 8}
     assert "readout: z2" in str(xbs3) and "K_minus" in str(xbs3)
     assert json.loads(json.dumps(toy_adaptive.to_json()))["Gamma"] == [[2.0, 0.5], [0.5, 1.0]]
     assert "estimated: q, r" in str(toy_adaptive)

@@ -17,7 +17,8 @@ int main(int argc, char **argv)
     double t, y, vx, u, xbs, t_prev = 0.0, y_prev = 0.0, vx_prev = 0.0, next_print = 0.0;
     double sq_error = 0.0;
     long n = 0, n_error = 0;
-    int i, status;
+    int i;
+    int32_t status;
     char line[512];
     FILE *in, *out;
 

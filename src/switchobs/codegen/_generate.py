@@ -349,8 +349,8 @@ def _substep_check(tr: Translation, real: str, P: str) -> list[str]:
     (``a <= H_MAX``, else ``n = ceil(a / H_MAX)``), so both choose the same ``n``.
     """
     f = "f" if real == "float" else ""
-    scale = "s" if not tr.scale.is_constant() else float_literal(abs(float(tr.scale)), real)
-    return [f"    a = fabs{f}({scale}) * dt;  /* this step in the rescaled time tau */",
+    scale = f"fabs{f}(s)" if not tr.scale.is_constant() else float_literal(abs(float(tr.scale)), real)
+    return [f"    a = {scale} * dt;  /* this step in the rescaled time tau */",
             f"    if (!(a <= {P}_H_MAX)) {{",
             f"        q = a / {P}_H_MAX;",
             f"        if (!(q <= ({real}){P}_MAX_SUBSTEPS)) return {P}_ERR_SUBSTEP_LIMIT;",
