@@ -6,6 +6,7 @@
  * error, and writes the estimate to a second CSV file.  Build: see the Makefile.
  */
 #include <math.h>
+#include <stdint.h>
 #include <stdio.h>
 
 #include "switchobs_abs_xbs4.h"

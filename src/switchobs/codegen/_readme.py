@@ -40,7 +40,8 @@ def example_program(gen: "GeneratedObserver") -> str:
         f"    {real} saved[{P}_NX];",
         f"    {real} signals[{P}_NS];",
         f"    {real} params[{P}_NP];",
-        "    int i, status;",
+        "    int i;",
+        "    int32_t status;",
         f"    for (i = 0; i < {P}_NP; ++i) params[i] = {p}_default_params[i];",
         *rows,
         f"    status = {p}_step(xhat, signals, params, {lit(1e-3)});",
@@ -57,6 +58,33 @@ def example_program(gen: "GeneratedObserver") -> str:
         "}",
         "",
     ])
+
+
+def _bound_section(gen: "GeneratedObserver") -> list[str]:
+    """The certified step bound: what is certified, the worst-case time and the status beyond it."""
+    P = gen.prefix.upper()
+    if gen.h_max is None:
+        if gen.kind == "super-twisting":
+            return []
+        return ["## Step bound", "",
+                "None: every call takes one step of `dt`, whatever `|s|*dt` is.  In the rescaled time",
+                "`tau = ∫|s| dt` of the error dynamics a step is `h = |s|*dt`; regenerate with `--h-max` (a bound",
+                "certified for the sampled error dynamics) to split steps beyond it.", ""]
+    return [
+        "## Step bound (certified sub-stepping)", "",
+        f"The sampled error dynamics are certified for every step `h = |s|*dt` (rescaled time) up to",
+        f"`h_max = {gen.h_max}`.  `{P}_H_MAX` = `{float_literal(gen.h_max_c, gen.real)}` is `h_max` rounded DOWN "
+        f"to `{gen.real}`,",
+        "so the C never steps beyond the certified bound.  A call computes `s` once (signals held) and:",
+        "",
+        f"- `|s|*dt <= {P}_H_MAX`: one step of `dt`, exactly as without a bound (certified);",
+        f"- otherwise `n = ceil(|s|*dt / {P}_H_MAX)` sub-steps of `dt/n`, signals held (each certified);",
+        f"- more than `{P}_MAX_SUBSTEPS` = {gen.max_substeps} sub-steps: `{P}_ERR_SUBSTEP_LIMIT` = "
+        f"{int(StepStatus.SUBSTEP_LIMIT)}, `xhat` unchanged.",
+        "",
+        f"Worst-case time of one call: `{P}_MAX_SUBSTEPS` = {gen.max_substeps} evaluations of the step kernel "
+        "(plus the checks).",
+        "The certificate is for the default gains and parameters: other `params` need their own bound.", ""]
 
 
 def readme(gen: "GeneratedObserver", *, command: str | None) -> str:
@@ -87,21 +115,26 @@ def readme(gen: "GeneratedObserver", *, command: str | None) -> str:
         f"cc -std=c99 -O2 -c {p}.c   # link with -lm",
         "```",
         "",
+        "- Do not compile with `-ffast-math` or `-ffinite-math-only`: they let the compiler assume that no value is",
+        "  NaN or infinite and delete the checks that refuse such inputs, so the file refuses them with `#error`.",
+        "",
         "## API",
         "",
         "```c",
         f"extern const {real} {p}_default_params[{P}_NP];",
-        f"int {p}_step({real} *xhat, const {real} *signals, const {real} *params, {real} dt);",
-        f"int {p}_run({real} *xhat, const {real} *signals, long n_steps, const {real} *params, {real} dt,",
-        f"    {real} *trajectory);",
-        f"const char *{p}_status_message(int status);",
+        f"int32_t {p}_step({real} *xhat, const {real} *signals, const {real} *params, {real} dt);",
+        f"int32_t {p}_run({real} *xhat, const {real} *signals, int32_t n_steps, const {real} *params,",
+        f"    {real} dt, {real} *trajectory);",
+        f"const char *{p}_status_message(int32_t status);",
         "```",
         "",
         f"`{p}_step` advances `xhat` in place by `dt` seconds; `params` may be `NULL` for the defaults.",
         f"`{p}_run` does `n_steps` steps through the rows of `signals` (row-major, `{P}_NS` per row) and writes",
         "every new state to `trajectory` (may be `NULL`).  Both return 0 or a status code below; a failed",
         "step leaves `xhat` unchanged (for `_run`: `xhat` holds the state after the steps that succeeded).",
+        "Status and counts are `int32_t` (`<stdint.h>`), the same width on every target.",
         "",
+        *_bound_section(gen),
         f"## State (`{P}_NX` = {gen.nx})",
         "",
         "| index macro | state |",
