@@ -5,7 +5,7 @@ PY := $(VENV)/bin/python
 STAMP := $(VENV)/.installed
 DEMO_ARGS ?=
 
-.PHONY: demo test bench docs install clean
+.PHONY: demo test bench docs install clean cc-tools
 
 $(STAMP): pyproject.toml
 	$(PYTHON) -m venv $(VENV)
@@ -18,7 +18,20 @@ install: $(STAMP)
 demo: $(STAMP)
 	$(VENV)/bin/switchobs demo $(DEMO_ARGS)
 
-test: $(STAMP)
+# clang checks the generated C next to gcc (tests/test_codegen_hygiene.py): installed when missing and possible.
+cc-tools:
+	@command -v clang >/dev/null 2>&1 || { \
+	  if [ "$$(id -u)" = 0 ] && command -v apt-get >/dev/null 2>&1; then \
+	    echo "installing clang (checks the generated C)"; \
+	    export DEBIAN_FRONTEND=noninteractive; \
+	    apt-get install -y -q clang >/dev/null 2>&1 || \
+	      { apt-get update -q >/dev/null && apt-get install -y -q clang >/dev/null; } || \
+	      echo "!!! could not install clang: the clang checks of the generated C will be SKIPPED !!!"; \
+	  else \
+	    echo "!!! clang is missing and cannot be installed here (needs root and apt-get): the clang checks of the generated C will be SKIPPED !!!"; \
+	  fi; }
+
+test: $(STAMP) cc-tools
 	$(PY) -m pytest -n 2 -q
 
 bench: $(STAMP)
