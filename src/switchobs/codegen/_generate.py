@@ -228,11 +228,11 @@ class GeneratedObserver:
             f"  NP = {self.np}: {params}",
             "  checks: " + ("; ".join(str(g) for g in self.guards) or "none beyond finiteness"),
             f"  stack: {self.temporaries} temporaries, at most {self.stack_reals} reals per step",
-            "  sub-steps: " + ("none (one step per dt)" if self.h_max is None else
-                               f"|s|*dt <= H_MAX = {self.h_max_c!r} (certified h_max = {self.h_max}) per step, "
-                               f"at most MAX_SUBSTEPS = {self.max_substeps}, else SUBSTEP_LIMIT = "
-                               f"{int(StepStatus.SUBSTEP_LIMIT)}"),
         ]
+        if self.h_max is not None:
+            lines.append(f"  sub-steps: |s|*dt <= H_MAX = {self.h_max_c!r} (certified h_max = {self.h_max}) per step, "
+                         f"at most MAX_SUBSTEPS = {self.max_substeps}, else SUBSTEP_LIMIT = "
+                         f"{int(StepStatus.SUBSTEP_LIMIT)}")
         return "\n".join(lines)
 
 
