@@ -38,6 +38,7 @@ CFLAGS = ["-std=c99", "-O2"]
 HAND = r"""
 #include <math.h>
 #include <stddef.h>
+#include <stdint.h>
 typedef REAL real;
 
 /* The right-hand side on scalars, so that the whole step is straight-line code in registers. */
@@ -62,7 +63,7 @@ typedef REAL real;
 #define FOR_N(X) X(0) X(1) X(2) X(3)
 #endif
 
-int NAME(real *x, const real *sig, const real *p, real dt)
+int32_t NAME(real *x, const real *sig, const real *p, real dt)
 {
     real s, y, bu, h, dt6, e, g0, g1, g2, g3;
     real x0, x1, x2, x3, t0, t1, t2, t3, a0, a1, a2, a3, b0, b1, b2, b3, c0, c1, c2, c3, d0, d1, d2, d3;
@@ -108,11 +109,11 @@ DRIVER = r"""
 #include <time.h>
 #include "@P@.h"
 typedef @REAL@ real;
-int hand_@M@(real *x, const real *sig, const real *p, real dt);
+int32_t hand_@M@(real *x, const real *sig, const real *p, real dt);
 #define ROWS 4096
 #define REPEATS 41  /* the best of many short runs: robust to the other processes of a shared machine */
 static double now(void) { struct timespec t; clock_gettime(CLOCK_MONOTONIC, &t); return t.tv_sec + 1e-9 * t.tv_nsec; }
-typedef int (*stepper)(real *, const real *, const real *, real);
+typedef int32_t (*stepper)(real *, const real *, const real *, real);
 static double bench(stepper f, const real *rows, long steps, long *failures)
 {
     real x[@PU@_NX];
