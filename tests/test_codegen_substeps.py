@@ -245,3 +245,19 @@ def test_cli_h_max_value_and_auto(tmp_path, capsys, monkeypatch):
     assert err.count("\n") == 1 and "discrete_certificate" in err and not (tmp_path / "n").exists()
     assert main(["codegen", "super-twisting", "--param", "lam=400", "--param", "alpha=2000", "--h-max", "0.01",
                  "--out", str(tmp_path / "s")]) == 2
+
+
+def test_constant_time_scale_substeps_like_the_reference():
+    """s = 3 is folded into the kernel; the sub-step count uses the constant |s| in C as in Python."""
+    from test_codegen_hygiene import constant_scale_model
+
+    model = constant_scale_model()
+    ref = SwitchedObserver(model, [1.0, 2.0], [3.0, 4.0], h_max="1/100", max_substeps=5)
+    c = CObserver.like(ref)
+    assert "_scale(" not in c.generated.source and "a = 3.0 * dt;" in c.generated.source  # s is a literal
+    x = [0.4, -0.2]
+    for dt in (1e-3, 0.01, 0.015):  # |s| dt = 0.003 (one step), 0.03 (4 sub-steps: H_MAX < 1/100), 0.045 (5)
+        assert np.array_equal(c.step(x, [1.0, 2.0], dt), ref.step(x, [1.0, 2.0], dt))
+    for obs in (c, ref):
+        with pytest.raises(ObserverInputError, match="SUBSTEP_LIMIT"):
+            obs.step(x, [1.0, 2.0], 0.02)  # 6 sub-steps > 5
