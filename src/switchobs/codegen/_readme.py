@@ -173,6 +173,8 @@ def readme(gen: "GeneratedObserver", *, command: str | None) -> str:
         "",
         *([f"- `{g}`" for g in gen.guards] or ["- none beyond finiteness"]),
         *([] if gen.kind == "super-twisting" else ["- `s` finite, else `UNDEFINED_TIME_SCALE`."]),
+        *([] if gen.h_max is None else ["- at most `MAX_SUBSTEPS` sub-steps of `H_MAX` (then the domain of d, b), "
+                                        "else `SUBSTEP_LIMIT`."]),
         "",
         "## Memory",
         "",
