@@ -94,8 +94,9 @@ def substep_bound(h_max: Any, max_substeps: Any, *, error: type[Exception]) -> t
     if exact <= 0:
         raise error(f"h_max = {h_max!r} must be > 0 (a step bound in the rescaled time tau)")
     limit = DEFAULT_MAX_SUBSTEPS if max_substeps is None else max_substeps
-    if isinstance(limit, bool) or not isinstance(limit, (int, np.integer)) or not 1 <= limit <= 2**31 - 1:
-        raise error(f"max_substeps = {max_substeps!r} must be an integer in 1 .. 2147483647")
+    # 2**24: exact in IEEE single, so that the float build's ceil(q) <= MAX_SUBSTEPS fits its int32_t
+    if isinstance(limit, bool) or not isinstance(limit, (int, np.integer)) or not 1 <= limit <= 2**24:
+        raise error(f"max_substeps = {max_substeps!r} must be an integer in 1 .. 16777216")
     return exact, int(limit)
 
 
