@@ -48,7 +48,7 @@ def register(sub: argparse._SubParsersAction) -> None:
                         "sub-steps (H_MAX in the header, rounded down); VALUE is exact (0.01 or 1/100), auto takes "
                         "the h_max of the discrete certificate of A_plus, A_minus (default: no sub-stepping)")
     p.add_argument("--max-substeps", type=int, metavar="N",
-                   help="most sub-steps per step with --h-max (default 64); beyond: status SUBSTEP_LIMIT")
+                   help="most sub-steps per step with --h-max, 1..16777216 (default 64); beyond: status SUBSTEP_LIMIT")
     p.add_argument("--prefix", help="C prefix (default switchobs_<model>, non-identifier characters as _)")
     p.add_argument("--out", required=True, metavar="DIR", help="directory for <prefix>.c, <prefix>.h, README.md")
     p.add_argument("--json", action="store_true", help="print the description as JSON")

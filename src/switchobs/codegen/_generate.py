@@ -344,7 +344,7 @@ def _model_info(model: Model, kind: str) -> _Info:
 def _substep_check(tr: Translation, real: str, P: str) -> list[str]:
     """C lines choosing the sub-steps: ``a = |s| dt`` (the step in tau), ``n``, ``h = dt / n``.
 
-    The non-stiff path costs one multiplication and one comparison; the Python
+    The non-stiff path costs a multiplication and two comparisons (bound, sub-step loop); the Python
     reference (``switchobs.observers``) makes the same float operations
     (``a <= H_MAX``, else ``n = ceil(a / H_MAX)``), so both choose the same ``n``.
     """
