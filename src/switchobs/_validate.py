@@ -88,7 +88,7 @@ def substep_bound(h_max: Any, max_substeps: Any, *, error: type[Exception]) -> t
     try:
         if isinstance(h_max, bool):
             raise TypeError
-        exact = Fraction(repr(h_max)) if isinstance(h_max, float) else Fraction(h_max)
+        exact = Fraction(repr(float(h_max))) if isinstance(h_max, (float, np.floating)) else Fraction(h_max)
     except (TypeError, ValueError, ZeroDivisionError):
         raise error(f"h_max = {h_max!r} must be a positive finite number such as 0.01 or 1/100") from None
     if exact <= 0:
@@ -111,7 +111,7 @@ def round_down(value: Fraction, real: str = "double", *, error: type[Exception])
         near = float(np.float32(float(value))) if single else float(value)
     except OverflowError:
         near = math.inf
-    while Fraction(near) > value if math.isfinite(near) else True:
+    while not math.isfinite(near) or Fraction(near) > value:
         near = float(np.nextafter(np.float32(near), np.float32(0.0))) if single else math.nextafter(near, 0.0)
     if not near > 0.0:
         raise error(f"h_max = {value} is below the smallest positive {real}; give a larger bound")
