@@ -245,6 +245,9 @@ def test_cli_h_max_value_and_auto(tmp_path, capsys, monkeypatch):
     assert err.count("\n") == 1 and "discrete_certificate" in err and not (tmp_path / "n").exists()
     assert main(["codegen", "super-twisting", "--param", "lam=400", "--param", "alpha=2000", "--h-max", "0.01",
                  "--out", str(tmp_path / "s")]) == 2
+    assert main(["codegen", "abs-adaptive2", "--spectrum", "-15,-15", "--unknown", "c,d", "--gamma", "50,20",
+                 "--h-max", "auto", "--out", str(tmp_path / "ad")]) == 2
+    assert "give --h-max VALUE" in capsys.readouterr().err
 
 
 def test_constant_time_scale_substeps_like_the_reference():

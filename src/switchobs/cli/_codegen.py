@@ -137,6 +137,9 @@ def run(args: argparse.Namespace) -> int:
         if args.gamma and not unknown:
             raise CodegenError("--gamma is the adaptation gain of the adaptive observer; give --unknown too")
         method = args.method or "rk4"
+        if args.h_max == "auto" and unknown:
+            raise CodegenError("--h-max auto certifies the switched observer's error dynamics (A_plus, A_minus); "
+                               "the adaptive observer's error also has the parameter estimates: give --h-max VALUE")
         h_max = (_certified_h_max(model, gains, values, method) if args.h_max == "auto" else args.h_max)
         gen = generate_observer(model, gains, values=values, real=args.real, method=method,
                                 prefix=args.prefix, unknown=unknown,
