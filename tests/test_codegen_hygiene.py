@@ -11,10 +11,13 @@ import subprocess
 import warnings
 from pathlib import Path
 
+import casadi as ca
 import numpy as np
 import pytest
 
 from switchobs.codegen import GeneratedObserver, StepStatus, generate_observer, generate_super_twisting
+from switchobs.codegen._emit import kernel
+from switchobs.exceptions import CodegenError
 from switchobs.design import design
 from switchobs.model import Model, builtin_model
 
@@ -105,6 +108,16 @@ def test_generated_c_compiles_clean_with_strict_flags(tmp_path, cc):
 def _code(text: str) -> str:
     """C text without comments (literals there need no suffix)."""
     return re.sub(r"/\*.*?\*/", "", text, flags=re.S)
+
+
+def test_casadi_truth_tests_become_comparisons_and_other_logic_is_refused():
+    """clang -Wfloat-conversion refuses a real used as a boolean: `(a0?`, `(!a0)` are written as comparisons."""
+    x = ca.SX.sym("x", 2)
+    k = kernel("k", [("x", x)], ca.if_else(x[0] > 0, x[1], 2 * x[0]), real="float", prefix="p")
+    assert "(a0!=0?" in k.body and "(a0==0)" in k.body
+    assert not re.search(r"\(a\d+\?|\(!a\d+\)", k.body)
+    with pytest.raises(CodegenError, match="unexpected logical operator"):
+        kernel("k", [("x", x)], ca.logic_and(x[0], x[1]), real="double", prefix="p")
 
 
 @pytest.mark.parametrize("cc", COMPILERS)
