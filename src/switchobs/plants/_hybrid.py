@@ -140,10 +140,14 @@ class Crossing:
 class HybridPlant(Protocol):
     """What :func:`integrate` needs of a plant.
 
-    The right-hand side also leaves the plant's outputs of that evaluation
-    (slips, forces, ``x2``) where :meth:`row`, :meth:`guard_values` and
-    :meth:`transition_args` read them; the integrator always evaluates it at
-    the point it asks about next.
+    A plant defines its states and recorded series, :meth:`initial_state`,
+    :meth:`rhs`, :meth:`step_size` and :meth:`row`; the other hooks default to
+    "nothing of that kind" (no controllers, no discrete-time parts, no guards
+    of its own, no breakpoints, no bounds), so a plant subclasses this protocol
+    and overrides what it has.  The right-hand side also leaves the plant's
+    outputs of that evaluation (slips, forces, ``x2``) where :meth:`row`,
+    :meth:`guard_values` and :meth:`transition_args` read them; the integrator
+    always evaluates it at the point it asks about next.
     """
 
     #: Names of the continuous state ``y`` and of the recorded columns (``row``), in order.
@@ -151,60 +155,64 @@ class HybridPlant(Protocol):
     series: tuple[str, ...]
     #: Controller runtimes (``phase``, ``deadline``, ``fire``, ``expire``, see
     #: :mod:`switchobs.plants._controllers`) and their labels in the events ("" or "front ").
-    automata: Sequence[Any]
-    labels: Sequence[str]
+    automata: Sequence[Any] = ()
+    labels: Sequence[str] = ()
     #: Whether :meth:`after_step` changes the right-hand side (an estimate or a filtered speed in the loop).
-    discrete_feedback: bool
+    discrete_feedback: bool = False
 
     def initial_state(self) -> State: ...
 
     def rhs(self, t: float, y: State) -> State: ...
 
-    def clamp(self, y: State) -> State:
-        """``y`` projected on the admissible set (the same tuple when inside)."""
+    def step_size(self, t: float, y: State) -> float: ...
+
+    def row(self, t: float, y: State) -> tuple[float, ...]:
+        """The recorded sample at ``(t, y)``, in the order of :attr:`series`."""
         ...
 
-    def step_size(self, t: float, y: State) -> float: ...
+    def clamp(self, y: State) -> State:
+        """``y`` projected on the admissible set (the same tuple when inside)."""
+        return y
 
     def breakpoint(self, t: float) -> float:
         """Next known kink of the right-hand side after ``t`` (``inf`` if none)."""
-        ...
+        return math.inf
 
     def start(self, t: float, y: State) -> bool:
         """Start the discrete-time parts at the first sample; whether the right-hand side changed."""
-        ...
+        return False
 
     def after_step(self, t: float, y: State, h: float) -> str | None:
         """Advance the discrete-time parts over the step just taken; a message if one refused it."""
-        ...
+        return None
 
     def crossings(self, t: float, y: State, y1: State) -> list[Crossing]:
         """The plant's own guards positive at the end of the step ``(t, y) -> y1``."""
-        ...
+        return []
 
     def take(self, crossing: Crossing, t: float, y: State) -> str:
         """Act on a located, non-terminal crossing; the event text."""
-        ...
+        raise SimulationError(f"{type(self).__name__} has no non-terminal guard {crossing.name!r}")
 
     def at_breakpoint(self, t: float, y: State) -> tuple[bool, list[str]]:
         """Take the switches scheduled at ``t``: (right-hand side changed, event texts)."""
-        ...
+        return False, []
 
     def guard_values(self, k: int) -> tuple[float, ...]:
         """The outgoing guards of controller ``k`` at the last evaluation (``()`` while it is inactive)."""
-        ...
+        return ()
 
     def locatable(self, k: int) -> bool:
         """Whether controller ``k``'s guards are continuous along a step (so they can be located)."""
-        ...
+        return True
 
     def transition_args(self, k: int, y: State) -> tuple[float, float, float]:
         """``(x2, v_wheel, vx)`` that controller ``k`` reads when it changes phase."""
-        ...
+        raise SimulationError(f"{type(self).__name__} has no controller {k}")
 
     def end_step(self, t: float, y: State) -> tuple[str, str] | None:
         """Bookkeeping after the transitions; ``(status, message)`` to end the run."""
-        ...
+        return None
 
 
 @dataclass(frozen=True)

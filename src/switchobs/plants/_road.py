@@ -169,17 +169,17 @@ class _RoadState:
             return pending.at_time_s
         return math.inf
 
-    def at_breakpoint(self, t: float) -> tuple[bool, str | None]:
-        """Take the scheduled switch due at ``t``: ``(characteristic changed, event text or None)``."""
+    def at_breakpoint(self, t: float) -> tuple[bool, list[str]]:
+        """Take the scheduled switch due at ``t``: ``(characteristic changed, event texts)``."""
         pending = self.pending
         if self.blending and t >= self.t0 + self.duration - 1e-12:
             self.end_change()
-            return True, None
+            return True, []
         if not self.blending and pending is not None and pending.at_time_s is not None \
                 and t >= pending.at_time_s - 1e-12:
             self.start_change(t)
-            return True, f"road -> {pending.road.name}"
-        return False, None
+            return True, [f"road -> {pending.road.name}"]
+        return False, []
 
     def weight(self, t: float) -> float:
         s = (t - self.t0) / self.duration

@@ -16,8 +16,11 @@ stiffness ``a mu'(lambda) / vx`` never leaves the RK4 stability region
 Steps end exactly on the known breakpoints (start and end of the road
 transitions, end of a reference trajectory, the final time); controller phase
 changes, position-triggered road changes and the final stop are located within
-the step (:func:`locate_event`).  Only the controller's guards that read an
-observer's estimate are checked at the step ends, where the estimate changes.
+the step.  Only the controller's guards that read an observer's estimate are
+checked at the step ends, where the estimate changes.  The integrator and its
+rules (order of the transitions, guard cascades, an observer refusing a step)
+are those of :func:`switchobs.plants._hybrid.integrate`, shared with the
+two-axle vehicle and the wheel of :mod:`switchobs.sensors`.
 """
 
 from __future__ import annotations
@@ -34,7 +37,7 @@ import numpy.typing as npt
 from ..exceptions import SimulationError
 from ._controllers import ContinuousXbsControl, Controller, FivePhaseABS, TwoPhaseABS
 from ._estimator import TrueXbs, XbsEstimator
-from ._hybrid import Crossing, integrate
+from ._hybrid import Crossing, HybridPlant, integrate
 from ._metrics import BrakingMetrics, braking_metrics
 from ._road import RoadSchedule, _RoadState
 from ._tyre import Burckhardt
@@ -216,7 +219,7 @@ class BrakingResult:
         return "\n".join(lines)
 
 
-class _QuarterCar:
+class _QuarterCar(HybridPlant):
     """The quarter car with its controller and estimator as a :class:`HybridPlant`; plain floats, no numpy per step."""
 
     states = ("omega", "vx", "x", "P_b")
@@ -364,8 +367,7 @@ class _QuarterCar:
         return f"road -> {pending.road.name} (x = {y[2]:.2f} m)"
 
     def at_breakpoint(self, t: float, y: tuple[float, ...]) -> tuple[bool, list[str]]:
-        changed, text = self.road.at_breakpoint(t)
-        return changed, [] if text is None else [text]
+        return self.road.at_breakpoint(t)
 
     def guard_values(self, k: int) -> tuple[float, ...]:
         return self.ctrl.guards(self.o_x2, self.xbs_hat if self.use_hat else self.o_xbs)

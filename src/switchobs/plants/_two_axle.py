@@ -18,6 +18,9 @@ suspension and pitch dynamics (the load transfer is instantaneous), tyre
 relaxation length, left/right differences, position-triggered road changes.
 The observers keep the static-load ``a`` (the seed recomputes it on line from
 (3.36)); the loads the controllers would need are reported instead.
+
+Integration as the quarter car's (:func:`switchobs.plants._hybrid.integrate`),
+with one controller per axle; the controllers take over at ``brake_start_s``.
 """
 
 from __future__ import annotations
@@ -32,7 +35,7 @@ import numpy.typing as npt
 from ..exceptions import SimulationError
 from ._controllers import FivePhaseABS, TwoPhaseABS
 from ._estimator import XbsEstimator
-from ._hybrid import Crossing, integrate
+from ._hybrid import Crossing, HybridPlant, integrate
 from ._metrics import _cumtrapz
 from ._road import RoadSchedule, _RoadState
 from ._vehicle import GRAVITY, BrakeActuator, QuarterCar
@@ -289,7 +292,7 @@ def simulate_two_axle(scenario: TwoAxleScenario, *,
     return _TwoAxle(scenario, estimators, observer_in_loop).run()
 
 
-class _TwoAxle:
+class _TwoAxle(HybridPlant):
     """The two-axle vehicle with its two controllers, speed filter and estimators as a :class:`HybridPlant`."""
 
     states = ("omega_f", "omega_r", "vx", "x", "P_f", "P_r")
@@ -423,12 +426,8 @@ class _TwoAxle:
         return [Crossing("stop", lambda tt, yy: v_stop - yy[2], v_stop - y[2], v_stop - y1[2], terminal=True,
                          text=f"vx reached {v_stop:.3f} m/s")]
 
-    def take(self, crossing: Crossing, t: float, y: tuple[float, ...]) -> str:
-        raise SimulationError(f"the two-axle vehicle has no guard {crossing.name!r}")
-
     def at_breakpoint(self, t: float, y: tuple[float, ...]) -> tuple[bool, list[str]]:
-        changed, text = self.road.at_breakpoint(t)
-        return changed, [] if text is None else [text]
+        return self.road.at_breakpoint(t)
 
     def guard_values(self, k: int) -> tuple[float, ...]:
         if not self.braking:          # the controllers take over when the driver brakes
@@ -440,9 +439,6 @@ class _TwoAxle:
 
     def transition_args(self, k: int, y: tuple[float, ...]) -> tuple[float, float, float]:
         return (self.x2[k], self.R * y[k], self.vx_hat)
-
-    def end_step(self, t: float, y: tuple[float, ...]) -> tuple[str, str] | None:
-        return None
 
     def row(self, t: float, y: tuple[float, ...]) -> tuple[float, ...]:
         ref_f, ref_r = self.automata[0].reference(t)[0], self.automata[1].reference(t)[0]

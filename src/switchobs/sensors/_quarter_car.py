@@ -24,7 +24,7 @@ import numpy as np
 import numpy.typing as npt
 
 from ..exceptions import SimulationError
-from ..plants import Burckhardt, Crossing, QuarterCar, integrate, road
+from ..plants import Burckhardt, Crossing, HybridPlant, QuarterCar, integrate, road
 from ._trajectory import AngleTrajectory
 from ._validate import check_positive
 
@@ -111,14 +111,11 @@ def simulate_wheel(
                     accel_x_m_s2=f / plant.m, slip=lam, force_n=f, torque_nm=torque_arr, vehicle=vehicle)
 
 
-class _Wheel:
+class _Wheel(HybridPlant):
     """The torque-driven quarter car as a :class:`switchobs.plants.HybridPlant`: no controller, one terminal guard."""
 
     states = ("theta", "omega", "v")
     series = ("t", "theta", "omega", "v")
-    automata = ()
-    labels = ()
-    discrete_feedback = False
 
     def __init__(self, torque: Callable[[float], float], tyre: TyreForce, vehicle: QuarterCar, speed0_m_s: float,
                  duration_s: float, sample_s: float):
@@ -138,9 +135,6 @@ class _Wheel:
         f = float(self.tyre(np.array((self.R * w - v) / v)))
         return (w, (self.torque(t) - self.R * f) / self.J, f / self.m)
 
-    def clamp(self, y: tuple[float, ...]) -> tuple[float, ...]:
-        return y
-
     def step_size(self, t: float, y: tuple[float, ...]) -> float:
         return self.h
 
@@ -149,12 +143,6 @@ class _Wheel:
         k = min(int(t / self.h + 0.5) + 1, self.grid.size - 1)
         return float(self.grid[k])
 
-    def start(self, t: float, y: tuple[float, ...]) -> bool:
-        return False
-
-    def after_step(self, t: float, y: tuple[float, ...], h: float) -> str | None:
-        return None
-
     def crossings(self, t: float, y: tuple[float, ...], y1: tuple[float, ...]) -> list[Crossing]:
         R = self.R
         g1 = 0.5 - min(y1[1] * R, y1[2])
@@ -162,24 +150,6 @@ class _Wheel:
             return []
         return [Crossing("stop", lambda tt, yy: 0.5 - min(yy[1] * R, yy[2]), 0.5 - min(y[1] * R, y[2]), g1,
                          terminal=True, text="the wheel or the car stopped")]
-
-    def take(self, crossing: Crossing, t: float, y: tuple[float, ...]) -> str:
-        raise SimulationError(f"the wheel has no guard {crossing.name!r}")
-
-    def at_breakpoint(self, t: float, y: tuple[float, ...]) -> tuple[bool, list[str]]:
-        return False, []
-
-    def guard_values(self, k: int) -> tuple[float, ...]:
-        return ()
-
-    def locatable(self, k: int) -> bool:
-        return False
-
-    def transition_args(self, k: int, y: tuple[float, ...]) -> tuple[float, float, float]:
-        raise SimulationError("the wheel has no controller")
-
-    def end_step(self, t: float, y: tuple[float, ...]) -> tuple[str, str] | None:
-        return None
 
     def row(self, t: float, y: tuple[float, ...]) -> tuple[float, ...]:
         return (t, *y)
