@@ -19,7 +19,7 @@ changes, position-triggered road changes and the final stop are located within
 the step.  Only the controller's guards that read an observer's estimate are
 checked at the step ends, where the estimate changes.  The integrator and its
 rules (order of the transitions, guard cascades, an observer refusing a step)
-are those of :func:`switchobs.plants._hybrid.integrate`, shared with the
+are those of :func:`switchobs.plants.integrate`, shared with the
 two-axle vehicle and the wheel of :mod:`switchobs.sensors`.
 """
 
@@ -342,7 +342,7 @@ class _QuarterCar(HybridPlant):
         t_obs = time.perf_counter()
         try:
             self.xbs_hat = self.estimator.update(t, self.o_x2, y[1], u_mean, h)
-        except SimulationError as exc:     # e.g. ObserverInputError: the run stops (module notes of _hybrid)
+        except SimulationError as exc:     # e.g. ObserverInputError: the run stops (integrate's rule)
             return str(exc)
         finally:
             self.observer_time_s += time.perf_counter() - t_obs

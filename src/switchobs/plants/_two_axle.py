@@ -19,7 +19,7 @@ relaxation length, left/right differences, position-triggered road changes.
 The observers keep the static-load ``a`` (the seed recomputes it on line from
 (3.36)); the loads the controllers would need are reported instead.
 
-Integration as the quarter car's (:func:`switchobs.plants._hybrid.integrate`),
+Integration as the quarter car's (:func:`switchobs.plants.integrate`),
 with one controller per axle; the controllers take over at ``brake_start_s``.
 """
 
@@ -414,7 +414,7 @@ class _TwoAxle(HybridPlant):
             if est is not None and failure is None:
                 try:
                     self.hat[k] = est.update(t, self.x2[k], self.vx_hat, u, h)
-                except SimulationError as exc:    # e.g. ObserverInputError: the run stops (module notes of _hybrid)
+                except SimulationError as exc:    # e.g. ObserverInputError: the run stops (integrate's rule)
                     self.failed[k] = f"t = {t:.4f} s: {exc}"
                     failure = f"{self.labels[k]}observer: {exc}"
         return failure
