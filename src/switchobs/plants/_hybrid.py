@@ -203,7 +203,7 @@ class HybridPlant(Protocol):
         return ()
 
     def locatable(self, k: int) -> bool:
-        """Whether controller ``k``'s guards are continuous along a step (so they can be located)."""
+        """Whether controller ``k``'s guards are continuous along a step (so they can be located); asked once."""
         return True
 
     def transition_args(self, k: int, y: State) -> tuple[float, float, float]:
@@ -250,21 +250,24 @@ def integrate(plant: HybridPlant, t_end: float, *, name: str) -> HybridRun:
         When phase changes cascade more than :data:`MAX_CASCADE` rounds at one instant.
     """
     wall0 = time.perf_counter()
-    rhs = plant.rhs
+    # bound methods as locals: this loop runs once per step, in plain Python
+    rhs, step_size, breakpoint, crossings = plant.rhs, plant.step_size, plant.breakpoint, plant.crossings
+    clamp, after_step, row, guard_values = plant.clamp, plant.after_step, plant.row, plant.guard_values
     automata = plant.automata
+    located = [k for k in range(len(automata)) if plant.locatable(k)]
     t = 0.0
     y = plant.initial_state()
     k1 = rhs(t, y)
     if plant.start(t, y):
         k1 = rhs(t, y)
-    rows = [plant.row(t, y)]
+    rows = [row(t, y)]
     events: list[tuple[float, str]] = []
-    g_old = [plant.guard_values(k) for k in range(len(automata))]
+    g_old = [guard_values(k) for k in range(len(automata))]
     status, message = "duration", f"reached the time bound {t_end:g} s"
     steps = 0
     while True:
-        h = plant.step_size(t, y)
-        tb = min(t_end, plant.breakpoint(t))
+        h = step_size(t, y)
+        tb = min(t_end, breakpoint(t))
         at_break = t + h >= tb - 1e-12
         if at_break:
             h = tb - t
@@ -272,9 +275,8 @@ def integrate(plant: HybridPlant, t_end: float, *, name: str) -> HybridRun:
         k_end = rhs(t + h, y1)
         candidates: list[tuple[Callable[[float, State], float], float, float, Any]] = [
             (_controller_guard(plant, k, i), g0, g1, (k, i))
-            for k in range(len(automata)) if plant.locatable(k)
-            for i, (g0, g1) in enumerate(zip(g_old[k], plant.guard_values(k))) if g1 > 0.0]
-        candidates += [(c.guard, c.g0, c.g1, c) for c in plant.crossings(t, y, y1)]
+            for k in located for i, (g0, g1) in enumerate(zip(g_old[k], guard_values(k))) if g1 > 0.0]
+        candidates += [(c.guard, c.g0, c.g1, c) for c in crossings(t, y, y1)]
         found: Any = None
         best = 2.0
         for guard, g0, g1, what in candidates:
@@ -287,12 +289,12 @@ def integrate(plant: HybridPlant, t_end: float, *, name: str) -> HybridRun:
             y1 = rk4_step(rhs, t, y, h, k1)
             k_end = rhs(t + h, y1)
         t += h
-        y = plant.clamp(y1)
+        y = clamp(y1)
         if y is not y1:
             k_end = rhs(t, y)
         steps += 1
-        failure = plant.after_step(t, y, h)
-        rows.append(plant.row(t, y))
+        failure = after_step(t, y, h)
+        rows.append(row(t, y))
         if failure is not None:
             status, message = "observer-failed", failure
             break
@@ -310,12 +312,11 @@ def integrate(plant: HybridPlant, t_end: float, *, name: str) -> HybridRun:
         # k_end must be the derivative at (t, y) under the current phase, road and estimate
         if changed:
             k_end = rhs(t, y)
-        k_end = _transitions(plant, t, y, found if isinstance(found, tuple) else None, events, k_end, name)
+        k_end, g_old = _transitions(plant, t, y, found if isinstance(found, tuple) else None, events, k_end, name)
         halt = plant.end_step(t, y)
         if halt is not None:
             status, message = halt
             break
-        g_old = [plant.guard_values(k) for k in range(len(automata))]
         k1 = k_end
         if t >= t_end - 1e-12:
             break
@@ -332,8 +333,12 @@ def _controller_guard(plant: HybridPlant, k: int, i: int) -> Callable[[float, St
 
 
 def _transitions(plant: HybridPlant, t: float, y: State, located: tuple[int, int] | None,
-                 events: list[tuple[float, str]], k_end: State, name: str) -> State:
-    """Stall timeouts, then the located guard and the cascade of guards positive at ``t``; the final ``k_end``."""
+                 events: list[tuple[float, str]], k_end: State, name: str
+                 ) -> tuple[State, list[tuple[float, ...]]]:
+    """Stall timeouts, then the located guard and the cascade of guards positive at ``t``.
+
+    Returns the final ``k_end`` and the controllers' guards at ``(t, y)`` in their final phases.
+    """
     automata, labels = plant.automata, plant.labels
     fired = [located] if located is not None else []
     for k, ctrl in enumerate(automata):
@@ -346,12 +351,13 @@ def _transitions(plant: HybridPlant, t: float, y: State, located: tuple[int, int
     rounds = 0
     while True:
         if not fired:
-            for k in range(len(automata)):
-                index = next((i for i, g in enumerate(plant.guard_values(k)) if g > 0.0), -1)
+            values = [plant.guard_values(k) for k in range(len(automata))]
+            for k, guards in enumerate(values):
+                index = next((i for i, g in enumerate(guards) if g > 0.0), -1)
                 if index >= 0:
                     fired.append((k, index))
             if not fired:
-                return k_end
+                return k_end, values
         rounds += 1
         if rounds > MAX_CASCADE:
             k, index = fired[0]
