@@ -125,6 +125,19 @@ def test_a_guard_cascade_raises_in_both_loops_naming_the_guard():
         simulate_two_axle(TwoAxleScenario("dry-asphalt", speed_m_s=20.0, front=Endless(), duration_s=0.5))
 
 
+def test_the_wheel_of_the_sensors_runs_on_the_same_integrator_and_stops_at_a_located_lock():
+    from switchobs.sensors import burckhardt_tyre, simulate_wheel
+
+    veh = QuarterCar()
+    tyre = burckhardt_tyre("dry-asphalt", veh.load_n)
+    run = simulate_wheel(lambda t: -300.0, tyre, speed0_m_s=20.0, duration_s=0.5, vehicle=veh)
+    np.testing.assert_allclose(run.t, np.linspace(0.0, 0.5, 5001), rtol=0, atol=1e-15)   # on the sample grid
+    # omega integrates alpha: the trapezoid of the recorded alpha gives the recorded omega
+    np.testing.assert_allclose(run.omega[-1] - run.omega[0], np.trapezoid(run.alpha, run.t), rtol=1e-4)
+    with pytest.raises(SimulationError, match=r"the wheel locked or the car stopped at t = 0\.\d+ s \(< 2 s\)"):
+        simulate_wheel(lambda t: -3000.0, tyre, speed0_m_s=20.0, duration_s=2.0, vehicle=veh)
+
+
 def test_series_carry_the_tracked_reference_by_name():
     sc = BrakingScenario("dry-asphalt", speed_m_s=30.0, duration_s=1.0, controller=FivePhaseABS(tracking=True))
     s = simulate(sc, estimator="true").series
