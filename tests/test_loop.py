@@ -13,7 +13,7 @@ from switchobs import loop
 from switchobs.exceptions import DimensionError, ModelError, ObserverInputError, SimulationError
 from switchobs.loop import DEFAULT_BETA, INITIAL_STATE, ObserverSpec, ObserverXbsEstimator, xbs_estimator
 from switchobs.model import builtin_model
-from switchobs.observers import ErrorCode, SwitchedObserver, xbs3_observer, xbs4_observer
+from switchobs.observers import ErrorCode, SwitchedObserver, xbs3_observer
 from switchobs.plants import (MAX_CASCADE, BrakingScenario, FivePhaseABS, QuarterCar, TwoAxleScenario,
                               XbsEstimator, aguado_sec36, road, simulate, simulate_two_axle)
 
