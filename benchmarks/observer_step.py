@@ -12,7 +12,8 @@ import time
 
 import numpy as np
 
-from switchobs.observers import ObserverXbsEstimator, adaptive_xbs_observer, xbs3_observer, xbs4_observer
+from switchobs.loop import ObserverXbsEstimator
+from switchobs.observers import adaptive_xbs_observer, xbs3_observer, xbs4_observer
 
 
 def _best(fn, repeat: int = 3) -> float:

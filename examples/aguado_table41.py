@@ -22,5 +22,5 @@ assert result.two_phase_always_shorter, "the two-phase ABS should brake shorter 
 worst = max(abs(r.two_phase_m / r.seed_two_phase_m - 1) for r in result.rows)
 print(f"largest relative difference to the seed's two-phase distances: {100 * worst:.1f} %")
 assert worst < 0.05
-plot_table41(result, OUT / "aguado_table41.png")
+plot_table41(result).savefig(OUT / "aguado_table41.png", dpi=110)
 print(f"plot written to {OUT / 'aguado_table41.png'}")

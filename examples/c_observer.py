@@ -14,7 +14,8 @@ from pathlib import Path
 
 import numpy as np
 
-from switchobs.observers import ObserverXbsEstimator, xbs4_observer
+from switchobs.loop import ObserverXbsEstimator
+from switchobs.observers import xbs4_observer
 
 FAST = os.environ.get("SWITCHOBS_FAST") == "1"
 OUT = Path(sys.argv[1] if len(sys.argv) > 1 else os.environ.get("SWITCHOBS_EXAMPLES_OUT", "out/examples"))

@@ -12,7 +12,8 @@ import sys
 from dataclasses import replace
 from pathlib import Path
 
-from switchobs.observers import ObserverXbsEstimator, xbs4_observer
+from switchobs.loop import ObserverXbsEstimator
+from switchobs.observers import xbs4_observer
 from switchobs.plants import plot_braking, scenario, simulate
 
 FAST = os.environ.get("SWITCHOBS_FAST") == "1"
@@ -33,7 +34,7 @@ print("seed 000 Fig. 3:", res3, sep="\n")
 after = [r for r in res3.metrics.reconvergence if r.label == "-> hoang-wet"][0]
 print(f"re-converged within 10 % {after.time_s:.3f} s after the change to the wet road (seed: a fraction of a second)")
 assert res3.status == "duration" and after.time_s is not None and after.time_s < 0.5
-plot_braking(res3, OUT / "hoang2014_fig3.png")
+plot_braking(res3).savefig(OUT / "hoang2014_fig3.png", dpi=110)
 
 fig4 = scenario("hoang-fig4")
 res4 = simulate(fig4, estimator=observer(), observer_in_loop=True)
@@ -45,5 +46,5 @@ for name, (a, b) in {"dry": (0.5, 3.0), "wet": (3.0, 4.0), "snow": (4.0, 7.0)}.i
     print(f"  {name}: {cycles} ABS cycles, slip {s['lambda'][sel].mean():.3f}")
     assert cycles >= 2, f"the tracking ABS stopped cycling on the {name} road"
 assert all(r.time_s is not None and r.time_s < 0.5 for r in res4.metrics.reconvergence if r.label != "initial")
-plot_braking(res4, OUT / "hoang2014_fig4.png")
+plot_braking(res4).savefig(OUT / "hoang2014_fig4.png", dpi=110)
 print(f"plots written to {OUT / 'hoang2014_fig3.png'} and {OUT / 'hoang2014_fig4.png'}")

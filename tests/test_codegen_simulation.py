@@ -6,7 +6,8 @@ import numpy as np
 import pytest
 
 from switchobs.codegen import CObserver, compile_observer, generate_super_twisting
-from switchobs.observers import ObserverXbsEstimator, xbs3_observer, xbs4_observer
+from switchobs.loop import ObserverXbsEstimator
+from switchobs.observers import xbs3_observer, xbs4_observer
 from switchobs.plants import scenario, simulate
 from switchobs.sensors import Encoder, braking_trajectory, encoder_chain, super_twisting, super_twisting_gains
 

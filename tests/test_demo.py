@@ -17,10 +17,10 @@ import pytest
 
 from switchobs.cli.main import main
 from switchobs.exceptions import PrerequisiteError, SimulationError
-from switchobs.observers import ObserverXbsEstimator, xbs4_observer
-from switchobs.plants import BrakingScenario, FivePhaseABS, QuarterCar, simulate
-from switchobs.report import (STAGES, DemoSettings, EncoderLoopEstimator, Progress, Stage, check_prerequisites,
-                              demo_scenario, tracking_reference)
+from switchobs.loop import DemoSettings, EncoderLoopEstimator, ObserverXbsEstimator, demo_scenario
+from switchobs.observers import xbs4_observer
+from switchobs.plants import BrakingScenario, simulate
+from switchobs.report import STAGES, Progress, Stage, check_prerequisites
 from switchobs.sensors import Encoder
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -239,13 +239,13 @@ def test_encoder_loop_rejects_bad_settings():
 
 
 # ------------------------------------------------------------------ reference (21)
-def test_hoang2014_eq21_eq22_rebuilt_reference_reproduces_the_controller_rate():
-    """Replay the controller's own runtime through the recorded events; law (22) on the rebuilt
-    reference (21) must give the rate the runtime computes."""
+def test_hoang2014_eq21_eq22_recorded_reference_reproduces_the_controller_rate():
+    """Replay the controller's own runtime through the recorded events; law (22) on the reference (21)
+    the simulation recorded must give the rate the runtime computes."""
     sc = _short_demo_scenario(1.5)
     result = simulate(sc, estimator="true")
     s = result.series
-    ref, dref = tracking_reference(result)
+    ref, dref = s["x2_ref"], s["dx2_ref"]
     ctrl = sc.controller
     rt = ctrl.runtime(sc.vehicle, sc.actuator)
     veh = sc.vehicle
@@ -273,10 +273,3 @@ def test_hoang2014_eq21_eq22_rebuilt_reference_reproduces_the_controller_rate():
             else:
                 assert math.isnan(ref[j])
     assert checked > 100
-
-
-def test_tracking_reference_needs_a_tracking_controller():
-    sc = BrakingScenario("dry-asphalt", speed_m_s=10.0, controller=FivePhaseABS(), duration_s=0.2,
-                         vehicle=QuarterCar.hoang2014())
-    with pytest.raises(SimulationError, match="does not track a wheel-acceleration reference"):
-        tracking_reference(simulate(sc))

@@ -364,7 +364,7 @@ def test_to_json_and_str(xbs3, toy_adaptive):
     assert "def advance" in xbs3.source
 
 
-@pytest.mark.parametrize("module", ["_observer", "_xbs", "_adapter"])
+@pytest.mark.parametrize("module", ["_observer", "_xbs"])
 def test_docstring_examples_run(module):
     import doctest
     import importlib

@@ -18,10 +18,9 @@ from scipy.integrate import solve_ivp
 from scipy.linalg import expm
 
 from switchobs.design import design
-from switchobs.exceptions import DimensionError, ModelError, ObserverInputError, SpectrumError
+from switchobs.exceptions import SpectrumError
 from switchobs.model import builtin_model
-from switchobs.observers import (ErrorCode, ObserverXbsEstimator, SwitchedObserver, adaptive_xbs_observer,
-                                 xbs3_observer, xbs4_observer, xbs_gains)
+from switchobs.observers import adaptive_xbs_observer, xbs3_observer, xbs4_observer, xbs_gains
 
 A_RIG, B_RIG = 187.5, -4.375      # seed 000 Fig. 2: a = R^2 Fz / I, b = -R gamma_b / I
 
@@ -226,39 +225,6 @@ def test_hoang2014_discretised_observer_tracks_xbs_at_1khz():
         floors.append(np.abs(err[late]).max())
     assert floors[0] < 0.03          # z2 swings over [-0.3, 0.4]; initial error 0.8
     assert floors[0] / floors[1] > 3.0
-
-
-# --------------------------------------------------------------------------- adapter
-def test_adapter_is_an_xbs_estimator_and_equals_run_with_mean_hold():
-    from switchobs.plants import XbsEstimator
-
-    obs = xbs3_observer(60.0, 60.0)
-    est = ObserverXbsEstimator(obs, initial_state={"z2": 0.4, "z3": 20.0})
-    assert isinstance(est, XbsEstimator)
-    t = np.arange(0, 0.3, 1e-3)
-    y, vx, u = 30 * np.sin(40 * t), 25 - 3 * t, 500 * np.cos(40 * t)
-    est.reset(0.0, y[0], vx[0])
-    np.testing.assert_array_equal(est.state, [y[0], 0.4, 20.0])
-    assert est.estimate == 0.4
-    out = [est.update(t[k], y[k], vx[k], u[k], 1e-3) for k in range(1, t.size)]
-    rows = np.column_stack([(y[:-1] + y[1:]) / 2, (vx[:-1] + vx[1:]) / 2, u[1:]])
-    traj = obs.run([y[0], 0.4, 20.0], rows, 1e-3)
-    np.testing.assert_array_equal(out, traj[:, 1])
-    before = est.state
-    assert est.update(0.3, 5.0, 24.0, 0.0, 0.0) == out[-1]
-    np.testing.assert_array_equal(est.state, before)
-    assert est.describe() == "SwitchedObserver of model 'abs-xbs3' (rk4, ZOH signals y, vx, u)"
-    with pytest.raises(ObserverInputError, match=r"vx = -1.0 must be > 0") as info:
-        est.update(0.31, 5.0, -26.0, 0.0, 1e-3)      # the held (mean) speed is (24 - 26) / 2
-    assert info.value.code == ErrorCode.UNDEFINED_TIME_SCALE
-
-
-def test_adapter_refusals():
-    with pytest.raises(DimensionError, match=r"\['mu'\], which are not observer states"):
-        ObserverXbsEstimator(xbs3_observer(10.0, 10.0), initial_state={"mu": 0.1})
-    nf = SwitchedObserver(builtin_model("normal-form-2"), [1, 2], [1, 2], params={"a1": -1, "a2": -2})
-    with pytest.raises(ModelError, match=r"signals \(y, vx, u\), got \('y',\)"):
-        ObserverXbsEstimator(nf)
 
 
 # --------------------------------------------------------------------------- seed 001

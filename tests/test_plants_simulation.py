@@ -72,7 +72,8 @@ def test_results_change_less_than_1_percent_when_the_step_is_halved(ctrl):
 
 
 def test_step_halving_with_observer_and_road_changes():
-    from switchobs.observers import ObserverXbsEstimator, adaptive_xbs_observer
+    from switchobs.loop import ObserverXbsEstimator
+    from switchobs.observers import adaptive_xbs_observer
     sc = replace(scenario("aguado-sec34"), duration_s=4.0)
 
     def run(dt):
@@ -101,8 +102,9 @@ def test_aguado2020_table41_two_phase_shorter():
 
 
 def test_aguado2020_table41_two_phase_shorter_with_the_adaptive_observer_in_the_loop():
-    from switchobs.cli._simulate import make_estimator
-    res = table41(speeds_kmh=(60.0,), estimator_factory=lambda sc: make_estimator("adaptive", sc),
+    from switchobs.loop import xbs_estimator
+    res = table41(speeds_kmh=(60.0,), estimator_factory=lambda sc: xbs_estimator("adaptive", sc.vehicle,
+                                                                                  sc.roads.initial),
                   observer="adaptive")
     assert all(r.complete for r in res.rows) and res.two_phase_always_shorter
     for row in res.rows:
@@ -132,7 +134,8 @@ def test_two_phase_cycle_keeps_xbs_between_thresholds():
 
 
 def test_aguado2020_sec41_continuous_control_loses_persistency_of_excitation():
-    from switchobs.observers import ObserverXbsEstimator, adaptive_xbs_observer
+    from switchobs.loop import ObserverXbsEstimator
+    from switchobs.observers import adaptive_xbs_observer
     veh = QuarterCar()
 
     def observer():

@@ -12,11 +12,9 @@ from switchobs.plants import (GRAVITY, Accelerometer, RoadChange, RoadSchedule, 
 
 @pytest.fixture(scope="module")
 def sec36():
-    from switchobs.cli._simulate import make_estimator
-    from switchobs.plants import BrakingScenario
+    from switchobs.loop import xbs_estimator
     sc = replace(aguado_sec36(), duration_s=4.0)
-    ests = tuple(make_estimator("xbs4", BrakingScenario(sc.roads, speed_m_s=50.0, vehicle=sc.vehicle.corner(a)))
-                 for a in ("front", "rear"))
+    ests = tuple(xbs_estimator("xbs4", sc.vehicle.corner(a), sc.roads.initial) for a in ("front", "rear"))
     return simulate_two_axle(sc, estimators=ests)
 
 

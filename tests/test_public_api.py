@@ -7,9 +7,11 @@ import pytest
 
 import switchobs
 
-LAYERS = ["model", "design", "certify", "codegen", "plants", "sensors", "observers", "report", "cli"]
-RANK = {"model": 0, "design": 1, "certify": 2, "codegen": 3, "plants": 4, "sensors": 4, "observers": 4,
-        "report": 5, "cli": 6}
+LAYERS = ["model", "design", "certify", "codegen", "observers", "plants", "sensors", "loop", "report", "cli"]
+# observers are generic (model, design); plants hold the physics and the hybrid integrator; sensors use the
+# plants' vehicle, roads and integrator; the loop wires observers and sensors to the plants
+RANK = {"model": 0, "design": 1, "certify": 2, "codegen": 3, "observers": 4, "plants": 5, "sensors": 6,
+        "loop": 7, "report": 8, "cli": 9}
 
 
 @pytest.mark.parametrize("name", switchobs.__all__)

@@ -16,11 +16,20 @@ generate_observer, compile_observer, CObserver
                                             -- switchobs.codegen (casadi -> C)
 SwitchedObserver, AdaptiveSwitchedObserver, xbs3_observer, xbs4_observer,
 adaptive_xbs_observer                       -- switchobs.observers
-simulate, scenario, table41, road, PoincareMap
+simulate, BrakingScenario, scenario, table41, road, PoincareMap
                                             -- switchobs.plants (ABS)
 Encoder, encoder_chain, ThreeStageEstimator, super_twisting
                                             -- switchobs.sensors (wheel encoders)
+ObserverSpec, xbs_estimator, ObserverXbsEstimator, EncoderLoopEstimator, demo_scenario
+                                            -- switchobs.loop (observers in the ABS loop)
 run_demo, write_theory, theory_documents    -- switchobs.report (main job, theory/)
+
+Example: the 4D XBS observer in the loop of a braking on dry asphalt::
+
+    from switchobs import BrakingScenario, simulate, xbs_estimator
+    sc = BrakingScenario("dry-asphalt", speed_m_s=30.0)
+    res = simulate(sc, estimator=xbs_estimator("xbs4", sc.vehicle, sc.roads.initial))
+    print(res.metrics)
 
 Names are loaded on first use, so ``import switchobs`` stays cheap (cvxpy and
 casadi are imported only by the layers that need them).
@@ -41,8 +50,10 @@ _EXPORTS = {
     "switchobs.codegen": ("generate_observer", "compile_observer", "CObserver"),
     "switchobs.observers": ("SwitchedObserver", "AdaptiveSwitchedObserver", "xbs3_observer", "xbs4_observer",
                             "adaptive_xbs_observer"),
-    "switchobs.plants": ("simulate", "scenario", "table41", "road", "PoincareMap"),
+    "switchobs.plants": ("simulate", "BrakingScenario", "scenario", "table41", "road", "PoincareMap"),
     "switchobs.sensors": ("Encoder", "encoder_chain", "ThreeStageEstimator", "super_twisting"),
+    "switchobs.loop": ("ObserverSpec", "xbs_estimator", "ObserverXbsEstimator", "EncoderLoopEstimator",
+                       "demo_scenario"),
     "switchobs.report": ("run_demo", "write_theory", "theory_documents"),
 }
 _WHERE = {name: module for module, names in _EXPORTS.items() for name in names}

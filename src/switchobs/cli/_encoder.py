@@ -5,8 +5,9 @@ from __future__ import annotations
 import argparse
 
 from ..exceptions import SimulationError
-from ..sensors import (ESTIMATORS, AngleTrajectory, ChainSettings, Encoder, EstimatorComparison,
-                       braking_trajectory, compare_estimators, constant_speed, varying_speed)
+from .._figures import save_figure
+from ..sensors import (ESTIMATORS, AngleTrajectory, ChainSettings, Encoder, braking_trajectory,
+                       compare_estimators, constant_speed, plot_comparison, varying_speed)
 from ._common import emit_json
 
 __all__ = ["register"]
@@ -64,36 +65,7 @@ def run(args: argparse.Namespace) -> int:
     else:
         print(comparison)
     if args.plot:
-        plot_comparison(comparison, args.plot)
+        save_figure(plot_comparison(comparison), args.plot)
         if not args.json:
             print(f"plot written to {args.plot}")
     return 0
-
-
-def plot_comparison(comparison: EstimatorComparison, path: str) -> None:
-    """Speed and acceleration of every estimator against the truth over one second after the warm-up."""
-    import matplotlib
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
-    first = comparison.results[0]
-    t0 = first.t[0] + first.settings.warmup_s
-    show = (first.t >= t0) & (first.t <= t0 + 1.0)
-    fig, axes = plt.subplots(2, 1, figsize=(9, 6), sharex=True)
-    axes[0].plot(first.t[show], first.omega_true[show], "k", lw=2, label="truth")
-    axes[1].plot(first.t[show], first.alpha_true[show], "k", lw=2, label="truth")
-    for r in comparison.results:
-        axes[0].plot(r.t[show], r.omega[show], lw=0.9, label=r.estimator)
-        axes[1].plot(r.t[show], r.alpha[show], lw=0.9, label=r.estimator)
-    axes[0].set_ylabel("omega [rad/s]")
-    axes[1].set_ylabel("alpha [rad/s^2]")
-    axes[1].set_xlabel("t [s]")
-    axes[0].legend(loc="upper right", fontsize=8)
-    axes[0].set_title(f"{comparison.trajectory}, {comparison.encoder.ppr}-ppr encoder")
-    fig.tight_layout()
-    try:
-        fig.savefig(path, dpi=110)
-    except OSError as exc:
-        raise SimulationError(f"cannot write the plot to {path!r}: {exc}") from None
-    finally:
-        plt.close(fig)

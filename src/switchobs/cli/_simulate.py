@@ -13,22 +13,18 @@ import argparse
 from dataclasses import replace
 from typing import Any
 
+from .._figures import save_figure
 from ..exceptions import SimulationError
+from ..loop import DEFAULT_GAMMA, OBSERVER_KINDS, ObserverSpec, xbs_estimator
 from ..plants import (TABLE41_ROADS, TABLE41_SPEEDS_KMH, BrakeActuator, BrakingScenario, ContinuousXbsControl,
                       FivePhaseABS, TwoPhaseABS, XbsEstimator, aguado_sec36, plot_braking, plot_table41,
                       plot_two_axle, road, road_names, scenario, scenario_description, scenario_names,
                       scenario_observer, simulate, simulate_two_axle, table41)
 from ._common import emit_json
 
-__all__ = ["register", "make_estimator", "OBSERVERS"]
+__all__ = ["register"]
 
-OBSERVERS = ("xbs3", "xbs4", "adaptive", "none")
 CONTROLLERS = ("five-phase", "two-phase", "continuous")
-#: Default observer gains: error rates in the rescaled time tau (seed 000 Sec. III-E, IV-D; seed 001 (3.20)).
-DEFAULT_BETA = {"xbs3": 150.0, "xbs4": 100.0, "adaptive": 100.0}
-DEFAULT_GAMMA = 1e4
-#: Initial estimates: a small positive XBS (the stable side) and rough road parameters.
-INITIAL_STATE = {"xbs3": {"z2": 0.5}, "xbs4": {"z2": 0.5}, "adaptive": {"c": 20.0, "d": 10.0}}
 
 
 def register(sub: argparse._SubParsersAction) -> None:
@@ -43,7 +39,7 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--controller", choices=CONTROLLERS, help="ABS algorithm (default five-phase)")
     p.add_argument("--tracking", action="store_true",
                    help="five-phase: closed-loop wheel-acceleration tracking (21)-(22) in phases 1, 3, 4")
-    p.add_argument("--observer", choices=OBSERVERS,
+    p.add_argument("--observer", choices=OBSERVER_KINDS,
                    help="XBS observer (default: none, or the scenario's); controllers that need an XBS read "
                         "its estimate, or the true XBS with --observer none")
     p.add_argument("--observer-impl", choices=("python", "c"), default="python",
@@ -60,38 +56,6 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--series", action="store_true", help="with --json: include the time series")
     p.add_argument("--plot", metavar="PNG", help="write the figure to this file")
     p.set_defaults(func=run)
-
-
-def make_estimator(kind: str, sc: BrakingScenario, *, beta: float | None = None, gamma: float | None = None,
-                   impl: str = "python") -> XbsEstimator | None:
-    """The reference observer ``kind`` set up for the plant of ``sc`` (None for ``none``).
-
-    ``a = R² Fz / J`` and ``b`` come from the scenario's vehicle (``b = -R γ_b / J``
-    for the models of seed 000, ``+R γ_b / J`` for seed 001's); the 3D observer
-    knows the initial road's ``c = -c2``.
-    """
-    if kind == "none":
-        return None
-    if kind not in OBSERVERS:
-        raise SimulationError(f"unknown observer {kind!r}; choose one of {', '.join(OBSERVERS)}")
-    if impl not in ("python", "c"):
-        raise SimulationError(f"unknown --observer-impl {impl!r}; choose python or c")
-    from ..observers import ObserverXbsEstimator, adaptive_xbs_observer, xbs3_observer, xbs4_observer
-
-    beta = DEFAULT_BETA[kind] if beta is None else beta
-    veh = sc.vehicle
-    if kind == "xbs3":
-        obs = xbs3_observer(beta, beta, params={"a": veh.a, "b": -veh.b, "c": sc.roads.initial.c})
-    elif kind == "xbs4":
-        obs = xbs4_observer(beta, beta, params={"a": veh.a, "b": -veh.b})
-    else:
-        g = DEFAULT_GAMMA if gamma is None else gamma
-        obs = adaptive_xbs_observer(beta, [g, g], params={"a": veh.a, "b": veh.b})
-    if impl == "c":
-        from ..codegen import CObserver
-
-        obs = CObserver.like(obs)  # the generated C twin: same model, gains, parameters and readout
-    return ObserverXbsEstimator(obs, initial_state=INITIAL_STATE[kind])
 
 
 def _controller(args: argparse.Namespace, base: Any) -> Any:
@@ -142,6 +106,10 @@ def _timing_changes(args: argparse.Namespace) -> dict[str, Any]:
     return changes
 
 
+def _spec(args: argparse.Namespace, kind: str) -> ObserverSpec:
+    return ObserverSpec(kind, beta=args.beta, gamma=args.gamma, impl=args.observer_impl)
+
+
 def _table41(args: argparse.Namespace) -> int:
     for opt in ("road", "speed_kmh", "controller", "duration", "delay"):
         if getattr(args, opt) is not None or (opt == "controller" and args.tracking):
@@ -150,12 +118,14 @@ def _table41(args: argparse.Namespace) -> int:
     kind = args.observer or "none"
     factory = None
     if kind != "none":
+        spec = _spec(args, kind)
+
         def factory(sc: BrakingScenario) -> XbsEstimator | None:
-            return make_estimator(kind, sc, beta=args.beta, gamma=args.gamma, impl=args.observer_impl)
+            return xbs_estimator(spec, sc.vehicle, sc.roads.initial)
     result = table41(roads=TABLE41_ROADS, speeds_kmh=TABLE41_SPEEDS_KMH, dt_s=args.dt or 1e-3,
                      estimator_factory=factory, observer=kind)
     if args.plot:
-        plot_table41(result, args.plot)
+        save_figure(plot_table41(result), args.plot)
     if args.json:
         emit_json(result.to_json())
     else:
@@ -172,13 +142,11 @@ def _two_axle(args: argparse.Namespace) -> int:
     sc = replace(sc, **changes)
     kind = args.observer or scenario_observer(args.scenario)
     # each observer knows its wheel's static load: a = R^2 Fz / J of the corner
-    ests = tuple(make_estimator(kind, BrakingScenario(sc.roads, speed_m_s=sc.speed_m_s,
-                                                      vehicle=sc.vehicle.corner(axle)),
-                                beta=args.beta, gamma=args.gamma, impl=args.observer_impl)
-                 for axle in ("front", "rear"))
+    spec = _spec(args, kind)
+    ests = tuple(xbs_estimator(spec, sc.vehicle.corner(axle), sc.roads.initial) for axle in ("front", "rear"))
     result = simulate_two_axle(sc, estimators=ests, observer_in_loop=not args.parallel)
     if args.plot:
-        plot_two_axle(result, args.plot)
+        save_figure(plot_two_axle(result), args.plot)
     if args.json:
         data = result.to_json(include_series=args.series)
         data["description"] = scenario_description(args.scenario)
@@ -198,10 +166,10 @@ def run(args: argparse.Namespace) -> int:
     if args.scenario == "aguado-sec36":
         return _two_axle(args)
     sc, kind = _scenario(args)
-    est = make_estimator(kind, sc, beta=args.beta, gamma=args.gamma, impl=args.observer_impl)
+    est = xbs_estimator(_spec(args, kind), sc.vehicle, sc.roads.initial)
     result = simulate(sc, estimator=est, observer_in_loop=not args.parallel)
     if args.plot:
-        plot_braking(result, args.plot)
+        save_figure(plot_braking(result), args.plot)
     if args.json:
         data = result.to_json(include_series=args.series)
         if args.scenario is not None:

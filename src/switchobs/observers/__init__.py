@@ -1,4 +1,4 @@
-"""Reference switched observers (Python): generic, 3D / 4D XBS, switched adaptive, and their ABS adapter.
+"""Reference switched observers (Python): generic, 3D / 4D XBS, switched adaptive.
 
 Public API
 ----------
@@ -8,20 +8,18 @@ xbs3_observer            -- 3D known-road XBS observer (abs-xbs3, seed 000 Sec. 
 xbs4_observer            -- 4D unknown-road XBS observer (abs-xbs4, seed 000 Sec. IV), gains from beta1, beta2
 adaptive_xbs_observer    -- switched adaptive XBS observer (abs-adaptive2, seed 001 Ch. 3), gains from beta, Gamma
 xbs_gains                -- the beta-parametrised gain pairs of the three built-in XBS models
-ObserverXbsEstimator     -- an observer as a switchobs.plants.XbsEstimator (reset / update -> mu_hat)
-SteppingObserver         -- protocol the adapter needs (step, readout, names): a C binding can satisfy it
 ErrorCode                -- status codes of a refused step (mirrored by the generated C)
 METHODS                  -- discretisations: "rk4" (default), "euler"
 
 Every observer has ``step(xhat, signals, dt)``, ``run(xhat0, signal_rows, dt)``,
 ``derivative(xhat, signals)`` and ``readout(xhat)``; signals are ordered as
 ``Model.signals`` (y, external signals, inputs) and held constant over a step.
+To close an ABS loop on one, see :mod:`switchobs.loop`.
 """
 
-from ._adapter import ObserverXbsEstimator, SteppingObserver
 from ._engine import METHODS, ErrorCode
 from ._observer import AdaptiveSwitchedObserver, SwitchedObserver
 from ._xbs import adaptive_xbs_observer, xbs3_observer, xbs4_observer, xbs_gains
 
-__all__ = ["AdaptiveSwitchedObserver", "ErrorCode", "METHODS", "ObserverXbsEstimator", "SteppingObserver", "SwitchedObserver",
+__all__ = ["AdaptiveSwitchedObserver", "ErrorCode", "METHODS", "SwitchedObserver",
            "adaptive_xbs_observer", "xbs3_observer", "xbs4_observer", "xbs_gains"]

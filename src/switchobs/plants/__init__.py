@@ -8,8 +8,12 @@ Vehicle
     :class:`QuarterCar`, :class:`BrakeActuator`, :class:`PrescribedSpeed`
 Controllers
     :class:`FivePhaseABS`, :class:`TwoPhaseABS`, :class:`ContinuousXbsControl`
-Observer interface
-    :class:`XbsEstimator` (protocol), :class:`TrueXbs` (oracle)
+Observer port
+    :class:`XbsEstimator` (the protocol the simulations call; observers are wired to it
+    by :mod:`switchobs.loop`), :class:`TrueXbs` (oracle)
+Hybrid integrator (every simulated plant: quarter car, two-axle vehicle, the wheel of :mod:`switchobs.sensors`)
+    :func:`integrate`, :class:`HybridPlant` (protocol), :class:`HybridRun`, :class:`Crossing`,
+    :data:`MAX_CASCADE`
 Simulation
     :class:`BrakingScenario`, :func:`simulate`, :class:`BrakingResult`,
     :class:`BrakingMetrics`, :class:`Assumption1Status`, :func:`assumption1`
@@ -25,6 +29,7 @@ Limit cycle of the two-phase ABS
 
 from ._controllers import ContinuousXbsControl, FivePhaseABS, TwoPhaseABS
 from ._estimator import TrueXbs, XbsEstimator
+from ._hybrid import MAX_CASCADE, Crossing, HybridPlant, HybridRun, integrate
 from ._plot import plot_braking, plot_table41, plot_two_axle
 from ._poincare import PoincareFixedPoint, PoincareMap, simulate_return_map
 from ._two_axle import Accelerometer, TwoAxleResult, TwoAxleScenario, TwoAxleVehicle, simulate_two_axle
@@ -42,7 +47,7 @@ __all__ = [
     "D1_HOANG", "D2_HOANG", "RoadChange", "RoadSchedule",
     "QuarterCar", "BrakeActuator", "PrescribedSpeed", "GRAVITY",
     "FivePhaseABS", "TwoPhaseABS", "ContinuousXbsControl",
-    "XbsEstimator", "TrueXbs",
+    "XbsEstimator", "TrueXbs", "integrate", "HybridPlant", "HybridRun", "Crossing", "MAX_CASCADE",
     "BrakingScenario", "BrakingResult", "simulate", "SERIES",
     "BrakingMetrics", "Assumption1Status", "Reconvergence", "assumption1",
     "scenario", "scenario_names", "scenario_observer", "scenario_description", "table41", "Table41Result",

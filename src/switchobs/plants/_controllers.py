@@ -13,7 +13,10 @@ simulation loop.  A runtime exposes
 ``fire(t, index, x2, v_wheel, vx)``
     takes transition ``index``;
 ``breakpoint() -> float``
-    next time at which ``rate`` has a kink (end of a reference trajectory).
+    next time at which ``rate`` has a kink (end of a reference trajectory);
+``reference(t) -> (x2_ref, dx2_ref)``
+    the wheel-acceleration reference the controller tracks and its slope
+    (NaN when it tracks none); the simulations record it.
 
 Sign conventions: ``x2 = R dω/dt - a_x`` is ``z1`` of the models; with
 ``b = R γ_b / J > 0`` the simplified wheel dynamics read
@@ -212,18 +215,23 @@ class _FivePhaseRuntime:
         if p == 0:
             return self.r0
         if self.tracking and p in (1, 3, 4):
-            tau = t - self.t0
-            if tau < self.T:
-                ref = self.ref0 + tau * tau * (self.ref_a2 + self.ref_a3 * tau)
-                dref = tau * (2.0 * self.ref_a2 + 3.0 * self.ref_a3 * tau)
-            else:
-                ref, dref = self.target, 0.0
+            ref, dref = self.reference(t)
             # (22) with b > 0 and dz1/dt = -(a/vx) z1 z2 - b u: closed loop dxi/dt = -alpha xi
             return (-self.a / vx * xbs * x2 - dref + self.alpha * (x2 - ref)) / self.b
         r = self.rates[p]
         if r == 0.0:
             return 0.0
         return r / (v_wheel if v_wheel > _V_WHEEL_FLOOR else _V_WHEEL_FLOOR)
+
+    def reference(self, t: float) -> tuple[float, float]:
+        """The cubic (21) and its slope at ``t`` in the tracked phases 1, 3, 4; NaN otherwise."""
+        if not (self.tracking and self.phase in (1, 3, 4)):
+            return (math.nan, math.nan)
+        tau = t - self.t0
+        if tau < self.T:
+            return (self.ref0 + tau * tau * (self.ref_a2 + self.ref_a3 * tau),
+                    tau * (2.0 * self.ref_a2 + 3.0 * self.ref_a3 * tau))
+        return (self.target, 0.0)
 
     #: the guards read x2 only, so they can be located within a step whatever the XBS source
     guards_use_xbs = False
@@ -366,6 +374,10 @@ class _TwoPhaseRuntime:
     def breakpoint(self) -> float:
         return math.inf
 
+    def reference(self, t: float) -> tuple[float, float]:
+        """No wheel-acceleration reference curve: (4.3) tracks the constant ``±z_ref`` (recorded as NaN)."""
+        return (math.nan, math.nan)
+
 
 @dataclass(frozen=True)
 class ContinuousXbsControl:
@@ -457,6 +469,10 @@ class _ContinuousRuntime:
 
     def breakpoint(self) -> float:
         return math.inf
+
+    def reference(self, t: float) -> tuple[float, float]:
+        """The virtual reference (4.2) is a function of the XBS, not a curve in time: recorded as NaN."""
+        return (math.nan, math.nan)
 
 
 Controller = FivePhaseABS | TwoPhaseABS | ContinuousXbsControl

@@ -1,9 +1,11 @@
-"""The interface through which a simulation feeds an XBS observer, and a trivial oracle.
+"""The port through which a simulation feeds an XBS estimator, and a trivial oracle.
 
-The simulation loop of :mod:`switchobs.plants` never imports an observer: it
-receives any object with the two methods of :class:`XbsEstimator` (structural
-typing), so that the Python reference observers of :mod:`switchobs.observers`
-and, later, bindings of the generated C observers plug in the same way.
+The simulations of :mod:`switchobs.plants` never import an observer: they call
+any object with the two methods of :class:`XbsEstimator` (structural typing).
+The protocol lives here, with the simulations that call it, because a lower
+layer defines the ports it calls; :mod:`switchobs.loop` implements it for the
+Python reference observers, the compiled C observers and the encoder chain
+(:func:`switchobs.loop.xbs_estimator`, :class:`switchobs.loop.ObserverXbsEstimator`).
 """
 
 from __future__ import annotations
@@ -45,8 +47,8 @@ class XbsEstimator(Protocol):
         """Advance from ``t - dt`` to ``t`` and return the XBS estimate ``mu_hat'(t)``.
 
         May raise :class:`switchobs.exceptions.SimulationError` (e.g.
-        ``ObserverInputError``) to refuse a step; the simulation then stops with
-        status ``observer-failed`` (two-axle: drops that wheel's estimator).
+        ``ObserverInputError``) to refuse a step; the simulation (quarter car
+        and two-axle vehicle alike) then stops with status ``observer-failed``.
         """
         ...
 

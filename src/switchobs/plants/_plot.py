@@ -1,12 +1,17 @@
-"""Figures of braking runs, in the style of the seeds' plots (matplotlib, Agg backend)."""
+"""Figures of braking runs, in the style of the seeds' plots (matplotlib ``Figure`` objects, no pyplot).
+
+Each function returns the Figure and takes ``ax=``: the Axes to draw on, or
+``None`` for a new Figure (:mod:`switchobs._figures`); save it with
+``fig.savefig(path)``.
+"""
 
 from __future__ import annotations
 
-from pathlib import Path
+from typing import Any
 
 import numpy as np
 
-from ..exceptions import SimulationError
+from .._figures import panels
 from ._scenarios import Table41Result
 from ._simulate import BrakingResult
 from ._two_axle import TwoAxleResult
@@ -14,33 +19,37 @@ from ._two_axle import TwoAxleResult
 __all__ = ["plot_braking", "plot_table41", "plot_two_axle"]
 
 
-def _save(fig, path: str | Path) -> Path:  # noqa: ANN001 - matplotlib figure
-    path = Path(path)
-    try:
-        fig.savefig(path, dpi=110)
-    except (OSError, ValueError) as exc:
-        raise SimulationError(f"cannot write the plot {str(path)!r}: {exc}") from None
-    return path
-
-
-def plot_braking(result: BrakingResult, path: str | Path) -> Path:
+def plot_braking(result: BrakingResult, *, ax: Any = None) -> Any:
     """Time histories and phase planes of a run (seed 000 Figs. 3-4, seed 001 Figs. 3.4, 4.5-4.7).
 
     Left: speeds ``vx`` and ``R ω``, slip, ``x2`` with the controller phase,
     pressure, true and estimated XBS.  Right: the ``(lambda, x2)`` plane (seed
     001 Fig. 4.7) and the ``(z1, z2) = (x2, mu')`` plane (Figs. 4.4-4.6).
-    """
-    import matplotlib
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
 
+    Parameters
+    ----------
+    result : BrakingResult
+    ax : sequence of 7 Axes, optional
+        The five time histories, then the two planes; default a new Figure.
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+    """
     s = result.series
     t = s["t"]
-    fig = plt.figure(figsize=(12, 10))
-    grid = fig.add_gridspec(5, 2, width_ratios=(1.6, 1.0))
-    axes = [fig.add_subplot(grid[i, 0]) for i in range(5)]
-    for ax in axes[1:]:
-        ax.sharex(axes[0])
+    if ax is None:
+        from matplotlib.figure import Figure
+
+        fig = Figure(figsize=(12, 10))
+        grid = fig.add_gridspec(5, 2, width_ratios=(1.6, 1.0))
+        axes = [fig.add_subplot(grid[i, 0]) for i in range(5)]
+        for a in axes[1:]:
+            a.sharex(axes[0])
+        p1, p2 = fig.add_subplot(grid[0:2, 1]), fig.add_subplot(grid[2:5, 1])
+    else:
+        fig, given = panels(ax, 7, figsize=(12, 10), owner="plot_braking")
+        axes, (p1, p2) = given[:5], given[5:]
     r = result.scenario.vehicle.radius_m
     axes[0].plot(t, s["vx"], label="vx")
     axes[0].plot(t, r * s["omega"], label="R ω")
@@ -66,15 +75,13 @@ def plot_braking(result: BrakingResult, path: str | Path) -> Path:
     axes[4].legend(loc="upper right")
     for when, what in result.events:
         if what.startswith("road"):
-            for ax in axes:
-                ax.axvline(when, color="tab:red", lw=0.6, ls=":")
+            for a in axes:
+                a.axvline(when, color="tab:red", lw=0.6, ls=":")
     active = s["phase"] >= 1
-    p1 = fig.add_subplot(grid[0:2, 1])
     p1.plot(s["lambda"][active], s["x2"][active], lw=0.6)
     p1.set_xlabel("slip λ")
     p1.set_ylabel("x2 [m/s²]")
     p1.set_title("(λ, x2) plane")
-    p2 = fig.add_subplot(grid[2:5, 1])
     p2.plot(s["x2"][active], s["xbs"][active], lw=0.6, label="true")
     if not np.all(np.isnan(s["xbs_hat"])):
         p2.plot(s["x2"][active], s["xbs_hat"][active], lw=0.6, alpha=0.7, label="estimate")
@@ -86,21 +93,18 @@ def plot_braking(result: BrakingResult, path: str | Path) -> Path:
     fig.suptitle(f"{result.scenario.name}: {result.scenario.roads}, {result.scenario.speed_kmh:.0f} km/h, "
                  f"{result.scenario.controller.name}, observer {result.observer}", fontsize=10)
     fig.tight_layout()
-    try:
-        return _save(fig, path)
-    finally:
-        plt.close(fig)
+    return fig
 
 
-def plot_table41(result: Table41Result, path: str | Path) -> Path:
-    """Bar chart of the braking distances of Table 4.1, ours beside the seed's."""
-    import matplotlib
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
+def plot_table41(result: Table41Result, *, ax: Any = None) -> Any:
+    """Bar chart of the braking distances of Table 4.1, ours beside the seed's; one panel per speed.
 
+    ``ax``: one Axes per speed of the result, or ``None`` for a new Figure; returns the Figure.
+    """
     speeds = sorted({r.speed_kmh for r in result.rows})
-    fig, axes = plt.subplots(1, len(speeds), figsize=(4.5 * len(speeds), 4.5), squeeze=False)
-    for ax, v in zip(axes[0], speeds):
+    fig, axes = panels(ax, len(speeds), figsize=(4.5 * len(speeds), 4.5), owner="plot_table41", nrows=1,
+                       ncols=len(speeds))
+    for ax, v in zip(axes, speeds):
         rows = [r for r in result.rows if r.speed_kmh == v]
         x = np.arange(len(rows))
         w = 0.2
@@ -111,25 +115,21 @@ def plot_table41(result: Table41Result, path: str | Path) -> Path:
         ax.set_xticks(x, [r.road.replace("-", "\n") for r in rows], fontsize=8)
         ax.set_title(f"{v:.0f} km/h")
         ax.set_ylabel("braking distance [m]")
-    axes[0][0].legend(fontsize=8)
+    axes[0].legend(fontsize=8)
     fig.suptitle("seed 001 Table 4.1: braking distance vx(0)²/(2 g μ̄)")
     fig.tight_layout()
-    try:
-        return _save(fig, path)
-    finally:
-        plt.close(fig)
+    return fig
 
 
-def plot_two_axle(result: TwoAxleResult, path: str | Path) -> Path:
-    """Speeds and speed estimate, slips, pressures, loads and XBS of both axles (seed 001 Figs. 3.15-3.19)."""
-    import matplotlib
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
+def plot_two_axle(result: TwoAxleResult, *, ax: Any = None) -> Any:
+    """Speeds and speed estimate, slips, pressures, loads and XBS of both axles (seed 001 Figs. 3.15-3.19).
 
+    ``ax``: 5 Axes, or ``None`` for a new Figure; returns the Figure.
+    """
     s = result.series
     t = s["t"]
     r = result.scenario.vehicle.radius_m
-    fig, axes = plt.subplots(5, 1, figsize=(10, 12), sharex=True)
+    fig, axes = panels(ax, 5, figsize=(10, 12), owner="plot_two_axle", sharex=True)
     axes[0].plot(t, s["vx"], label="vx")
     axes[0].plot(t, s["vx_hat"], "--", label="vx estimate")
     axes[0].plot(t, r * s["omega_f"], lw=0.8, label="R ω front")
@@ -159,7 +159,4 @@ def plot_two_axle(result: TwoAxleResult, path: str | Path) -> Path:
                 ax.axvline(when, color="tab:red", lw=0.6, ls=":")
     fig.suptitle(str(result.scenario), fontsize=9)
     fig.tight_layout()
-    try:
-        return _save(fig, path)
-    finally:
-        plt.close(fig)
+    return fig

@@ -160,6 +160,27 @@ class _RoadState:
         self.a = self.b
         self.blending = False
 
+    def breakpoint(self) -> float:
+        """Next scheduled kink of the characteristic: the end of a transition or a change at a given time."""
+        if self.blending:
+            return self.t0 + self.duration
+        pending = self.pending
+        if pending is not None and pending.at_time_s is not None:
+            return pending.at_time_s
+        return math.inf
+
+    def at_breakpoint(self, t: float) -> tuple[bool, list[str]]:
+        """Take the scheduled switch due at ``t``: ``(characteristic changed, event texts)``."""
+        pending = self.pending
+        if self.blending and t >= self.t0 + self.duration - 1e-12:
+            self.end_change()
+            return True, []
+        if not self.blending and pending is not None and pending.at_time_s is not None \
+                and t >= pending.at_time_s - 1e-12:
+            self.start_change(t)
+            return True, [f"road -> {pending.road.name}"]
+        return False, []
+
     def weight(self, t: float) -> float:
         s = (t - self.t0) / self.duration
         if s <= 0.0:

@@ -16,8 +16,11 @@ stiffness ``a mu'(lambda) / vx`` never leaves the RK4 stability region
 Steps end exactly on the known breakpoints (start and end of the road
 transitions, end of a reference trajectory, the final time); controller phase
 changes, position-triggered road changes and the final stop are located within
-the step (:func:`locate_event`).  Only the controller's guards that read an
-observer's estimate are checked at the step ends, where the estimate changes.
+the step.  Only the controller's guards that read an observer's estimate are
+checked at the step ends, where the estimate changes.  The integrator and its
+rules (order of the transitions, guard cascades, an observer refusing a step)
+are those of :func:`switchobs.plants.integrate`, shared with the
+two-axle vehicle and the wheel of :mod:`switchobs.sensors`.
 """
 
 from __future__ import annotations
@@ -34,7 +37,7 @@ import numpy.typing as npt
 from ..exceptions import SimulationError
 from ._controllers import ContinuousXbsControl, Controller, FivePhaseABS, TwoPhaseABS
 from ._estimator import TrueXbs, XbsEstimator
-from ._hybrid import locate_event, rk4_step
+from ._hybrid import Crossing, HybridPlant, integrate
 from ._metrics import BrakingMetrics, braking_metrics
 from ._road import RoadSchedule, _RoadState
 from ._tyre import Burckhardt
@@ -44,9 +47,7 @@ __all__ = ["BrakingScenario", "BrakingResult", "simulate", "SERIES"]
 
 #: Columns of :attr:`BrakingResult.series`, in order.
 SERIES = ("t", "omega", "vx", "x", "P_b", "lambda", "mu", "xbs", "x2", "ax", "omega_dot", "u", "phase",
-          "xbs_hat")
-
-_MAX_CASCADE = 8
+          "xbs_hat", "x2_ref", "dx2_ref")
 
 
 def _check(owner: str, key: str, value: Any, *, positive: bool = True, allow_zero: bool = False) -> None:
@@ -166,7 +167,10 @@ class BrakingResult:
         travelled distance ``x``, pressure ``P_b`` [bar], slip ``lambda``,
         friction ``mu``, true XBS ``xbs``, ``x2 = R dω/dt - a_x``, ``ax``,
         ``omega_dot``, applied ``u = dP_b/dt`` [bar/s], controller ``phase``,
-        estimate ``xbs_hat`` (NaN without estimator).
+        estimate ``xbs_hat`` (NaN without estimator), the wheel-acceleration
+        reference the controller tracks ``x2_ref`` and its slope ``dx2_ref``
+        (seed 000 (21); NaN when it tracks none, :class:`FivePhaseABS` with
+        ``tracking=True`` in phases 1, 3, 4).
     events : tuple of (float, str)
         Phase changes and road changes with their times.
     metrics : BrakingMetrics
@@ -215,8 +219,12 @@ class BrakingResult:
         return "\n".join(lines)
 
 
-class _Loop:
-    """The inner loop; plain floats and locals, no numpy per step."""
+class _QuarterCar(HybridPlant):
+    """The quarter car with its controller and estimator as a :class:`HybridPlant`; plain floats, no numpy per step."""
+
+    states = ("omega", "vx", "x", "P_b")
+    series = SERIES
+    labels = ("",)
 
     def __init__(self, sc: BrakingScenario, estimator: XbsEstimator | None, in_loop: bool):
         veh = sc.vehicle
@@ -238,10 +246,14 @@ class _Loop:
             self.ctrl = ctrl.runtime(veh, sc.actuator, c=first.c, d=first.d)
         else:
             self.ctrl = ctrl.runtime(veh, sc.actuator)
+        self.automata = (self.ctrl,)
         self.estimator = estimator
         # the controller reads the estimate only if it needs an XBS and the estimator is in the loop
         self.use_hat = bool(estimator is not None and in_loop and ctrl.uses_xbs)
+        self.discrete_feedback = self.use_hat
         self.xbs_hat = math.nan
+        self.observer_time_s = 0.0
+        self.p_prev = 0.0
         self.hist_t: list[float] = []
         self.hist_u: list[float] = []
         # outputs of the last rhs evaluation
@@ -249,6 +261,10 @@ class _Loop:
 
     def true_xbs(self) -> float:
         return self.o_xbs
+
+    def initial_state(self) -> tuple[float, ...]:
+        v0 = self.sc.speed_m_s
+        return (v0 / self.R, v0, 0.0, 0.0)
 
     def rhs(self, t: float, y: tuple[float, ...]) -> tuple[float, float, float, float]:
         om, vx, _x, P = y
@@ -289,194 +305,104 @@ class _Loop:
         w = (t - t0) / (t1 - t0)
         return self.hist_u[i] + w * (self.hist_u[i + 1] - self.hist_u[i])
 
-    def _command_now(self, t: float, y: tuple[float, ...]) -> float:
-        """Controller output at a step end (kept for the delayed actuator)."""
+    def _remember_command(self, t: float, y: tuple[float, ...]) -> None:
+        """Controller output at a step end, for the delayed actuator."""
         xbs = self.xbs_hat if self.use_hat else self.o_xbs
-        return self.ctrl.rate(t, self.o_x2, self.R * y[0], y[1], xbs)
+        self.hist_t.append(t)
+        self.hist_u.append(self.ctrl.rate(t, self.o_x2, self.R * y[0], y[1], xbs))
 
-    def guard_values(self) -> tuple[float, ...]:
+    def clamp(self, y: tuple[float, ...]) -> tuple[float, ...]:
+        om, vx, x, P = y
+        if om < 0.0 or P < 0.0 or P > self.p_max:
+            return (max(om, 0.0), vx, x, min(max(P, 0.0), self.p_max))
+        return y
+
+    def step_size(self, t: float, y: tuple[float, ...]) -> float:
+        dt, v_low = self.sc.dt_s, self.sc.low_speed_m_s
+        return dt if y[1] >= v_low else dt * y[1] / v_low
+
+    def breakpoint(self, t: float) -> float:
+        kink = self.ctrl.breakpoint()
+        return min(self.road.breakpoint(), kink if kink > t + 1e-12 else math.inf)
+
+    def start(self, t: float, y: tuple[float, ...]) -> bool:
+        if self.estimator is not None:
+            t_obs = time.perf_counter()
+            self.estimator.reset(t, self.o_x2, y[1])
+            self.observer_time_s += time.perf_counter() - t_obs
+        if self.delay > 0.0:
+            self._remember_command(t, y)
+            return True
+        return False
+
+    def after_step(self, t: float, y: tuple[float, ...], h: float) -> str | None:
+        u_mean, self.p_prev = (y[3] - self.p_prev) / h, y[3]
+        if self.estimator is None:
+            return None
+        t_obs = time.perf_counter()
+        try:
+            self.xbs_hat = self.estimator.update(t, self.o_x2, y[1], u_mean, h)
+        except SimulationError as exc:     # e.g. ObserverInputError: the run stops (integrate's rule)
+            return str(exc)
+        finally:
+            self.observer_time_s += time.perf_counter() - t_obs
+        return None
+
+    def crossings(self, t: float, y: tuple[float, ...], y1: tuple[float, ...]) -> list[Crossing]:
+        out = []
+        v_stop = self.sc.stop_speed_m_s
+        if y1[1] <= v_stop:
+            out.append(Crossing("stop", lambda tt, yy: v_stop - yy[1], v_stop - y[1], v_stop - y1[1],
+                                terminal=True, text=f"vx reached {v_stop:.3f} m/s"))
+        pending = self.road.pending
+        if not self.road.blending and pending is not None and pending.at_position_m is not None \
+                and y1[2] >= pending.at_position_m:
+            x_change = pending.at_position_m
+            out.append(Crossing("road", lambda tt, yy: yy[2] - x_change, y[2] - x_change, y1[2] - x_change))
+        return out
+
+    def take(self, crossing: Crossing, t: float, y: tuple[float, ...]) -> str:
+        pending = self.road.pending
+        self.road.start_change(t)
+        return f"road -> {pending.road.name} (x = {y[2]:.2f} m)"
+
+    def at_breakpoint(self, t: float, y: tuple[float, ...]) -> tuple[bool, list[str]]:
+        return self.road.at_breakpoint(t)
+
+    def guard_values(self, k: int) -> tuple[float, ...]:
         return self.ctrl.guards(self.o_x2, self.xbs_hat if self.use_hat else self.o_xbs)
+
+    def locatable(self, k: int) -> bool:
+        return not (self.use_hat and self.ctrl.guards_use_xbs)
+
+    def transition_args(self, k: int, y: tuple[float, ...]) -> tuple[float, float, float]:
+        return (self.o_x2, self.R * y[0], y[1])
+
+    def end_step(self, t: float, y: tuple[float, ...]) -> tuple[str, str] | None:
+        failure = getattr(self.ctrl, "failure", None)
+        if failure:
+            return "controller-singular", failure
+        if self.delay > 0.0:
+            self._remember_command(t, y)
+            if len(self.hist_t) > 4096:
+                keep = bisect.bisect_left(self.hist_t, t - 2.0 * self.delay - self.sc.dt_s)
+                del self.hist_t[:keep], self.hist_u[:keep]
+        return None
+
+    def row(self, t: float, y: tuple[float, ...]) -> tuple[float, ...]:
+        return (t, y[0], y[1], y[2], y[3], self.o_lam, self.o_mu, self.o_xbs, self.o_x2, self.o_ax, self.o_omdot,
+                self.o_u, float(self.ctrl.phase), self.xbs_hat, *self.ctrl.reference(t))
 
     def run(self) -> BrakingResult:
         sc = self.sc
-        wall0 = time.perf_counter()
-        obs_time = 0.0
-        R = self.R
-        t = 0.0
-        v0 = sc.speed_m_s
-        y: tuple[float, ...] = (v0 / R, v0, 0.0, 0.0)
-        ctrl = self.ctrl
-        road = self.road
+        run = integrate(self, sc.duration_s, name=sc.name)
         est = self.estimator
-        dt, v_low, t_end, v_stop = sc.dt_s, sc.low_speed_m_s, sc.duration_s, sc.stop_speed_m_s
-        events: list[tuple[float, str]] = []
-        rows: list[tuple[float, ...]] = []
-        rhs = self.rhs
-        locate_ctrl = not (self.use_hat and ctrl.guards_use_xbs)
-
-        k1 = rhs(t, y)
-        if est is not None:
-            t_obs = time.perf_counter()
-            est.reset(t, self.o_x2, y[1])
-            obs_time += time.perf_counter() - t_obs
-        if self.delay > 0.0:
-            self.hist_t.append(t)
-            self.hist_u.append(self._command_now(t, y))
-            k1 = rhs(t, y)
-
-        def record() -> None:
-            rows.append((t, y[0], y[1], y[2], y[3], self.o_lam, self.o_mu, self.o_xbs, self.o_x2, self.o_ax,
-                         self.o_omdot, self.o_u, float(ctrl.phase), self.xbs_hat))
-
-        record()
-        status, message = "duration", f"reached the time bound {t_end:g} s"
-        steps = 0
-        g_ctrl = self.guard_values()
-        while True:
-            vx = y[1]
-            h = dt if vx >= v_low else dt * vx / v_low
-            # breakpoints: road transitions by time, end of a transition, controller kinks, final time
-            tb = t_end
-            pending = road.pending
-            if road.blending:
-                tb = min(tb, road.t0 + road.duration)
-            elif pending is not None and pending.at_time_s is not None:
-                tb = min(tb, pending.at_time_s)
-            kink = ctrl.breakpoint()
-            if kink > t + 1e-12:
-                tb = min(tb, kink)
-            at_break = t + h >= tb - 1e-12
-            if at_break:
-                h = tb - t
-            y1 = rk4_step(rhs, t, y, h, k1)
-            k_end = rhs(t + h, y1)
-            # located events: (theta, kind, index)
-            found: tuple[float, str, int] | None = None
-            guards: list[tuple[str, int, float, float]] = []
-            if locate_ctrl:
-                g_new = self.guard_values()
-                guards += [("ctrl", i, g0, g1) for i, (g0, g1) in enumerate(zip(g_ctrl, g_new)) if g1 > 0.0]
-            if y1[1] <= v_stop:
-                guards.append(("stop", 0, v_stop - vx, v_stop - y1[1]))
-            if not road.blending and pending is not None and pending.at_position_m is not None \
-                    and y1[2] >= pending.at_position_m:
-                guards.append(("road", 0, y[2] - pending.at_position_m, y1[2] - pending.at_position_m))
-            if guards:
-                best = 2.0
-                for kind, idx, g0, g1 in guards:
-                    theta = locate_event(rhs, t, y, h, k1, self._guard_fn(kind, idx), min(g0, 0.0), g1)
-                    if theta < best:
-                        best, found = theta, (theta, kind, idx)
-                assert found is not None
-                if found[0] < 1.0:
-                    h *= found[0]
-                    at_break = False
-                    y1 = rk4_step(rhs, t, y, h, k1)
-                    k_end = rhs(t + h, y1)
-            t += h
-            om, vx1, x1, P1 = y1
-            clamped = om < 0.0 or P1 < 0.0 or P1 > self.p_max
-            y = (max(om, 0.0), vx1, x1, min(max(P1, 0.0), self.p_max))
-            if clamped:
-                k_end = rhs(t, y)
-            steps += 1
-            if est is not None:
-                t_obs = time.perf_counter()
-                try:
-                    self.xbs_hat = est.update(t, self.o_x2, y[1], (y[3] - rows[-1][4]) / h, h)
-                except SimulationError as exc:     # e.g. ObserverInputError: keep the run, report the refusal
-                    obs_time += time.perf_counter() - t_obs
-                    record()
-                    status, message = "observer-failed", str(exc)
-                    break
-                obs_time += time.perf_counter() - t_obs
-            record()
-            changed = self.use_hat
-            # transitions: located event, time breakpoints, sampled guards, cascades
-            if found is not None and found[1] == "stop":
-                status, message = "stopped", f"vx reached {v_stop:.3f} m/s"
-                break
-            if found is not None and found[1] == "road":
-                road.start_change(t)
-                events.append((t, f"road -> {pending.road.name} (x = {y[2]:.2f} m)"))
-                changed = True
-            if at_break:
-                if road.blending and t >= road.t0 + road.duration - 1e-12:
-                    road.end_change()
-                    changed = True
-                elif not road.blending and pending is not None and pending.at_time_s is not None \
-                        and t >= pending.at_time_s - 1e-12:
-                    road.start_change(t)
-                    events.append((t, f"road -> {pending.road.name}"))
-                    changed = True
-            if found is not None and found[1] == "ctrl":
-                fire = found[2]
-            else:
-                fire = -1
-            # k_end must be the derivative at (t, y) under the current phase, road and estimate
-            if changed:
-                k_end = rhs(t, y)
-            if fire < 0 and t >= ctrl.deadline - 1e-12:
-                before = ctrl.phase
-                ctrl.expire(t, self.o_x2, R * y[0], y[1])
-                events.append((t, f"phase {before} -> {ctrl.phase} (stall timeout)"))
-                k_end = rhs(t, y)
-            cascade = 0
-            while True:
-                if fire < 0:
-                    g_ctrl = self.guard_values()
-                    fire = next((i for i, g in enumerate(g_ctrl) if g > 0.0), -1)
-                    if fire < 0:
-                        break
-                before = ctrl.phase
-                ctrl.fire(t, fire, self.o_x2, R * y[0], y[1])
-                events.append((t, f"phase {before} -> {ctrl.phase}"))
-                fire = -1
-                cascade += 1
-                if cascade > _MAX_CASCADE:
-                    raise SimulationError(
-                        f"scenario {sc.name!r}: the controller switched {cascade} times at t = {t:.6f} s "
-                        f"without time passing (phase {ctrl.phase}); check its thresholds")
-                k_end = rhs(t, y)
-            failure = getattr(ctrl, "failure", None)
-            if failure:
-                status, message = "controller-singular", failure
-                break
-            if self.delay > 0.0:
-                self.hist_t.append(t)
-                self.hist_u.append(self._command_now(t, y))
-                if len(self.hist_t) > 4096:
-                    keep = bisect.bisect_left(self.hist_t, t - 2.0 * self.delay - dt)
-                    del self.hist_t[:keep], self.hist_u[:keep]
-            k1 = k_end
-            if t >= t_end - 1e-12:
-                break
-        wall = time.perf_counter() - wall0
-        data = np.array(rows, dtype=float)
-        series = {name: data[:, i].copy() for i, name in enumerate(SERIES)}
-        metrics = braking_metrics(series, sc, road.starts, status=status,
+        metrics = braking_metrics(run.series, sc, self.road.starts, status=run.status,
                                   have_estimate=est is not None)
         observer = "none" if est is None else (est.describe() if hasattr(est, "describe") else type(est).__name__)
-        return BrakingResult(scenario=sc, status=status, message=message, series=series, events=tuple(events),
-                             metrics=metrics, observer=observer, observer_in_loop=self.use_hat,
-                             wall_time_s=wall, observer_time_s=obs_time, steps=steps)
-
-    def _guard_fn(self, kind: str, idx: int):  # noqa: ANN202 - internal closure factory
-        if kind == "ctrl":
-            def g(t: float, y: tuple[float, ...]) -> float:
-                self.rhs(t, y)
-                return self.guard_values()[idx]
-        elif kind == "stop":
-            v_stop = self.sc.stop_speed_m_s
-
-            def g(t: float, y: tuple[float, ...]) -> float:
-                return v_stop - y[1]
-        else:
-            x_change = self.road.pending.at_position_m
-
-            def g(t: float, y: tuple[float, ...]) -> float:
-                return y[2] - x_change
-        return g
+        return BrakingResult(scenario=sc, status=run.status, message=run.message, series=run.series,
+                             events=run.events, metrics=metrics, observer=observer, observer_in_loop=self.use_hat,
+                             wall_time_s=run.wall_time_s, observer_time_s=self.observer_time_s, steps=run.steps)
 
 
 def simulate(scenario: BrakingScenario, *, estimator: XbsEstimator | str | None = None,
@@ -517,12 +443,11 @@ def simulate(scenario: BrakingScenario, *, estimator: XbsEstimator | str | None 
     if isinstance(estimator, str):
         if estimator != "true":
             raise SimulationError(f"estimator must be an XbsEstimator object, 'true' or None, got {estimator!r}")
-        loop = _Loop(scenario, None, observer_in_loop)
-        oracle = TrueXbs(loop.true_xbs)
-        loop.estimator = oracle
-        loop.use_hat = bool(observer_in_loop and scenario.controller.uses_xbs)
-        return loop.run()
+        plant = _QuarterCar(scenario, None, observer_in_loop)
+        plant.estimator = TrueXbs(plant.true_xbs)
+        plant.use_hat = plant.discrete_feedback = bool(observer_in_loop and scenario.controller.uses_xbs)
+        return plant.run()
     if estimator is not None and not isinstance(estimator, XbsEstimator):
         raise SimulationError(f"the estimator {estimator!r} lacks reset(t0, y0, vx0) and "
                               f"update(t, y, vx, u, dt)")
-    return _Loop(scenario, estimator, observer_in_loop).run()
+    return _QuarterCar(scenario, estimator, observer_in_loop).run()

@@ -18,12 +18,14 @@ suspension and pitch dynamics (the load transfer is instantaneous), tyre
 relaxation length, left/right differences, position-triggered road changes.
 The observers keep the static-load ``a`` (the seed recomputes it on line from
 (3.36)); the loads the controllers would need are reported instead.
+
+Integration as the quarter car's (:func:`switchobs.plants.integrate`),
+with one controller per axle; the controllers take over at ``brake_start_s``.
 """
 
 from __future__ import annotations
 
 import math
-import time
 from dataclasses import asdict, dataclass, field
 from typing import Any
 
@@ -33,7 +35,7 @@ import numpy.typing as npt
 from ..exceptions import SimulationError
 from ._controllers import FivePhaseABS, TwoPhaseABS
 from ._estimator import XbsEstimator
-from ._hybrid import locate_event, rk4_step
+from ._hybrid import Crossing, HybridPlant, integrate
 from ._metrics import _cumtrapz
 from ._road import RoadSchedule, _RoadState
 from ._vehicle import GRAVITY, BrakeActuator, QuarterCar
@@ -213,7 +215,7 @@ class TwoAxleScenario:
 #: Columns of :attr:`TwoAxleResult.series`.
 TWO_AXLE_SERIES = ("t", "vx", "vx_hat", "ax", "ax_meas", "x", "omega_f", "omega_r", "lambda_f", "lambda_r",
                    "x2_f", "x2_r", "xbs_f", "xbs_r", "xbs_hat_f", "xbs_hat_r", "P_f", "P_r", "Fz_f", "Fz_r",
-                   "phase_f", "phase_r")
+                   "phase_f", "phase_r", "x2_ref_f", "x2_ref_r")
 
 
 @dataclass(frozen=True)
@@ -224,13 +226,16 @@ class TwoAxleResult:
     ``mean_deceleration_m_s2``, ``speed_error_mean_pct`` (mean of
     ``(vx_hat - vx)/vx`` over the braking, in %; seed 001 reports -18 %),
     ``speed_error_max_pct``, per axle: ``load_min_n``/``load_max_n``,
-    ``slip_mean``, ``abs_cycles``, ``xbs_rms_error`` (after braking starts, until
-    the observer failed if it did), ``observer_failure`` (``None`` or when and why
-    the observer refused a step; it is then dropped for the rest of the run).
+    ``slip_mean``, ``abs_cycles``, ``xbs_rms_error`` (after braking starts),
+    ``observer_failure`` (``None`` or when and why the observer refused a step;
+    the run then stops with status ``observer-failed``, as the quarter car's does).
+
+    ``status`` is ``stopped``, ``duration`` or ``observer-failed``; ``message`` details it.
     """
 
     scenario: TwoAxleScenario
     status: str
+    message: str
     series: dict[str, npt.NDArray[np.float64]]
     events: tuple[tuple[float, str], ...]
     metrics: dict[str, Any]
@@ -238,7 +243,8 @@ class TwoAxleResult:
     steps: int
 
     def to_json(self, *, include_series: bool = False) -> dict[str, Any]:
-        out = {"scenario": self.scenario.to_json(), "status": self.status, "metrics": self.metrics,
+        out = {"scenario": self.scenario.to_json(), "status": self.status, "message": self.message,
+               "metrics": self.metrics,
                "events": [{"t": t, "event": e} for t, e in self.events],
                "cost": {"steps": self.steps, "wall_time_s": self.wall_time_s}}
         if include_series:
@@ -247,7 +253,8 @@ class TwoAxleResult:
 
     def __str__(self) -> str:
         m = self.metrics
-        lines = [str(self.scenario), f"  status: {self.status}; stopping distance {m['stopping_distance_m']:.2f} m,"
+        status = self.status + (f" ({self.message})" if self.status == "observer-failed" else "")
+        lines = [str(self.scenario), f"  status: {status}; stopping distance {m['stopping_distance_m']:.2f} m,"
                  f" mean deceleration {m['mean_deceleration_m_s2']:.2f} m/s²",
                  f"  speed estimate error: mean {m['speed_error_mean_pct']:.1f} %, worst "
                  f"{m['speed_error_max_pct']:.1f} %"]
@@ -282,10 +289,17 @@ def simulate_two_axle(scenario: TwoAxleScenario, *,
     """
     if not isinstance(scenario, TwoAxleScenario):
         raise SimulationError(f"simulate_two_axle() needs a TwoAxleScenario, got {type(scenario).__name__}")
-    return _TwoAxleLoop(scenario, estimators, observer_in_loop).run()
+    return _TwoAxle(scenario, estimators, observer_in_loop).run()
 
 
-class _TwoAxleLoop:
+class _TwoAxle(HybridPlant):
+    """The two-axle vehicle with its two controllers, speed filter and estimators as a :class:`HybridPlant`."""
+
+    states = ("omega_f", "omega_r", "vx", "x", "P_f", "P_r")
+    series = TWO_AXLE_SERIES
+    labels = ("front ", "rear ")
+    discrete_feedback = True          # the filtered speed vx_hat feeds the controllers
+
     def __init__(self, sc: TwoAxleScenario, estimators: tuple[XbsEstimator | None, XbsEstimator | None],
                  in_loop: bool):
         if len(estimators) != 2:
@@ -295,27 +309,35 @@ class _TwoAxleLoop:
                 raise SimulationError(f"the estimator {est!r} lacks reset(t0, y0, vx0) and update(t, y, vx, u, dt)")
         veh = sc.vehicle
         self.sc = sc
-        self.veh = veh
         self.R, self.J = veh.radius_m, veh.inertia_kg_m2
         self.gains = (veh.brake_gain_front_nm_bar, veh.brake_gain_rear_nm_bar)
         self.W = veh.static_loads
         self.dz = veh.load_transfer
         self.M = veh.mass_kg
         self.road = _RoadState(sc.roads)
-        self.ctrls = (sc.front.runtime(veh.corner("front"), sc.actuator),
-                      sc.rear.runtime(veh.corner("rear"), sc.actuator))
+        self.automata = (sc.front.runtime(veh.corner("front"), sc.actuator),
+                         sc.rear.runtime(veh.corner("rear"), sc.actuator))
         self.est = estimators
         self.use_hat = tuple(bool(e is not None and in_loop and c.uses_xbs) for e, c in zip(estimators,
                                                                                           (sc.front, sc.rear)))
         self.hat = [math.nan, math.nan]
         self.failed: list[str | None] = [None, None]
         self.vx_hat = sc.speed_m_s
+        self.p_var = sc.speed_filter_r
+        self.p_prev = [0.0, 0.0]
         self.bias_t, self.bias_v = sc.accelerometer.bias_profile(sc.duration_s)
         self.max_rate, self.p_max = sc.actuator.max_rate_bar_s, sc.actuator.max_pressure_bar
-        self.out: tuple[float, ...] = ()
+        # outputs of the last rhs evaluation, per wheel (front, rear) where they are two
+        self.braking = False
+        self.lam = self.mu = self.xbs = self.fz = self.x2 = (0.0, 0.0)
+        self.ax = self.ax_meas = 0.0
 
     def bias(self, t: float) -> float:
         return float(np.interp(t, self.bias_t, self.bias_v))
+
+    def initial_state(self) -> tuple[float, ...]:
+        v0 = self.sc.speed_m_s
+        return (v0 / self.R, v0 / self.R, v0, 0.0, 0.0, 0.0)
 
     def rhs(self, t: float, y: tuple[float, ...]) -> tuple[float, ...]:
         omf, omr, vx, _x, pf, pr = y
@@ -334,10 +356,11 @@ class _TwoAxleLoop:
             dor = 0.0
         ax_meas = ax + self.bias(t)
         x2f, x2r = R * dof - ax_meas, R * dor - ax_meas
+        self.braking = t >= self.sc.brake_start_s
         rates = []
-        for k, (ctrl, x2, om, p, xbs) in enumerate(((self.ctrls[0], x2f, omf, pf, xf),
-                                                    (self.ctrls[1], x2r, omr, pr, xr))):
-            if t < self.sc.brake_start_s:
+        for k, (ctrl, x2, om, p, xbs) in enumerate(((self.automata[0], x2f, omf, pf, xf),
+                                                    (self.automata[1], x2r, omr, pr, xr))):
+            if not self.braking:
                 u = 0.0
             else:
                 u = ctrl.rate(t, x2, R * om, self.vx_hat, self.hat[k] if self.use_hat[k] else xbs)
@@ -345,144 +368,90 @@ class _TwoAxleLoop:
                 if (p <= 0.0 and u < 0.0) or (p >= self.p_max and u > 0.0):
                     u = 0.0
             rates.append(u)
-        self.out = (lf, lr, muf, mur, xf, xr, ax, ax_meas, fzf, fzr, x2f, x2r, dof, dor)
+        self.lam, self.mu, self.xbs, self.fz, self.x2 = (lf, lr), (muf, mur), (xf, xr), (fzf, fzr), (x2f, x2r)
+        self.ax, self.ax_meas = ax, ax_meas
         return (dof, dor, ax, vx, rates[0], rates[1])
 
-    def guards(self) -> list[tuple[float, ...]]:
-        o = self.out
-        return [c.guards(o[10 + k], self.hat[k] if self.use_hat[k] else o[4 + k]) for k, c in enumerate(self.ctrls)]
+    def clamp(self, y: tuple[float, ...]) -> tuple[float, ...]:
+        omf, omr, vx, x, pf, pr = y
+        if omf < 0.0 or omr < 0.0 or not (0.0 <= pf <= self.p_max and 0.0 <= pr <= self.p_max):
+            return (max(omf, 0.0), max(omr, 0.0), vx, x, min(max(pf, 0.0), self.p_max),
+                    min(max(pr, 0.0), self.p_max))
+        return y
+
+    def step_size(self, t: float, y: tuple[float, ...]) -> float:
+        sc = self.sc
+        return sc.dt_s if y[2] >= sc.low_speed_m_s else sc.dt_s * y[2] / sc.low_speed_m_s
+
+    def breakpoint(self, t: float) -> float:
+        tb = self.road.breakpoint()
+        for c in self.automata:
+            kink = c.breakpoint()
+            if kink > t + 1e-12:
+                tb = min(tb, kink)
+        if t < self.sc.brake_start_s:
+            tb = min(tb, self.sc.brake_start_s)
+        return tb
+
+    def start(self, t: float, y: tuple[float, ...]) -> bool:
+        for k, est in enumerate(self.est):
+            if est is not None:
+                est.reset(t, self.x2[k], self.vx_hat)
+        return False
+
+    def after_step(self, t: float, y: tuple[float, ...], h: float) -> str | None:
+        sc = self.sc
+        # speed estimate: predict with the biased accelerometer, correct with the fastest wheel
+        self.vx_hat += h * self.ax_meas
+        self.p_var += sc.speed_filter_q * h
+        gain = self.p_var / (self.p_var + sc.speed_filter_r)
+        self.vx_hat += gain * (self.R * max(y[0], y[1]) - self.vx_hat)
+        self.p_var *= 1.0 - gain
+        failure = None
+        for k, est in enumerate(self.est):
+            pressure = y[4 + k]
+            u, self.p_prev[k] = (pressure - self.p_prev[k]) / h, pressure
+            if est is not None and failure is None:
+                try:
+                    self.hat[k] = est.update(t, self.x2[k], self.vx_hat, u, h)
+                except SimulationError as exc:    # e.g. ObserverInputError: the run stops (integrate's rule)
+                    self.failed[k] = f"t = {t:.4f} s: {exc}"
+                    failure = f"{self.labels[k]}observer: {exc}"
+        return failure
+
+    def crossings(self, t: float, y: tuple[float, ...], y1: tuple[float, ...]) -> list[Crossing]:
+        v_stop = self.sc.stop_speed_m_s
+        if y1[2] > v_stop:
+            return []
+        return [Crossing("stop", lambda tt, yy: v_stop - yy[2], v_stop - y[2], v_stop - y1[2], terminal=True,
+                         text=f"vx reached {v_stop:.3f} m/s")]
+
+    def at_breakpoint(self, t: float, y: tuple[float, ...]) -> tuple[bool, list[str]]:
+        return self.road.at_breakpoint(t)
+
+    def guard_values(self, k: int) -> tuple[float, ...]:
+        if not self.braking:          # the controllers take over when the driver brakes
+            return ()
+        return self.automata[k].guards(self.x2[k], self.hat[k] if self.use_hat[k] else self.xbs[k])
+
+    def locatable(self, k: int) -> bool:
+        return not (self.use_hat[k] and self.automata[k].guards_use_xbs)
+
+    def transition_args(self, k: int, y: tuple[float, ...]) -> tuple[float, float, float]:
+        return (self.x2[k], self.R * y[k], self.vx_hat)
+
+    def row(self, t: float, y: tuple[float, ...]) -> tuple[float, ...]:
+        ref_f, ref_r = self.automata[0].reference(t)[0], self.automata[1].reference(t)[0]
+        return (t, y[2], self.vx_hat, self.ax, self.ax_meas, y[3], y[0], y[1], *self.lam, *self.x2, *self.xbs,
+                *self.hat, y[4], y[5], *self.fz, float(self.automata[0].phase), float(self.automata[1].phase),
+                ref_f, ref_r)
 
     def run(self) -> TwoAxleResult:
         sc = self.sc
-        wall0 = time.perf_counter()
-        R = self.R
-        t = 0.0
-        v0 = sc.speed_m_s
-        y: tuple[float, ...] = (v0 / R, v0 / R, v0, 0.0, 0.0, 0.0)
-        rows: list[tuple[float, ...]] = []
-        events: list[tuple[float, str]] = []
-        p_var = sc.speed_filter_r
-        k1 = self.rhs(t, y)
-        for k, est in enumerate(self.est):
-            if est is not None:
-                est.reset(t, self.out[10 + k], self.vx_hat)
-
-        def record() -> None:
-            o = self.out
-            rows.append((t, y[2], self.vx_hat, o[6], o[7], y[3], y[0], y[1], o[0], o[1], o[10], o[11], o[4], o[5],
-                         self.hat[0], self.hat[1], y[4], y[5], o[8], o[9], float(self.ctrls[0].phase),
-                         float(self.ctrls[1].phase)))
-        record()
-        g_old = self.guards()
-        status = "duration"
-        steps = 0
-        while True:
-            vx = y[2]
-            h = sc.dt_s if vx >= sc.low_speed_m_s else sc.dt_s * vx / sc.low_speed_m_s
-            tb = sc.duration_s
-            road, pending = self.road, self.road.pending
-            if road.blending:
-                tb = min(tb, road.t0 + road.duration)
-            elif pending is not None:
-                tb = min(tb, pending.at_time_s)
-            for c in self.ctrls:
-                kink = c.breakpoint()
-                if kink > t + 1e-12:
-                    tb = min(tb, kink)
-            if t < sc.brake_start_s:
-                tb = min(tb, sc.brake_start_s)
-            at_break = t + h >= tb - 1e-12
-            if at_break:
-                h = tb - t
-            y1 = rk4_step(self.rhs, t, y, h, k1)
-            k_end = self.rhs(t + h, y1)
-            g_new = self.guards()
-            cand: list[tuple[int, int, float, float]] = [
-                (w, i, g0, g1) for w in (0, 1) for i, (g0, g1) in enumerate(zip(g_old[w], g_new[w]))
-                if g1 > 0.0 and not (self.use_hat[w] and self.ctrls[w].guards_use_xbs)]
-            stop = y1[2] <= sc.stop_speed_m_s
-            found: tuple[float, int, int] | None = None
-            for w, i, g0, g1 in cand:
-                def guard(tt: float, yy: tuple[float, ...], w: int = w, i: int = i) -> float:
-                    self.rhs(tt, yy)
-                    return self.guards()[w][i]
-                theta = locate_event(self.rhs, t, y, h, k1, guard, min(g0, 0.0), g1)
-                if found is None or theta < found[0]:
-                    found = (theta, w, i)
-            if stop:
-                theta = locate_event(self.rhs, t, y, h, k1, lambda tt, yy: sc.stop_speed_m_s - yy[2],
-                                     sc.stop_speed_m_s - vx, sc.stop_speed_m_s - y1[2])
-                if found is None or theta <= found[0]:
-                    found = (theta, -1, 0)
-            if found is not None and found[0] < 1.0:
-                h *= found[0]
-                at_break = False
-                y1 = rk4_step(self.rhs, t, y, h, k1)
-                k_end = self.rhs(t + h, y1)
-            t += h
-            y = (max(y1[0], 0.0), max(y1[1], 0.0), y1[2], y1[3], min(max(y1[4], 0.0), self.p_max),
-                 min(max(y1[5], 0.0), self.p_max))
-            k_end = self.rhs(t, y)
-            steps += 1
-            # speed estimate: predict with the biased accelerometer, correct with the fastest wheel
-            self.vx_hat += h * self.out[7]
-            p_var += sc.speed_filter_q * h
-            gain = p_var / (p_var + sc.speed_filter_r)
-            self.vx_hat += gain * (R * max(y[0], y[1]) - self.vx_hat)
-            p_var *= 1.0 - gain
-            for k, est in enumerate(self.est):
-                if est is not None and not self.failed[k]:
-                    u = (y[4 + k] - rows[-1][16 + k]) / h
-                    try:
-                        self.hat[k] = est.update(t, self.out[10 + k], self.vx_hat, u, h)
-                    except SimulationError as exc:    # e.g. ObserverInputError: drop this observer, go on
-                        self.failed[k] = f"t = {t:.4f} s: {exc}"
-                        self.hat[k] = math.nan
-                        events.append((t, f"{('front', 'rear')[k]} observer failed: {exc}"))
-            record()
-            if found is not None and found[1] == -1:
-                status = "stopped"
-                break
-            if at_break:
-                if road.blending and t >= road.t0 + road.duration - 1e-12:
-                    road.end_change()
-                elif not road.blending and pending is not None and t >= pending.at_time_s - 1e-12:
-                    road.start_change(t)
-                    events.append((t, f"road -> {pending.road.name}"))
-            k_end = self.rhs(t, y)
-            fired = [(found[1], found[2])] if found is not None and found[1] >= 0 else []
-            for _ in range(8):
-                if not fired:
-                    if t < sc.brake_start_s:
-                        break
-                    g = self.guards()
-                    fired = [(w, next(i for i, v in enumerate(g[w]) if v > 0.0)) for w in (0, 1)
-                             if any(v > 0.0 for v in g[w])]
-                    if not fired:
-                        break
-                for w, i in fired:
-                    c = self.ctrls[w]
-                    before = c.phase
-                    c.fire(t, i, self.out[10 + w], R * y[w], self.vx_hat)
-                    events.append((t, f"{'front' if w == 0 else 'rear'} phase {before} -> {c.phase}"))
-                fired = []
-                k_end = self.rhs(t, y)
-            for w, c in enumerate(self.ctrls):
-                if t >= c.deadline - 1e-12:
-                    before = c.phase
-                    c.expire(t, self.out[10 + w], R * y[w], self.vx_hat)
-                    events.append((t, f"{'front' if w == 0 else 'rear'} phase {before} -> {c.phase} (stall timeout)"))
-                    k_end = self.rhs(t, y)
-            g_old = self.guards()
-            k1 = k_end
-            if t >= sc.duration_s - 1e-12:
-                break
-        data = np.array(rows, dtype=float)
-        series = {name: data[:, i].copy() for i, name in enumerate(TWO_AXLE_SERIES)}
-        return TwoAxleResult(scenario=sc, status=status, series=series, events=tuple(events),
-                             metrics=_metrics(series, sc, status, self.est, self.failed),
-                             wall_time_s=time.perf_counter() - wall0,
-                             steps=steps)
+        run = integrate(self, sc.duration_s, name=sc.name)
+        return TwoAxleResult(scenario=sc, status=run.status, message=run.message, series=run.series,
+                             events=run.events, metrics=_metrics(run.series, sc, run.status, self.est, self.failed),
+                             wall_time_s=run.wall_time_s, steps=run.steps)
 
 
 def _metrics(s: dict[str, npt.NDArray[np.float64]], sc: TwoAxleScenario, status: str,

@@ -20,7 +20,7 @@ Stages (``switchobs demo``, ``make demo``):
    seed 000, dry -> wet -> snow, five-phase ABS with wheel-acceleration
    tracking (21)-(22), the generated C 4D observer in the loop, fed by a
    60-ppr encoder with three-stage compensation
-   (:class:`switchobs.report.EncoderLoopEstimator`).
+   (:func:`switchobs.loop.demo_braking`).
 6. **report** -- ``report.md``, ``report.json`` and the figures.
 """
 
@@ -29,24 +29,20 @@ from __future__ import annotations
 import json
 import math
 import time
-from collections.abc import Mapping, Sequence
-from dataclasses import asdict, dataclass, field, fields
+from collections.abc import Mapping
+from dataclasses import dataclass, field, fields
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
-import numpy.typing as npt
 
 from ..exceptions import SimulationError
 from ._progress import Progress, Stage, check_prerequisites
 
-if TYPE_CHECKING:       # the plants layer is imported when a stage needs it (its prerequisites are checked first)
-    from ..plants import BrakingScenario
+if TYPE_CHECKING:       # the loop layer is imported when a stage needs it (its prerequisites are checked first)
+    from ..loop import BrakingSummary, DemoSettings
 
-__all__ = ["DEMO_BETAS", "DEMO_MODELS", "DemoSettings", "DemoReport", "ModelResult", "BrakingSummary",
-           "ErrorRow", "run_demo", "demo_scenario", "STAGES"]
-
-Array = npt.NDArray[np.float64]
+__all__ = ["DEMO_BETAS", "DEMO_MODELS", "DemoReport", "ModelResult", "run_demo", "STAGES"]
 
 #: beta1 = beta2 = 100: the defaults docs/observers.md recommends for the quarter car at 1 ms.
 DEMO_BETAS: Mapping[str, int] = {"beta1": 100, "beta2": 100}
@@ -61,58 +57,10 @@ STAGES: tuple[Stage, ...] = (
     Stage("design", ("sympy", "switchobs.design")),
     Stage("certify", ("cvxpy", "clarabel", "switchobs.certify")),
     Stage("codegen", ("casadi", "switchobs.codegen", "switchobs.observers"), compiler=True),
-    Stage("braking", ("numpy", "scipy", "switchobs.plants", "switchobs.sensors", "switchobs.observers")),
+    Stage("braking", ("numpy", "scipy", "switchobs.plants", "switchobs.sensors", "switchobs.observers",
+                      "switchobs.loop")),
     Stage("report", ("matplotlib",)),
 )
-
-
-@dataclass(frozen=True)
-class DemoSettings:
-    """The braking scenario and chain of the demo (defaults: the full run; :meth:`fast` for CI).
-
-    Attributes
-    ----------
-    fast : bool
-    speed_m_s : float
-        Initial speed (40 m/s = 144 km/h).
-    wet_at_s, snow_at_s : float
-        Road changes (25 ms transitions, seed 000 Sec. IV-D).
-    stop_speed_m_s : float
-        The run ends at 10 km/h, where an ABS hands back to the driver.
-    duration_s : float
-        Bound on the simulated time (fast mode ends shortly after the change to snow).
-    encoder_ppr, dnl_cycles, eccentricity, clock_hz, encoder_seed : encoder (docs/encoders.md defaults)
-    tsa_window, harmonics : TSA window ``n`` and harmonics ``M`` (seed 001: 15 and 5)
-    timing_steps : int
-        Steps of the C ``_run`` timing.
-    """
-
-    fast: bool = False
-    speed_m_s: float = 40.0
-    wet_at_s: float = 1.5
-    snow_at_s: float = 3.0
-    stop_speed_m_s: float = 10.0 / 3.6
-    duration_s: float = 30.0
-    encoder_ppr: int = 60
-    dnl_cycles: float = 0.01
-    eccentricity: float = 0.003
-    clock_hz: float = 1e6
-    encoder_seed: int = 1
-    tsa_window: int = 15
-    harmonics: int = 5
-    timing_steps: int = 200_000
-
-    @classmethod
-    def for_mode(cls, fast: bool) -> DemoSettings:
-        return cls(fast=True, duration_s=3.6, timing_steps=20_000) if fast else cls()
-
-    def to_json(self) -> dict[str, Any]:
-        return asdict(self)
-
-    def __str__(self) -> str:
-        return (f"demo settings ({'fast' if self.fast else 'full'}): {3.6 * self.speed_m_s:g} km/h, wet at "
-                f"{self.wet_at_s:g} s, snow at {self.snow_at_s:g} s, stop at {3.6 * self.stop_speed_m_s:g} km/h, "
-                f"{self.encoder_ppr}-ppr encoder, TSA n = {self.tsa_window}, M = {self.harmonics}")
 
 
 @dataclass(frozen=True)
@@ -153,62 +101,6 @@ class ModelResult:
 
 
 @dataclass(frozen=True)
-class ErrorRow:
-    """RMS / median / 90th percentile of ``|XBS estimate - XBS|`` on one road segment."""
-
-    estimator: str
-    segment: str
-    rms: float
-    median: float
-    p90: float
-    rms_settled: float
-
-    def to_json(self) -> dict[str, Any]:
-        return asdict(self)
-
-    def __str__(self) -> str:
-        return (f"{self.estimator}, {self.segment}: median {self.median:.3f}, 90th percentile {self.p90:.3f}, "
-                f"RMS {self.rms:.3f} (settled {self.rms_settled:.3f})")
-
-
-@dataclass(frozen=True)
-class BrakingSummary:
-    """What the braking stage measured."""
-
-    scenario: str
-    status: str
-    stop_time_s: float | None
-    stopping_distance_m: float
-    braking_distance_m: float | None
-    mean_friction: float
-    abs_activation_s: float | None
-    abs_cycles: int
-    slip_mean: float | None
-    errors: tuple[ErrorRow, ...]
-    x2_rms: Mapping[str, Mapping[str, float]]
-    omega_reconstruction_max: float
-    lag_mean_ms: float
-    encoder_events: int
-    max_substeps: int
-    reference_segments: int
-    wall_time_s: float
-
-    def to_json(self) -> dict[str, Any]:
-        out = {f.name: getattr(self, f.name) for f in fields(self)}
-        out["errors"] = [e.to_json() for e in self.errors]
-        out["x2_rms"] = {k: dict(v) for k, v in self.x2_rms.items()}
-        return out
-
-    def __str__(self) -> str:
-        dist = "n/a" if self.braking_distance_m is None else f"{self.braking_distance_m:.2f} m"
-        lines = [self.scenario, f"  {self.status}; stopping distance {self.stopping_distance_m:.2f} m, braking "
-                 f"distance v0²/(2gμ̄) {dist}; {self.abs_cycles} ABS cycles; {self.encoder_events} encoder edges, "
-                 f"measurement lag {self.lag_mean_ms:.1f} ms"]
-        lines += [f"  {e}" for e in self.errors]
-        return "\n".join(lines)
-
-
-@dataclass(frozen=True)
 class DemoReport:
     """Everything the demo produced (``report.md`` is its readable form)."""
 
@@ -245,17 +137,6 @@ class DemoReport:
                 lines.append(f"  XBS error, {e.estimator}: median {e.median:.3f}, RMS {e.rms:.3f}")
         lines.append(f"  {'all checks hold' if self.ok else 'SOME CHECKS FAILED'}")
         return "\n".join(lines)
-
-
-def demo_scenario(settings: DemoSettings) -> BrakingScenario:
-    """The braking scenario of the demo: dry -> wet -> snow (seed 000 Table I), five-phase ABS with tracking."""
-    from ..plants import BrakingScenario, FivePhaseABS, QuarterCar, RoadChange, RoadSchedule
-
-    roads = RoadSchedule("hoang-dry", [RoadChange("hoang-wet", at_time_s=settings.wet_at_s, duration_s=0.025),
-                                       RoadChange("hoang-snow", at_time_s=settings.snow_at_s, duration_s=0.025)])
-    return BrakingScenario(roads, speed_m_s=settings.speed_m_s, name="demo", vehicle=QuarterCar.hoang2014(),
-                           controller=FivePhaseABS(tracking=True, stall_timeout_s=0.1),
-                           duration_s=settings.duration_s, stop_speed_m_s=settings.stop_speed_m_s)
 
 
 # ---------------------------------------------------------------------- stages
@@ -347,89 +228,6 @@ def _codegen(model: Any, d: Any, numeric: dict[str, np.ndarray], out: Path, sett
             "run_ns": best / settings.timing_steps * 1e9, "step_us": step_us, "c_vs_python": diff}
 
 
-def _braking(c_observers: dict[str, Any], spectral_radius: float, settings: DemoSettings) -> tuple[Any, Any, Any]:
-    from ..observers import ObserverXbsEstimator
-    from ..plants import simulate
-    from ..sensors import Encoder
-    from ._encoder_loop import EncoderLoopEstimator
-
-    sc = demo_scenario(settings)
-    encoder = Encoder(ppr=settings.encoder_ppr, dnl_cycles=settings.dnl_cycles, eccentricity=settings.eccentricity,
-                      clock_hz=settings.clock_hz, seed=settings.encoder_seed)
-    estimator = EncoderLoopEstimator(
-        [("xbs4 (C), encoder, in the loop", c_observers["abs-xbs4"], {"z2": 0.5}),
-         ("xbs3 (C, c = 34), encoder, beside", c_observers["abs-xbs3"], {"z2": 0.5})],
-        spectral_radius=spectral_radius, encoder=encoder, radius_m=sc.vehicle.radius_m,
-        window=settings.tsa_window, harmonics=settings.harmonics,
-        beside=[("xbs4 (C), exact x2, beside", ObserverXbsEstimator(c_observers["abs-xbs4"],
-                                                                     initial_state={"z2": 0.5}))])
-    result = simulate(sc, estimator=estimator)
-    return sc, result, estimator.record()
-
-
-def _segments(sc: Any, t_end: float, t_abs: float) -> list[tuple[str, float, float]]:
-    starts = [t_abs] + [c.at_time_s for c in sc.roads.changes]
-    names = [sc.roads.initial.name] + [c.road.name for c in sc.roads.changes]
-    ends = starts[1:] + [t_end]
-    segs = [(n, a, b) for n, a, b in zip(names, starts, ends) if b > a]
-    return segs + [("whole run", t_abs, t_end)]
-
-
-def _error_rows(label: str, t: Array, err: Array, segs: list[tuple[str, float, float]],
-                changes: Sequence[float]) -> list[ErrorRow]:
-    rows = []
-    settled = np.ones(t.size, dtype=bool)
-    for tc in changes:       # the transients after a road change (seed 000 Fig. 3: "highly perturbed")
-        settled &= ~((t >= tc) & (t < tc + 0.25))
-    for name, a, b in segs:
-        sel = (t >= a) & (t < b) & np.isfinite(err)
-        if not np.any(sel):
-            continue
-        e = np.abs(err[sel])
-        es = np.abs(err[sel & settled])
-        rows.append(ErrorRow(label, name, float(np.sqrt(np.mean(e ** 2))), float(np.median(e)),
-                             float(np.percentile(e, 90)),
-                             float(np.sqrt(np.mean(es ** 2))) if es.size else math.nan))
-    return rows
-
-
-def _summarise(sc: Any, result: Any, record: Any, wall: float) -> BrakingSummary:
-    from ._reference import tracking_reference
-
-    s = result.series
-    m = result.metrics
-    t_abs = m.abs_activation_s if m.abs_activation_s is not None else 0.0
-    segs = _segments(sc, float(s["t"][-1]), t_abs)
-    changes = [c.at_time_s for c in sc.roads.changes]
-    errors: list[ErrorRow] = []
-    for label, est in record.estimates.items():
-        errors += _error_rows(label, record.t, est - np.interp(record.t, s["t"], s["xbs"]), segs, changes)
-    for label, est in record.beside.items():
-        errors += _error_rows(label, record.steps_t, est - np.interp(record.steps_t, s["t"], s["xbs"]), segs,
-                              changes)
-    ok = np.isfinite(record.t_measured)
-    x2_at = np.interp(record.t_measured[ok], s["t"], s["x2"])
-    x2_rms: dict[str, dict[str, float]] = {}
-    for label, series in (("raw TSA", record.x2_tsa), ("three-stage", record.x2_measured)):
-        x2_rms[label] = {}
-        for name, a, b in segs:
-            sel = (record.t[ok] >= a) & (record.t[ok] < b)
-            if np.any(sel):
-                x2_rms[label][name] = float(np.sqrt(np.mean((series[ok][sel] - x2_at[sel]) ** 2)))
-    omega_true = np.interp(record.steps_t, s["t"], s["omega"])
-    ref, _ = tracking_reference(result)
-    tracked = np.isfinite(ref)
-    reference_segments = int(np.count_nonzero(tracked[1:] & ~tracked[:-1]) + (1 if tracked[0] else 0))
-    return BrakingSummary(
-        scenario=str(sc), status=result.status, stop_time_s=m.stop_time_s,
-        stopping_distance_m=m.stopping_distance_m, braking_distance_m=m.braking_distance_m,
-        mean_friction=m.mean_friction, abs_activation_s=m.abs_activation_s, abs_cycles=m.abs_cycles,
-        slip_mean=m.slip_mean, errors=tuple(errors), x2_rms=x2_rms,
-        omega_reconstruction_max=float(np.max(np.abs(omega_true - record.omega_steps))),
-        lag_mean_ms=float(np.nanmean(record.lag_s) * 1e3), encoder_events=record.events,
-        max_substeps=int(record.substeps.max()), reference_segments=reference_segments, wall_time_s=wall)
-
-
 # ---------------------------------------------------------------------- driver
 def run_demo(out_dir: str | Path = "out/demo", *, fast: bool = False,
              progress: Progress | None = None) -> DemoReport:
@@ -462,9 +260,11 @@ def run_demo(out_dir: str | Path = "out/demo", *, fast: bool = False,
     seed 000 eq. (7), (20), (21)-(22), Sec. III-E, IV-D, Figs. 2-4, Table I; seed 001 (2.1), Ch. 5-6;
     seed 004 Theorem 1.
     """
-    settings = DemoSettings.for_mode(fast)
     progress = progress if progress is not None else Progress(len(STAGES))
     check_prerequisites(STAGES)
+    from ..loop import DemoSettings, demo_braking, summarise_braking
+
+    settings = DemoSettings.for_mode(fast)
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
 
@@ -489,8 +289,8 @@ def run_demo(out_dir: str | Path = "out/demo", *, fast: bool = False,
               for k in ("A_plus", "A_minus"))
     with progress.stage("braking", "dry -> wet -> snow, encoder chain, C observer in the loop"):
         t0 = time.perf_counter()
-        sc, result, record = _braking({n: c["observer"] for n, c in code.items()}, rho, settings)
-        braking = _summarise(sc, result, record, time.perf_counter() - t0)
+        sc, result, record = demo_braking({n: c["observer"] for n, c in code.items()}, rho, settings)
+        braking = summarise_braking(sc, result, record, time.perf_counter() - t0)
         progress.note(f"{result.status}, {float(result.series['t'][-1]):.2f} s simulated, "
                       f"{record.events} encoder edges")
     model_results = tuple(
@@ -507,9 +307,10 @@ def run_demo(out_dir: str | Path = "out/demo", *, fast: bool = False,
                     c_vs_python=code[name]["c_vs_python"])
         for name, spectrum in DEMO_MODELS)
     with progress.stage("report", "figures, report.md, report.json"):
-        from ._plots import plot_demo
+        from .._figures import save_figure
+        from ._plots import demo_figures
 
-        figures = plot_demo(out, sc, result, record)
+        figures = [save_figure(fig, out / name) for name, fig in demo_figures(sc, result, record).items()]
         report = DemoReport(out_dir=str(out), settings=settings, models=model_results, braking=braking,
                             files=tuple(sorted([*map(str, figures), str(out / "report.md"), str(out / "report.json"),
                                                 *(m.certificate for m in model_results),

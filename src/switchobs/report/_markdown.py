@@ -100,7 +100,7 @@ def demo_markdown(report: Any) -> str:
             f"C 4D observer. That observer is fed by a {st.encoder_ppr}-ppr encoder (transition noise "
             f"{st.dnl_cycles:g} cycle, eccentricity {st.eccentricity:g}, {st.clock_hz:g} Hz timer), the "
             f"streaming time-stamping algorithm (n = {st.tsa_window}) and the three-stage compensation "
-            f"(M = {st.harmonics}) at 1 kHz (`switchobs.report.EncoderLoopEstimator`). The encoder edges come "
+            f"(M = {st.harmonics}) at 1 kHz (`switchobs.loop.EncoderLoopEstimator`). The encoder edges come "
             "from the wheel angle rebuilt from the plant's signals (largest difference to the simulated wheel "
             f"speed: {b.omega_reconstruction_max:.2g} rad/s). The phase *switching* of the five-phase automaton "
             "reads the plant's exact x2 (the plant simulator has no hook for a measured x2 there), so the "

@@ -1,24 +1,24 @@
-"""Figures of the demo (matplotlib, Agg backend): XBS, wheel acceleration, switching, encoder compensation."""
+"""Figures of the demo: XBS, wheel acceleration, switching, encoder compensation.
+
+Matplotlib ``Figure`` objects (no pyplot, no backend switch); each plot
+function takes ``ax=`` (its Axes, or ``None`` for a new Figure) and returns the
+Figure; :func:`demo_figures` gives them all by file name, the demo writes them.
+"""
 
 from __future__ import annotations
 
 from collections.abc import Sequence
-from pathlib import Path
 from typing import Any
 
 import numpy as np
 import numpy.typing as npt
 
-__all__ = ["plot_demo", "mark_road_changes"]
+from .._figures import panels
+
+__all__ = ["demo_figures", "mark_road_changes", "plot_xbs", "plot_wheel_acceleration", "plot_switching",
+           "plot_encoder"]
 
 Array = npt.NDArray[np.float64]
-
-
-def _pyplot() -> Any:
-    import matplotlib
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-    return plt
 
 
 def mark_road_changes(axes: Sequence[Any], scenario: Any, *, label: bool = True) -> None:
@@ -41,11 +41,13 @@ def _clip_limits(ax: Any, truth: Array, margin: float = 0.6) -> None:
     ax.set_ylim(lo - margin * span, hi + margin * span)
 
 
-def plot_xbs(path: Path, scenario: Any, result: Any, record: Any) -> Path:
-    """True vs estimated XBS: exact-x2 observer (top), encoder-fed observers (bottom); road changes marked."""
-    plt = _pyplot()
+def plot_xbs(scenario: Any, result: Any, record: Any, *, ax: Any = None) -> Any:
+    """True vs estimated XBS: exact-x2 observer (top), encoder-fed observers (bottom); road changes marked.
+
+    ``ax``: 2 Axes or ``None``; returns the Figure (as the other demo plots).
+    """
     s = result.series
-    fig, axes = plt.subplots(2, 1, figsize=(11, 7), sharex=True)
+    fig, axes = panels(ax, 2, figsize=(11, 7), owner="plot_xbs", sharex=True)
     for ax in axes:
         ax.plot(s["t"], s["xbs"], color="k", lw=1.2, label="true XBS μ'(λ)")
     for label, est in record.beside.items():
@@ -59,19 +61,16 @@ def plot_xbs(path: Path, scenario: Any, result: Any, record: Any) -> Path:
         ax.grid(alpha=0.3)
     axes[0].set_title("extended braking stiffness: true and estimated (estimates clipped to the plot)")
     axes[1].set_xlabel("t [s]")
-    return _save(fig, axes, scenario, path)
+    return _finish(fig, axes, scenario)
 
 
-def plot_wheel_acceleration(path: Path, scenario: Any, result: Any, record: Any) -> Path:
-    """x2 and its tracking reference (21), the encoder measurement, the pressure and the ABS phase."""
-    from ._reference import tracking_reference
-
-    plt = _pyplot()
+def plot_wheel_acceleration(scenario: Any, result: Any, record: Any, *, ax: Any = None) -> Any:
+    """x2 and the tracking reference (21) the controller recorded, the encoder measurement, pressure and phase."""
     s = result.series
-    ref, _ = tracking_reference(result)
-    fig, axes = plt.subplots(2, 1, figsize=(11, 7), sharex=True, gridspec_kw={"height_ratios": (2, 1)})
+    fig, axes = panels(ax, 2, figsize=(11, 7), owner="plot_wheel_acceleration", sharex=True,
+                       gridspec_kw={"height_ratios": (2, 1)})
     axes[0].plot(s["t"], s["x2"], color="k", lw=1.0, label="x2 = R dω/dt - a_x (plant)")
-    axes[0].plot(s["t"], ref, color="tab:red", lw=1.4, label="reference x2* (21) in phases 1, 3, 4")
+    axes[0].plot(s["t"], s["x2_ref"], color="tab:red", lw=1.4, label="reference x2* (21) in phases 1, 3, 4")
     axes[0].plot(record.t_measured, record.x2_measured, color="tab:blue", lw=0.6, alpha=0.8,
                  label="x2 measured (encoder, three-stage), at its time")
     axes[0].set_ylabel("wheel acceleration [m/s²]")
@@ -84,20 +83,20 @@ def plot_wheel_acceleration(path: Path, scenario: Any, result: Any, record: Any)
     ph.set_ylabel("ABS phase")
     axes[1].set_xlabel("t [s]")
     axes[0].set_title("closed-loop wheel-acceleration control (seed 000 (21)-(22)) on the C observer's XBS")
-    return _save(fig, axes, scenario, path)
+    return _finish(fig, axes, scenario)
 
 
-def plot_switching(path: Path, scenario: Any, result: Any, record: Any) -> Path:
-    """The switching signal sign(s), s = y / vx, and the rescaled time tau = ∫|s| dt (seed 004)."""
+def plot_switching(scenario: Any, result: Any, record: Any, *, ax: Any = None) -> Any:
+    """The switching signal sign(s), s = y / vx, and the rescaled time tau = ∫|s| dt (seed 004); 3 Axes."""
     from ..certify import time_rescaling
 
-    plt = _pyplot()
     s = result.series
     keep = np.concatenate([[True], np.diff(s["t"]) > 0])
     t, s_true = s["t"][keep], (s["x2"] / s["vx"])[keep]
     ok = np.isfinite(record.x2_measured)
     tm, s_meas = record.t[ok], (record.x2_measured / record.vx)[ok]
-    fig, axes = plt.subplots(3, 1, figsize=(11, 7), sharex=True, gridspec_kw={"height_ratios": (1, 1, 1.4)})
+    fig, axes = panels(ax, 3, figsize=(11, 7), owner="plot_switching", sharex=True,
+                       gridspec_kw={"height_ratios": (1, 1, 1.4)})
     axes[0].step(t, np.sign(s_true), where="post", lw=0.6, color="k")
     axes[0].set_ylabel("σ(t) exact")
     axes[1].step(tm, np.sign(s_meas), where="post", lw=0.6, color="tab:blue")
@@ -110,18 +109,17 @@ def plot_switching(path: Path, scenario: Any, result: Any, record: Any) -> Path:
     axes[2].set_xlabel("t [s]")
     axes[2].legend(loc="upper left", fontsize=8)
     axes[0].set_title("switching signal: K_plus when s = y/vx > 0, K_minus when s < 0; rescaled time τ")
-    return _save(fig, axes, scenario, path)
+    return _finish(fig, axes, scenario)
 
 
-def plot_encoder(path: Path, scenario: Any, result: Any, record: Any) -> Path:
-    """Encoder compensation: speed and x2 errors of the raw TSA and of the three-stage estimate."""
-    plt = _pyplot()
+def plot_encoder(scenario: Any, result: Any, record: Any, *, ax: Any = None) -> Any:
+    """Encoder compensation: speed and x2 errors of the raw TSA and of the three-stage estimate; 2 Axes."""
     s = result.series
     ok = np.isfinite(record.t_measured)
     t, tm = record.t[ok], record.t_measured[ok]
     omega_now = np.interp(t, s["t"], s["omega"])
     x2_then = np.interp(tm, s["t"], s["x2"])
-    fig, axes = plt.subplots(2, 1, figsize=(11, 7), sharex=True)
+    fig, axes = panels(ax, 2, figsize=(11, 7), owner="plot_encoder", sharex=True)
     axes[0].plot(t, record.omega_tsa[ok] - omega_now, lw=0.6, label="raw TSA")
     axes[0].plot(t, record.omega_measured[ok] - omega_now, lw=0.6, label="three-stage")
     axes[0].set_ylabel("ω error [rad/s]")
@@ -134,24 +132,22 @@ def plot_encoder(path: Path, scenario: Any, result: Any, record: Any) -> Path:
         ax.grid(alpha=0.3)
     axes[0].set_title(f"{scenario.vehicle.radius_m:g} m wheel, 60-ppr encoder: harmonic compensation "
                       "(seed 001 Ch. 6)")
-    return _save(fig, axes, scenario, path)
+    return _finish(fig, axes, scenario)
 
 
-def plot_demo(out: Path, scenario: Any, result: Any, record: Any) -> list[Path]:
-    """All figures of the demo into ``out``; returns their paths."""
+def demo_figures(scenario: Any, result: Any, record: Any) -> dict[str, Any]:
+    """All figures of the demo, by file name (``xbs.png``, ``wheel_acceleration.png``, ...)."""
     from ..plants import plot_braking
 
-    return [plot_xbs(out / "xbs.png", scenario, result, record),
-            plot_wheel_acceleration(out / "wheel_acceleration.png", scenario, result, record),
-            plot_switching(out / "switching.png", scenario, result, record),
-            plot_encoder(out / "encoder.png", scenario, result, record),
-            plot_braking(result, out / "braking.png")]
+    return {"xbs.png": plot_xbs(scenario, result, record),
+            "wheel_acceleration.png": plot_wheel_acceleration(scenario, result, record),
+            "switching.png": plot_switching(scenario, result, record),
+            "encoder.png": plot_encoder(scenario, result, record),
+            "braking.png": plot_braking(result)}
 
 
-def _save(fig: Any, axes: Any, scenario: Any, path: Path) -> Path:
-    """Mark the road changes, write the figure and free it (every demo plot ends this way)."""
+def _finish(fig: Any, axes: Any, scenario: Any) -> Any:
+    """Mark the road changes and lay the figure out (every demo plot ends this way)."""
     mark_road_changes(axes, scenario)
     fig.tight_layout()
-    fig.savefig(path, dpi=110)
-    _pyplot().close(fig)
-    return path
+    return fig

@@ -20,12 +20,13 @@ Torque-driven quarter car (vehicle and roads of switchobs.plants)
     WheelRun, simulate_wheel, braking_trajectory, linear_tyre, burckhardt_tyre
 Chain
     encoder_chain, compare_estimators, ChainSettings, ChainResult, EstimatorComparison,
-    ESTIMATORS, rms_error, estimate_lag
+    ESTIMATORS, rms_error, estimate_lag, plot_comparison (a matplotlib Figure)
 """
 
 from ._chain import ESTIMATORS, ChainResult, ChainSettings, EstimatorComparison, compare_estimators, encoder_chain
 from ._encoder import Encoder, EncoderEvents
 from ._identify import StiffnessEstimate, identify_stiffness
+from ._plot import plot_comparison
 from ._quarter_car import WheelRun, braking_trajectory, burckhardt_tyre, linear_tyre, simulate_wheel
 from ._series import SpeedEstimate, estimate_lag, rms_error
 from ._super_twisting import (SuperTwistingGains, SuperTwistingObserver, SuperTwistingRun, low_pass,
@@ -43,5 +44,5 @@ __all__ = [
     "SuperTwistingRun", "low_pass", "StiffnessEstimate", "identify_stiffness",
     "WheelRun", "simulate_wheel", "braking_trajectory", "linear_tyre", "burckhardt_tyre",
     "encoder_chain", "compare_estimators", "ChainSettings", "ChainResult", "EstimatorComparison",
-    "ESTIMATORS", "rms_error", "estimate_lag",
+    "ESTIMATORS", "rms_error", "estimate_lag", "plot_comparison",
 ]

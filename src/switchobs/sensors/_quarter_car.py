@@ -22,10 +22,9 @@ from dataclasses import dataclass
 
 import numpy as np
 import numpy.typing as npt
-from scipy.integrate import solve_ivp
 
 from ..exceptions import SimulationError
-from ..plants import Burckhardt, QuarterCar, road
+from ..plants import Burckhardt, Crossing, HybridPlant, QuarterCar, integrate, road
 from ._trajectory import AngleTrajectory
 from ._validate import check_positive
 
@@ -85,36 +84,75 @@ def simulate_wheel(
 ) -> WheelRun:
     """Integrate the quarter car from free rolling under the torque ``torque(t)`` (N m, < 0 braking).
 
+    Classical RK4 on the sample grid (``sample_s``, adjusted to divide
+    ``duration_s``) with the hybrid integrator of :mod:`switchobs.plants`
+    (:func:`switchobs.plants.integrate`); the stop of the wheel or of the car
+    is located within its step.
+
     Raises
     ------
     SimulationError
         If the wheel locks or the car stops within ``duration_s``.
     """
-    J, R = vehicle.inertia_kg_m2, vehicle.radius_m
-    m = float(vehicle.mass_kg)  # type: ignore[arg-type]  # set by QuarterCar.__post_init__
-
-    def rhs(t: float, x: Array) -> list[float]:
-        _, w, v = x
-        f = float(tyre(np.array((R * w - v) / v)))
-        return [w, (torque(t) - R * f) / J, f / m]
-
-    def stopped(t: float, x: Array) -> float:
-        return min(x[1] * R, x[2]) - 0.5
-    stopped.terminal = True  # type: ignore[attr-defined]
-
-    t_eval = np.linspace(0.0, duration_s, int(round(duration_s / sample_s)) + 1)
-    sol = solve_ivp(rhs, (0.0, duration_s), [0.0, speed0_m_s / R, speed0_m_s], method="DOP853",
-                    t_eval=t_eval, rtol=1e-11, atol=1e-10, events=stopped, max_step=sample_s * 10)
-    if sol.status != 0:
+    plant = _Wheel(torque, tyre, vehicle, check_positive(speed0_m_s, "speed0_m_s"),
+                   check_positive(duration_s, "duration_s"), check_positive(sample_s, "sample_s"))
+    run = integrate(plant, duration_s, name="wheel")
+    if run.status == "stopped":
         raise SimulationError(
-            f"the wheel locked or the car stopped at t = {sol.t[-1]:.4g} s (< {duration_s:g} s); "
+            f"the wheel locked or the car stopped at t = {run.series['t'][-1]:.4g} s (< {duration_s:g} s); "
             "reduce the brake torque or the duration")
-    theta, w, v = sol.y
+    s = run.series
+    t, theta, w, v = s["t"], s["theta"], s["omega"], s["v"]
+    R, J = vehicle.radius_m, vehicle.inertia_kg_m2
     lam = (R * w - v) / v
     f = tyre(lam)
-    torque_arr = np.array([torque(ti) for ti in sol.t])
-    return WheelRun(t=sol.t, theta=theta, omega=w, alpha=(torque_arr - R * f) / J, speed_m_s=v,
-                    accel_x_m_s2=f / m, slip=lam, force_n=f, torque_nm=torque_arr, vehicle=vehicle)
+    torque_arr = np.array([torque(ti) for ti in t])
+    return WheelRun(t=t, theta=theta, omega=w, alpha=(torque_arr - R * f) / J, speed_m_s=v,
+                    accel_x_m_s2=f / plant.m, slip=lam, force_n=f, torque_nm=torque_arr, vehicle=vehicle)
+
+
+class _Wheel(HybridPlant):
+    """The torque-driven quarter car as a :class:`switchobs.plants.HybridPlant`: no controller, one terminal guard."""
+
+    states = ("theta", "omega", "v")
+    series = ("t", "theta", "omega", "v")
+
+    def __init__(self, torque: Callable[[float], float], tyre: TyreForce, vehicle: QuarterCar, speed0_m_s: float,
+                 duration_s: float, sample_s: float):
+        self.torque, self.tyre = torque, tyre
+        self.R, self.J = vehicle.radius_m, vehicle.inertia_kg_m2
+        self.m = float(vehicle.mass_kg)  # type: ignore[arg-type]  # set by QuarterCar.__post_init__
+        self.v0 = speed0_m_s
+        n = max(int(round(duration_s / sample_s)), 1)
+        self.grid = np.linspace(0.0, duration_s, n + 1)
+        self.h = float(self.grid[1])
+
+    def initial_state(self) -> tuple[float, ...]:
+        return (0.0, self.v0 / self.R, self.v0)
+
+    def rhs(self, t: float, y: tuple[float, ...]) -> tuple[float, float, float]:
+        _, w, v = y
+        f = float(self.tyre(np.array((self.R * w - v) / v)))
+        return (w, (self.torque(t) - self.R * f) / self.J, f / self.m)
+
+    def step_size(self, t: float, y: tuple[float, ...]) -> float:
+        return self.h
+
+    def breakpoint(self, t: float) -> float:
+        """The next sample: steps end on the grid without accumulating rounding."""
+        k = min(int(t / self.h + 0.5) + 1, self.grid.size - 1)
+        return float(self.grid[k])
+
+    def crossings(self, t: float, y: tuple[float, ...], y1: tuple[float, ...]) -> list[Crossing]:
+        R = self.R
+        g1 = 0.5 - min(y1[1] * R, y1[2])
+        if g1 <= 0.0:
+            return []
+        return [Crossing("stop", lambda tt, yy: 0.5 - min(yy[1] * R, yy[2]), 0.5 - min(y[1] * R, y[2]), g1,
+                         terminal=True, text="the wheel or the car stopped")]
+
+    def row(self, t: float, y: tuple[float, ...]) -> tuple[float, ...]:
+        return (t, *y)
 
 
 def braking_trajectory(

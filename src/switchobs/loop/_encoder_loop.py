@@ -1,4 +1,4 @@
-"""The wheel-encoder chain inside the ABS loop, as an :class:`~switchobs.plants.XbsEstimator`.
+"""The wheel-encoder chain inside the ABS loop, as a :class:`switchobs.plants.XbsEstimator`.
 
 :func:`switchobs.plants.simulate` hands its estimator the plant's signals
 ``(t, x2, vx, u, dt)`` after every integration step, not the wheel angle.  The
@@ -46,8 +46,8 @@ import numpy as np
 import numpy.typing as npt
 
 from ..exceptions import SimulationError
-from ..observers import ObserverXbsEstimator, SteppingObserver
 from ..sensors import Encoder, ThreeStageEstimator, TimeStamper
+from ._adapter import ObserverXbsEstimator, SteppingObserver, check_xbs_signals, initial_xbs_state
 
 __all__ = ["EncoderLoopEstimator", "EncoderLoopRecord"]
 
@@ -157,7 +157,9 @@ class EncoderLoopEstimator:
     Raises
     ------
     SimulationError
-        Bad settings, no observer, or an observer whose signals are not ``(y, vx, u)``.
+        Bad settings or no observer.
+    ModelError
+        An observer whose signals are not ``(y, vx, u)``.
     """
 
     def __init__(self, observers: Sequence[tuple[str, SteppingObserver, dict[str, float]]], *,
@@ -167,9 +169,7 @@ class EncoderLoopEstimator:
         if not observers:
             raise SimulationError("EncoderLoopEstimator needs at least one observer")
         for label, obs, _ in observers:
-            if tuple(obs.signal_names) != ("y", "vx", "u"):
-                raise SimulationError(f"observer {label!r} has signals {tuple(obs.signal_names)}; an XBS "
-                                      "observer takes (y, vx, u)")
+            check_xbs_signals(obs, f"the encoder loop's observer {label!r}")
         for name, value in (("spectral_radius", spectral_radius), ("rate_hz", rate_hz), ("radius_m", radius_m)):
             if not (isinstance(value, (int, float)) and math.isfinite(value) and value > 0):
                 raise SimulationError(f"{name} must be finite and > 0, got {value!r}")
@@ -291,13 +291,7 @@ class EncoderLoopEstimator:
         y_meas = self._R * al_c - ax_c
         n_sub = 0
         if self._last is None:
-            for i, (_, obs, init) in enumerate(self._observers):
-                names = tuple(obs.state_names)
-                x = np.zeros(len(names))
-                x[0] = y_meas
-                for name, value in init.items():
-                    x[names.index(name)] = value
-                self._states[i] = x
+            self._states = [initial_xbs_state(obs, y_meas, init) for _, obs, init in self._observers]
             self._last = (tc, y_meas, vx_c, U_c)
         elif tc > self._last[0]:
             # held over [t_c_prev, t_c]: the mean of the bounding measurements (as ObserverXbsEstimator

@@ -1,4 +1,10 @@
-"""Plug an observer into the ABS simulations: the ``XbsEstimator`` protocol of :mod:`switchobs.plants`."""
+"""Plug an observer into the ABS simulations: the ``XbsEstimator`` port of :mod:`switchobs.plants`.
+
+The plant simulation calls an estimator through the structural protocol
+:class:`switchobs.plants.XbsEstimator` (``reset``/``update``); this module
+turns any observer with ``step``/``readout`` (:class:`SteppingObserver`: the
+Python reference observers and the compiled C observers alike) into one.
+"""
 
 from __future__ import annotations
 
@@ -9,7 +15,7 @@ import numpy as np
 
 from ..exceptions import DimensionError, ModelError
 
-__all__ = ["ObserverXbsEstimator", "SteppingObserver"]
+__all__ = ["ObserverXbsEstimator", "SteppingObserver", "initial_xbs_state"]
 
 
 class SteppingObserver(Protocol):
@@ -24,6 +30,26 @@ class SteppingObserver(Protocol):
     def step(self, xhat: Any, signals: Any, dt: float) -> np.ndarray: ...
 
     def readout(self, xhat: Any) -> float: ...
+
+
+def check_xbs_signals(observer: SteppingObserver, label: str = "an XBS estimator") -> None:
+    """Refuse an observer whose signals are not ``(y, vx, u)`` (the XBS models of seeds 000 and 001)."""
+    if tuple(observer.signal_names)[1:] != ("vx", "u") or len(observer.signal_names) != 3:
+        raise ModelError(f"{label} needs an observer with signals (y, vx, u), got {tuple(observer.signal_names)}")
+
+
+def initial_xbs_state(observer: SteppingObserver, y0: float, initial_state: Mapping[str, float]) -> np.ndarray:
+    """The observer's state at the first measurement ``y0``.
+
+    The first state (the measured ``z1`` or ``w1`` of the XBS models) starts at
+    ``y0``, the named ones at their given values, the others at 0.
+    """
+    names = tuple(observer.state_names)
+    x = np.zeros(len(names))
+    x[0] = y0
+    for k, v in initial_state.items():
+        x[names.index(k)] = v
+    return x
 
 
 class ObserverXbsEstimator:
@@ -56,9 +82,7 @@ class ObserverXbsEstimator:
     """
 
     def __init__(self, observer: SteppingObserver, *, initial_state: Mapping[str, float] | None = None):
-        if tuple(observer.signal_names)[1:] != ("vx", "u") or len(observer.signal_names) != 3:
-            raise ModelError(f"an XBS estimator needs an observer with signals (y, vx, u), got "
-                             f"{tuple(observer.signal_names)}")
+        check_xbs_signals(observer)
         names = tuple(observer.state_names)
         unknown = sorted(set(initial_state or {}) - set(names))
         if unknown:
@@ -85,11 +109,7 @@ class ObserverXbsEstimator:
 
     def reset(self, t0: float, y0: float, vx0: float) -> None:  # noqa: ARG002 - the observer is time-invariant
         """Restart from the first measurements (protocol :class:`switchobs.plants.XbsEstimator`)."""
-        names = self.observer.state_names
-        x = np.zeros(len(names))
-        x[0] = y0
-        for k, v in self._initial.items():
-            x[names.index(k)] = v
+        x = initial_xbs_state(self.observer, y0, self._initial)
         self._state = x
         self._y, self._vx = float(y0), float(vx0)
         self._estimate = float(self.observer.readout(x))

@@ -1,0 +1,41 @@
+"""The closed ABS loop: observers and measurement chains wired to the plant simulations.
+
+:mod:`switchobs.plants` holds the physics and the brake controllers and calls
+an estimator through its port :class:`switchobs.plants.XbsEstimator`
+(``reset(t0, y0, vx0)``, ``update(t, y, vx, u, dt) -> mu_hat``);
+:mod:`switchobs.observers` holds generic switched observers; this package
+turns the latter into the former and sets them up for a vehicle.
+
+Public API
+----------
+ObserverSpec, xbs_estimator -- an observer kind (xbs3, xbs4, adaptive, none), gains and implementation
+                               (python | c) -> an estimator for a vehicle (sign conventions, initial state)
+OBSERVER_KINDS, DEFAULT_BETA, DEFAULT_GAMMA, INITIAL_STATE -- the factory's choices and defaults
+ObserverXbsEstimator        -- any observer with step/readout as an estimator (mean-hold of the signals)
+SteppingObserver            -- what it needs (Python reference observers and compiled C observers qualify)
+EncoderLoopEstimator        -- XBS observers fed by a simulated encoder with three-stage compensation
+EncoderLoopRecord           -- what the encoder chain and the observers saw
+DemoSettings, demo_scenario, demo_braking -- the braking of ``switchobs demo``
+road_segments, segment_errors, ErrorRow, summarise_braking, BrakingSummary, SETTLE_S
+                            -- estimation errors per road segment and the demo's braking summary
+
+Example
+-------
+>>> from switchobs.loop import xbs_estimator
+>>> from switchobs.plants import BrakingScenario, simulate
+>>> sc = BrakingScenario("dry-asphalt", speed_m_s=20.0, duration_s=0.5)
+>>> res = simulate(sc, estimator=xbs_estimator("xbs4", sc.vehicle, sc.roads.initial))
+>>> res.observer
+"SwitchedObserver of model 'abs-xbs4' (rk4, ZOH signals y, vx, u)"
+"""
+
+from ._adapter import ObserverXbsEstimator, SteppingObserver
+from ._demo import (SETTLE_S, BrakingSummary, DemoSettings, ErrorRow, demo_braking, demo_scenario, road_segments,
+                    segment_errors, summarise_braking)
+from ._encoder_loop import EncoderLoopEstimator, EncoderLoopRecord
+from ._factory import DEFAULT_BETA, DEFAULT_GAMMA, INITIAL_STATE, OBSERVER_KINDS, ObserverSpec, xbs_estimator
+
+__all__ = ["ObserverSpec", "xbs_estimator", "OBSERVER_KINDS", "DEFAULT_BETA", "DEFAULT_GAMMA", "INITIAL_STATE",
+           "ObserverXbsEstimator", "SteppingObserver", "EncoderLoopEstimator", "EncoderLoopRecord",
+           "DemoSettings", "demo_scenario", "demo_braking", "road_segments", "segment_errors", "ErrorRow",
+           "summarise_braking", "BrakingSummary", "SETTLE_S"]

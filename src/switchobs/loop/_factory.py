@@ -1,0 +1,139 @@
+"""From an observer specification (kind, gains, implementation) to an estimator set up for a vehicle.
+
+This is where the conventions of the observer models meet the plant's: the
+models of seed 000 (abs-xbs3, abs-xbs4) write the brake input as ``+b u`` with
+``b = -R γ_b / J``, seed 001's (abs-adaptive2) as ``-b u`` with
+``b = +R γ_b / J``, so the sign of :attr:`QuarterCar.b` is flipped for the
+former; ``a = R² Fz / J`` is the vehicle's; the 3D observer knows the road's
+``c = -c2``.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+from dataclasses import dataclass
+from typing import Any
+
+from ..exceptions import SimulationError
+from ..plants import Burckhardt, QuarterCar, XbsEstimator, road
+from ._adapter import ObserverXbsEstimator
+
+__all__ = ["ObserverSpec", "xbs_estimator", "OBSERVER_KINDS", "DEFAULT_BETA", "DEFAULT_GAMMA", "INITIAL_STATE"]
+
+#: Observer kinds: the three reference XBS observers and ``none`` (no estimator).
+OBSERVER_KINDS = ("xbs3", "xbs4", "adaptive", "none")
+#: Default observer gains: error rates in the rescaled time tau (seed 000 Sec. III-E, IV-D; seed 001 (3.20)).
+DEFAULT_BETA: Mapping[str, float] = {"xbs3": 150.0, "xbs4": 100.0, "adaptive": 100.0}
+#: Default adaptation gain ``Gamma = gamma I`` of the adaptive observer (seed 001 eq. (3.4)).
+DEFAULT_GAMMA = 1e4
+#: Initial estimates: a small positive XBS (the stable side) and rough road parameters.
+INITIAL_STATE: Mapping[str, Mapping[str, float]] = {"xbs3": {"z2": 0.5}, "xbs4": {"z2": 0.5},
+                                                    "adaptive": {"c": 20.0, "d": 10.0}}
+IMPLEMENTATIONS = ("python", "c")
+
+
+@dataclass(frozen=True)
+class ObserverSpec:
+    """Which XBS observer closes the loop, and how it is built.
+
+    Parameters
+    ----------
+    kind : str
+        One of :data:`OBSERVER_KINDS`.
+    beta : float, optional
+        Observer rate in the rescaled time (``beta1 = beta2 = beta``); default :data:`DEFAULT_BETA`.
+    gamma : float, optional
+        Adaptive observer only (the others ignore it): ``Gamma = gamma I``; default :data:`DEFAULT_GAMMA`.
+    impl : str
+        ``python`` (reference observer) or ``c`` (the generated C twin, compiled
+        with the system compiler, :meth:`switchobs.codegen.CObserver.like`).
+
+    Raises
+    ------
+    SimulationError
+        For an unknown kind or implementation (the gains are checked by the
+        observer constructors, e.g. :func:`switchobs.observers.xbs4_observer`).
+
+    Examples
+    --------
+    >>> ObserverSpec("xbs4")
+    ObserverSpec(kind='xbs4', beta=None, gamma=None, impl='python')
+    >>> str(ObserverSpec("adaptive", beta=80))
+    'adaptive observer, beta 80, gamma 10000 (python)'
+    """
+
+    kind: str
+    beta: float | None = None
+    gamma: float | None = None
+    impl: str = "python"
+
+    def __post_init__(self) -> None:
+        if self.kind not in OBSERVER_KINDS:
+            raise SimulationError(f"unknown observer {self.kind!r}; choose one of {', '.join(OBSERVER_KINDS)}")
+        if self.impl not in IMPLEMENTATIONS:
+            raise SimulationError(f"unknown observer implementation {self.impl!r}; choose python or c")
+
+    def to_json(self) -> dict[str, Any]:
+        return {"kind": self.kind, "beta": self.beta, "gamma": self.gamma, "impl": self.impl}
+
+    def __str__(self) -> str:
+        if self.kind == "none":
+            return "no observer"
+        beta = DEFAULT_BETA[self.kind] if self.beta is None else self.beta
+        text = f"{self.kind} observer, beta {beta:g}"
+        if self.kind == "adaptive":
+            text += f", gamma {DEFAULT_GAMMA if self.gamma is None else self.gamma:g}"
+        return f"{text} ({self.impl})"
+
+
+def xbs_estimator(spec: ObserverSpec | str, vehicle: QuarterCar, initial_road: Burckhardt | str
+                  ) -> XbsEstimator | None:
+    """The observer of ``spec`` set up for ``vehicle``, as an estimator for the ABS simulations.
+
+    Parameters
+    ----------
+    spec : ObserverSpec or str
+        An observer kind is read as ``ObserverSpec(kind)``.
+    vehicle : QuarterCar
+        Gives ``a = R² Fz / J`` and ``b`` (sign flipped for the models of
+        seed 000, see the module notes).  For the two-axle vehicle pass the
+        corner of the wheel (:meth:`TwoAxleVehicle.corner`).
+    initial_road : Burckhardt or str
+        The road the 3D observer assumes (``c = -c2``); ignored by the others.
+
+    Returns
+    -------
+    ObserverXbsEstimator or None
+        ``None`` for ``kind = "none"``; otherwise started from
+        :data:`INITIAL_STATE`.
+
+    Examples
+    --------
+    >>> from switchobs.plants import QuarterCar
+    >>> est = xbs_estimator("xbs4", QuarterCar(), "dry-asphalt")
+    >>> est.describe()
+    "SwitchedObserver of model 'abs-xbs4' (rk4, ZOH signals y, vx, u)"
+    >>> xbs_estimator(ObserverSpec("none"), QuarterCar(), "dry-asphalt") is None
+    True
+    """
+    if isinstance(spec, str):
+        spec = ObserverSpec(spec)
+    if not isinstance(spec, ObserverSpec):
+        raise SimulationError(f"xbs_estimator() needs an ObserverSpec or an observer kind, got {spec!r}")
+    if spec.kind == "none":
+        return None
+    from ..observers import adaptive_xbs_observer, xbs3_observer, xbs4_observer
+
+    beta = DEFAULT_BETA[spec.kind] if spec.beta is None else spec.beta
+    if spec.kind == "xbs3":
+        obs = xbs3_observer(beta, beta, params={"a": vehicle.a, "b": -vehicle.b, "c": road(initial_road).c})
+    elif spec.kind == "xbs4":
+        obs = xbs4_observer(beta, beta, params={"a": vehicle.a, "b": -vehicle.b})
+    else:
+        g = DEFAULT_GAMMA if spec.gamma is None else spec.gamma
+        obs = adaptive_xbs_observer(beta, [g, g], params={"a": vehicle.a, "b": vehicle.b})
+    if spec.impl == "c":
+        from ..codegen import CObserver
+
+        obs = CObserver.like(obs)  # the generated C twin: same model, gains, parameters and readout
+    return ObserverXbsEstimator(obs, initial_state=INITIAL_STATE[spec.kind])
