@@ -15,7 +15,7 @@ from __future__ import annotations
 import time
 from dataclasses import replace
 
-from switchobs.loop import ObserverSpec, xbs_estimator
+from switchobs.loop import EstimatorSpec, xbs_estimator
 from switchobs.plants import TwoPhaseABS, scenario, simulate, table41
 
 REPEAT = 3
@@ -24,7 +24,7 @@ REPEAT = 3
 def measure(label: str, sc, observer: str, in_loop: bool = True, impl: str = "python") -> None:
     best = None
     for _ in range(REPEAT):
-        est = xbs_estimator(ObserverSpec(observer, impl=impl), sc.vehicle, sc.roads.initial)
+        est = xbs_estimator(EstimatorSpec(observer, impl=impl), sc.vehicle, sc.roads.initial)
         c0 = time.process_time()
         res = simulate(sc, estimator=est, observer_in_loop=in_loop)
         cpu = time.process_time() - c0

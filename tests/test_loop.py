@@ -11,7 +11,7 @@ import pytest
 import switchobs
 from switchobs import loop
 from switchobs.exceptions import DimensionError, ModelError, ObserverInputError, SimulationError
-from switchobs.loop import DEFAULT_BETA, INITIAL_STATE, ObserverSpec, ObserverXbsEstimator, xbs_estimator
+from switchobs.loop import DEFAULT_BETA, INITIAL_STATE, EstimatorSpec, ObserverXbsEstimator, xbs_estimator
 from switchobs.model import builtin_model
 from switchobs.observers import ErrorCode, SwitchedObserver, xbs3_observer
 from switchobs.plants import (MAX_CASCADE, BrakingScenario, FivePhaseABS, QuarterCar, TwoAxleScenario,
@@ -52,7 +52,7 @@ def test_adapter_refusals():
 # --------------------------------------------------------------------------- factory
 def test_factory_flips_the_sign_of_b_for_the_models_of_seed_000_and_starts_from_the_initial_state():
     veh = QuarterCar.hoang2014()
-    est = xbs_estimator(ObserverSpec("xbs3", beta=80.0), veh, "hoang-dry")
+    est = xbs_estimator(EstimatorSpec("xbs3", beta=80.0), veh, "hoang-dry")
     obs = est.observer
     # seed 000 writes b = -R gamma_b / I with +b u; QuarterCar.b is R gamma_b / J > 0 (seed 001)
     assert obs.values["b"] == pytest.approx(-veh.b) and obs.values["a"] == pytest.approx(veh.a)
@@ -66,15 +66,15 @@ def test_factory_flips_the_sign_of_b_for_the_models_of_seed_000_and_starts_from_
     adaptive = xbs_estimator("adaptive", veh, "hoang-dry").observer
     assert adaptive.values["b"] == pytest.approx(veh.b)          # seed 001's sign convention
     assert xbs_estimator("none", veh, "hoang-dry") is None
-    assert str(ObserverSpec("xbs4")) == f"xbs4 observer, beta {DEFAULT_BETA['xbs4']:g} (python)"
+    assert str(EstimatorSpec("xbs4")) == f"xbs4 observer, beta {DEFAULT_BETA['xbs4']:g} (python)"
 
 
 def test_factory_refusals():
     with pytest.raises(SimulationError, match="unknown observer 'xbs5'; choose one of xbs3, xbs4, adaptive, none"):
-        ObserverSpec("xbs5")
+        EstimatorSpec("xbs5")
     with pytest.raises(SimulationError, match="unknown observer implementation 'rust'"):
-        ObserverSpec("xbs4", impl="rust")
-    with pytest.raises(SimulationError, match="needs an ObserverSpec or an observer kind"):
+        EstimatorSpec("xbs4", impl="rust")
+    with pytest.raises(SimulationError, match="needs an EstimatorSpec or an observer kind"):
         xbs_estimator(4, QuarterCar(), "dry-asphalt")
 
 

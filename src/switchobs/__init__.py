@@ -20,7 +20,7 @@ simulate, BrakingScenario, scenario, table41, road, PoincareMap
                                             -- switchobs.plants (ABS)
 Encoder, encoder_chain, ThreeStageEstimator, super_twisting
                                             -- switchobs.sensors (wheel encoders)
-ObserverSpec, xbs_estimator, ObserverXbsEstimator, EncoderLoopEstimator, demo_scenario
+EstimatorSpec, xbs_estimator, ObserverXbsEstimator, EncoderLoopEstimator, demo_scenario
                                             -- switchobs.loop (observers in the ABS loop)
 run_demo, write_theory, theory_documents    -- switchobs.report (main job, theory/)
 
@@ -52,7 +52,7 @@ _EXPORTS = {
                             "adaptive_xbs_observer"),
     "switchobs.plants": ("simulate", "BrakingScenario", "scenario", "table41", "road", "PoincareMap"),
     "switchobs.sensors": ("Encoder", "encoder_chain", "ThreeStageEstimator", "super_twisting"),
-    "switchobs.loop": ("ObserverSpec", "xbs_estimator", "ObserverXbsEstimator", "EncoderLoopEstimator",
+    "switchobs.loop": ("EstimatorSpec", "xbs_estimator", "ObserverXbsEstimator", "EncoderLoopEstimator",
                        "demo_scenario"),
     "switchobs.report": ("run_demo", "write_theory", "theory_documents"),
 }

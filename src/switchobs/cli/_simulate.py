@@ -15,7 +15,7 @@ from typing import Any
 
 from .._figures import save_figure
 from ..exceptions import SimulationError
-from ..loop import DEFAULT_GAMMA, OBSERVER_KINDS, ObserverSpec, xbs_estimator
+from ..loop import DEFAULT_GAMMA, OBSERVER_KINDS, EstimatorSpec, xbs_estimator
 from ..plants import (TABLE41_ROADS, TABLE41_SPEEDS_KMH, BrakeActuator, BrakingScenario, ContinuousXbsControl,
                       FivePhaseABS, TwoPhaseABS, XbsEstimator, aguado_sec36, plot_braking, plot_table41,
                       plot_two_axle, road, road_names, scenario, scenario_description, scenario_names,
@@ -106,8 +106,8 @@ def _timing_changes(args: argparse.Namespace) -> dict[str, Any]:
     return changes
 
 
-def _spec(args: argparse.Namespace, kind: str) -> ObserverSpec:
-    return ObserverSpec(kind, beta=args.beta, gamma=args.gamma, impl=args.observer_impl)
+def _spec(args: argparse.Namespace, kind: str) -> EstimatorSpec:
+    return EstimatorSpec(kind, beta=args.beta, gamma=args.gamma, impl=args.observer_impl)
 
 
 def _table41(args: argparse.Namespace) -> int:

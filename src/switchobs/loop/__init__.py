@@ -8,7 +8,7 @@ turns the latter into the former and sets them up for a vehicle.
 
 Public API
 ----------
-ObserverSpec, xbs_estimator -- an observer kind (xbs3, xbs4, adaptive, none), gains and implementation
+EstimatorSpec, xbs_estimator -- an observer kind (xbs3, xbs4, adaptive, none), gains and implementation
                                (python | c) -> an estimator for a vehicle (sign conventions, initial state)
 OBSERVER_KINDS, DEFAULT_BETA, DEFAULT_GAMMA, INITIAL_STATE -- the factory's choices and defaults
 ObserverXbsEstimator        -- any observer with step/readout as an estimator (mean-hold of the signals)
@@ -33,9 +33,9 @@ from ._adapter import ObserverXbsEstimator, SteppingObserver
 from ._demo import (SETTLE_S, BrakingSummary, DemoSettings, ErrorRow, demo_braking, demo_scenario, road_segments,
                     segment_errors, summarise_braking)
 from ._encoder_loop import EncoderLoopEstimator, EncoderLoopRecord
-from ._factory import DEFAULT_BETA, DEFAULT_GAMMA, INITIAL_STATE, OBSERVER_KINDS, ObserverSpec, xbs_estimator
+from ._factory import DEFAULT_BETA, DEFAULT_GAMMA, INITIAL_STATE, OBSERVER_KINDS, EstimatorSpec, xbs_estimator
 
-__all__ = ["ObserverSpec", "xbs_estimator", "OBSERVER_KINDS", "DEFAULT_BETA", "DEFAULT_GAMMA", "INITIAL_STATE",
+__all__ = ["EstimatorSpec", "xbs_estimator", "OBSERVER_KINDS", "DEFAULT_BETA", "DEFAULT_GAMMA", "INITIAL_STATE",
            "ObserverXbsEstimator", "SteppingObserver", "EncoderLoopEstimator", "EncoderLoopRecord",
            "DemoSettings", "demo_scenario", "demo_braking", "road_segments", "segment_errors", "ErrorRow",
            "summarise_braking", "BrakingSummary", "SETTLE_S"]

@@ -18,7 +18,7 @@ from ..exceptions import SimulationError
 from ..plants import Burckhardt, QuarterCar, XbsEstimator, road
 from ._adapter import ObserverXbsEstimator
 
-__all__ = ["ObserverSpec", "xbs_estimator", "OBSERVER_KINDS", "DEFAULT_BETA", "DEFAULT_GAMMA", "INITIAL_STATE"]
+__all__ = ["EstimatorSpec", "xbs_estimator", "OBSERVER_KINDS", "DEFAULT_BETA", "DEFAULT_GAMMA", "INITIAL_STATE"]
 
 #: Observer kinds: the three reference XBS observers and ``none`` (no estimator).
 OBSERVER_KINDS = ("xbs3", "xbs4", "adaptive", "none")
@@ -33,7 +33,7 @@ IMPLEMENTATIONS = ("python", "c")
 
 
 @dataclass(frozen=True)
-class ObserverSpec:
+class EstimatorSpec:
     """Which XBS observer closes the loop, and how it is built.
 
     Parameters
@@ -56,9 +56,9 @@ class ObserverSpec:
 
     Examples
     --------
-    >>> ObserverSpec("xbs4")
-    ObserverSpec(kind='xbs4', beta=None, gamma=None, impl='python')
-    >>> str(ObserverSpec("adaptive", beta=80))
+    >>> EstimatorSpec("xbs4")
+    EstimatorSpec(kind='xbs4', beta=None, gamma=None, impl='python')
+    >>> str(EstimatorSpec("adaptive", beta=80))
     'adaptive observer, beta 80, gamma 10000 (python)'
     """
 
@@ -86,14 +86,14 @@ class ObserverSpec:
         return f"{text} ({self.impl})"
 
 
-def xbs_estimator(spec: ObserverSpec | str, vehicle: QuarterCar, initial_road: Burckhardt | str
+def xbs_estimator(spec: EstimatorSpec | str, vehicle: QuarterCar, initial_road: Burckhardt | str
                   ) -> XbsEstimator | None:
     """The observer of ``spec`` set up for ``vehicle``, as an estimator for the ABS simulations.
 
     Parameters
     ----------
-    spec : ObserverSpec or str
-        An observer kind is read as ``ObserverSpec(kind)``.
+    spec : EstimatorSpec or str
+        An observer kind is read as ``EstimatorSpec(kind)``.
     vehicle : QuarterCar
         Gives ``a = R² Fz / J`` and ``b`` (sign flipped for the models of
         seed 000, see the module notes).  For the two-axle vehicle pass the
@@ -113,13 +113,13 @@ def xbs_estimator(spec: ObserverSpec | str, vehicle: QuarterCar, initial_road: B
     >>> est = xbs_estimator("xbs4", QuarterCar(), "dry-asphalt")
     >>> est.describe()
     "SwitchedObserver of model 'abs-xbs4' (rk4, ZOH signals y, vx, u)"
-    >>> xbs_estimator(ObserverSpec("none"), QuarterCar(), "dry-asphalt") is None
+    >>> xbs_estimator(EstimatorSpec("none"), QuarterCar(), "dry-asphalt") is None
     True
     """
     if isinstance(spec, str):
-        spec = ObserverSpec(spec)
-    if not isinstance(spec, ObserverSpec):
-        raise SimulationError(f"xbs_estimator() needs an ObserverSpec or an observer kind, got {spec!r}")
+        spec = EstimatorSpec(spec)
+    if not isinstance(spec, EstimatorSpec):
+        raise SimulationError(f"xbs_estimator() needs an EstimatorSpec or an observer kind, got {spec!r}")
     if spec.kind == "none":
         return None
     from ..observers import adaptive_xbs_observer, xbs3_observer, xbs4_observer
