@@ -22,6 +22,22 @@ def test_unknown_attribute_is_an_attribute_error():
         switchobs.nope  # noqa: B018
 
 
+@pytest.mark.parametrize("first", ["import switchobs", "import switchobs.design", "from switchobs import design_gains",
+                                   "from switchobs.design import design", "import switchobs.observers"])
+def test_switchobs_design_is_the_subpackage_in_every_import_order(first):
+    """`switchobs.design` never turns into the design function, whatever was imported before."""
+    import subprocess
+    import sys
+
+    code = (f"{first}\nimport types\nimport switchobs\nfrom switchobs import design\n"
+            "assert isinstance(design, types.ModuleType), design\n"
+            "assert switchobs.design is design\n"
+            "assert switchobs.design_gains is design.design_gains is design.design\n"
+            "assert 'design' in dir(switchobs)\n")
+    proc = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=120)
+    assert proc.returncode == 0, proc.stderr
+
+
 @pytest.mark.parametrize("layer", [name for name in LAYERS if name != "cli"])
 def test_lower_layers_never_import_higher_ones(layer):
     root = pathlib.Path(switchobs.__file__).parent / layer

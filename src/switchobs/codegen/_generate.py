@@ -254,7 +254,7 @@ def _defaults(model: Model, values: Mapping[str, Any], extra_names: Sequence[str
     missing = [p for p in model.parameters if p not in merged]
     if missing:
         raise ModelError(f"parameter(s) {missing} of model {model.name!r} have no value; every parameter is a "
-                         f"runtime parameter of the C observer and needs a default (e.g. --param {missing[0]}=...)")
+                         "runtime parameter of the C observer and needs a default value")
     return {p: float(merged[p]) for p in model.parameters}
 
 

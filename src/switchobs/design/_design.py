@@ -28,14 +28,14 @@ import numpy as np
 import sympy as sp
 from sympy.polys.matrices import DomainMatrix
 
-from ..exceptions import CertificateError, DimensionError, NotHurwitzError, SpectrumError
+from ..exceptions import CertificateError, DimensionError, ExpressionError, NotHurwitzError, SpectrumError
 from ..model import Model, free_names, make_symbol, numeric, parse_expression
 from ._lyapunov import _generic_solution, observer_form_gramian
 from ._normal_form import ObserverNormalForm, observer_normal_form
 from ._routh import hurwitz_conditions, readable_condition
 from ._spectrum import LAPLACE, parse_spectrum, polynomial_coefficients, spectrum_coefficients
 
-__all__ = ["GainDesign", "design", "theorem1_K_minus", "hoang_family_constraints", "minus_coefficients",
+__all__ = ["GainDesign", "design_gains", "design", "theorem1_K_minus", "hoang_family_constraints", "minus_coefficients",
            "plus_coefficients", "parse_gains"]
 
 
@@ -122,7 +122,8 @@ def parse_gains(gains: str | Sequence, model: Model, *, what: str) -> sp.Immutab
         text = str(g).strip()
         for name in free_names(text):
             if name in forbidden:
-                raise DimensionError(f"{what} entry {i + 1} uses {name!r}, a state or signal; gains are constants")
+                raise ExpressionError(f"{what} entry {i + 1} uses {name!r}, a state or signal; gains are constants "
+                                      "(numbers, parameters or new gain symbols)")
             names.setdefault(name, make_symbol(name))
         out.append(parse_expression(text, names, what=f"{what} entry {i + 1}"))
     return _column(out)
@@ -323,7 +324,7 @@ class GainDesign:
         return "\n".join(lines)
 
 
-def design(model: Model, spectrum: str | Sequence | None = None, *,
+def design_gains(model: Model, spectrum: str | Sequence | None = None, *,
            characteristic_polynomial: str | sp.Expr | Sequence | None = None,
            K_plus: str | Sequence | sp.MatrixBase | None = None,
            K_minus: str | Sequence | sp.MatrixBase | None = None) -> GainDesign:
@@ -361,7 +362,7 @@ def design(model: Model, spectrum: str | Sequence | None = None, *,
     Examples
     --------
     >>> from switchobs.model import builtin_model
-    >>> d = design(builtin_model("abs-xbs3"), "-beta1,-beta2,-beta2")
+    >>> d = design_gains(builtin_model("abs-xbs3"), "-beta1,-beta2,-beta2")
     >>> d.K_plus[0]
     beta1 + 2*beta2 + c
     """
@@ -426,6 +427,12 @@ def design(model: Model, spectrum: str | Sequence | None = None, *,
         hurwitz_plus=hurwitz_plus, hurwitz_minus=hurwitz_minus, P=P, C_plus=sp.ImmutableMatrix(C),
         C_minus=sp.ImmutableMatrix(C_minus), gain_constraints=constraints, family_symbols=family,
         conditional=conditional)
+
+
+#: The same function under the name of its sub-package: ``from switchobs.design import design``.
+#: At the top level only ``switchobs.design_gains`` is exported, so that ``switchobs.design`` is always
+#: the sub-package, whatever was imported first.
+design = design_gains
 
 
 def _raise_not_hurwitz(name: str, M: sp.MatrixBase) -> None:
