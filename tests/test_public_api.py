@@ -7,8 +7,8 @@ import pytest
 
 import switchobs
 
-LAYERS = ["model", "design", "certify", "codegen", "plants", "sensors", "observers", "report", "cli"]
-RANK = {"model": 0, "design": 1, "certify": 2, "codegen": 3, "plants": 4, "sensors": 4, "observers": 4,
+LAYERS = ["model", "design", "spec", "certify", "codegen", "plants", "sensors", "observers", "report", "cli"]
+RANK = {"model": 0, "design": 1, "spec": 2, "certify": 2, "codegen": 3, "plants": 4, "sensors": 4, "observers": 4,
         "report": 5, "cli": 6}
 
 

@@ -10,7 +10,7 @@ adaptive_xbs_observer    -- switched adaptive XBS observer (abs-adaptive2, seed 
 xbs_gains                -- the beta-parametrised gain pairs of the three built-in XBS models
 ObserverXbsEstimator     -- an observer as a switchobs.plants.XbsEstimator (reset / update -> mu_hat)
 SteppingObserver         -- protocol the adapter needs (step, readout, names): a C binding can satisfy it
-ErrorCode                -- status codes of a refused step (mirrored by the generated C)
+ErrorCode                -- status codes of a refused step: switchobs.spec.StepStatus, shared with the generated C
 METHODS                  -- discretisations: "rk4" (default), "euler"
 
 Every observer has ``step(xhat, signals, dt)``, ``run(xhat0, signal_rows, dt)``,

@@ -12,7 +12,8 @@ import sympy as sp
 from .._validate import adaptation_gain, signal_matrix
 from ..exceptions import DimensionError, FreeSymbolError, ModelError, SimulationError
 from ..model import Model, numeric, parse_expression, rational_value
-from ._engine import SCALE, ErrorCode, Kernel, KernelSpec, _ArrayPrinter, signal_symbols
+from ..spec import REFERENCE_STATUSES, ObserverSpec
+from ._engine import ErrorCode, Kernel, _ArrayPrinter, check_free
 
 __all__ = ["SwitchedObserver", "AdaptiveSwitchedObserver"]
 
@@ -35,32 +36,16 @@ def _gain(K: Any, n: int, what: str) -> np.ndarray:
     return arr
 
 
-def _substituted(model: Model, params: Mapping[str, Any] | None,
-                 keep: Sequence[str]) -> tuple[Model, dict[str, sp.Rational]]:
-    """The model with every parameter but ``keep`` replaced by its value (``params`` override ``values``)."""
+def _parameter_values(model: Model, params: Mapping[str, Any] | None,
+                      keep: Sequence[str]) -> dict[str, sp.Rational]:
+    """Exact values of every parameter but ``keep`` (``params`` override the model's ``values``)."""
     values = {k: v for k, v in model.values.items() if k not in keep}
     for key, val in (params or {}).items():
         if key in keep:
             raise ModelError(f"parameter {key!r} is estimated by the adaptive observer; do not give it a value")
         values[key] = rational_value(val, what=f"params[{key!r}]")
-    numeric_model = model.with_values(values)
-    missing = [p for p in numeric_model.parameters if p not in keep]
-    if missing:
-        raise FreeSymbolError(f"model {model.name!r}: the parameter(s) {missing} have no value; "
-                              f"give them with params={{{missing[0]!r}: ...}}")
-    return numeric_model, values
-
-
-def _check_free(expr: sp.Basic, allowed: set, what: str, model: Model) -> None:
-    t = model.symbols["t"]
-    if t in expr.free_symbols:
-        raise ModelError(f"{what} of model {model.name!r} depends on t explicitly; the observers hold the "
-                         "signals constant over a step and take no time argument (neither does the C API): "
-                         "make time an external signal instead")
-    free = sorted(str(s) for s in expr.free_symbols - allowed)
-    if free:
-        raise FreeSymbolError(f"{what} of model {model.name!r} still depends on {free}; give their values "
-                              f"(e.g. params={{{free[0]!r}: ...}})")
+    model.with_values(values)  # validates the names and the declared signs
+    return values
 
 
 class _Observer:
@@ -73,65 +58,44 @@ class _Observer:
     def __init__(self, model: Model, K_plus: Any, K_minus: Any, *, params: Mapping[str, Any] | None,
                  method: str, readout: str | None, unknown: Sequence[str], Gamma: Any):
         unknown = tuple(unknown)
-        for name in unknown:
-            if name not in model.parameters:
-                raise ModelError(f"model {model.name!r} has no parameter {name!r} to estimate "
-                                 f"(parameters: {list(model.parameters)})")
-        self.model = model
-        m, values = _substituted(model, params, unknown)
-        self.values = {k: float(v) for k, v in values.items()}
+        values = _parameter_values(model, params, unknown)
         n = model.n
-        theta = tuple(model.symbols[u] for u in unknown)
-        for what, expr in (("A", m.A), ("C", m.C), ("time_scale", m.time_scale)):
-            hit = sorted(str(s) for s in set(theta) & expr.free_symbols)
-            if hit:
-                raise ModelError(f"the estimated parameter(s) {hit} appear in {what} of model {model.name!r}; "
-                                 "the adaptive observer needs them only in d(y) and b(y)")
-        A = numeric(m.A, what=f"A of model {model.name!r}")
-        C = numeric(m.C, what=f"C of model {model.name!r}").reshape(n)
-        sig_syms = [model.symbols[name] for name in model.signals]
-        S = signal_symbols(len(sig_syms))
-        to_S = dict(zip(sig_syms, S))
-        allowed = set(sig_syms) | set(theta)
-        _check_free(m.time_scale, set(sig_syms), "time_scale", model)
-        u = sp.Matrix([model.symbols[name] for name in model.inputs])
-        F = SCALE * m.d + (m.b * u if model.inputs else sp.zeros(n, 1))
-        for i in range(n):
-            _check_free(F[i], allowed | {SCALE}, f"d or b (row {i + 1})", model)
-        regressor = []
-        drift = []
-        for i in range(n):
-            Fi = F[i]
-            row = []
-            for th in theta:
-                coeff = sp.diff(Fi, th)
-                if any(sp.diff(coeff, other) != 0 for other in theta):
-                    raise ModelError(f"s d(y) + b(y) u of model {model.name!r} is not linear in {th} (row {i + 1}); "
-                                     "the adaptive observer needs a linear parametrisation (seed 001 eq. (3.2))")
-                row.append(coeff.xreplace(to_S))
-            regressor.append(tuple(row))
-            drift.append(Fi.xreplace({th: 0 for th in theta}).xreplace(to_S))
-        p = len(unknown)
-        if p:
-            G = adaptation_gain(Gamma, unknown, error=SimulationError)
-        else:
-            G = np.zeros((0, 0))
-        self.K_plus = _gain(K_plus, n, "K_plus")
-        self.K_minus = _gain(K_minus, n, "K_minus")
-        self.Gamma = G
-        self.unknown = unknown
-        self.A = A
-        self.C = C
-        names = (*model.states, *unknown, *[f"Upsilon_{s}_{t}" for s in model.states for t in unknown])
-        signs = tuple(1 if model.symbols[name].is_positive else -1 if model.symbols[name].is_negative else 0
-                      for name in model.signals)
-        spec = KernelSpec(A=A, C=C, K_plus=self.K_plus, K_minus=self.K_minus,
-                          time_scale=m.time_scale.xreplace(to_S), drift=tuple(drift), regressor=tuple(regressor),
-                          Gamma=G, n_signals=len(S), signal_signs=signs, signal_names=tuple(model.signals),
-                          state_names=names)
+        G = adaptation_gain(Gamma, unknown, error=SimulationError) if unknown else np.zeros((0, 0))
+        spec = ObserverSpec(model, tuple(_gain(K_plus, n, "K_plus").tolist()),
+                            tuple(_gain(K_minus, n, "K_minus").tolist()), values=values, unknown=unknown,
+                            Gamma=tuple(map(tuple, G.tolist())))
+        missing = [p for p in spec.known_parameters if p not in values]
+        if missing:
+            raise FreeSymbolError(f"model {model.name!r}: the parameter(s) {missing} have no value; "
+                                  f"give them with params={{{missing[0]!r}: ...}}")
+        self._build(spec, method, readout)
+
+    def _build(self, spec: ObserverSpec, method: str, readout: str | None) -> None:
+        """Everything but the validation of the user's arguments: what an unpickled observer runs."""
         self._kernel = Kernel(spec, method)
+        self.model = spec.model
+        self.values = {k: float(v) for k, v in spec.values.items()}
+        self.unknown = spec.unknown
+        lowered = self._kernel.lowered
+        self.K_plus, self.K_minus, self.Gamma = lowered.K_plus, lowered.K_minus, lowered.Gamma
+        self.A, self.C = lowered.A, lowered.C
         self._readout_text = readout
-        self._readout_fn = self._compile_readout(readout, values) if readout is not None else None
+        self._readout_fn = self._compile_readout(readout, spec.values) if readout is not None else None
+
+    @classmethod
+    def _from_spec(cls, spec: ObserverSpec, method: str, readout: str | None) -> "_Observer":
+        obs = cls.__new__(cls)
+        obs._build(spec, method, readout)
+        return obs
+
+    def __reduce__(self):
+        """Pickle as the spec (plain data): the unpickled observer regenerates its step source."""
+        return (type(self)._from_spec, (self.spec, self.method, self._readout_text))
+
+    @property
+    def spec(self) -> ObserverSpec:
+        """The observer contract this observer runs (also what :func:`switchobs.codegen.generate_observer` translates)."""
+        return self._kernel.spec
 
     # ------------------------------------------------------------------ info
     @property
@@ -230,7 +194,7 @@ class _Observer:
         names = {**{p: self.model.symbols[p] for p in self.model.parameters}, **states}
         expr = parse_expression(text, names, what="readout").xreplace(
             {self.model.symbols[k]: v for k, v in values.items()})
-        _check_free(expr, set(states.values()), "readout", self.model)
+        check_free(expr, set(states.values()), "readout", self.model)
         code = _ArrayPrinter().doprint(expr)
         args = ", ".join(f"x{i}" for i in range(self.size))
         namespace: dict = {"numpy": np}
@@ -269,7 +233,7 @@ class _Observer:
             "unknown": list(self.unknown),
             "Gamma": self.Gamma.tolist(),
             "readout": self._readout_text,
-            "error_codes": {c.name: int(c) for c in ErrorCode},
+            "error_codes": {c.name: int(c) for c in REFERENCE_STATUSES},
         }
 
     def __str__(self) -> str:
