@@ -22,6 +22,7 @@ from typing import Any
 
 import sympy as sp
 
+from ..design import GainDesign
 from ..exceptions import FreeSymbolError, SpectrumError
 from ..model import Model
 from ._exact import fraction_matrix, matrix_strings
@@ -245,25 +246,29 @@ def certify(family: FamilyLike, *, names: Sequence[str] | None = None, output: A
 
 
 def certify_model(model: Model, *, values: Mapping[str, Any] | None = None, spectrum: str | Sequence | None = None,
-                  K_plus: Any = None, K_minus: Any = None, dwell: bool = True, eps: float = DEFAULT_EPS,
-                  solvers: Sequence[str] = DEFAULT_SOLVERS) -> CertificationReport:
+                  gains: GainDesign | None = None, K_plus: Any = None, K_minus: Any = None, dwell: bool = True,
+                  eps: float = DEFAULT_EPS, solvers: Sequence[str] = DEFAULT_SOLVERS) -> CertificationReport:
     """Certify the switched observer of a numeric model (seed 004; seed 000 eq. (13)).
 
     The error dynamics in the rescaled time are ``A_plus = A - K_plus C`` and
-    ``A_minus = -A + K_minus C``.  Give ``spectrum`` (gains by
-    :func:`switchobs.design.design`, Theorem 1 of seed 004) or ``K_plus`` (and
-    optionally any ``K_minus``; omitted, the Theorem 1 choice).
+    ``A_minus = -A + K_minus C``.  Give one of ``gains`` (a design, evaluated
+    with :meth:`GainDesign.at`), ``spectrum`` (gains by
+    :func:`switchobs.design.design_gains`, Theorem 1 of seed 004) or
+    ``K_plus`` (and optionally any ``K_minus``; omitted, the Theorem 1 choice).
 
     Parameters
     ----------
     model : Model
         Parameters take the model's stored ``[values]``, overridden by ``values``.
     values : mapping name -> number, optional
-        Parameter values (``--param``), exact (``"187.5"`` is ``375/2``).
+        Parameter values, exact (``"187.5"`` is ``375/2``).
     spectrum : str or sequence, optional
         Poles of ``A_plus``, e.g. ``"-10,-20,-20"``.
+    gains : GainDesign, optional
+        The designed gains; a design still holding parameters is evaluated at
+        the model's values (its design symbols must have values already).
     K_plus, K_minus : str or sequence, optional
-        Numeric gains, e.g. ``"84,-7312/375,-64/3"``.
+        Numeric gains, e.g. ``"84,-7312/375,-64/3"`` (the command line's form).
     dwell, eps, solvers
         As in :func:`certify`.
 
@@ -274,23 +279,33 @@ def certify_model(model: Model, *, values: Mapping[str, Any] | None = None, spec
     Raises
     ------
     SpectrumError
-        Neither a spectrum nor gains, or both.
+        Not exactly one of a spectrum, a design or gains.
     FreeSymbolError
         A parameter or design symbol has no value.
+    ModelError
+        The design is for another model (other states).
     NotHurwitzError
         ``A_plus`` or ``A_minus`` is not Hurwitz (named, with its spectrum).
     """
-    from ..design import design, observer_normal_form, parse_gains, theorem1_K_minus
+    from ..design import design_gains, observer_normal_form, parse_gains, theorem1_K_minus
 
-    if (spectrum is None) == (K_plus is None):
-        raise SpectrumError("give either a spectrum (--spectrum) or the gains (--gains-plus [--gains-minus])")
     if K_minus is not None and K_plus is None:
-        raise SpectrumError("--gains-minus needs --gains-plus")
+        raise SpectrumError("K_minus needs K_plus (alone, K_minus is the Theorem 1 choice)")
+    if sum(x is not None for x in (spectrum, gains, K_plus)) != 1:
+        raise SpectrumError("give either a spectrum, a gain design or the gains K_plus [and K_minus]")
     used = {k: str(v) for k, v in model.values.items()}
     used.update({k: str(v) for k, v in (values or {}).items()})
+    if gains is not None:
+        if not isinstance(gains, GainDesign):
+            raise SpectrumError(f"gains must be a GainDesign, got {type(gains).__name__}; give numbers as K_plus")
+        gains.check_model(model)
+        if not gains.is_numeric:
+            gains = gains.at({k: v for k, v in used.items() if k in gains.model.parameters})
     model = model.with_values(dict(values or {})).numeric()
-    if spectrum is not None:
-        d = design(model, spectrum)
+    if gains is not None:
+        Kp, Km = gains.K_plus, gains.K_minus
+    elif spectrum is not None:
+        d = design_gains(model, spectrum)
         Kp, Km = d.K_plus, d.K_minus
     else:
         Kp = parse_gains(K_plus, model, what="K_plus")
@@ -301,7 +316,7 @@ def certify_model(model: Model, *, values: Mapping[str, Any] | None = None, spec
     free = sorted({str(s) for M in (A_plus, A_minus) for s in M.free_symbols})
     if free:
         raise FreeSymbolError(f"the error matrices still depend on {free}; give their values "
-                              f"(e.g. --param {free[0]}=... or a numeric spectrum)")
+                              "(or a numeric spectrum, or a design evaluated with GainDesign.at)")
     observer = {"A": matrix_strings(fraction_matrix(model.A, what="A")),
                 "C": matrix_strings(fraction_matrix(model.C, what="C")),
                 "K_plus": [str(x[0]) for x in fraction_matrix([[e] for e in Kp], what="K_plus")],

@@ -213,11 +213,7 @@ class GeneratedObserver:
 # ----------------------------------------------------------------------------- inputs
 def _gains(model: Model, gains: Any, values: Mapping[str, Any]) -> tuple[np.ndarray, np.ndarray]:
     if isinstance(gains, GainDesign):
-        if gains.model.states != model.states:
-            raise CodegenError(f"the gain design is for model {gains.model.name!r} with states "
-                               f"{list(gains.model.states)}, not for {model.name!r} with {list(model.states)}")
-        num = gains.numeric(values)
-        return num["K_plus"], num["K_minus"]
+        return gains.gains_for(model, values)
     try:
         Kp, Km = gains
     except (TypeError, ValueError):

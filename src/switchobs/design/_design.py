@@ -19,6 +19,7 @@ eq. (17) for n = 3).  ``alpha_minus = alpha_plus`` is the unique choice with
 
 from __future__ import annotations
 
+import dataclasses
 import json
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
@@ -28,8 +29,9 @@ import numpy as np
 import sympy as sp
 from sympy.polys.matrices import DomainMatrix
 
-from ..exceptions import CertificateError, DimensionError, ExpressionError, NotHurwitzError, SpectrumError
-from ..model import Model, free_names, make_symbol, numeric, parse_expression
+from ..exceptions import (CertificateError, DimensionError, ExpressionError, ModelError, NotHurwitzError,
+                          NotObservableError, SpectrumError)
+from ..model import Model, free_names, make_symbol, numeric, parse_expression, rational_value
 from ._lyapunov import _generic_solution, observer_form_gramian
 from ._normal_form import ObserverNormalForm, observer_normal_form
 from ._routh import hurwitz_conditions, readable_condition
@@ -250,6 +252,81 @@ class GainDesign:
             checks["gain_constraints"] = all(sp.cancel(c.lhs.xreplace(subs) - c.rhs.xreplace(subs)) == 0
                                              for c in self.gain_constraints)
         return checks
+
+    def gains_for(self, model: Model, values: Mapping[str, Any] | None = None) -> tuple[np.ndarray, np.ndarray]:
+        """Float ``(K_plus, K_minus)`` for an observer of ``model``, at the design's values overridden by ``values``.
+
+        Raises
+        ------
+        ModelError
+            The design is for a model with other states.
+        FreeSymbolError
+            A parameter or design symbol has no value.
+        """
+        self.check_model(model)
+        merged = {**self.model.values, **dict(values or {})}
+        return (numeric(self.K_plus, merged, what="K_plus").reshape(-1),
+                numeric(self.K_minus, merged, what="K_minus").reshape(-1))
+
+    def check_model(self, model: Model) -> None:
+        """Refuse a model other than the one designed for (compared by its states)."""
+        if self.model.states != model.states:
+            raise ModelError(f"the gain design is for model {self.model.name!r} with states "
+                             f"{list(self.model.states)}, not for {model.name!r} with {list(model.states)}")
+
+    @property
+    def is_numeric(self) -> bool:
+        """No parameter and no design symbol is left: the gains are exact rational numbers."""
+        return not self.model.parameters and not (self.K_plus.free_symbols | self.K_minus.free_symbols)
+
+    def at(self, values: Mapping[str, Any] | None = None) -> "GainDesign":
+        """The design evaluated exactly at the model's stored values, overridden and completed by ``values``.
+
+        ``values`` gives model parameters and design symbols (``beta1``...) as
+        numbers or exact strings (``"187.5"`` is ``375/2``).  The result is the
+        design of the model with those values substituted
+        (:meth:`Model.with_values`): every field is evaluated, conditions that
+        hold are dropped.  This is the form the later stages take
+        (``certify_model``, the observers, ``generate_observer``).
+
+        Raises
+        ------
+        ModelError
+            A value for a name that is neither a parameter nor a design symbol, or not a finite number.
+        NotHurwitzError, NotObservableError
+            The values break a Routh–Hurwitz or an observability condition.
+        """
+        given = dict(values or {})
+        symbols = {s.name: s for s in self.design_symbols}
+        params = {**{k: v for k, v in self.model.values.items() if k in self.model.parameters},
+                  **{k: v for k, v in given.items() if k not in symbols}}
+        model = self.model.with_values(params)
+        subs = {self.model.symbols[k]: rational_value(v, what=f"parameter {k!r}") for k, v in params.items()}
+        subs.update({symbols[k]: rational_value(v, what=f"design symbol {k!r}") for k, v in given.items()
+                     if k in symbols})
+
+        def ev(x: Any) -> Any:
+            if isinstance(x, tuple):
+                return tuple(ev(e) for e in x)
+            return x.xreplace(subs) if isinstance(x, (sp.Basic, sp.MatrixBase)) else x
+
+        def still_open(conditions: tuple, error: type[Exception], what: str) -> tuple:
+            out = tuple(c for c in ev(conditions) if c is not sp.true)
+            if any(c is sp.false for c in out):
+                broken = [sp.sstr(c) for c, e in zip(conditions, ev(conditions)) if e is sp.false]
+                raise error(f"at these values {what} fails: {broken[0]} does not hold")
+            return out
+
+        nf = self.normal_form
+        fields = {f.name: ev(getattr(nf, f.name)) for f in dataclasses.fields(nf)}
+        fields["observability_conditions"] = still_open(nf.observability_conditions, NotObservableError,
+                                                        "observability")
+        normal_form = dataclasses.replace(nf, **fields)
+        evaluated = {f.name: ev(getattr(self, f.name)) for f in dataclasses.fields(self)
+                     if f.name not in ("model", "normal_form", "hurwitz_plus", "hurwitz_minus")}
+        hurwitz = {f"hurwitz_{side}": still_open(getattr(self, f"hurwitz_{side}"), NotHurwitzError,
+                                                 f"the A_{side} Routh–Hurwitz condition") for side in ("plus", "minus")}
+        return GainDesign(**evaluated, **hurwitz, model=model, normal_form=normal_form)
 
     def numeric(self, values: Mapping[str, Any] | None = None) -> dict[str, np.ndarray]:
         """Float arrays of the gains and certificate, through the model's numeric gate.

@@ -10,6 +10,7 @@ import numpy.typing as npt
 import sympy as sp
 
 from .._validate import adaptation_gain, signal_matrix
+from ..design import GainDesign
 from ..exceptions import DimensionError, FreeSymbolError, ModelError, SimulationError
 from ..model import Model, numeric, parse_expression, rational_value
 from ..spec import REFERENCE_STATUSES, ObserverSpec
@@ -59,6 +60,12 @@ class _Observer:
                  method: str, readout: str | None, unknown: Sequence[str], Gamma: Any):
         unknown = tuple(unknown)
         values = _parameter_values(model, params, unknown)
+        if isinstance(K_plus, GainDesign):
+            if K_minus is not None:
+                raise SimulationError("a GainDesign holds both gains; do not give K_minus with it")
+            K_plus, K_minus = K_plus.gains_for(model, values)
+        elif K_minus is None:
+            raise SimulationError("K_minus is missing: give both gains, or a GainDesign as K_plus")
         n = model.n
         G = adaptation_gain(Gamma, unknown, error=SimulationError) if unknown else np.zeros((0, 0))
         spec = ObserverSpec(model, tuple(_gain(K_plus, n, "K_plus").tolist()),
@@ -274,8 +281,10 @@ class SwitchedObserver(_Observer):
         Any switchobs model (built-in or TOML).  Parameters take the model's
         :attr:`~switchobs.model.Model.values` unless overridden by ``params``;
         none may be left free.
-    K_plus, K_minus : array_like or sympy.Matrix, length n
-        Numeric gains (e.g. ``design(model, spectrum).numeric(values)``).
+    K_plus, K_minus : GainDesign, or array_like or sympy.Matrix of length n
+        The design (``design_gains(model, spectrum)``, evaluated at the
+        observer's parameter values; its design symbols need values, e.g.
+        with :meth:`GainDesign.at`) with ``K_minus`` omitted, or two numeric gains.
     params : mapping, optional
         Parameter values overriding the model's (numbers or fraction strings).
     method : {"rk4", "euler"}
@@ -303,8 +312,8 @@ class SwitchedObserver(_Observer):
     >>> from switchobs.design import design
     >>> from switchobs.model import builtin_model
     >>> model = builtin_model("abs-xbs3")
-    >>> g = design(model, "-beta1,-beta2,-beta2").numeric({"beta1": 10, "beta2": 20})
-    >>> obs = SwitchedObserver(model, g["K_plus"], g["K_minus"], readout="z2")
+    >>> g = design(model, "-beta1,-beta2,-beta2").at({"beta1": 10, "beta2": 20})
+    >>> obs = SwitchedObserver(model, g, readout="z2")
     >>> obs.signal_names
     ('y', 'vx', 'u')
     >>> x = obs.step([0.0, 0.5, 0.0], [10.0, 20.0, 0.0], 1e-3)
@@ -314,8 +323,8 @@ class SwitchedObserver(_Observer):
     0.412037
     """
 
-    def __init__(self, model: Model, K_plus: Any, K_minus: Any, *, params: Mapping[str, Any] | None = None,
-                 method: str = "rk4", readout: str | None = None):
+    def __init__(self, model: Model, K_plus: GainDesign | Any, K_minus: Any = None, *,
+                 params: Mapping[str, Any] | None = None, method: str = "rk4", readout: str | None = None):
         super().__init__(model, K_plus, K_minus, params=params, method=method, readout=readout,
                          unknown=(), Gamma=None)
 
@@ -339,8 +348,8 @@ class AdaptiveSwitchedObserver(_Observer):
     Parameters
     ----------
     model : Model
-    K_plus, K_minus : array_like, length n
-        The gains ``K'`` for ``y > 0`` and ``y < 0`` (seed 001 (3.15); (3.20)
+    K_plus, K_minus : GainDesign, or array_like of length n
+        A design (``K_minus`` omitted), or the gains ``K'`` for ``y > 0`` and ``y < 0`` (seed 001 (3.15); (3.20)
         asks ``k1- = -k1+ > ... `` see :func:`adaptive_xbs_observer`).
     unknown : sequence of str
         Parameters to estimate (``("c", "d")`` for abs-adaptive2).
@@ -362,7 +371,8 @@ class AdaptiveSwitchedObserver(_Observer):
     seed 001 eq. (3.2)-(3.5), (3.8), (3.15), (3.20), Propositions 1-2.
     """
 
-    def __init__(self, model: Model, K_plus: Any, K_minus: Any, *, unknown: Sequence[str], Gamma: Any,
+    def __init__(self, model: Model, K_plus: GainDesign | Any, K_minus: Any = None, *, unknown: Sequence[str],
+                 Gamma: Any,
                  params: Mapping[str, Any] | None = None, method: str = "rk4", readout: str | None = None):
         if isinstance(unknown, str) or not unknown:
             raise ModelError(f"unknown must be a non-empty list of parameter names, got {unknown!r}")
