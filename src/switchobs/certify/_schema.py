@@ -24,7 +24,7 @@ A new optional top-level section is one class decorated with
 from __future__ import annotations
 
 from collections.abc import Callable, Mapping, Sequence
-from dataclasses import dataclass, field
+from dataclasses import MISSING, dataclass, field, fields
 from enum import Enum
 from typing import Any, ClassVar, Protocol
 
@@ -156,11 +156,14 @@ class OptionalSection(Protocol):
 
     def to_json(self) -> dict[str, Any]: ...
 
+    @classmethod
+    def from_json(cls, data: Any) -> "OptionalSection": ...
+
     def check(self, names: Sequence[str], matrices: Sequence[Any]) -> Check: ...
 
 
 #: Optional top-level sections, by key, in the order they are written.
-SECTIONS: dict[str, Any] = {}
+SECTIONS: dict[str, type[OptionalSection]] = {}
 
 
 def document_section(cls: type) -> type:
@@ -211,8 +214,30 @@ class ObserverSection:
 
 
 # ----------------------------------------------------------------------------- certificate entries
+class _Entry:
+    """JSON of a certificate entry: ``kind`` first, then the fields in declaration order (the JSON keys)."""
+
+    kind: CertificateKind
+
+    def _writes(self, name: str) -> bool:
+        return True
+
+    def to_json(self) -> dict[str, Any]:
+        out: dict[str, Any] = {"kind": self.kind.value}
+        out.update({f.name: getattr(self, f.name) for f in fields(self) if f.name != "kind" and self._writes(f.name)})
+        return out
+
+    @classmethod
+    def from_json(cls, data: Mapping[str, Any]) -> Any:
+        values = {f.name: data.get(f.name, None if f.default is MISSING else f.default)
+                  for f in fields(cls) if f.init}
+        if "kind" in values:
+            values["kind"] = CertificateKind(data["kind"])
+        return cls(**values)
+
+
 @dataclass(frozen=True)
-class LyapunovEntry:
+class LyapunovEntry(_Entry):
     """``strict-cqlf`` (``P``) or ``hespanha`` (``P`` and one output matrix ``C_p`` per mode)."""
 
     kind: CertificateKind
@@ -222,21 +247,12 @@ class LyapunovEntry:
     method: str = ""
     solver: str = ""
 
-    def to_json(self) -> dict[str, Any]:
-        out: dict[str, Any] = {"kind": self.kind.value, "P": self.P}
-        if self.kind is CertificateKind.HESPANHA:
-            out["C"] = self.C
-        out.update({"margin": self.margin, "method": self.method, "solver": self.solver})
-        return out
-
-    @classmethod
-    def from_json(cls, data: Mapping[str, Any]) -> "LyapunovEntry":
-        return cls(CertificateKind(data["kind"]), data.get("P"), data.get("C"), data.get("margin"),
-                   data.get("method", ""), data.get("solver", ""))
+    def _writes(self, name: str) -> bool:
+        return name != "C" or self.kind is CertificateKind.HESPANHA
 
 
 @dataclass(frozen=True)
-class DualEntry:
+class DualEntry(_Entry):
     """``no-strict-cqlf`` or ``no-common-lyapunov``: one ``R_p >= 0`` per mode."""
 
     kind: CertificateKind
@@ -245,18 +261,9 @@ class DualEntry:
     method: str = ""
     solver: str = ""
 
-    def to_json(self) -> dict[str, Any]:
-        return {"kind": self.kind.value, "R": self.R, "margin": self.margin, "method": self.method,
-                "solver": self.solver}
-
-    @classmethod
-    def from_json(cls, data: Mapping[str, Any]) -> "DualEntry":
-        return cls(CertificateKind(data["kind"]), data.get("R"), data.get("margin"), data.get("method", ""),
-                   data.get("solver", ""))
-
 
 @dataclass(frozen=True)
-class DwellTimeEntry:
+class DwellTimeEntry(_Entry):
     """``dwell-time``: ``tau_D`` (a rational string) and one ``P_p`` per mode (Geromel–Colaneri)."""
 
     tau_D: Any
@@ -266,18 +273,9 @@ class DwellTimeEntry:
     solver: str = ""
     kind: CertificateKind = field(default=CertificateKind.DWELL_TIME, init=False)
 
-    def to_json(self) -> dict[str, Any]:
-        return {"kind": self.kind.value, "tau_D": self.tau_D, "P": self.P, "margin": self.margin,
-                "method": self.method, "solver": self.solver}
-
-    @classmethod
-    def from_json(cls, data: Mapping[str, Any]) -> "DwellTimeEntry":
-        return cls(data.get("tau_D"), data.get("P"), data.get("margin"), data.get("method", ""),
-                   data.get("solver", ""))
-
 
 @dataclass(frozen=True)
-class PlanarEntry:
+class PlanarEntry(_Entry):
     """``planar``: the Balde–Boscain–Mason case, ``Gamma``, the numeric ``R`` of case iv and its verdict."""
 
     case: Any
@@ -285,14 +283,6 @@ class PlanarEntry:
     R: float | None = None
     verdict: str = ""
     kind: CertificateKind = field(default=CertificateKind.PLANAR, init=False)
-
-    def to_json(self) -> dict[str, Any]:
-        return {"kind": self.kind.value, "case": self.case, "Gamma": self.Gamma, "R": self.R,
-                "verdict": self.verdict}
-
-    @classmethod
-    def from_json(cls, data: Mapping[str, Any]) -> "PlanarEntry":
-        return cls(data.get("case"), data.get("Gamma", ""), data.get("R"), data.get("verdict", ""))
 
 
 CertificateEntry = LyapunovEntry | DualEntry | DwellTimeEntry | PlanarEntry
@@ -324,7 +314,7 @@ class CertificateDocument:
     certificates: tuple[CertificateEntry, ...]
     verdict: Verdict
     provenance: Mapping[str, Any] = field(default_factory=dict)
-    sections: Mapping[str, Any] = field(default_factory=dict)
+    sections: Mapping[str, OptionalSection] = field(default_factory=dict)
 
     def to_json(self) -> dict[str, Any]:
         out: dict[str, Any] = {"format": FORMAT, "version": VERSION, "family": self.family.to_json()}

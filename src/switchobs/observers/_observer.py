@@ -14,7 +14,7 @@ from ..design import GainDesign
 from ..exceptions import DimensionError, FreeSymbolError, ModelError, SimulationError
 from ..model import Model, numeric, parse_expression, rational_value
 from ..spec import REFERENCE_STATUSES, ObserverSpec
-from ._engine import ErrorCode, Kernel, _ArrayPrinter, check_free
+from ._engine import Kernel, _ArrayPrinter, check_free
 
 __all__ = ["SwitchedObserver", "AdaptiveSwitchedObserver"]
 
@@ -151,7 +151,7 @@ class _Observer:
         Raises
         ------
         ObserverInputError
-            With ``.code`` one of :class:`ErrorCode` (checked in that order).
+            With ``.code`` one of :class:`~switchobs.spec.StepStatus` (checked in that order).
         DimensionError
             If ``xhat`` or ``signals`` has the wrong length.
         """
