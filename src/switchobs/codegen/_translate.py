@@ -34,7 +34,7 @@ import sympy as sp
 
 from ..exceptions import CodegenError
 from ..model import Model
-from ..spec import SCALE, Guard, ObserverSpec, StepStatus
+from ..spec import METHODS, SCALE, Guard, ObserverSpec, StepStatus
 
 __all__ = ["Translation", "to_casadi", "translate_switched", "translate_adaptive", "translate_super_twisting"]
 
@@ -184,7 +184,7 @@ class Translation:
     param_names: tuple[str, ...]
     default_params: tuple[float, ...]
     advance: Callable[[str], ca.SX] | None = None
-    methods: tuple[str, ...] = ("rk4", "euler")
+    methods: tuple[str, ...] = METHODS
     s: ca.SX | None = None
 
 
