@@ -21,8 +21,8 @@ def xbs3_report():
 def test_hoang2014_xbs3_certificate_verdict(xbs3_report):
     rep = xbs3_report
     assert rep.certified and rep.verification.holds
-    assert rep.verdict == {"arbitrary_switching": "UGS", "dwell_time": "any", "strict_cqlf": "none",
-                           "common_lyapunov": "exists"}
+    assert rep.verdict.to_json() == {"arbitrary_switching": "UGS", "dwell_time": "any", "strict_cqlf": "none",
+                                     "common_lyapunov": "exists"}
     kinds = [c["kind"] for c in rep.document["certificates"]]
     assert kinds == ["hespanha", "no-strict-cqlf", "dwell-time"]
     assert rep.document["observer"]["K_plus"] == ["84", "-7312/375", "-64/3"]   # seed 000 Sec. III-E
@@ -147,7 +147,8 @@ def test_cli_certify_bad_input_one_line(capsys):
     assert main(["certify", "abs-xbs3"]) == 2
     assert "give either a spectrum" in capsys.readouterr().err
     assert main(["certify", "abs-xbs3", "--spectrum=-beta1,-2,-3"]) == 2
-    assert "beta1" in capsys.readouterr().err
+    err = capsys.readouterr().err
+    assert "beta1" in err and err.count("--param NAME=VALUE") == 1    # the CLI adds its hint once
     assert main(["certify", "abs-xbs3", "--param", "a=nan", "--spectrum=-1,-2,-3"]) == 2
     assert "not a finite number" in capsys.readouterr().err
 
@@ -179,3 +180,60 @@ def test_cli_classify_bad_matrices(capsys):
     assert "A2 is not Hurwitz" in capsys.readouterr().err
     assert main(["classify", "[[-1,0],[0,-1]]", "oops"]) == 2
     assert "is not a list of rows" in capsys.readouterr().err
+
+
+def test_schema_round_trip_keeps_the_json_and_types_the_verdict(xbs3_report):
+    """One schema for producers and checker: reading and writing a certificate gives the same JSON."""
+    from switchobs.certify import (ArbitrarySwitching, CertificateDocument, CertificateKind, Existence,
+                                   ObserverSection)
+
+    doc = CertificateDocument.from_json(xbs3_report.document)
+    assert json.dumps(doc.to_json()) == json.dumps(xbs3_report.document)
+    assert [c.kind for c in doc.certificates] == [CertificateKind.HESPANHA, CertificateKind.NO_STRICT_CQLF,
+                                                  CertificateKind.DWELL_TIME]
+    assert doc.verdict == xbs3_report.verdict
+    assert xbs3_report.verdict.arbitrary_switching is ArbitrarySwitching.UGS
+    assert xbs3_report.verdict.strict_cqlf == "none" and xbs3_report.verdict.strict_cqlf is Existence.NONE
+    assert isinstance(doc.sections["observer"], ObserverSection)
+
+
+def test_a_new_optional_section_is_one_class(xbs3_report, monkeypatch):
+    """A later section (e.g. the sampled observer's `discrete` data) plugs into writing, reading and checking."""
+    import dataclasses
+    from typing import ClassVar
+
+    from switchobs.certify import CertificateDocument, Check
+    from switchobs.certify import _schema
+
+    @dataclasses.dataclass(frozen=True)
+    class Discrete:
+        KEY: ClassVar[str] = "discrete"
+        h_max: str
+
+        def to_json(self):
+            return {"h_max": self.h_max}
+
+        @classmethod
+        def from_json(cls, data):
+            return cls(data["h_max"])
+
+        def check(self, names, matrices):
+            return Check("discrete", self.h_max == "1/100", f"h_max = {self.h_max}")
+
+    monkeypatch.setattr(_schema, "SECTIONS", dict(_schema.SECTIONS))
+    _schema.document_section(Discrete)
+    doc = dict(xbs3_report.document, discrete={"h_max": "1/100"})
+    back = CertificateDocument.from_json(doc)
+    assert back.sections["discrete"] == Discrete("1/100")
+    assert list(back.to_json()) == ["format", "version", "family", "observer", "discrete", "certificates",
+                                    "verdict", "provenance"]
+    assert verify_certificate(doc).holds
+    bad = verify_certificate(dict(doc, discrete={"h_max": "1"}))
+    assert not bad.holds and [c.name for c in bad.checks if not c.holds] == ["discrete"]
+
+
+def test_a_verdict_outside_the_schema_is_malformed(xbs3_report):
+    d = copy.deepcopy(xbs3_report.document)
+    d["verdict"]["strict_cqlf"] = "maybe"
+    with pytest.raises(CertificateError, match="verdict strict_cqlf is 'maybe'"):
+        verify_certificate(d)

@@ -1,5 +1,6 @@
 """Geromel–Colaneri dwell time: certified bound, periodic switching above it contracts, below it may not."""
 
+import dataclasses
 from fractions import Fraction
 
 import numpy as np
@@ -64,13 +65,13 @@ def test_dwell_certificate_holds_for_every_longer_dwell_time(results):
     res = results["liberzon"]
     cert = res.certificate()
     for factor in (Fraction(3, 2), Fraction(4)):
-        longer = dict(cert, tau_D=str(res.tau_D * factor))
+        longer = dataclasses.replace(cert, tau_D=str(res.tau_D * factor))   # certificate() is a schema entry
         assert _check_dwell(res.family.names, res.family.exact, longer).holds
 
 
 def test_dwell_certificate_fails_well_below_tau_D(results):
     res = results["liberzon"]
-    shorter = dict(res.certificate(), tau_D=str(res.tau_D / 4))
+    shorter = dataclasses.replace(res.certificate(), tau_D=str(res.tau_D / 4))
     check = _check_dwell(res.family.names, res.family.exact, shorter)
     assert not check.holds
     assert check.detail.startswith("exp(A_") and "tau_D) - P_A_" in check.detail and "< 0 fails" in check.detail
@@ -85,7 +86,7 @@ def test_bisection_brackets_tau_D(results):
 def test_dwell_certificate_round_trips_through_verify(results):
     res = results["branicky"]
     doc = {"format": "switchobs-certificate", "version": 1,
-           "family": res.family.to_json(), "certificates": [res.certificate()],
+           "family": res.family.to_json(), "certificates": [res.certificate().to_json()],
            "verdict": {"arbitrary_switching": "unknown", "dwell_time": str(res.tau_D), "strict_cqlf": "unknown",
                        "common_lyapunov": "unknown"}}
     assert verify_certificate(doc).holds
@@ -99,6 +100,6 @@ def test_hoang2014_xbs4_dwell_time_certified_despite_a_thin_margin():
 
     rep = certify_model(builtin_model("abs-xbs4"), spectrum="-40,-40,-60,-60")
     assert rep.dwell is not None and rep.dwell.certified
-    assert rep.verdict["dwell_time"] == "any" and rep.verification.holds
+    assert rep.verdict.dwell_time == "any" and rep.verification.holds
     kinds = [c["kind"] for c in rep.document["certificates"]]
     assert "dwell-time" in kinds and "hespanha" in kinds

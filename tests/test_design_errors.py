@@ -8,8 +8,8 @@ import pytest
 import sympy as sp
 
 from switchobs.design import design
-from switchobs.exceptions import (CertificateError, DimensionError, NotHurwitzError, NotObservableError,
-                                  SpectrumError)
+from switchobs.exceptions import (CertificateError, DimensionError, ExpressionError, NotHurwitzError,
+                                  NotObservableError, SpectrumError)
 from switchobs.model import Model, builtin_model
 
 
@@ -53,6 +53,12 @@ def test_non_hurwitz_given_gains_report_spectrum():
 def test_gain_length_mismatch():
     with pytest.raises(DimensionError, match="K_plus has 2 entries but model 'abs-xbs3' has dimension 3"):
         design(builtin_model("abs-xbs3"), K_plus="1,2")
+
+
+def test_gain_using_a_state_is_an_expression_error_not_a_shape_error():
+    with pytest.raises(ExpressionError, match="K_plus entry 2 uses 'z1', a state or signal") as info:
+        design(builtin_model("abs-xbs3"), K_plus="1,z1,2")
+    assert not isinstance(info.value, DimensionError)
 
 
 def test_K_minus_outside_hoang_family_is_refused():

@@ -3,7 +3,7 @@
 import pytest
 import sympy as sp
 
-from switchobs.exceptions import DimensionError, ExpressionError, FreeSymbolError, ModelError
+from switchobs.exceptions import DimensionError, ExpressionError, FreeSymbolError, ModelError, NotRealError
 from switchobs.model import Model, builtin_model, load_model, numeric, parse_expression
 
 XBS3_TOML = """
@@ -64,6 +64,18 @@ def test_numeric_gate_names_free_symbols():
     with pytest.raises(FreeSymbolError, match=r"\['a', 'c'\]"):
         numeric(m.A)
     assert numeric(m.A, {"a": 2, "c": 3})[1, 1] == 3.0
+
+
+def test_numeric_gate_refuses_a_complex_value_as_not_real():
+    """A complex value has no free symbol left: it is NotRealError, and no message names a CLI flag."""
+    with pytest.raises(NotRealError, match="K is not real") as info:
+        numeric(sp.sqrt(sp.Symbol("q")), {"q": -4}, what="K")
+    assert not isinstance(info.value, FreeSymbolError)
+    with pytest.raises(FreeSymbolError) as free:
+        numeric(builtin_model("abs-xbs3").A)
+    with pytest.raises(ModelError) as bad:
+        builtin_model("abs-xbs3").with_values({"a": "x/0"})
+    assert "--param" not in str(free.value) and "--param" not in str(bad.value)
 
 
 @pytest.mark.parametrize("text, match", [

@@ -7,10 +7,11 @@ import pytest
 
 import switchobs
 
-LAYERS = ["model", "design", "certify", "codegen", "observers", "plants", "sensors", "loop", "report", "cli"]
-# observers are generic (model, design); plants hold the physics and the hybrid integrator; sensors use the
-# plants' vehicle, roads and integrator; the loop wires observers and sensors to the plants
-RANK = {"model": 0, "design": 1, "certify": 2, "codegen": 3, "observers": 4, "plants": 5, "sensors": 6,
+LAYERS = ["model", "design", "spec", "certify", "codegen", "observers", "plants", "sensors", "loop", "report", "cli"]
+# spec is the observer contract shared by the Python engine and the C translator; observers are generic (model,
+# design, spec); plants hold the physics and the hybrid integrator; sensors use the plants' vehicle, roads and
+# integrator; the loop wires observers and sensors to the plants
+RANK = {"model": 0, "design": 1, "spec": 2, "certify": 2, "codegen": 3, "observers": 4, "plants": 5, "sensors": 6,
         "loop": 7, "report": 8, "cli": 9}
 
 
@@ -22,6 +23,22 @@ def test_every_exported_name_resolves(name):
 def test_unknown_attribute_is_an_attribute_error():
     with pytest.raises(AttributeError, match="no attribute 'nope'"):
         switchobs.nope  # noqa: B018
+
+
+@pytest.mark.parametrize("first", ["import switchobs", "import switchobs.design", "from switchobs import design_gains",
+                                   "from switchobs.design import design", "import switchobs.observers"])
+def test_switchobs_design_is_the_subpackage_in_every_import_order(first):
+    """`switchobs.design` never turns into the design function, whatever was imported before."""
+    import subprocess
+    import sys
+
+    code = (f"{first}\nimport types\nimport switchobs\nfrom switchobs import design\n"
+            "assert isinstance(design, types.ModuleType), design\n"
+            "assert switchobs.design is design\n"
+            "assert switchobs.design_gains is design.design_gains is design.design\n"
+            "assert 'design' in dir(switchobs)\n")
+    proc = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=120)
+    assert proc.returncode == 0, proc.stderr
 
 
 @pytest.mark.parametrize("layer", [name for name in LAYERS if name != "cli"])

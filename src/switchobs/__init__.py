@@ -8,7 +8,7 @@ Systems ``dz/dt = s(y,t) (A z + d(y)) + b(y) u, y = C z`` whose time scaling
 Public API (sub-packages follow the pipeline; each has its own ``__all__``)
 ---------------------------------------------------------------------------
 Model, builtin_model, load_model            -- switchobs.model
-design, GainDesign, observer_normal_form    -- switchobs.design (sympy, exact)
+design_gains, GainDesign, observer_normal_form -- switchobs.design (sympy, exact)
 certify_model, common_lyapunov, strict_common_lyapunov, dwell_time,
 classify_planar, verify_certificate, trajectory_conditions
                                             -- switchobs.certify (cvxpy + exact re-check)
@@ -32,7 +32,9 @@ Example: the 4D XBS observer in the loop of a braking on dry asphalt::
     print(res.metrics)
 
 Names are loaded on first use, so ``import switchobs`` stays cheap (cvxpy and
-casadi are imported only by the layers that need them).
+casadi are imported only by the layers that need them).  ``switchobs.<layer>``
+is always the sub-package (``from switchobs import design`` gives the module
+whatever was imported before; the design function is ``design_gains``).
 """
 
 from __future__ import annotations
@@ -44,7 +46,7 @@ __version__ = "0.1.0"
 
 _EXPORTS = {
     "switchobs.model": ("Model", "builtin_model", "load_model"),
-    "switchobs.design": ("design", "GainDesign", "observer_normal_form"),
+    "switchobs.design": ("design_gains", "GainDesign", "observer_normal_form"),
     "switchobs.certify": ("certify_model", "common_lyapunov", "strict_common_lyapunov", "dwell_time",
                           "classify_planar", "verify_certificate", "trajectory_conditions"),
     "switchobs.codegen": ("generate_observer", "compile_observer", "CObserver"),
@@ -61,7 +63,13 @@ _WHERE = {name: module for module, names in _EXPORTS.items() for name in names}
 __all__ = sorted(_WHERE)
 
 
+#: The sub-packages, reachable as attributes before they are imported (``switchobs.design``).
+_SUBPACKAGES = frozenset(module.split(".")[1] for module in _EXPORTS)
+
+
 def __getattr__(name: str) -> Any:
+    if name in _SUBPACKAGES:
+        return importlib.import_module(f"switchobs.{name}")  # importing binds it in this namespace too
     module = _WHERE.get(name)
     if module is None:
         raise AttributeError(f"module 'switchobs' has no attribute {name!r}")
@@ -71,4 +79,4 @@ def __getattr__(name: str) -> Any:
 
 
 def __dir__() -> list[str]:
-    return sorted(set(globals()) | set(__all__))
+    return sorted(set(globals()) | set(__all__) | _SUBPACKAGES)

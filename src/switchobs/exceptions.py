@@ -17,6 +17,7 @@ __all__ = [
     "SpectrumError",
     "NotHurwitzError",
     "FreeSymbolError",
+    "NotRealError",
     "CertificateError",
     "SolverFailure",
     "SimulationError",
@@ -56,6 +57,10 @@ class NotHurwitzError(SwitchobsError, ValueError):
 
 class FreeSymbolError(SwitchobsError, ValueError):
     """A numeric computation was asked of an expression with free symbols left."""
+
+
+class NotRealError(SwitchobsError, ValueError):
+    """A value that must be real (a gain, a matrix entry) has a nonzero imaginary part."""
 
 
 class CertificateError(SwitchobsError, ValueError):

@@ -27,6 +27,11 @@ as_family                 -- the validation gate for a family of matrices
 Results: CertificationReport, LyapunovResult, DualCertificate, DwellTimeResult,
 PlanarClassification, VerificationReport, TrajectoryReport, AdmissibleConstants,
 ZeroCrossing, Family.
+
+Certificate schema (one frozen class per section, ``to_json`` / ``from_json``):
+CertificateDocument, FamilySection, ObserverSection, LyapunovEntry, DualEntry,
+DwellTimeEntry, PlanarEntry, Verdict; enums CertificateKind, ArbitrarySwitching,
+Existence; document_section registers a new optional section.
 """
 
 from ._certify import CertificationReport, certify, certify_model, verdict_text
@@ -35,6 +40,8 @@ from ._family import Family, as_family
 from ._lyapunov import (DEFAULT_EPS, DualCertificate, LyapunovResult, common_lyapunov,
                         infeasibility_certificate, strict_common_lyapunov)
 from ._planar import PlanarClassification, classify_planar
+from ._schema import (ArbitrarySwitching, CertificateDocument, CertificateKind, DualEntry, DwellTimeEntry, Existence,
+                      FamilySection, LyapunovEntry, ObserverSection, PlanarEntry, Verdict, document_section)
 from ._trajectory import (AdmissibleConstants, TrajectoryReport, ZeroCrossing, admissible_constants, pe_level,
                           regressor_excitation, time_rescaling, trajectory_conditions, windowed_energy,
                           zero_crossings)
@@ -47,6 +54,8 @@ __all__ = [
     "DEFAULT_EPS", "DualCertificate", "LyapunovResult", "common_lyapunov", "infeasibility_certificate",
     "strict_common_lyapunov",
     "PlanarClassification", "classify_planar",
+    "ArbitrarySwitching", "CertificateDocument", "CertificateKind", "DualEntry", "DwellTimeEntry", "Existence",
+    "FamilySection", "LyapunovEntry", "ObserverSection", "PlanarEntry", "Verdict", "document_section",
     "AdmissibleConstants", "TrajectoryReport", "ZeroCrossing", "admissible_constants", "pe_level",
     "regressor_excitation", "time_rescaling", "trajectory_conditions", "windowed_energy", "zero_crossings",
     "Check", "VerificationReport", "load_certificate", "verify_certificate",

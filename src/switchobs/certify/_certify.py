@@ -22,6 +22,7 @@ from typing import Any
 
 import sympy as sp
 
+from ..design import GainDesign
 from ..exceptions import FreeSymbolError, SpectrumError
 from ..model import Model
 from ._exact import fraction_matrix, matrix_strings
@@ -30,38 +31,40 @@ from ._dwell import DwellTimeResult, dwell_time
 from ._lmi import DEFAULT_SOLVERS
 from ._lyapunov import DEFAULT_EPS, LyapunovResult, common_lyapunov, strict_common_lyapunov
 from ._planar import PlanarClassification, classify_planar
-from ._verify import FORMAT, VERSION, VerificationReport, implied_verdict, verify_certificate
+from ._schema import (ANY_DWELL, ArbitrarySwitching, CertificateDocument, CertificateKind, FamilySection,
+                      ObserverSection, PlanarEntry, Verdict)
+from ._verify import VerificationReport, implied_verdict, verify_certificate
 
 __all__ = ["CertificationReport", "certify", "certify_model", "verdict_text"]
 
 
-def verdict_text(verdict: Mapping[str, Any], planar: PlanarClassification | None = None) -> str:
+def verdict_text(verdict: Verdict, planar: PlanarClassification | None = None) -> str:
     """One sentence for an implied verdict (and the numerical planar case iv, if any)."""
-    arb = verdict.get("arbitrary_switching")
-    dwell = verdict.get("dwell_time")
+    arb = verdict.arbitrary_switching
+    dwell = verdict.dwell_time
     parts = []
-    if arb == "UGES":
+    if arb is ArbitrarySwitching.UGES:
         parts.append("uniformly exponentially stable under arbitrary switching (strict common quadratic "
                      "Lyapunov function)")
     else:
-        if dwell == "any":
+        if dwell == ANY_DWELL:
             parts.append("uniformly exponentially stable for every switching signal with a positive dwell time "
                          "(Hespanha, non-strict common Lyapunov function)")
         elif dwell is not None:
             parts.append(f"uniformly exponentially stable for every switching signal with dwell time >= "
                          f"{dwell} = {float(Fraction(dwell)):.6g} (Geromel-Colaneri)")
-        if arb == "UGS":
+        if arb is ArbitrarySwitching.UGS:
             parts.append("uniformly stable under arbitrary switching")
-        elif arb == "UGS-not-UGES":
+        elif arb is ArbitrarySwitching.UGS_NOT_UGES:
             parts.append("under arbitrary switching: uniformly stable but not exponentially (planar case ii)")
-        elif arb == "unbounded":
+        elif arb is ArbitrarySwitching.UNBOUNDED:
             parts.append("some fast switching signal gives unbounded trajectories (planar case i)")
         elif planar is not None and planar.case == "iv":
             parts.append(f"under arbitrary switching: {planar.verdict} (planar case iv, R = {planar.R:.6g}, "
                          "computed numerically)")
         elif not parts:
             parts.append("nothing certified")
-        if not any("arbitrary" in p for p in parts) and arb == "unknown" and dwell is not None:
+        if not any("arbitrary" in p for p in parts) and arb is ArbitrarySwitching.UNKNOWN and dwell is not None:
             parts.append("arbitrary switching not decided")
     return "; ".join(parts)
 
@@ -83,7 +86,7 @@ class CertificationReport:
         The certificate (JSON types only); write it with :meth:`write`.
     verification : VerificationReport
         The independent exact check of ``document``.
-    verdict : dict
+    verdict : Verdict
         The verdict implied by the certificates that hold.
     text : str
         The verdict in one sentence.
@@ -98,7 +101,7 @@ class CertificationReport:
     planar: PlanarClassification | None
     document: dict[str, Any]
     verification: VerificationReport
-    verdict: dict[str, Any]
+    verdict: Verdict
     text: str
     timings: dict[str, float] = field(default_factory=dict)
 
@@ -106,13 +109,14 @@ class CertificationReport:
     def certified(self) -> bool:
         """Some stability certificate (strict, Hespanha or dwell time) holds and the document checks out."""
         kinds = {c["kind"] for c in self.document["certificates"]}
-        return self.verification.holds and bool(kinds & {"strict-cqlf", "hespanha", "dwell-time"})
+        stable = {CertificateKind.STRICT_CQLF, CertificateKind.HESPANHA, CertificateKind.DWELL_TIME}
+        return self.verification.holds and bool(kinds & stable)
 
     def write(self, path: str | Path) -> None:
         Path(path).write_text(json.dumps(self.document, indent=2) + "\n", encoding="utf-8")
 
     def to_json(self) -> dict[str, Any]:
-        return {"verdict": self.verdict, "text": self.text, "certified": self.certified,
+        return {"verdict": self.verdict.to_json(), "text": self.text, "certified": self.certified,
                 "strict": self.strict.to_json(), "hespanha": self.hespanha.to_json(),
                 "dwell_time": None if self.dwell is None else self.dwell.to_json(),
                 "planar": None if self.planar is None else self.planar.to_json(),
@@ -165,7 +169,7 @@ def _exact_col(ok: bool) -> str:
 
 def certify(family: FamilyLike, *, names: Sequence[str] | None = None, output: Any = None,
             dwell: bool = True, eps: float = DEFAULT_EPS, solvers: Sequence[str] = DEFAULT_SOLVERS,
-            observer: Mapping[str, Any] | None = None, provenance: Mapping[str, Any] | None = None
+            observer: ObserverSection | None = None, provenance: Mapping[str, Any] | None = None
             ) -> CertificationReport:
     """Run every applicable check on a switched family and return the verified certificate.
 
@@ -180,7 +184,7 @@ def certify(family: FamilyLike, *, names: Sequence[str] | None = None, output: A
     eps : float
         Numerical margin threshold.
     solvers : cvxpy solvers in order of preference
-    observer : mapping, optional
+    observer : ObserverSection, optional
         ``A``, ``C``, ``K_plus``, ``K_minus`` (rational strings): the checker then
         also re-derives ``A_plus``, ``A_minus`` from them.
     provenance : mapping, optional
@@ -197,7 +201,7 @@ def certify(family: FamilyLike, *, names: Sequence[str] | None = None, output: A
     Examples
     --------
     >>> rep = certify([[[-1, -1], [1, 0]], [[-1, 1], [-1, 0]]], output=[[1, 0]])
-    >>> rep.verdict["dwell_time"], rep.planar.case
+    >>> rep.verdict.dwell_time, rep.planar.case
     ('any', 'ii')
     """
     fam = as_family(family, names)
@@ -222,18 +226,14 @@ def certify(family: FamilyLike, *, names: Sequence[str] | None = None, output: A
                          strict.dual.certificate() if strict.dual is not None else None,
                          dw.certificate() if dw is not None else None) if c is not None]
     if planar is not None:
-        certs.append({"kind": "planar", "case": planar.case, "Gamma": str(planar.gamma),
-                      "R": planar.R, "verdict": planar.verdict})
-    holding = [c["kind"] for c in certs if c["kind"] != "planar"]
-    tau = [Fraction(c["tau_D"]) for c in certs if c["kind"] == "dwell-time"]
+        certs.append(PlanarEntry(planar.case, str(planar.gamma), planar.R, planar.verdict))
+    holding = [c.kind for c in certs if c.kind is not CertificateKind.PLANAR]
+    tau = [Fraction(c.tau_D) for c in certs if c.kind is CertificateKind.DWELL_TIME]
     verdict = implied_verdict(holding, planar.case if planar is not None else None, tau)
-    doc: dict[str, Any] = {"format": FORMAT, "version": VERSION, "family": fam.to_json()}
-    if observer is not None:
-        doc["observer"] = dict(observer)
-    doc["certificates"] = certs
-    doc["verdict"] = verdict
-    doc["provenance"] = dict(provenance or {})
-    doc["provenance"]["produced_by"] = "switchobs certify"
+    document = CertificateDocument(FamilySection(**fam.to_json()), tuple(certs), verdict,
+                                   {**(provenance or {}), "produced_by": "switchobs certify"},
+                                   {} if observer is None else {ObserverSection.KEY: observer})
+    doc = document.to_json()
     t0 = time.perf_counter()
     if certs:
         check = verify_certificate(doc)
@@ -245,25 +245,29 @@ def certify(family: FamilyLike, *, names: Sequence[str] | None = None, output: A
 
 
 def certify_model(model: Model, *, values: Mapping[str, Any] | None = None, spectrum: str | Sequence | None = None,
-                  K_plus: Any = None, K_minus: Any = None, dwell: bool = True, eps: float = DEFAULT_EPS,
-                  solvers: Sequence[str] = DEFAULT_SOLVERS) -> CertificationReport:
+                  gains: GainDesign | None = None, K_plus: Any = None, K_minus: Any = None, dwell: bool = True,
+                  eps: float = DEFAULT_EPS, solvers: Sequence[str] = DEFAULT_SOLVERS) -> CertificationReport:
     """Certify the switched observer of a numeric model (seed 004; seed 000 eq. (13)).
 
     The error dynamics in the rescaled time are ``A_plus = A - K_plus C`` and
-    ``A_minus = -A + K_minus C``.  Give ``spectrum`` (gains by
-    :func:`switchobs.design.design`, Theorem 1 of seed 004) or ``K_plus`` (and
-    optionally any ``K_minus``; omitted, the Theorem 1 choice).
+    ``A_minus = -A + K_minus C``.  Give one of ``gains`` (a design, evaluated
+    with :meth:`GainDesign.at`), ``spectrum`` (gains by
+    :func:`switchobs.design.design_gains`, Theorem 1 of seed 004) or
+    ``K_plus`` (and optionally any ``K_minus``; omitted, the Theorem 1 choice).
 
     Parameters
     ----------
     model : Model
         Parameters take the model's stored ``[values]``, overridden by ``values``.
     values : mapping name -> number, optional
-        Parameter values (``--param``), exact (``"187.5"`` is ``375/2``).
+        Parameter values, exact (``"187.5"`` is ``375/2``).
     spectrum : str or sequence, optional
         Poles of ``A_plus``, e.g. ``"-10,-20,-20"``.
+    gains : GainDesign, optional
+        The designed gains; a design still holding parameters is evaluated at
+        the model's values (its design symbols must have values already).
     K_plus, K_minus : str or sequence, optional
-        Numeric gains, e.g. ``"84,-7312/375,-64/3"``.
+        Numeric gains, e.g. ``"84,-7312/375,-64/3"`` (the command line's form).
     dwell, eps, solvers
         As in :func:`certify`.
 
@@ -274,23 +278,33 @@ def certify_model(model: Model, *, values: Mapping[str, Any] | None = None, spec
     Raises
     ------
     SpectrumError
-        Neither a spectrum nor gains, or both.
+        Not exactly one of a spectrum, a design or gains.
     FreeSymbolError
         A parameter or design symbol has no value.
+    ModelError
+        The design is for another model (other states).
     NotHurwitzError
         ``A_plus`` or ``A_minus`` is not Hurwitz (named, with its spectrum).
     """
-    from ..design import design, observer_normal_form, parse_gains, theorem1_K_minus
+    from ..design import design_gains, observer_normal_form, parse_gains, theorem1_K_minus
 
-    if (spectrum is None) == (K_plus is None):
-        raise SpectrumError("give either a spectrum (--spectrum) or the gains (--gains-plus [--gains-minus])")
     if K_minus is not None and K_plus is None:
-        raise SpectrumError("--gains-minus needs --gains-plus")
+        raise SpectrumError("K_minus needs K_plus (alone, K_minus is the Theorem 1 choice)")
+    if sum(x is not None for x in (spectrum, gains, K_plus)) != 1:
+        raise SpectrumError("give either a spectrum, a gain design or the gains K_plus [and K_minus]")
     used = {k: str(v) for k, v in model.values.items()}
     used.update({k: str(v) for k, v in (values or {}).items()})
+    if gains is not None:
+        if not isinstance(gains, GainDesign):
+            raise SpectrumError(f"gains must be a GainDesign, got {type(gains).__name__}; give numbers as K_plus")
+        gains.check_model(model)
+        if not gains.is_numeric:
+            gains = gains.at({k: v for k, v in used.items() if k in gains.model.parameters})
     model = model.with_values(dict(values or {})).numeric()
-    if spectrum is not None:
-        d = design(model, spectrum)
+    if gains is not None:
+        Kp, Km = gains.K_plus, gains.K_minus
+    elif spectrum is not None:
+        d = design_gains(model, spectrum)
         Kp, Km = d.K_plus, d.K_minus
     else:
         Kp = parse_gains(K_plus, model, what="K_plus")
@@ -301,11 +315,11 @@ def certify_model(model: Model, *, values: Mapping[str, Any] | None = None, spec
     free = sorted({str(s) for M in (A_plus, A_minus) for s in M.free_symbols})
     if free:
         raise FreeSymbolError(f"the error matrices still depend on {free}; give their values "
-                              f"(e.g. --param {free[0]}=... or a numeric spectrum)")
-    observer = {"A": matrix_strings(fraction_matrix(model.A, what="A")),
-                "C": matrix_strings(fraction_matrix(model.C, what="C")),
-                "K_plus": [str(x[0]) for x in fraction_matrix([[e] for e in Kp], what="K_plus")],
-                "K_minus": [str(x[0]) for x in fraction_matrix([[e] for e in Km], what="K_minus")]}
+                              "(or a numeric spectrum, or a design evaluated with GainDesign.at)")
+    observer = ObserverSection(A=matrix_strings(fraction_matrix(model.A, what="A")),
+                               C=matrix_strings(fraction_matrix(model.C, what="C")),
+                               K_plus=[str(x[0]) for x in fraction_matrix([[e] for e in Kp], what="K_plus")],
+                               K_minus=[str(x[0]) for x in fraction_matrix([[e] for e in Km], what="K_minus")])
     provenance = {"model": model.name, "parameters": used,
                   "spectrum": None if spectrum is None else (spectrum if isinstance(spectrum, str)
                                                              else [str(p) for p in spectrum]),

@@ -33,6 +33,7 @@ from ._exact import Matrix, matrix_strings
 from ._family import Family, FamilyLike, as_family
 from ._lmi import DEFAULT_SOLVERS, SolveInfo, balance, solve
 from ._rounding import dyadic
+from ._schema import DwellTimeEntry
 from ._verify import _check_dwell
 
 __all__ = ["DwellTimeResult", "dwell_time", "gc_margin", "CERTIFY_ATTEMPTS"]
@@ -83,12 +84,13 @@ class DwellTimeResult:
     exact_s: float
     detail: str = ""
 
-    def certificate(self) -> dict[str, Any] | None:
+    def certificate(self) -> DwellTimeEntry | None:
+        """The certificate entry of the document (``None`` unless certified)."""
         if not self.certified or self.P is None or self.tau_D is None:
             return None
-        return {"kind": "dwell-time", "tau_D": str(self.tau_D), "P": [matrix_strings(P) for P in self.P],
-                "margin": self.margin, "method": "Geromel-Colaneri LMI, bisection",
-                "solver": "-" if self.solver is None else f"{self.solver.solver} ({self.solver.status})"}
+        return DwellTimeEntry(str(self.tau_D), [matrix_strings(P) for P in self.P], self.margin,
+                              "Geromel-Colaneri LMI, bisection",
+                              "-" if self.solver is None else f"{self.solver.solver} ({self.solver.status})")
 
     def to_json(self) -> dict[str, Any]:
         return {"tau_D": None if self.tau_D is None else str(self.tau_D),
@@ -217,7 +219,7 @@ def dwell_time(family: FamilyLike, *, names: Sequence[str] | None = None, eps: f
         if t <= eps:
             continue
         Ps = [dyadic(P / np.outer(bal.d, bal.d), 52) for P in Ps_b]
-        check = _check_dwell(fam.names, fam.exact, {"tau_D": str(tau), "P": Ps})
+        check = _check_dwell(fam.names, fam.exact, DwellTimeEntry(str(tau), Ps))
         if check.holds:
             return DwellTimeResult(fam, tau, True, lo / bal.sigma, hi / bal.sigma, tuple(Ps), t, info, iterations,
                                    solve_s, time.perf_counter() - t0)

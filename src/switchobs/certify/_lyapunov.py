@@ -20,6 +20,7 @@ from ._family import Family, FamilyLike, as_family
 from ._lmi import DEFAULT_SOLVERS, SolveInfo, balance, dual_margin, primal_margin
 from ._rounding import (FACE_TOLERANCES, dyadic, factor_rows, normalise, project_dual, project_primal, psd_dyadic,
                         short_sqrt_lower)
+from ._schema import CertificateKind, DualEntry, LyapunovEntry
 from ._verify import _check_dual, _check_hespanha, _check_strict
 
 __all__ = ["LyapunovResult", "DualCertificate", "common_lyapunov", "strict_common_lyapunov",
@@ -72,11 +73,12 @@ class DualCertificate:
     exact_s: float
     detail: str = ""
 
-    def certificate(self) -> dict[str, Any] | None:
+    def certificate(self) -> DualEntry | None:
+        """The certificate entry of the document (``None`` unless certified)."""
         if not self.certified or self.R is None:
             return None
-        return {"kind": self.kind, "R": [matrix_strings(R) for R in self.R], "margin": self.margin,
-                "method": self.method, "solver": _solver_text(self.solver)}
+        return DualEntry(CertificateKind(self.kind), [matrix_strings(R) for R in self.R], self.margin, self.method,
+                         _solver_text(self.solver))
 
     def to_json(self) -> dict[str, Any]:
         return {"kind": self.kind, "certified": self.certified,
@@ -143,15 +145,13 @@ class LyapunovResult:
     def P_float(self) -> np.ndarray | None:
         return None if self.P is None else np.array([[float(x) for x in r] for r in self.P])
 
-    def certificate(self) -> dict[str, Any] | None:
-        """The certificate entry of the JSON document (``None`` unless certified)."""
+    def certificate(self) -> LyapunovEntry | None:
+        """The certificate entry of the document (``None`` unless certified)."""
         if not self.certified or self.P is None:
             return None
-        out: dict[str, Any] = {"kind": self.kind, "P": matrix_strings(self.P)}
-        if self.kind == "hespanha":
-            out["C"] = [matrix_strings(C) for C in (self.C or ())]
-        out.update({"margin": self.margin, "method": self.method, "solver": _solver_text(self.solver)})
-        return out
+        kind = CertificateKind(self.kind)
+        C = [matrix_strings(C) for C in (self.C or ())] if kind is CertificateKind.HESPANHA else None
+        return LyapunovEntry(kind, matrix_strings(self.P), C, self.margin, self.method, _solver_text(self.solver))
 
     def to_json(self) -> dict[str, Any]:
         return {"kind": self.kind, "feasible": self.feasible, "certified": self.certified,
@@ -285,7 +285,7 @@ def common_lyapunov(family: FamilyLike, *, output: Any = None, names: Sequence[s
     P = dyadic(P_num)
     Cs = _interior_outputs(fam, P, P_num)
     if Cs is not None:
-        check = _check_hespanha(fam.names, fam.exact, {"P": P, "C": Cs})
+        check = _check_hespanha(fam.names, fam.exact, LyapunovEntry(CertificateKind.HESPANHA, P, Cs))
         if check.holds:
             return LyapunovResult("hespanha", fam, True, True, float(t), eps, P, tuple(Cs), info,
                                   "direct rounding", time.perf_counter() - t0)
@@ -298,7 +298,7 @@ def common_lyapunov(family: FamilyLike, *, output: Any = None, names: Sequence[s
         Cs = _factors(Ws)
         if Cs is None:
             continue
-        check = _check_hespanha(fam.names, fam.exact, {"P": P, "C": Cs})
+        check = _check_hespanha(fam.names, fam.exact, LyapunovEntry(CertificateKind.HESPANHA, P, Cs))
         if check.holds:
             return LyapunovResult("hespanha", fam, True, True, float(t), eps, P, tuple(Cs), info,
                                   f"facial projection (face tol {tol:g})", time.perf_counter() - t0)
@@ -349,7 +349,7 @@ def strict_common_lyapunov(family: FamilyLike, *, names: Sequence[str] | None = 
                               time.perf_counter() - t0, "no strict common P found numerically", d)
     P_num = _unbalance_P(P_b, bal.d)
     P = dyadic(P_num)
-    check = _check_strict(fam.names, fam.exact, {"P": P})
+    check = _check_strict(fam.names, fam.exact, LyapunovEntry(CertificateKind.STRICT_CQLF, P))
     if check.holds:
         return LyapunovResult("strict-cqlf", fam, True, True, float(t), eps, P, None, info, "direct rounding",
                               time.perf_counter() - t0)
@@ -385,8 +385,7 @@ def infeasibility_certificate(family: FamilyLike, *, names: Sequence[str] | None
     detail = ""
     if s > eps:
         Rs = [psd_dyadic(R) for R in R_num]
-        check = _check_dual(fam.names, fam.exact, {"kind": "no-common-lyapunov", "R": Rs},
-                            kind="no-common-lyapunov")
+        check = _check_dual(fam.names, fam.exact, DualEntry(CertificateKind.NO_COMMON_LYAPUNOV, Rs))
         if check.holds:
             return DualCertificate("no-common-lyapunov", True, tuple(Rs), float(s), info, "direct rounding",
                                    time.perf_counter() - t0)
@@ -401,7 +400,7 @@ def infeasibility_certificate(family: FamilyLike, *, names: Sequence[str] | None
             Rs = [[[x / top for x in row] for row in R] for R in Rs]
             S = [[x / top for x in row] for row in S]
         kind = "no-strict-cqlf" if all(x == 0 for row in S for x in row) else "no-common-lyapunov"
-        check = _check_dual(fam.names, fam.exact, {"kind": kind, "R": Rs}, kind=kind)
+        check = _check_dual(fam.names, fam.exact, DualEntry(CertificateKind(kind), Rs))
         if check.holds:
             return DualCertificate(kind, True, tuple(Rs), float(s), info, f"facial projection (face tol {tol:g})",
                                    time.perf_counter() - t0)

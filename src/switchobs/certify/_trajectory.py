@@ -442,7 +442,7 @@ def admissible_constants(model: Model, *, bounds: Mapping[str, Sequence[float]],
         raise ModelError(f"Theorem 3 is stated for one input; model {model.name!r} has {len(model.inputs)}")
     if model.parameters:
         raise ModelError(f"model {model.name!r} still has free parameters {list(model.parameters)}; "
-                         "call model.numeric() or give --param values")
+                         "call model.numeric() or give the parameter values")
     if not epsilon > 0:
         raise SimulationError(f"epsilon must be positive, got {epsilon}")
     tsym = model.symbols["t"]

@@ -1,8 +1,8 @@
 """Independent exact checker of switchobs certificates (standard library only).
 
-A certificate is a JSON document (format ``switchobs-certificate``, version 1)
-holding the switched family ``{A_p}`` and, as rational strings, the matrices
-of one or more certificates.  :func:`verify_certificate` re-derives every
+A certificate is a JSON document (format ``switchobs-certificate``, version 1,
+sections in :mod:`switchobs.certify._schema`) holding the switched family
+``{A_p}`` and, as rational strings, the matrices of one or more certificates.  :func:`verify_certificate` re-derives every
 inequality from those matrices alone, decides each in exact rational
 arithmetic (:mod:`switchobs.certify._exact`), recomputes the verdict they
 imply and compares it with the verdict the document claims.  It never looks
@@ -47,30 +47,13 @@ from typing import Any
 
 from ..exceptions import CertificateError
 from ._exact import (Matrix, add, definiteness, expm_enclosure, fraction_matrix, inf_norm,
-                     integer_form, is_zero, lyapunov_form, matmul, observable, scale, sqrt_upper, sub,
+                     integer_form, is_zero, lyapunov_form, matmul, observable, scale, sqrt_upper,
                      transpose)
+from ._schema import (ANY_DWELL, ArbitrarySwitching, CertificateDocument, CertificateKind, Check, DualEntry,
+                      DwellTimeEntry, Existence, FamilySection, LyapunovEntry, Verdict)
 
-__all__ = ["FORMAT", "VERSION", "Check", "VerificationReport", "verify_certificate", "load_certificate",
-           "implied_verdict", "planar_case_exact"]
-
-FORMAT = "switchobs-certificate"
-VERSION = 1
-KINDS = ("strict-cqlf", "hespanha", "no-strict-cqlf", "no-common-lyapunov", "dwell-time", "planar")
-
-
-@dataclass(frozen=True)
-class Check:
-    """One verified statement: ``name`` (which certificate), ``holds`` and the reason when it does not."""
-
-    name: str
-    holds: bool
-    detail: str = ""
-
-    def to_json(self) -> dict[str, Any]:
-        return {"name": self.name, "holds": self.holds, "detail": self.detail}
-
-    def __str__(self) -> str:
-        return f"{self.name}: {'holds' if self.holds else 'FAILS'}{(' - ' + self.detail) if self.detail else ''}"
+__all__ = ["Check", "VerificationReport", "verify_certificate", "load_certificate", "implied_verdict",
+           "planar_case_exact"]
 
 
 @dataclass(frozen=True)
@@ -82,25 +65,25 @@ class VerificationReport:
     holds : bool
         Every certificate holds exactly and the claimed verdict is the implied one.
     checks : tuple of Check
-    implied : dict
+    implied : Verdict
         The verdict the verified certificates imply.
-    claimed : dict
+    claimed : Verdict
         The verdict written in the document.
     """
 
     holds: bool
     checks: tuple[Check, ...]
-    implied: Mapping[str, Any]
-    claimed: Mapping[str, Any]
+    implied: Verdict
+    claimed: Verdict
 
     def to_json(self) -> dict[str, Any]:
         return {"holds": self.holds, "checks": [c.to_json() for c in self.checks],
-                "implied": dict(self.implied), "claimed": dict(self.claimed)}
+                "implied": self.implied.to_json(), "claimed": self.claimed.to_json()}
 
     def __str__(self) -> str:
         head = "certificate holds exactly" if self.holds else "certificate does NOT hold"
         lines = [head] + [f"  {c}" for c in self.checks]
-        lines.append("  implied verdict: " + ", ".join(f"{k} = {v}" for k, v in self.implied.items()))
+        lines.append("  implied verdict: " + ", ".join(f"{k} = {v}" for k, v in self.implied.to_json().items()))
         return "\n".join(lines)
 
 
@@ -126,21 +109,9 @@ def load_certificate(path: str | Path) -> dict[str, Any]:
 
 
 # ------------------------------------------------------------------ family
-def _family(doc: Mapping[str, Any]) -> tuple[list[str], list[Matrix]]:
-    if doc.get("format") != FORMAT:
-        raise CertificateError(f"not a switchobs certificate: format is {doc.get('format')!r}, expected {FORMAT!r}")
-    if doc.get("version") != VERSION:
-        raise CertificateError(f"unsupported certificate version {doc.get('version')!r} (this checker reads {VERSION})")
-    fam = doc.get("family")
-    if not isinstance(fam, Mapping) or "matrices" not in fam:
-        raise CertificateError("certificate has no 'family' with 'matrices'")
-    mats = fam["matrices"]
-    if not isinstance(mats, list) or not mats:
-        raise CertificateError("certificate 'family.matrices' must be a non-empty list of matrices")
-    names = fam.get("names") or [f"A_{i + 1}" for i in range(len(mats))]
-    if len(names) != len(mats):
-        raise CertificateError(f"'family.names' has {len(names)} names for {len(mats)} matrices")
-    As = [fraction_matrix(M, what=str(nm)) for M, nm in zip(mats, names)]
+def _family(fam: FamilySection) -> tuple[list[str], list[Matrix]]:
+    names = fam.names
+    As = [fraction_matrix(M, what=str(nm)) for M, nm in zip(fam.matrices, names)]
     n = len(As[0])
     for nm, M in zip(names, As):
         if len(M) != len(M[0]):
@@ -150,10 +121,9 @@ def _family(doc: Mapping[str, Any]) -> tuple[list[str], list[Matrix]]:
     return [str(x) for x in names], As
 
 
-def _per_mode(cert: Mapping[str, Any], key: str, names: Sequence[str], n: int) -> list[Matrix]:
-    items = cert.get(key)
-    if not isinstance(items, list) or len(items) != len(names):
-        raise CertificateError(f"{cert.get('kind')}: '{key}' must list one matrix per mode ({len(names)})")
+def _per_mode(items: Any, kind: str, key: str, names: Sequence[str], n: int) -> list[Matrix]:
+    if not isinstance(items, (list, tuple)) or len(items) != len(names):
+        raise CertificateError(f"{kind}: '{key}' must list one matrix per mode ({len(names)})")
     return [fraction_matrix(M, what=f"{key}[{nm}]", rows=n, cols=n) for M, nm in zip(items, names)]
 
 
@@ -173,9 +143,9 @@ def _fail(name: str, claim: str, res: Any) -> Check:
 
 
 # ------------------------------------------------------------- certificate kinds
-def _check_strict(names: Sequence[str], As: Sequence[Matrix], cert: Mapping[str, Any]) -> Check:
+def _check_strict(names: Sequence[str], As: Sequence[Matrix], cert: LyapunovEntry) -> Check:
     n = len(As[0])
-    P = fraction_matrix(cert.get("P"), what="P", rows=n, cols=n)
+    P = fraction_matrix(cert.P, what="P", rows=n, cols=n)
     r = _defin(P, strict=True)
     if not r.holds:
         return _fail("strict-cqlf", "P > 0", r)
@@ -186,11 +156,11 @@ def _check_strict(names: Sequence[str], As: Sequence[Matrix], cert: Mapping[str,
     return Check("strict-cqlf", True)
 
 
-def _check_hespanha(names: Sequence[str], As: Sequence[Matrix], cert: Mapping[str, Any]) -> Check:
+def _check_hespanha(names: Sequence[str], As: Sequence[Matrix], cert: LyapunovEntry) -> Check:
     n = len(As[0])
-    P = fraction_matrix(cert.get("P"), what="P", rows=n, cols=n)
-    Cs = cert.get("C")
-    if not isinstance(Cs, list) or len(Cs) != len(As):
+    P = fraction_matrix(cert.P, what="P", rows=n, cols=n)
+    Cs = cert.C
+    if not isinstance(Cs, (list, tuple)) or len(Cs) != len(As):
         raise CertificateError(f"hespanha: 'C' must list one output matrix per mode ({len(As)})")
     r = _defin(P, strict=True)
     if not r.holds:
@@ -218,9 +188,10 @@ def _dual_sum(As: Sequence[Matrix], Rs: Sequence[Matrix]) -> Matrix:
     return S
 
 
-def _check_dual(names: Sequence[str], As: Sequence[Matrix], cert: Mapping[str, Any], *, kind: str) -> Check:
+def _check_dual(names: Sequence[str], As: Sequence[Matrix], cert: DualEntry) -> Check:
     n = len(As[0])
-    Rs = _per_mode(cert, "R", names, n)
+    kind = cert.kind.value
+    Rs = _per_mode(cert.R, kind, "R", names, n)
     for nm, R in zip(names, Rs):
         r = _defin(R, strict=False)
         if not r.holds:
@@ -237,15 +208,15 @@ def _check_dual(names: Sequence[str], As: Sequence[Matrix], cert: Mapping[str, A
     return Check(kind, True)
 
 
-def _check_dwell(names: Sequence[str], As: Sequence[Matrix], cert: Mapping[str, Any]) -> Check:
+def _check_dwell(names: Sequence[str], As: Sequence[Matrix], cert: DwellTimeEntry) -> Check:
     n = len(As[0])
     try:
-        T = Fraction(str(cert.get("tau_D")))
+        T = Fraction(str(cert.tau_D))
     except (ValueError, ZeroDivisionError):
-        raise CertificateError(f"dwell-time: tau_D {cert.get('tau_D')!r} is not a rational number") from None
+        raise CertificateError(f"dwell-time: tau_D {cert.tau_D!r} is not a rational number") from None
     if T <= 0:
         return Check("dwell-time", False, f"tau_D = {T} must be positive")
-    Ps = _per_mode(cert, "P", names, n)
+    Ps = _per_mode(cert.P, "dwell-time", "P", names, n)
     for nm, A, P in zip(names, As, Ps):
         r = _defin(P, strict=True)
         if not r.holds:
@@ -329,55 +300,40 @@ def planar_case_exact(A1: Matrix, A2: Matrix) -> str:
 
 # ------------------------------------------------------------------- verdict
 def implied_verdict(holding: Sequence[str], planar_case: str | None = None,
-                    dwell: Sequence[Fraction] = ()) -> dict[str, Any]:
+                    dwell: Sequence[Fraction] = ()) -> Verdict:
     """The verdict implied by the certificate kinds that hold (and the exact planar case, if any)."""
-    strict = "strict-cqlf" in holding or planar_case == "iii"
-    hesp = "hespanha" in holding
+    strict = CertificateKind.STRICT_CQLF in holding or planar_case == "iii"
+    hesp = CertificateKind.HESPANHA in holding
     if strict:
-        arbitrary = "UGES"
+        arbitrary = ArbitrarySwitching.UGES
     elif planar_case == "ii":
-        arbitrary = "UGS-not-UGES"
+        arbitrary = ArbitrarySwitching.UGS_NOT_UGES
     elif planar_case == "i":
-        arbitrary = "unbounded"
+        arbitrary = ArbitrarySwitching.UNBOUNDED
     elif hesp:
-        arbitrary = "UGS"
+        arbitrary = ArbitrarySwitching.UGS
     else:
-        arbitrary = "unknown"
+        arbitrary = ArbitrarySwitching.UNKNOWN
     if strict or hesp:
-        dwell_time = "any"
+        dwell_time = ANY_DWELL
     elif dwell:
         dwell_time = str(min(dwell))
     else:
         dwell_time = None
     if strict:
-        cqlf = "exists"
-    elif {"no-strict-cqlf", "no-common-lyapunov"} & set(holding) or planar_case in ("i", "ii", "iv"):
-        cqlf = "none"
+        cqlf = Existence.EXISTS
+    elif {CertificateKind.NO_STRICT_CQLF, CertificateKind.NO_COMMON_LYAPUNOV} & set(holding) \
+            or planar_case in ("i", "ii", "iv"):
+        cqlf = Existence.NONE
     else:
-        cqlf = "unknown"
+        cqlf = Existence.UNKNOWN
     if strict or hesp:
-        common = "exists"
-    elif "no-common-lyapunov" in holding or planar_case == "i":
-        common = "none"
+        common = Existence.EXISTS
+    elif CertificateKind.NO_COMMON_LYAPUNOV in holding or planar_case == "i":
+        common = Existence.NONE
     else:
-        common = "unknown"
-    return {"arbitrary_switching": arbitrary, "dwell_time": dwell_time, "strict_cqlf": cqlf,
-            "common_lyapunov": common}
-
-
-def _check_observer(names: Sequence[str], As: Sequence[Matrix], obs: Mapping[str, Any]) -> Check:
-    n = len(As[0])
-    A = fraction_matrix(obs.get("A"), what="observer A", rows=n, cols=n)
-    C = fraction_matrix(obs.get("C"), what="observer C", cols=n)
-    Kp = fraction_matrix([[x] for x in obs.get("K_plus", [])], what="K_plus", rows=n, cols=1)
-    Km = fraction_matrix([[x] for x in obs.get("K_minus", [])], what="K_minus", rows=n, cols=1)
-    expected = {"A_plus": sub(A, matmul(Kp, C)), "A_minus": add(scale(-1, A), matmul(Km, C))}
-    for nm, M in zip(names, As):
-        if nm in expected and expected[nm] != M:
-            which = "A - K_plus C" if nm == "A_plus" else "-A + K_minus C"
-            return Check("observer", False, f"{nm} in the family differs from {which} computed from the "
-                                            "observer's A, C and gains")
-    return Check("observer", True)
+        common = Existence.UNKNOWN
+    return Verdict(arbitrary, dwell_time, cqlf, common)
 
 
 def verify_certificate(doc: Mapping[str, Any] | str | Path) -> VerificationReport:
@@ -411,36 +367,30 @@ def verify_certificate(doc: Mapping[str, Any] | str | Path) -> VerificationRepor
     """
     if not isinstance(doc, Mapping):
         doc = load_certificate(doc)
-    names, As = _family(doc)
-    certs = doc.get("certificates")
-    if not isinstance(certs, list) or not certs:
-        raise CertificateError("certificate has no 'certificates' list")
-    checks: list[Check] = []
-    if doc.get("observer") is not None:
-        checks.append(_check_observer(names, As, doc["observer"]))
+    document = CertificateDocument.from_json(doc)
+    names, As = _family(document.family)
+    checks = [section.check(names, As) for section in document.sections.values()]
     holding: list[str] = []
     dwell: list[Fraction] = []
     planar: str | None = None
-    for cert in certs:
-        kind = cert.get("kind") if isinstance(cert, Mapping) else None
-        if kind not in KINDS:
-            raise CertificateError(f"unknown certificate kind {kind!r}; known kinds: {', '.join(KINDS)}")
-        if kind == "strict-cqlf":
+    for cert in document.certificates:
+        kind = cert.kind
+        if kind is CertificateKind.STRICT_CQLF:
             c = _check_strict(names, As, cert)
-        elif kind == "hespanha":
+        elif kind is CertificateKind.HESPANHA:
             c = _check_hespanha(names, As, cert)
-        elif kind in ("no-strict-cqlf", "no-common-lyapunov"):
-            c = _check_dual(names, As, cert, kind=kind)
-        elif kind == "dwell-time":
+        elif kind in (CertificateKind.NO_STRICT_CQLF, CertificateKind.NO_COMMON_LYAPUNOV):
+            c = _check_dual(names, As, cert)
+        elif kind is CertificateKind.DWELL_TIME:
             c = _check_dwell(names, As, cert)
             if c.holds:
-                dwell.append(Fraction(str(cert["tau_D"])))
+                dwell.append(Fraction(str(cert.tau_D)))
         else:
             if len(As) != 2 or len(As[0]) != 2:
                 c = Check("planar", False, "the planar classification needs exactly two 2x2 matrices")
             else:
                 case = planar_case_exact(As[0], As[1])
-                claimed = cert.get("case")
+                claimed = cert.case
                 c = Check("planar", case == claimed,
                           "" if case == claimed else f"claimed case {claimed!r} but the exact case is {case!r}")
                 if c.holds:
@@ -449,12 +399,12 @@ def verify_certificate(doc: Mapping[str, Any] | str | Path) -> VerificationRepor
         if c.holds:
             holding.append(kind)
     implied = implied_verdict(holding, planar, dwell)
-    claimed = doc.get("verdict") or {}
-    if dict(claimed) != implied:
-        diff = [k for k in implied if claimed.get(k) != implied[k]] + [k for k in claimed if k not in implied]
+    claimed = document.verdict
+    if claimed != implied:
+        diff = [k for k, v in implied.to_json().items() if claimed.to_json()[k] != v]
         checks.append(Check("verdict", False, "the claimed verdict differs from the one the certificates imply "
-                            f"in {sorted(set(diff))}: claimed {dict(claimed)}, implied {implied}"))
+                            f"in {sorted(diff)}: claimed {claimed.to_json()}, implied {implied.to_json()}"))
     else:
         checks.append(Check("verdict", True))
     return VerificationReport(holds=all(c.holds for c in checks), checks=tuple(checks), implied=implied,
-                              claimed=dict(claimed))
+                              claimed=claimed)

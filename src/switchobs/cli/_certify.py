@@ -5,6 +5,7 @@ from __future__ import annotations
 import argparse
 
 from ..certify import certify_model
+from ..exceptions import SpectrumError
 from ..model import load_model
 from ._common import add_model_arguments, emit_json, parse_params
 
@@ -32,6 +33,10 @@ def register(sub: argparse._SubParsersAction) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
+    if args.gains_minus is not None and args.gains_plus is None:
+        raise SpectrumError("--gains-minus needs --gains-plus")
+    if (args.spectrum is None) == (args.gains_plus is None):
+        raise SpectrumError("give either a spectrum (--spectrum) or the gains (--gains-plus [--gains-minus])")
     model = load_model(args.model)
     solvers = (args.solver,) if args.solver else ("CLARABEL", "SCS")
     report = certify_model(model, values=parse_params(args.param), spectrum=args.spectrum,

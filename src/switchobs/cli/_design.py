@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import argparse
 
-from ..design import design
+from ..design import design_gains
 from ..exceptions import SpectrumError
 from ._common import add_model_arguments, emit_json, model_from_args
 
@@ -32,7 +32,7 @@ def run(args: argparse.Namespace) -> int:
     if not (args.spectrum or args.charpoly or args.gains_plus):
         raise SpectrumError("give the target with --spectrum, --charpoly or --gains-plus")
     model = model_from_args(args)
-    result = design(model, args.spectrum, characteristic_polynomial=args.charpoly,
+    result = design_gains(model, args.spectrum, characteristic_polynomial=args.charpoly,
                     K_plus=args.gains_plus, K_minus=args.gains_minus)
     checks = None if args.no_verify else result.verify()
     if args.json:

@@ -16,7 +16,7 @@ import os
 import sys
 from collections.abc import Sequence
 
-from ..exceptions import PrerequisiteError, SwitchobsError
+from ..exceptions import FreeSymbolError, PrerequisiteError, SwitchobsError
 
 __all__ = ["main", "build_parser"]
 
@@ -76,7 +76,9 @@ def main(argv: Sequence[str] | None = None) -> int:
     try:
         return int(args.func(args) or 0)
     except SwitchobsError as exc:
-        print(f"switchobs {args.command}: error: {exc}", file=sys.stderr)
+        # The library names what has no value; only here is the way to give it a command-line flag.
+        hint = "; give values with --param NAME=VALUE" if isinstance(exc, FreeSymbolError) else ""
+        print(f"switchobs {args.command}: error: {exc}{hint}", file=sys.stderr)
         return 2
     except BrokenPipeError:  # output piped into `head`: not an error of ours
         sys.stdout = open(os.devnull, "w")

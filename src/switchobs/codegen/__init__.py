@@ -12,11 +12,9 @@ StepStatus          -- status codes of ``<prefix>_step`` / ``<prefix>_run``
 default_prefix      -- ``switchobs_<model>`` with non-identifier characters as ``_``
 """
 
+from ..spec import METHODS, STATUS_TEXT, Guard, StepStatus, domain_guards
 from ._build import CObserver, cache_directory, compile_observer, find_compiler
-from ._generate import (METHODS, REALS, GeneratedObserver, default_prefix, generate_observer,
-                        generate_super_twisting)
-from ._status import STATUS_TEXT, StepStatus
-from ._translate import Guard, domain_guards
+from ._generate import REALS, GeneratedObserver, default_prefix, generate_observer, generate_super_twisting
 
 __all__ = ["CObserver", "GeneratedObserver", "Guard", "METHODS", "REALS", "STATUS_TEXT", "StepStatus",
            "cache_directory", "compile_observer", "find_compiler", "default_prefix", "domain_guards", "generate_observer",

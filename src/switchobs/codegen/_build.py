@@ -25,7 +25,7 @@ import numpy.typing as npt
 from .._validate import named_vector, signal_matrix
 from ..exceptions import CodegenError, DimensionError, ModelError, ObserverInputError
 from ._generate import GeneratedObserver, generate_observer
-from ._status import STATUS_TEXT, StepStatus
+from ..spec import STATUS_TEXT, StepStatus
 
 __all__ = ["CObserver", "compile_observer", "compile_shared", "cache_directory", "find_compiler", "BUILD_FLAGS"]
 
@@ -141,6 +141,7 @@ class CObserver:
                  readout: Callable[[Any], Any] | None = None, compiler: str | None = None,
                  cache_dir: str | Path | None = None):
         self.generated = generated
+        self._build_options = (compiler, cache_dir)
         self.library_path = compile_shared(generated, compiler=compiler, cache_dir=cache_dir)
         self._lib = _library(self.library_path, generated)
         self._dtype = np.float32 if generated.real == "float" else np.float64
@@ -155,6 +156,20 @@ class CObserver:
         self._readout = readout
 
     # ------------------------------------------------------------------ construction
+    @classmethod
+    def _restore(cls, generated: GeneratedObserver, params: dict[str, float], readout: Callable[[Any], Any] | None,
+                 compiler: str | None, cache_dir: str | Path | None) -> "CObserver":
+        return cls(generated, params=params, readout=readout, compiler=compiler, cache_dir=cache_dir)
+
+    def __reduce__(self):
+        """Pickle as the generated files and the runtime parameters; unpickling recompiles (cached) and rebinds.
+
+        The readout must be picklable itself (a reference observer's ``readout``
+        is; a lambda is not).
+        """
+        params = dict(zip(self.generated.param_names, self.params.tolist()))
+        return (type(self)._restore, (self.generated, params, self._readout, *self._build_options))
+
     @classmethod
     def like(cls, reference: Any, *, real: str = "double", prefix: str | None = None,
              compiler: str | None = None, cache_dir: str | Path | None = None) -> "CObserver":

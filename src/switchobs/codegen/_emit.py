@@ -28,7 +28,7 @@ import casadi as ca
 
 from ..exceptions import CodegenError
 
-__all__ = ["Kernel", "kernel", "LIBM", "float_literal"]
+__all__ = ["CFunction", "kernel", "LIBM", "float_literal"]
 
 #: libm functions casadi may call, double name -> float name.
 LIBM = {"sqrt": "sqrtf", "exp": "expf", "log": "logf", "sin": "sinf", "cos": "cosf", "tan": "tanf",
@@ -58,7 +58,7 @@ def float_literal(value: float, real: str) -> str:
 
 
 @dataclass(frozen=True)
-class Kernel:
+class CFunction:
     """One generated static C function ``void name(inputs..., real *out)``.
 
     Attributes
@@ -83,7 +83,7 @@ class Kernel:
 
 
 def kernel(name: str, inputs: Sequence[tuple[str, ca.SX]], output: ca.SX, *, real: str, prefix: str,
-           scalars: Sequence[str] = ("dt",)) -> Kernel:
+           scalars: Sequence[str] = ("dt",)) -> CFunction:
     """Generate and post-process the C of ``output`` as a function of ``inputs``.
 
     Parameters
@@ -162,5 +162,5 @@ def kernel(name: str, inputs: Sequence[tuple[str, ca.SX]], output: ca.SX, *, rea
     signature = f"static void {name}({', '.join(params)})"
     body_text = "\n".join(f"    {line}" for line in rewritten)
     definition = f"{signature}\n{{\n{body_text}\n}}\n"
-    return Kernel(name=name, inputs=tuple(inputs[i][0] for i in order), body=definition,
+    return CFunction(name=name, inputs=tuple(inputs[i][0] for i in order), body=definition,
                   temporaries=int(fn.sz_w()))

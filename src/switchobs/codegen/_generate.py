@@ -40,16 +40,14 @@ from ..design import GainDesign
 from .._validate import adaptation_gain, round_down, substep_bound
 from ..exceptions import CodegenError, DimensionError, ModelError
 from ..model import Model, numeric, rational_value
-from ._emit import Kernel, float_literal, kernel
+from ..spec import METHODS, STATUS_TEXT, Guard, ObserverSpec, StepStatus
+from ._emit import CFunction, float_literal, kernel
 from ._readme import readme
-from ._status import STATUS_TEXT, StepStatus
-from ._translate import (GUARD_TESTS, Guard, Translation, translate_adaptive, translate_super_twisting,
-                         translate_switched)
+from ._translate import GUARD_TESTS, Translation, translate_adaptive, translate_super_twisting, translate_switched
 
 __all__ = ["GeneratedObserver", "generate_observer", "generate_super_twisting", "default_prefix", "REALS", "METHODS"]
 
 REALS = ("double", "float")
-METHODS = ("rk4", "euler")
 
 _C_KEYWORDS = frozenset(
     "auto break case char const continue default do double else enum extern float for goto if inline int long "
@@ -239,11 +237,7 @@ class GeneratedObserver:
 # ----------------------------------------------------------------------------- inputs
 def _gains(model: Model, gains: Any, values: Mapping[str, Any]) -> tuple[np.ndarray, np.ndarray]:
     if isinstance(gains, GainDesign):
-        if gains.model.states != model.states:
-            raise CodegenError(f"the gain design is for model {gains.model.name!r} with states "
-                               f"{list(gains.model.states)}, not for {model.name!r} with {list(model.states)}")
-        num = gains.numeric(values)
-        return num["K_plus"], num["K_minus"]
+        return gains.gains_for(model, values)
     try:
         Kp, Km = gains
     except (TypeError, ValueError):
@@ -266,8 +260,8 @@ def _gains(model: Model, gains: Any, values: Mapping[str, Any]) -> tuple[np.ndar
     return out[0], out[1]
 
 
-def _defaults(model: Model, values: Mapping[str, Any], extra_names: Sequence[str]) -> dict[str, float]:
-    """Float default of every model parameter: the model's values, overridden by ``values``."""
+def _defaults(model: Model, values: Mapping[str, Any], extra_names: Sequence[str]) -> dict[str, sp.Rational]:
+    """Default of every model parameter: the model's values, overridden by ``values``."""
     unknown = sorted(set(values) - set(model.parameters) - set(extra_names))
     if unknown:
         raise ModelError(f"values given for {unknown}, which are neither parameters of model {model.name!r} "
@@ -278,8 +272,8 @@ def _defaults(model: Model, values: Mapping[str, Any], extra_names: Sequence[str
     missing = [p for p in model.parameters if p not in merged]
     if missing:
         raise ModelError(f"parameter(s) {missing} of model {model.name!r} have no value; every parameter is a "
-                         f"runtime parameter of the C observer and needs a default (e.g. --param {missing[0]}=...)")
-    return {p: float(merged[p]) for p in model.parameters}
+                         "runtime parameter of the C observer and needs a default value")
+    return {p: merged[p] for p in model.parameters}
 
 
 # ----------------------------------------------------------------------------- assembly
@@ -299,7 +293,7 @@ def _step_expression(tr: Translation, method: str) -> ca.SX:
 
 
 def _guard_value(guard: Guard, expr: ca.SX, tr: Translation, index: int, real: str,
-                 prefix: str, P: str) -> tuple[str, Kernel | None]:
+                 prefix: str, P: str) -> tuple[str, CFunction | None]:
     """C expression of the guard value; a kernel when it is more than one signal or parameter."""
     if guard.expr.is_Symbol:
         name = guard.expr.name
@@ -504,17 +498,23 @@ def generate_observer(model: Model, gains: GainDesign | tuple[Sequence[float], S
     values = dict(values or {})
     design_syms = [s.name for s in gains.design_symbols] if isinstance(gains, GainDesign) else []
     defaults = _defaults(model, values, design_syms)
-    num_values = {**{k: v for k, v in values.items() if k not in model.parameters}, **defaults}
+    num_values = {**{k: v for k, v in values.items() if k not in model.parameters},
+                  **{k: float(v) for k, v in defaults.items()}}
     Kp, Km = _gains(model, gains, num_values)
+    unknown = tuple(unknown)
     if unknown:
-        unknown = tuple(unknown)
-        G = adaptation_gain(Gamma, unknown, error=CodegenError)
-        tr = translate_adaptive(model, Kp, Km, defaults, unknown, G.tolist())
+        G = tuple(map(tuple, adaptation_gain(Gamma, unknown, error=CodegenError).tolist()))
+    elif Gamma is not None:
+        raise CodegenError("Gamma is only used by the adaptive observer; give the unknown parameters too")
+    else:
+        G = ()
+    spec = ObserverSpec(model, tuple(map(float, Kp)), tuple(map(float, Km)), values=defaults, unknown=unknown,
+                        Gamma=G)
+    if unknown:
+        tr = translate_adaptive(spec)
         kind = "adaptive"
     else:
-        if Gamma is not None:
-            raise CodegenError("Gamma is only used by the adaptive observer; give the unknown parameters too")
-        tr = translate_switched(model, Kp, Km, defaults)
+        tr = translate_switched(spec)
         kind = "switched"
     return _assemble(tr, info=_model_info(model, kind), kind=kind, real=real, method=method, prefix=prefix,
                      command=command, bound=bound)
@@ -624,7 +624,7 @@ def _header(*, tr: Translation, info: _Info, kind: str, real: str, method: str, 
 
 
 def _source(*, tr: Translation, info: _Info, kind: str, real: str, method: str, prefix: str, P: str,
-            kernels: Sequence[Kernel], checks: Sequence[str], command: str | None,
+            kernels: Sequence[CFunction], checks: Sequence[str], command: str | None,
             bound: tuple[Fraction, int] | None, **_: Any) -> str:
     nx = f"{P}_NX"
     used = "\n".join(k.body for k in kernels)

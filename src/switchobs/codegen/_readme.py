@@ -5,7 +5,7 @@ from __future__ import annotations
 from typing import TYPE_CHECKING
 
 from ._emit import float_literal
-from ._status import STATUS_TEXT, StepStatus
+from ..spec import STATUS_TEXT, StepStatus
 
 if TYPE_CHECKING:  # pragma: no cover
     from ._generate import GeneratedObserver

@@ -13,12 +13,15 @@ and each branch is evaluated exactly, without ``K_minus + (K_plus - K_minus)``
 rounding.  The switched adaptive observer of seed 001 eq. (3.4), (3.8),
 (3.15) adds ``theta`` and ``Upsilon`` to the state.
 
-Every model parameter and every gain stays a runtime parameter (an entry of
-the ``params`` vector of the generated C).  Besides the equations, the
-translation returns the *guards*: the conditions under which the right-hand
-side is defined (denominators nonzero, logarithm arguments positive, even
-roots non-negative, declared signs respected), each tagged with the status
-code the generated step returns when it fails.
+Both observers are translated from an :class:`~switchobs.spec.ObserverSpec`,
+the contract the Python reference observers consume too (the affine split
+``c + Psi theta = s d + b u`` and its linearity test live there).  Every
+model parameter and every gain stays a runtime parameter (an entry of the
+``params`` vector of the generated C).  Besides the equations, the
+translation returns the *guards* of the spec: the conditions under which the
+right-hand side is defined (denominators nonzero, logarithm arguments
+positive, even roots non-negative, declared signs respected), each tagged
+with the status code the generated step returns when it fails.
 """
 
 from __future__ import annotations
@@ -31,10 +34,9 @@ import sympy as sp
 
 from ..exceptions import CodegenError
 from ..model import Model
-from ._status import StepStatus
+from ..spec import METHODS, SCALE, Guard, ObserverSpec, StepStatus
 
-__all__ = ["Guard", "Translation", "to_casadi", "domain_guards", "translate_switched", "translate_adaptive",
-           "translate_super_twisting"]
+__all__ = ["Translation", "to_casadi", "translate_switched", "translate_adaptive", "translate_super_twisting"]
 
 #: Guard kinds and the C comparison that holds when the guard is satisfied (NaN fails every one).
 GUARD_TESTS: Mapping[str, str] = {
@@ -144,92 +146,6 @@ def _product(factors: Sequence[ca.SX]) -> ca.SX:
 
 
 @dataclass(frozen=True)
-class Guard:
-    """A condition the right-hand side needs: ``expr`` is ``kind`` (positive, negative, nonzero, nonnegative).
-
-    ``status`` is what the generated step returns when the condition fails,
-    ``reason`` says where the condition comes from.
-    """
-
-    expr: sp.Expr
-    kind: str
-    status: StepStatus
-    reason: str
-
-    def to_json(self) -> dict[str, str | int]:
-        return {"expr": str(self.expr), "kind": self.kind, "status": int(self.status),
-                "status_name": self.status.name, "reason": self.reason}
-
-    def __str__(self) -> str:
-        sym = {"positive": "> 0", "negative": "< 0", "nonzero": "!= 0", "nonnegative": ">= 0"}[self.kind]
-        return f"{self.expr} {sym}  ({self.reason}; else {self.status.name} = {int(self.status)})"
-
-
-def _domain_conditions(expr: sp.Expr) -> list[tuple[sp.Expr, str, str]]:
-    """(argument, kind, reason) of every partial operation in ``expr``, innermost first."""
-    out: list[tuple[sp.Expr, str, str]] = []
-
-    def walk(e: sp.Basic) -> None:
-        for arg in e.args:
-            walk(arg)
-        if e.is_Pow and e.exp.is_Rational and not e.base.is_Number:
-            if not e.exp.is_Integer:
-                out.append((e.base, "positive" if e.exp < 0 else "nonnegative", f"base of {sp.sstr(e)}"))
-            elif e.exp < 0:
-                out.append((e.base, "nonzero", f"denominator of {sp.sstr(e)}"))
-        elif e.is_Pow and not e.exp.is_Rational:
-            out.append((e.base, "positive", f"base of the real power {sp.sstr(e)}"))
-        elif isinstance(e, sp.log):
-            out.append((e.args[0], "positive", f"argument of {sp.sstr(e)}"))
-
-    walk(sp.sympify(expr))
-    return out
-
-
-def domain_guards(model: Model) -> tuple[Guard, ...]:
-    """Where the model's right-hand side is defined, as guards in the order the generated step checks them.
-
-    Order and codes follow the Python reference observers: parameters first
-    (their declared signs, then parameter-only conditions: ``BAD_PARAM``),
-    then the external signals declared positive/negative and the conditions of
-    ``time_scale`` (``UNDEFINED_TIME_SCALE``), then the conditions of ``d`` and
-    ``b`` (``NONFINITE_RESULT``, as a domain error in the reference).  A
-    condition already implied by an earlier one is dropped.
-    """
-    params = set(model.parameter_symbols)
-    guards: list[Guard] = []
-
-    def add(expr: sp.Expr, kind: str, status: StepStatus, reason: str) -> None:
-        for g in guards:
-            if sp.simplify(g.expr - expr) == 0 and (g.kind == kind or g.kind in ("positive", "negative")
-                                                    and kind in ("nonzero", "nonnegative")):
-                return
-        guards.append(Guard(sp.sympify(expr), kind, status, reason))
-
-    def declared_sign(name: str, status: StepStatus, label: str) -> None:
-        sym = model.symbols[name]
-        for kind in ("positive", "negative"):
-            if getattr(sym, f"is_{kind}"):
-                add(sym, kind, status, f"{label} {name} is declared {kind}")
-
-    for name in model.parameters:
-        declared_sign(name, StepStatus.BAD_PARAM, "parameter")
-    everything = [model.time_scale, *model.A, *model.C, *model.d, *model.b]
-    for expr in everything:
-        for arg, kind, reason in _domain_conditions(expr):
-            if arg.free_symbols <= params:
-                add(arg, kind, StepStatus.BAD_PARAM, reason)
-    for name in model.external:
-        declared_sign(name, StepStatus.UNDEFINED_TIME_SCALE, "signal")
-    for arg, kind, reason in _domain_conditions(model.time_scale):
-        add(arg, kind, StepStatus.UNDEFINED_TIME_SCALE, f"{reason} in the time scaling s = {model.time_scale}")
-    for expr in [*model.d, *model.b]:
-        for arg, kind, reason in _domain_conditions(expr):
-            add(arg, kind, StepStatus.NONFINITE_RESULT, reason)
-    return tuple(guards)
-
-
-@dataclass(frozen=True)
 class Translation:
     """The casadi graph of one observer and the names of its C interface.
 
@@ -268,7 +184,7 @@ class Translation:
     param_names: tuple[str, ...]
     default_params: tuple[float, ...]
     advance: Callable[[str], ca.SX] | None = None
-    methods: tuple[str, ...] = ("rk4", "euler")
+    methods: tuple[str, ...] = METHODS
     s: ca.SX | None = None
 
 
@@ -283,35 +199,27 @@ def _environment(model: Model, extra_params: Sequence[str]) -> tuple[ca.SX, ca.S
     return sig, par, dt, env, index
 
 
-def _affine_parts(model: Model, env: Mapping[sp.Symbol, ca.SX], sig: ca.SX, unknown: Sequence[str] = ()):
-    """``s``, ``A``, ``C`` and ``c = s d + b u`` (with ``theta = 0``) and ``Psi = dc/dtheta``, as casadi.
+def _affine_parts(spec: ObserverSpec, env: Mapping[sp.Symbol, ca.SX]):
+    """``s``, ``A``, ``C`` and the spec's ``c`` and ``Psi``, as casadi.
 
     ``s`` is returned twice: as a symbol (used in ``c`` and ``Psi``) and as
-    its expression.  ``A`` and ``C`` keep structural zeros as ``None`` so
-    that no term is generated for them, as in the reference.
+    its expression.  ``A``, ``C``, ``c`` and ``Psi`` keep structural zeros as
+    ``None`` so that no term is generated for them, as in the reference.
     """
+    model = spec.model
     s_expr = to_casadi(model.time_scale, env, what="time_scale")
     s = ca.SX.sym("s")
     n = model.n
     A = [[None if model.A[i, j] == 0 else to_casadi(model.A[i, j], env, what=f"A[{i + 1}][{j + 1}]")
           for j in range(n)] for i in range(n)]
     C = [None if model.C[j] == 0 else to_casadi(model.C[j], env, what=f"C[{j + 1}]") for j in range(n)]
-    theta = [model.symbols[name] for name in unknown]
+    # A dummy for s, as the symbol sorts among the model's symbols: it fixes the order of the products.
     s_sym = sp.Dummy("s")
-    inputs = [model.symbols[u] for u in model.inputs]
-    c_sym = [s_sym * model.d[i] + sum((model.b[i, j] * inputs[j] for j in range(len(inputs))), sp.Integer(0))
-             for i in range(n)]
-    for i, e in enumerate(c_sym):
-        for t in theta:
-            if sp.diff(e, t, 2) != 0:
-                raise CodegenError(f"row {i + 1} of s*d + b*u is not linear in the unknown parameter {t}; "
-                                   "the adaptive observer of seed 001 (3.4) needs d and b affine in theta")
     env_s = {**env, s_sym: s}
-    zero = {t: 0 for t in theta}
-    c = [None if sp.expand(ci := e.xreplace(zero)) == 0 else to_casadi(ci, env_s, what=f"s*d[{i + 1}] + b u")
-         for i, e in enumerate(c_sym)]
-    psi = [[None if sp.expand(q := sp.diff(e, t)) == 0 else to_casadi(q, env_s, what="regressor Psi")
-            for t in theta] for e in c_sym]
+    c = [None if ci == 0 else to_casadi(ci.xreplace({SCALE: s_sym}), env_s, what=f"s*d[{i + 1}] + b u")
+         for i, ci in enumerate(spec.drift)]
+    psi = [[None if q == 0 else to_casadi(q.xreplace({SCALE: s_sym}), env_s, what="regressor Psi") for q in row]
+           for row in spec.regressor]
     return s, s_expr, A, C, c, psi
 
 
@@ -335,8 +243,8 @@ def _sum(parts: Sequence[ca.SX | None]) -> ca.SX:
     return total
 
 
-def _guards(model: Model, env: Mapping[sp.Symbol, ca.SX]) -> tuple[tuple[Guard, ca.SX], ...]:
-    return tuple((g, to_casadi(g.expr, env, what=f"guard {g.expr}")) for g in domain_guards(model))
+def _guards(spec: ObserverSpec, env: Mapping[sp.Symbol, ca.SX]) -> tuple[tuple[Guard, ca.SX], ...]:
+    return tuple((g, to_casadi(g.expr, env, what=f"guard {g.expr}")) for g in spec.guards())
 
 
 def _check_no_time(model: Model) -> None:
@@ -346,26 +254,34 @@ def _check_no_time(model: Model) -> None:
                            "step has no clock: declare the time-varying quantity as an external signal")
 
 
-def translate_switched(model: Model, K_plus: Sequence[float], K_minus: Sequence[float],
-                       defaults: Mapping[str, float]) -> Translation:
+def _gain_parameters(spec: ObserverSpec, par: ca.SX, index: Mapping[str, int], s: ca.SX) -> list[ca.SX]:
+    """``g = if_else(s > 0, s K_plus, s K_minus)`` per state, the gains being runtime parameters."""
+    return [ca.if_else(s > 0, s * par[index[f"K_plus_{z}"]], s * par[index[f"K_minus_{z}"]])
+            for z in spec.model.states]
+
+
+def _gain_names(spec: ObserverSpec) -> list[str]:
+    return [f"K_plus_{z}" for z in spec.model.states] + [f"K_minus_{z}" for z in spec.model.states]
+
+
+def translate_switched(spec: ObserverSpec) -> Translation:
     """The switched observer of seed 000 eq. (8)-(9) / seed 004 as casadi SX.
 
     Parameters
     ----------
-    model : Model
-    K_plus, K_minus : sequence of float
-        Default gains (runtime parameters ``K_plus_<state>``, ``K_minus_<state>``).
-    defaults : mapping name -> float
-        Default value of every model parameter.
+    spec : ObserverSpec
+        Without unknowns.  Its gains are the defaults of the runtime
+        parameters ``K_plus_<state>``, ``K_minus_<state>``; its ``values``
+        those of the model parameters (every parameter needs one).
     """
+    model = spec.model
     _check_no_time(model)
     n = model.n
-    gain_names = [f"K_plus_{z}" for z in model.states] + [f"K_minus_{z}" for z in model.states]
-    sig, par, dt, env, index = _environment(model, gain_names)
+    sig, par, dt, env, index = _environment(model, _gain_names(spec))
     x = ca.SX.sym("x", n)
-    s, s_expr, A, C, c, _ = _affine_parts(model, env, sig)
+    s, s_expr, A, C, c, _ = _affine_parts(spec, env)
     y = sig[0]
-    g = [ca.if_else(s > 0, s * par[index[f"K_plus_{z}"]], s * par[index[f"K_minus_{z}"]]) for z in model.states]
+    g = _gain_parameters(spec, par, index, s)
 
     def rhs(w: ca.SX) -> ca.SX:
         ws = [w[j] for j in range(n)]
@@ -376,15 +292,13 @@ def translate_switched(model: Model, K_plus: Sequence[float], K_minus: Sequence[
             rows.append(_sum([None if Aw is None else s * Aw, c[i], g[i] * e]))
         return ca.vertcat(*rows)
 
-    values = [defaults[name] for name in model.parameters] + [float(k) for k in K_plus] + [float(k) for k in K_minus]
-    return Translation(x=x, signals=sig, params=par, dt=dt, rhs=rhs, scale=s_expr, s=s, guards=_guards(model, env),
-                       state_names=tuple(model.states), signal_names=tuple(model.signals),
+    values = [float(spec.values[name]) for name in model.parameters] + list(spec.K_plus) + list(spec.K_minus)
+    return Translation(x=x, signals=sig, params=par, dt=dt, rhs=rhs, scale=s_expr, s=s, guards=_guards(spec, env),
+                       state_names=spec.state_names, signal_names=spec.signal_names,
                        param_names=tuple(index), default_params=tuple(values))
 
 
-def translate_adaptive(model: Model, K_plus: Sequence[float], K_minus: Sequence[float],
-                       defaults: Mapping[str, float], unknown: Sequence[str],
-                       Gamma: Sequence[Sequence[float]]) -> Translation:
+def translate_adaptive(spec: ObserverSpec) -> Translation:
     """The switched adaptive observer of seed 001 eq. (3.4), (3.8), (3.15) as casadi SX.
 
     With ``g = s K(s)``, ``e = y - C w``, ``r = Upsilon' C'``, ``q = Gamma r``::
@@ -393,36 +307,21 @@ def translate_adaptive(model: Model, K_plus: Sequence[float], K_minus: Sequence[
         theta'   = q e                                              (3.4b)
         Upsilon' = s (A Upsilon) - g r' + Psi                       (3.4c)
 
-    where ``c = s d + b u`` at ``theta = 0`` and ``Psi = dc/dtheta``.  The
-    state is ``(w, theta, Upsilon row-major)``, named as in the Python reference
-    (``z...``, the unknown names, ``Upsilon_<state>_<unknown>``).  ``Gamma``
-    entries are runtime parameters ``Gamma_<unknown>_<unknown>``; the unknown
-    parameters leave the parameter vector (they are states).
+    where ``c`` and ``Psi`` are the spec's affine split.  The state is
+    ``(w, theta, Upsilon row-major)`` (:attr:`ObserverSpec.state_names`).
+    ``Gamma`` entries are runtime parameters ``Gamma_<unknown>_<unknown>``;
+    the unknown parameters leave the parameter vector (they are states).
     """
+    model, unknown = spec.model, spec.unknown
     _check_no_time(model)
-    n, p = model.n, len(unknown)
-    missing = [u for u in unknown if u not in model.parameters]
-    if missing:
-        raise CodegenError(f"unknown parameter(s) {missing} are not parameters of model {model.name!r} "
-                           f"(parameters: {list(model.parameters)})")
-    known = tuple(q for q in model.parameters if q not in unknown)
-    gain_names = [f"K_plus_{z}" for z in model.states] + [f"K_minus_{z}" for z in model.states]
+    n, p = model.n, spec.p
     gamma_names = [f"Gamma_{a}_{b}" for a in unknown for b in unknown]
-    reduced = Model(name=model.name, states=model.states, output=model.output, A=model.A, C=model.C, d=model.d,
-                    b=model.b, time_scale=model.time_scale, parameters=known, external=model.external,
-                    inputs=model.inputs, values={k: v for k, v in model.values.items() if k in known},
-                    symbols=model.symbols, description=model.description, references=model.references)
-    bad = [name for name in unknown
-           if model.symbols[name] in (model.A.free_symbols | model.C.free_symbols | model.time_scale.free_symbols)]
-    if bad:
-        raise CodegenError(f"unknown parameter(s) {bad} enter A, C or the time scaling; the adaptive observer "
-                           "of seed 001 (3.4) needs them only in d and b")
-    sig, par, dt, env, index = _environment(reduced, [*gain_names, *gamma_names])
-    N = n + p + n * p
+    sig, par, dt, env, index = _environment(spec.known_model, [*_gain_names(spec), *gamma_names])
+    N = spec.size
     x = ca.SX.sym("x", N)
-    s, s_expr, A, C, c, psi = _affine_parts(model, env, sig, unknown)
+    s, s_expr, A, C, c, psi = _affine_parts(spec, env)
     y = sig[0]
-    g = [ca.if_else(s > 0, s * par[index[f"K_plus_{z}"]], s * par[index[f"K_minus_{z}"]]) for z in model.states]
+    g = _gain_parameters(spec, par, index, s)
     G = [[par[index[f"Gamma_{a}_{b}"]] for b in unknown] for a in unknown]
 
     def rhs(v: ca.SX) -> ca.SX:
@@ -447,12 +346,11 @@ def translate_adaptive(model: Model, K_plus: Sequence[float], K_minus: Sequence[
                 rows.append(_sum([None if AU is None else s * AU, -(g[i] * r[j]), psi[i][j]]))
         return ca.vertcat(*rows)
 
-    flat_gamma = [float(Gamma[i][j]) for i in range(p) for j in range(p)]
-    values = ([defaults[name] for name in known] + [float(k) for k in K_plus] + [float(k) for k in K_minus]
-              + flat_gamma)
-    states = (*model.states, *unknown, *[f"Upsilon_{z}_{u}" for z in model.states for u in unknown])
-    return Translation(x=x, signals=sig, params=par, dt=dt, rhs=rhs, scale=s_expr, s=s, guards=_guards(reduced, env),
-                       state_names=states, signal_names=tuple(model.signals), param_names=tuple(index),
+    flat_gamma = [float(spec.Gamma[i][j]) for i in range(p) for j in range(p)]
+    values = ([float(spec.values[name]) for name in spec.known_parameters] + list(spec.K_plus)
+              + list(spec.K_minus) + flat_gamma)
+    return Translation(x=x, signals=sig, params=par, dt=dt, rhs=rhs, scale=s_expr, s=s, guards=_guards(spec, env),
+                       state_names=spec.state_names, signal_names=spec.signal_names, param_names=tuple(index),
                        default_params=tuple(values))
 
 

@@ -2,7 +2,7 @@
 
 Public API
 ----------
-design                  -- the whole design and its exact certificate (GainDesign)
+design_gains            -- the whole design and its exact certificate (GainDesign); also named ``design``
 observer_normal_form    -- T, a_i and observability conditions of (A, C)
 theorem1_K_minus        -- the unique K_minus of Theorem 1 (seed 004)
 hoang_family_constraints-- coupling constraints of the Hoang family (seed 000 eq. (17))
@@ -11,7 +11,7 @@ observer_form_gramian   -- structured exact solution of the observer-form Lyapun
 parse_spectrum          -- validated target spectrum
 """
 
-from ._design import (GainDesign, design, hoang_family_constraints, minus_coefficients, parse_gains,
+from ._design import (GainDesign, design, design_gains, hoang_family_constraints, minus_coefficients, parse_gains,
                       plus_coefficients, theorem1_K_minus)
 from ._lyapunov import naive_lyapunov, observer_form_gramian
 from ._normal_form import ObserverNormalForm, normal_form_matrix, observer_normal_form
@@ -19,7 +19,7 @@ from ._routh import hurwitz_conditions, hurwitz_determinants, is_hurwitz_exact, 
 from ._spectrum import LAPLACE, parse_spectrum, polynomial_coefficients, spectrum_coefficients
 
 __all__ = [
-    "GainDesign", "design", "hoang_family_constraints", "minus_coefficients", "parse_gains", "plus_coefficients",
+    "GainDesign", "design", "design_gains", "hoang_family_constraints", "minus_coefficients", "parse_gains", "plus_coefficients",
     "theorem1_K_minus", "naive_lyapunov", "observer_form_gramian", "ObserverNormalForm", "normal_form_matrix",
     "observer_normal_form", "hurwitz_conditions", "hurwitz_determinants", "is_hurwitz_exact",
     "readable_condition", "LAPLACE", "parse_spectrum", "polynomial_coefficients", "spectrum_coefficients",

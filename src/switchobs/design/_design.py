@@ -19,6 +19,7 @@ eq. (17) for n = 3).  ``alpha_minus = alpha_plus`` is the unique choice with
 
 from __future__ import annotations
 
+import dataclasses
 import json
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
@@ -28,14 +29,15 @@ import numpy as np
 import sympy as sp
 from sympy.polys.matrices import DomainMatrix
 
-from ..exceptions import CertificateError, DimensionError, NotHurwitzError, SpectrumError
-from ..model import Model, free_names, make_symbol, numeric, parse_expression
+from ..exceptions import (CertificateError, DimensionError, ExpressionError, ModelError, NotHurwitzError,
+                          NotObservableError, SpectrumError)
+from ..model import Model, free_names, make_symbol, numeric, parse_expression, rational_value
 from ._lyapunov import _generic_solution, observer_form_gramian
 from ._normal_form import ObserverNormalForm, observer_normal_form
 from ._routh import hurwitz_conditions, readable_condition
 from ._spectrum import LAPLACE, parse_spectrum, polynomial_coefficients, spectrum_coefficients
 
-__all__ = ["GainDesign", "design", "theorem1_K_minus", "hoang_family_constraints", "minus_coefficients",
+__all__ = ["GainDesign", "design_gains", "design", "theorem1_K_minus", "hoang_family_constraints", "minus_coefficients",
            "plus_coefficients", "parse_gains"]
 
 
@@ -122,7 +124,8 @@ def parse_gains(gains: str | Sequence, model: Model, *, what: str) -> sp.Immutab
         text = str(g).strip()
         for name in free_names(text):
             if name in forbidden:
-                raise DimensionError(f"{what} entry {i + 1} uses {name!r}, a state or signal; gains are constants")
+                raise ExpressionError(f"{what} entry {i + 1} uses {name!r}, a state or signal; gains are constants "
+                                      "(numbers, parameters or new gain symbols)")
             names.setdefault(name, make_symbol(name))
         out.append(parse_expression(text, names, what=f"{what} entry {i + 1}"))
     return _column(out)
@@ -250,6 +253,81 @@ class GainDesign:
                                              for c in self.gain_constraints)
         return checks
 
+    def gains_for(self, model: Model, values: Mapping[str, Any] | None = None) -> tuple[np.ndarray, np.ndarray]:
+        """Float ``(K_plus, K_minus)`` for an observer of ``model``, at the design's values overridden by ``values``.
+
+        Raises
+        ------
+        ModelError
+            The design is for a model with other states.
+        FreeSymbolError
+            A parameter or design symbol has no value.
+        """
+        self.check_model(model)
+        merged = {**self.model.values, **dict(values or {})}
+        return (numeric(self.K_plus, merged, what="K_plus").reshape(-1),
+                numeric(self.K_minus, merged, what="K_minus").reshape(-1))
+
+    def check_model(self, model: Model) -> None:
+        """Refuse a model other than the one designed for (compared by its states)."""
+        if self.model.states != model.states:
+            raise ModelError(f"the gain design is for model {self.model.name!r} with states "
+                             f"{list(self.model.states)}, not for {model.name!r} with {list(model.states)}")
+
+    @property
+    def is_numeric(self) -> bool:
+        """No parameter and no design symbol is left: the gains are exact rational numbers."""
+        return not self.model.parameters and not (self.K_plus.free_symbols | self.K_minus.free_symbols)
+
+    def at(self, values: Mapping[str, Any] | None = None) -> "GainDesign":
+        """The design evaluated exactly at the model's stored values, overridden and completed by ``values``.
+
+        ``values`` gives model parameters and design symbols (``beta1``...) as
+        numbers or exact strings (``"187.5"`` is ``375/2``).  The result is the
+        design of the model with those values substituted
+        (:meth:`Model.with_values`): every field is evaluated, conditions that
+        hold are dropped.  This is the form the later stages take
+        (``certify_model``, the observers, ``generate_observer``).
+
+        Raises
+        ------
+        ModelError
+            A value for a name that is neither a parameter nor a design symbol, or not a finite number.
+        NotHurwitzError, NotObservableError
+            The values break a Routh–Hurwitz or an observability condition.
+        """
+        given = dict(values or {})
+        symbols = {s.name: s for s in self.design_symbols}
+        params = {**{k: v for k, v in self.model.values.items() if k in self.model.parameters},
+                  **{k: v for k, v in given.items() if k not in symbols}}
+        model = self.model.with_values(params)
+        subs = {self.model.symbols[k]: rational_value(v, what=f"parameter {k!r}") for k, v in params.items()}
+        subs.update({symbols[k]: rational_value(v, what=f"design symbol {k!r}") for k, v in given.items()
+                     if k in symbols})
+
+        def ev(x: Any) -> Any:
+            if isinstance(x, tuple):
+                return tuple(ev(e) for e in x)
+            return x.xreplace(subs) if isinstance(x, (sp.Basic, sp.MatrixBase)) else x
+
+        def still_open(conditions: tuple, error: type[Exception], what: str) -> tuple:
+            out = tuple(c for c in ev(conditions) if c is not sp.true)
+            if any(c is sp.false for c in out):
+                broken = [sp.sstr(c) for c, e in zip(conditions, ev(conditions)) if e is sp.false]
+                raise error(f"at these values {what} fails: {broken[0]} does not hold")
+            return out
+
+        nf = self.normal_form
+        fields = {f.name: ev(getattr(nf, f.name)) for f in dataclasses.fields(nf)}
+        fields["observability_conditions"] = still_open(nf.observability_conditions, NotObservableError,
+                                                        "observability")
+        normal_form = dataclasses.replace(nf, **fields)
+        evaluated = {f.name: ev(getattr(self, f.name)) for f in dataclasses.fields(self)
+                     if f.name not in ("model", "normal_form", "hurwitz_plus", "hurwitz_minus")}
+        hurwitz = {f"hurwitz_{side}": still_open(getattr(self, f"hurwitz_{side}"), NotHurwitzError,
+                                                 f"the A_{side} Routh–Hurwitz condition") for side in ("plus", "minus")}
+        return GainDesign(**evaluated, **hurwitz, model=model, normal_form=normal_form)
+
     def numeric(self, values: Mapping[str, Any] | None = None) -> dict[str, np.ndarray]:
         """Float arrays of the gains and certificate, through the model's numeric gate.
 
@@ -323,7 +401,7 @@ class GainDesign:
         return "\n".join(lines)
 
 
-def design(model: Model, spectrum: str | Sequence | None = None, *,
+def design_gains(model: Model, spectrum: str | Sequence | None = None, *,
            characteristic_polynomial: str | sp.Expr | Sequence | None = None,
            K_plus: str | Sequence | sp.MatrixBase | None = None,
            K_minus: str | Sequence | sp.MatrixBase | None = None) -> GainDesign:
@@ -361,7 +439,7 @@ def design(model: Model, spectrum: str | Sequence | None = None, *,
     Examples
     --------
     >>> from switchobs.model import builtin_model
-    >>> d = design(builtin_model("abs-xbs3"), "-beta1,-beta2,-beta2")
+    >>> d = design_gains(builtin_model("abs-xbs3"), "-beta1,-beta2,-beta2")
     >>> d.K_plus[0]
     beta1 + 2*beta2 + c
     """
@@ -426,6 +504,12 @@ def design(model: Model, spectrum: str | Sequence | None = None, *,
         hurwitz_plus=hurwitz_plus, hurwitz_minus=hurwitz_minus, P=P, C_plus=sp.ImmutableMatrix(C),
         C_minus=sp.ImmutableMatrix(C_minus), gain_constraints=constraints, family_symbols=family,
         conditional=conditional)
+
+
+#: The same function under the name of its sub-package: ``from switchobs.design import design``.
+#: At the top level only ``switchobs.design_gains`` is exported, so that ``switchobs.design`` is always
+#: the sub-package, whatever was imported first.
+design = design_gains
 
 
 def _raise_not_hurwitz(name: str, M: sp.MatrixBase) -> None:

@@ -78,7 +78,7 @@ def parse_spectrum(spectrum: str | Sequence, model: Model) -> tuple[sp.Expr, ...
             raise SpectrumError(f"pole {p} has a non-negative real part ({real}); every pole of A_plus "
                                 "must have a negative real part")
         raise SpectrumError(f"cannot decide the sign of the real part of pole {p}; write it with positive "
-                            "design symbols (e.g. -beta1) or give the parameter values with --param")
+                            "design symbols (e.g. -beta1) or give the parameter values")
     coeffs = spectrum_coefficients(poles)
     if any(sp.simplify(sp.im(c)) != 0 for c in coeffs):
         raise SpectrumError(f"the poles {[str(p) for p in poles]} are not closed under complex conjugation, "

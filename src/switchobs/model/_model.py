@@ -17,7 +17,7 @@ from typing import Any
 import numpy as np
 import sympy as sp
 
-from ..exceptions import DimensionError, FreeSymbolError, ModelError
+from ..exceptions import DimensionError, FreeSymbolError, ModelError, NotRealError
 from ._expr import parse_expression
 
 __all__ = ["Model", "numeric", "make_symbol"]
@@ -240,7 +240,7 @@ class Model:
             if key not in self.parameters:
                 raise ModelError(f"model {self.name!r} has no parameter {key!r} "
                                  f"(parameters: {list(self.parameters)})")
-            number = rational_value(val, what=f"--param {key}")
+            number = rational_value(val, what=f"parameter {key!r}")
             _check_sign(key, number, self.symbols[key])
             subs[self.symbols[key]] = number
         remaining = tuple(p for p in self.parameters if p not in values)
@@ -339,6 +339,8 @@ def numeric(expr: Any, values: Mapping[Any, Any] | None = None, *, what: str = "
     ------
     FreeSymbolError
         If free symbols remain after substitution; the message names them.
+    NotRealError
+        If the value has a nonzero imaginary part.
     """
     scalar = not isinstance(expr, sp.MatrixBase)
     m = sp.Matrix([[expr]]) if scalar else sp.Matrix(expr)
@@ -352,9 +354,10 @@ def numeric(expr: Any, values: Mapping[Any, Any] | None = None, *, what: str = "
         m = m.subs(subs)
     free = sorted(map(str, m.free_symbols))
     if free:
-        raise FreeSymbolError(f"{what} still depends on {free}; give their values (e.g. --param {free[0]}=...)")
+        raise FreeSymbolError(f"{what} still depends on {free}; give their values")
     out = np.array(m.evalf(), dtype=complex)
     if np.any(np.abs(out.imag) > 0):
-        raise FreeSymbolError(f"{what} is not real: {out}")
+        raise NotRealError(f"{what} is not real at these values: {out}; check the values under square roots "
+                           "and logarithms")
     out = out.real.astype(float)
     return out[0, 0] if scalar else out

@@ -8,7 +8,7 @@ xbs3_observer            -- 3D known-road XBS observer (abs-xbs3, seed 000 Sec. 
 xbs4_observer            -- 4D unknown-road XBS observer (abs-xbs4, seed 000 Sec. IV), gains from beta1, beta2
 adaptive_xbs_observer    -- switched adaptive XBS observer (abs-adaptive2, seed 001 Ch. 3), gains from beta, Gamma
 xbs_gains                -- the beta-parametrised gain pairs of the three built-in XBS models
-ErrorCode                -- status codes of a refused step (mirrored by the generated C)
+ErrorCode                -- status codes of a refused step: switchobs.spec.StepStatus, shared with the generated C
 METHODS                  -- discretisations: "rk4" (default), "euler"
 
 Every observer has ``step(xhat, signals, dt)``, ``run(xhat0, signal_rows, dt)``,

@@ -18,6 +18,9 @@ With no unknown parameters (``p = 0``) this is the switched observer
 seed 004); with ``p > 0`` it is the switched adaptive observer of seed 001
 eq. (3.4), (3.8), (3.15).
 
+The observer comes as an :class:`~switchobs.spec.ObserverSpec` (the contract the
+generated C is translated from too): its affine split ``c``, ``Psi`` is lowered
+here to the signal symbols ``S0, S1, ...`` with the parameter values substituted.
 The right-hand side is turned into straight-line Python source once (sympy's
 code printers, as ``lambdify`` does, with the gains and matrices as float
 literals and zeros skipped), so that a step costs a few microseconds of pure
@@ -39,7 +42,6 @@ from __future__ import annotations
 import math
 from collections.abc import Sequence
 from dataclasses import dataclass
-from enum import IntEnum
 
 import numpy as np
 import sympy as sp
@@ -47,28 +49,14 @@ from sympy.printing.numpy import NumPyPrinter
 from sympy.printing.pycode import PythonCodePrinter
 
 from .._validate import DEFAULT_MAX_SUBSTEPS, named_vector
-from ..exceptions import ObserverInputError, SimulationError
+from ..exceptions import FreeSymbolError, ModelError, ObserverInputError, SimulationError
+from ..model import Model, numeric
+from ..spec import METHODS, SCALE, ObserverSpec, StepStatus
 
-__all__ = ["ErrorCode", "METHODS", "Kernel", "KernelSpec"]
+__all__ = ["ErrorCode", "METHODS", "Kernel", "check_free"]
 
-#: Discretisations: classic fourth-order Runge-Kutta (default) and forward Euler.
-METHODS = ("rk4", "euler")
-
-
-class ErrorCode(IntEnum):
-    """Status of one observer step, as the generated C ``<prefix>_step`` returns it.
-
-    Checks run in this order and the first failing one is reported; the state
-    is never modified when a step fails.
-    """
-
-    OK = 0
-    BAD_DT = 1                # dt is not finite or dt <= 0
-    NONFINITE_STATE = 2       # an entry of xhat is NaN or +-inf
-    NONFINITE_SIGNAL = 3      # a signal (y, external, input) is NaN or +-inf
-    UNDEFINED_TIME_SCALE = 4  # a signal declared positive/negative has the wrong sign, or s(sig) is not finite
-    NONFINITE_RESULT = 5      # an intermediate or the new state is not finite (overflow, domain error)
-    SUBSTEP_LIMIT = 8         # with h_max: |s| dt > max_substeps * h_max (checked after s, before the step)
+#: The observers' name of the step status codes (the one enum of :mod:`switchobs.spec`).
+ErrorCode = StepStatus
 
 
 # --------------------------------------------------------------------------- printing
@@ -134,14 +122,10 @@ def _sum(parts: Sequence[str]) -> str:
     return " + ".join(parts) if parts else "0.0"
 
 
-# --------------------------------------------------------------------------- spec
+# --------------------------------------------------------------------------- lowering
 @dataclass(frozen=True)
-class KernelSpec:
-    """Numeric description of an observer right-hand side (see the module docstring).
-
-    Expressions use the symbols ``S0, S1, ...`` for the signals (y first) and
-    ``s`` for the time scaling.
-    """
+class _Lowered:
+    """An :class:`ObserverSpec` in numbers: floats, and expressions in ``S0, S1, ...`` (signals) and ``s``."""
 
     A: np.ndarray                      # n x n
     C: np.ndarray                      # n
@@ -152,9 +136,6 @@ class KernelSpec:
     regressor: tuple[tuple[sp.Expr, ...], ...]  # Psi_ij (n x p), in S0.. and s
     Gamma: np.ndarray                  # p x p (0 x 0 without unknowns)
     n_signals: int
-    signal_signs: tuple[int, ...]      # +1 must be > 0, -1 must be < 0, 0 free
-    signal_names: tuple[str, ...]
-    state_names: tuple[str, ...]
 
     @property
     def n(self) -> int:
@@ -170,17 +151,52 @@ class KernelSpec:
 
 
 SIGNAL = "S"
-SCALE = sp.Symbol("s", real=True)
 
 
 def signal_symbols(count: int) -> tuple[sp.Symbol, ...]:
     return tuple(sp.Symbol(f"{SIGNAL}{i}", real=True) for i in range(count))
 
 
-class _Source:
-    """Generates the Python source of the kernel functions from a :class:`KernelSpec`."""
+def check_free(expr: sp.Basic, allowed: set, what: str, model: Model) -> None:
+    """Refuse ``t`` and any symbol outside ``allowed`` in an expression the observer evaluates."""
+    t = model.symbols["t"]
+    if t in expr.free_symbols:
+        raise ModelError(f"{what} of model {model.name!r} depends on t explicitly; the observers hold the "
+                         "signals constant over a step and take no time argument (neither does the C API): "
+                         "make time an external signal instead")
+    free = sorted(str(s) for s in expr.free_symbols - allowed)
+    if free:
+        raise FreeSymbolError(f"{what} of model {model.name!r} still depends on {free}; give their values "
+                              f"(e.g. params={{{free[0]!r}: ...}})")
 
-    def __init__(self, spec: KernelSpec):
+
+def _lower(spec: ObserverSpec) -> _Lowered:
+    """Substitute the spec's parameter values and name the signals ``S0, S1, ...``."""
+    model = spec.model
+    subs = {model.symbols[k]: v for k, v in spec.values.items()}
+    sig_syms = [model.symbols[name] for name in model.signals]
+    S = signal_symbols(len(sig_syms))
+    to_S = dict(zip(sig_syms, S))
+    time_scale = model.time_scale.subs(subs)
+    check_free(time_scale, set(sig_syms), "time_scale", model)
+    allowed = set(sig_syms) | {SCALE}
+    drift = [c.subs(subs) for c in spec.drift]
+    regressor = [[q.subs(subs) for q in row] for row in spec.regressor]
+    for i in range(spec.n):
+        for expr in (drift[i], *regressor[i]):
+            check_free(expr, allowed, f"d or b (row {i + 1})", model)
+    return _Lowered(A=numeric(model.A, subs, what=f"A of model {model.name!r}"),
+                    C=numeric(model.C, subs, what=f"C of model {model.name!r}").reshape(spec.n),
+                    K_plus=np.array(spec.K_plus, dtype=float), K_minus=np.array(spec.K_minus, dtype=float),
+                    time_scale=time_scale.xreplace(to_S), drift=tuple(c.xreplace(to_S) for c in drift),
+                    regressor=tuple(tuple(q.xreplace(to_S) for q in row) for row in regressor),
+                    Gamma=np.array(spec.Gamma, dtype=float).reshape(spec.p, spec.p), n_signals=len(S))
+
+
+class _Source:
+    """Generates the Python source of the kernel functions from a lowered spec."""
+
+    def __init__(self, spec: _Lowered):
         self.spec = spec
         n, p = spec.n, spec.p
         self.x = [f"x{k}" for k in range(spec.size)]
@@ -340,13 +356,14 @@ class Kernel:
     module docstring).
     """
 
-    def __init__(self, spec: KernelSpec, method: str, *, h_max: float | None = None,
+    def __init__(self, spec: ObserverSpec, method: str, *, h_max: float | None = None,
                  max_substeps: int = DEFAULT_MAX_SUBSTEPS):
         if method not in METHODS:
             raise SimulationError(f"unknown discretisation method {method!r}; choose one of {list(METHODS)}")
         self.spec = spec
         self.method = method
-        self.source = _Source(spec).module(method)
+        self.lowered = _lower(spec)
+        self.source = _Source(self.lowered).module(method)
         namespace: dict = {"math": math, "numpy": np}
         exec(compile(self.source, f"<switchobs observer kernel ({method})>", "exec"), namespace)
         self._scale = namespace["scale"]

@@ -10,9 +10,11 @@ import numpy.typing as npt
 import sympy as sp
 
 from .._validate import adaptation_gain, round_down, signal_matrix, substep_bound
+from ..design import GainDesign
 from ..exceptions import DimensionError, FreeSymbolError, ModelError, SimulationError
 from ..model import Model, numeric, parse_expression, rational_value
-from ._engine import SCALE, ErrorCode, Kernel, KernelSpec, _ArrayPrinter, signal_symbols
+from ..spec import REFERENCE_STATUSES, ObserverSpec
+from ._engine import Kernel, _ArrayPrinter, check_free
 
 __all__ = ["SwitchedObserver", "AdaptiveSwitchedObserver"]
 
@@ -35,32 +37,16 @@ def _gain(K: Any, n: int, what: str) -> np.ndarray:
     return arr
 
 
-def _substituted(model: Model, params: Mapping[str, Any] | None,
-                 keep: Sequence[str]) -> tuple[Model, dict[str, sp.Rational]]:
-    """The model with every parameter but ``keep`` replaced by its value (``params`` override ``values``)."""
+def _parameter_values(model: Model, params: Mapping[str, Any] | None,
+                      keep: Sequence[str]) -> dict[str, sp.Rational]:
+    """Exact values of every parameter but ``keep`` (``params`` override the model's ``values``)."""
     values = {k: v for k, v in model.values.items() if k not in keep}
     for key, val in (params or {}).items():
         if key in keep:
             raise ModelError(f"parameter {key!r} is estimated by the adaptive observer; do not give it a value")
         values[key] = rational_value(val, what=f"params[{key!r}]")
-    numeric_model = model.with_values(values)
-    missing = [p for p in numeric_model.parameters if p not in keep]
-    if missing:
-        raise FreeSymbolError(f"model {model.name!r}: the parameter(s) {missing} have no value; "
-                              f"give them with params={{{missing[0]!r}: ...}}")
-    return numeric_model, values
-
-
-def _check_free(expr: sp.Basic, allowed: set, what: str, model: Model) -> None:
-    t = model.symbols["t"]
-    if t in expr.free_symbols:
-        raise ModelError(f"{what} of model {model.name!r} depends on t explicitly; the observers hold the "
-                         "signals constant over a step and take no time argument (neither does the C API): "
-                         "make time an external signal instead")
-    free = sorted(str(s) for s in expr.free_symbols - allowed)
-    if free:
-        raise FreeSymbolError(f"{what} of model {model.name!r} still depends on {free}; give their values "
-                              f"(e.g. params={{{free[0]!r}: ...}})")
+    model.with_values(values)  # validates the names and the declared signs
+    return values
 
 
 class _Observer:
@@ -75,69 +61,56 @@ class _Observer:
                  max_substeps: int | None = None):
         bound = substep_bound(h_max, max_substeps, error=SimulationError)
         unknown = tuple(unknown)
-        for name in unknown:
-            if name not in model.parameters:
-                raise ModelError(f"model {model.name!r} has no parameter {name!r} to estimate "
-                                 f"(parameters: {list(model.parameters)})")
-        self.model = model
-        m, values = _substituted(model, params, unknown)
-        self.values = {k: float(v) for k, v in values.items()}
+        values = _parameter_values(model, params, unknown)
+        if isinstance(K_plus, GainDesign):
+            if K_minus is not None:
+                raise SimulationError("a GainDesign holds both gains; do not give K_minus with it")
+            K_plus, K_minus = K_plus.gains_for(model, values)
+        elif K_minus is None:
+            raise SimulationError("K_minus is missing: give both gains, or a GainDesign as K_plus")
         n = model.n
-        theta = tuple(model.symbols[u] for u in unknown)
-        for what, expr in (("A", m.A), ("C", m.C), ("time_scale", m.time_scale)):
-            hit = sorted(str(s) for s in set(theta) & expr.free_symbols)
-            if hit:
-                raise ModelError(f"the estimated parameter(s) {hit} appear in {what} of model {model.name!r}; "
-                                 "the adaptive observer needs them only in d(y) and b(y)")
-        A = numeric(m.A, what=f"A of model {model.name!r}")
-        C = numeric(m.C, what=f"C of model {model.name!r}").reshape(n)
-        sig_syms = [model.symbols[name] for name in model.signals]
-        S = signal_symbols(len(sig_syms))
-        to_S = dict(zip(sig_syms, S))
-        allowed = set(sig_syms) | set(theta)
-        _check_free(m.time_scale, set(sig_syms), "time_scale", model)
-        u = sp.Matrix([model.symbols[name] for name in model.inputs])
-        F = SCALE * m.d + (m.b * u if model.inputs else sp.zeros(n, 1))
-        for i in range(n):
-            _check_free(F[i], allowed | {SCALE}, f"d or b (row {i + 1})", model)
-        regressor = []
-        drift = []
-        for i in range(n):
-            Fi = F[i]
-            row = []
-            for th in theta:
-                coeff = sp.diff(Fi, th)
-                if any(sp.diff(coeff, other) != 0 for other in theta):
-                    raise ModelError(f"s d(y) + b(y) u of model {model.name!r} is not linear in {th} (row {i + 1}); "
-                                     "the adaptive observer needs a linear parametrisation (seed 001 eq. (3.2))")
-                row.append(coeff.xreplace(to_S))
-            regressor.append(tuple(row))
-            drift.append(Fi.xreplace({th: 0 for th in theta}).xreplace(to_S))
-        p = len(unknown)
-        if p:
-            G = adaptation_gain(Gamma, unknown, error=SimulationError)
-        else:
-            G = np.zeros((0, 0))
-        self.K_plus = _gain(K_plus, n, "K_plus")
-        self.K_minus = _gain(K_minus, n, "K_minus")
-        self.Gamma = G
-        self.unknown = unknown
-        self.A = A
-        self.C = C
-        names = (*model.states, *unknown, *[f"Upsilon_{s}_{t}" for s in model.states for t in unknown])
-        signs = tuple(1 if model.symbols[name].is_positive else -1 if model.symbols[name].is_negative else 0
-                      for name in model.signals)
-        spec = KernelSpec(A=A, C=C, K_plus=self.K_plus, K_minus=self.K_minus,
-                          time_scale=m.time_scale.xreplace(to_S), drift=tuple(drift), regressor=tuple(regressor),
-                          Gamma=G, n_signals=len(S), signal_signs=signs, signal_names=tuple(model.signals),
-                          state_names=names)
+        G = adaptation_gain(Gamma, unknown, error=SimulationError) if unknown else np.zeros((0, 0))
+        spec = ObserverSpec(model, tuple(_gain(K_plus, n, "K_plus").tolist()),
+                            tuple(_gain(K_minus, n, "K_minus").tolist()), values=values, unknown=unknown,
+                            Gamma=tuple(map(tuple, G.tolist())))
+        missing = [p for p in spec.known_parameters if p not in values]
+        if missing:
+            raise FreeSymbolError(f"model {model.name!r}: the parameter(s) {missing} have no value; "
+                                  f"give them with params={{{missing[0]!r}: ...}}")
+        self._build(spec, method, readout, bound)
+
+    def _build(self, spec: ObserverSpec, method: str, readout: str | None, bound: tuple[Any, int] | None) -> None:
+        """Everything but the validation of the user's arguments: what an unpickled observer runs."""
         #: Certified bound on |s| dt (exact) and the sub-step limit, as given (None: one step per dt).
         self.h_max, self.max_substeps = bound if bound is not None else (None, None)
         self._kernel = (Kernel(spec, method) if bound is None else
                         Kernel(spec, method, h_max=round_down(bound[0], error=SimulationError),
                                max_substeps=bound[1]))
+        self.model = spec.model
+        self.values = {k: float(v) for k, v in spec.values.items()}
+        self.unknown = spec.unknown
+        lowered = self._kernel.lowered
+        self.K_plus, self.K_minus, self.Gamma = lowered.K_plus, lowered.K_minus, lowered.Gamma
+        self.A, self.C = lowered.A, lowered.C
         self._readout_text = readout
-        self._readout_fn = self._compile_readout(readout, values) if readout is not None else None
+        self._readout_fn = self._compile_readout(readout, spec.values) if readout is not None else None
+
+    @classmethod
+    def _from_spec(cls, spec: ObserverSpec, method: str, readout: str | None,
+                   bound: tuple[Any, int] | None = None) -> "_Observer":
+        obs = cls.__new__(cls)
+        obs._build(spec, method, readout, bound)
+        return obs
+
+    def __reduce__(self):
+        """Pickle as the spec (plain data): the unpickled observer regenerates its step source."""
+        bound = None if self.h_max is None else (self.h_max, self.max_substeps)
+        return (type(self)._from_spec, (self.spec, self.method, self._readout_text, bound))
+
+    @property
+    def spec(self) -> ObserverSpec:
+        """The observer contract this observer runs (also what :func:`switchobs.codegen.generate_observer` translates)."""
+        return self._kernel.spec
 
     # ------------------------------------------------------------------ info
     @property
@@ -186,7 +159,7 @@ class _Observer:
         Raises
         ------
         ObserverInputError
-            With ``.code`` one of :class:`ErrorCode` (checked in that order).
+            With ``.code`` one of :class:`~switchobs.spec.StepStatus` (checked in that order).
         DimensionError
             If ``xhat`` or ``signals`` has the wrong length.
         """
@@ -236,7 +209,7 @@ class _Observer:
         names = {**{p: self.model.symbols[p] for p in self.model.parameters}, **states}
         expr = parse_expression(text, names, what="readout").xreplace(
             {self.model.symbols[k]: v for k, v in values.items()})
-        _check_free(expr, set(states.values()), "readout", self.model)
+        check_free(expr, set(states.values()), "readout", self.model)
         code = _ArrayPrinter().doprint(expr)
         args = ", ".join(f"x{i}" for i in range(self.size))
         namespace: dict = {"numpy": np}
@@ -277,7 +250,7 @@ class _Observer:
             "readout": self._readout_text,
             "h_max": None if self.h_max is None else str(self.h_max),
             "max_substeps": self.max_substeps,
-            "error_codes": {c.name: int(c) for c in ErrorCode},
+            "error_codes": {c.name: int(c) for c in REFERENCE_STATUSES},
         }
 
     def __str__(self) -> str:
@@ -320,8 +293,10 @@ class SwitchedObserver(_Observer):
         Any switchobs model (built-in or TOML).  Parameters take the model's
         :attr:`~switchobs.model.Model.values` unless overridden by ``params``;
         none may be left free.
-    K_plus, K_minus : array_like or sympy.Matrix, length n
-        Numeric gains (e.g. ``design(model, spectrum).numeric(values)``).
+    K_plus, K_minus : GainDesign, or array_like or sympy.Matrix of length n
+        The design (``design_gains(model, spectrum)``, evaluated at the
+        observer's parameter values; its design symbols need values, e.g.
+        with :meth:`GainDesign.at`) with ``K_minus`` omitted, or two numeric gains.
     params : mapping, optional
         Parameter values overriding the model's (numbers or fraction strings).
     method : {"rk4", "euler"}
@@ -358,8 +333,8 @@ class SwitchedObserver(_Observer):
     >>> from switchobs.design import design
     >>> from switchobs.model import builtin_model
     >>> model = builtin_model("abs-xbs3")
-    >>> g = design(model, "-beta1,-beta2,-beta2").numeric({"beta1": 10, "beta2": 20})
-    >>> obs = SwitchedObserver(model, g["K_plus"], g["K_minus"], readout="z2")
+    >>> g = design(model, "-beta1,-beta2,-beta2").at({"beta1": 10, "beta2": 20})
+    >>> obs = SwitchedObserver(model, g, readout="z2")
     >>> obs.signal_names
     ('y', 'vx', 'u')
     >>> x = obs.step([0.0, 0.5, 0.0], [10.0, 20.0, 0.0], 1e-3)
@@ -369,9 +344,9 @@ class SwitchedObserver(_Observer):
     0.412037
     """
 
-    def __init__(self, model: Model, K_plus: Any, K_minus: Any, *, params: Mapping[str, Any] | None = None,
-                 method: str = "rk4", readout: str | None = None, h_max: Any = None,
-                 max_substeps: int | None = None):
+    def __init__(self, model: Model, K_plus: GainDesign | Any, K_minus: Any = None, *,
+                 params: Mapping[str, Any] | None = None, method: str = "rk4", readout: str | None = None,
+                 h_max: Any = None, max_substeps: int | None = None):
         super().__init__(model, K_plus, K_minus, params=params, method=method, readout=readout,
                          unknown=(), Gamma=None, h_max=h_max, max_substeps=max_substeps)
 
@@ -395,8 +370,8 @@ class AdaptiveSwitchedObserver(_Observer):
     Parameters
     ----------
     model : Model
-    K_plus, K_minus : array_like, length n
-        The gains ``K'`` for ``y > 0`` and ``y < 0`` (seed 001 (3.15); (3.20)
+    K_plus, K_minus : GainDesign, or array_like of length n
+        A design (``K_minus`` omitted), or the gains ``K'`` for ``y > 0`` and ``y < 0`` (seed 001 (3.15); (3.20)
         asks ``k1- = -k1+ > ... `` see :func:`adaptive_xbs_observer`).
     unknown : sequence of str
         Parameters to estimate (``("c", "d")`` for abs-adaptive2).
@@ -418,9 +393,9 @@ class AdaptiveSwitchedObserver(_Observer):
     seed 001 eq. (3.2)-(3.5), (3.8), (3.15), (3.20), Propositions 1-2.
     """
 
-    def __init__(self, model: Model, K_plus: Any, K_minus: Any, *, unknown: Sequence[str], Gamma: Any,
-                 params: Mapping[str, Any] | None = None, method: str = "rk4", readout: str | None = None,
-                 h_max: Any = None, max_substeps: int | None = None):
+    def __init__(self, model: Model, K_plus: GainDesign | Any, K_minus: Any = None, *, unknown: Sequence[str],
+                 Gamma: Any, params: Mapping[str, Any] | None = None, method: str = "rk4",
+                 readout: str | None = None, h_max: Any = None, max_substeps: int | None = None):
         if isinstance(unknown, str) or not unknown:
             raise ModelError(f"unknown must be a non-empty list of parameter names, got {unknown!r}")
         super().__init__(model, K_plus, K_minus, params=params, method=method, readout=readout,

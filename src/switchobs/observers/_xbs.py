@@ -9,9 +9,9 @@ from typing import Any
 
 import numpy as np
 
-from ..design import GainDesign, design
+from ..design import GainDesign, design_gains
 from ..exceptions import SpectrumError
-from ..model import builtin_model, rational_value
+from ..model import builtin_model
 from ._observer import AdaptiveSwitchedObserver, SwitchedObserver
 
 __all__ = ["xbs3_observer", "xbs4_observer", "adaptive_xbs_observer", "xbs_gains"]
@@ -26,7 +26,7 @@ _SPECTRA = {
 
 @functools.lru_cache(maxsize=None)
 def _symbolic_design(model_name: str) -> GainDesign:
-    return design(builtin_model(model_name), _SPECTRA[model_name][0])
+    return design_gains(builtin_model(model_name), _SPECTRA[model_name][0])
 
 
 def _positive(name: str, value: Any) -> float:
@@ -44,7 +44,7 @@ def xbs_gains(model_name: str, betas: Mapping[str, float], *,
               params: Mapping[str, Any] | None = None) -> tuple[np.ndarray, np.ndarray]:
     """Numeric ``(K_plus, K_minus)`` of a built-in XBS model for the given betas.
 
-    The gains come from :func:`switchobs.design.design` with the spectra of
+    The gains come from :func:`switchobs.design.design_gains` with the spectra of
     the seeds: ``{-beta1, -beta2, -beta2}`` for abs-xbs3 (seed 000 Sec. III-E),
     ``{-beta1, -beta1, -beta2, -beta2}`` for abs-xbs4 (Sec. IV-D) and
     ``{-beta, -beta}`` for abs-adaptive2 (a double pole; then
@@ -64,9 +64,15 @@ def xbs_gains(model_name: str, betas: Mapping[str, float], *,
     SpectrumError
         A beta is missing, not finite or not positive.
     """
+    gains = _xbs_design(model_name, betas, params)
+    return gains.gains_for(gains.model)
+
+
+def _xbs_design(model_name: str, betas: Mapping[str, Any], params: Mapping[str, Any] | None) -> GainDesign:
+    """The seeds' design of a built-in XBS model, evaluated exactly at the betas and the parameter values."""
     if model_name not in _SPECTRA:
         raise SpectrumError(f"no XBS gain formula for model {model_name!r}; use one of {sorted(_SPECTRA)} "
-                            "or switchobs.design.design for other models")
+                            "or switchobs.design.design_gains for other models")
     _, names = _SPECTRA[model_name]
     unexpected = sorted(set(betas) - set(names))
     if unexpected:
@@ -75,9 +81,8 @@ def xbs_gains(model_name: str, betas: Mapping[str, float], *,
     if missing:
         raise SpectrumError(f"model {model_name!r} needs {list(names)}; missing {missing}")
     values: dict[str, Any] = {n: _positive(n, betas[n]) for n in names}
-    values.update({k: rational_value(v, what=f"params[{k!r}]") for k, v in (params or {}).items()})
-    gains = _symbolic_design(model_name).numeric(values)
-    return gains["K_plus"], gains["K_minus"]
+    values.update(params or {})
+    return _symbolic_design(model_name).at(values)
 
 
 def xbs3_observer(beta1: float, beta2: float, *, params: Mapping[str, Any] | None = None,
@@ -104,9 +109,8 @@ def xbs3_observer(beta1: float, beta2: float, *, params: Mapping[str, Any] | Non
     >>> obs.K_plus.round(4).tolist()
     [84.0, -19.4987, -21.3333]
     """
-    K_plus, K_minus = xbs_gains("abs-xbs3", {"beta1": beta1, "beta2": beta2}, params=params)
-    return SwitchedObserver(builtin_model("abs-xbs3"), K_plus, K_minus, params=params, method=method,
-                            readout="z2")
+    gains = _xbs_design("abs-xbs3", {"beta1": beta1, "beta2": beta2}, params)
+    return SwitchedObserver(builtin_model("abs-xbs3"), gains, params=params, method=method, readout="z2")
 
 
 def xbs4_observer(beta1: float, beta2: float, *, params: Mapping[str, Any] | None = None,
@@ -121,9 +125,8 @@ def xbs4_observer(beta1: float, beta2: float, *, params: Mapping[str, Any] | Non
     >>> xbs4_observer(10.0, 20.0).K_plus.round(3).tolist()
     [134.0, -53.717, -3221.504, -213.333]
     """
-    K_plus, K_minus = xbs_gains("abs-xbs4", {"beta1": beta1, "beta2": beta2}, params=params)
-    return SwitchedObserver(builtin_model("abs-xbs4"), K_plus, K_minus, params=params, method=method,
-                            readout="z2")
+    gains = _xbs_design("abs-xbs4", {"beta1": beta1, "beta2": beta2}, params)
+    return SwitchedObserver(builtin_model("abs-xbs4"), gains, params=params, method=method, readout="z2")
 
 
 def adaptive_xbs_observer(beta: float, Gamma: Any, *, params: Mapping[str, Any] | None = None,
@@ -147,6 +150,6 @@ def adaptive_xbs_observer(beta: float, Gamma: Any, *, params: Mapping[str, Any] 
         Overrides of ``a`` and ``b`` (``c`` and ``d`` are estimated).
     method : {"rk4", "euler"}
     """
-    K_plus, K_minus = xbs_gains("abs-adaptive2", {"beta": beta}, params=params)
-    return AdaptiveSwitchedObserver(builtin_model("abs-adaptive2"), K_plus, K_minus, unknown=("c", "d"),
-                                    Gamma=Gamma, params=params, method=method, readout="w2 - c*w1/a")
+    gains = _xbs_design("abs-adaptive2", {"beta": beta}, params)
+    return AdaptiveSwitchedObserver(builtin_model("abs-adaptive2"), gains, unknown=("c", "d"), Gamma=Gamma,
+                                    params=params, method=method, readout="w2 - c*w1/a")

@@ -166,20 +166,15 @@ def _design(model: Any, spectrum: str) -> tuple[Any, dict[str, np.ndarray]]:
     return d, d.numeric(dict(DEMO_BETAS))
 
 
-def _exact_gains(d: Any) -> tuple[list[str], list[str]]:
-    """The designed gains at the rig values and the demo betas, as exact rationals."""
-    import sympy as sp
-
-    subs = {**{d.model.symbols[k]: v for k, v in d.model.values.items()},
-            **{s: sp.Integer(DEMO_BETAS[s.name]) for s in d.design_symbols}}
-    return [str(k.subs(subs)) for k in d.K_plus], [str(k.subs(subs)) for k in d.K_minus]
+def _exact_gains(d: Any) -> Any:
+    """The design evaluated exactly at the rig values and the demo betas (a numeric GainDesign)."""
+    return d.at({s.name: DEMO_BETAS[s.name] for s in d.design_symbols})
 
 
 def _certify(model: Any, d: Any, out: Path) -> dict[str, Any]:
     from ..certify import certify_model, verify_certificate
 
-    K_plus, K_minus = _exact_gains(d)
-    report = certify_model(model, K_plus=K_plus, K_minus=K_minus)
+    report = certify_model(model, gains=_exact_gains(d))
     path = out / f"certificate-{model.name}.json"
     report.write(path)
     check = verify_certificate(path)          # from the file, as `switchobs verify` does

@@ -1,0 +1,342 @@
+"""The certificate document, section by section: what ``certify`` writes and ``verify`` reads.
+
+A certificate is a JSON object (format ``switchobs-certificate``, version 1)::
+
+    {"format": ..., "version": 1,
+     "family": FamilySection,
+     "observer": ObserverSection,            optional sections, in registration order
+     "certificates": [LyapunovEntry | DualEntry | DwellTimeEntry | PlanarEntry, ...],
+     "verdict": Verdict,
+     "provenance": {...}}                    free-form: model, parameters, spectrum, producer
+
+Each section is a frozen class with ``to_json`` / ``from_json``; the JSON is
+exactly what earlier versions wrote (same keys, same order, same strings), so
+existing certificates still verify.  Matrices stay as JSON (lists of rational
+strings): the checker converts and checks them exactly, so a tampered entry
+is a failed check with a reason, not a parse error.
+
+A new optional top-level section is one class decorated with
+:func:`document_section`: it gets a ``KEY``, ``to_json``, ``from_json`` and
+``check(names, matrices) -> Check`` (its exact re-check, run by
+``verify_certificate``).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Mapping, Sequence
+from dataclasses import MISSING, dataclass, field, fields
+from enum import Enum
+from typing import Any, ClassVar, Protocol
+
+from ..exceptions import CertificateError
+
+__all__ = ["FORMAT", "VERSION", "CertificateKind", "ArbitrarySwitching", "Existence", "ANY_DWELL", "Verdict",
+           "FamilySection", "ObserverSection", "LyapunovEntry", "DualEntry", "DwellTimeEntry", "PlanarEntry",
+           "CertificateEntry", "CertificateDocument", "document_section", "Check"]
+
+FORMAT = "switchobs-certificate"
+VERSION = 1
+
+
+class CertificateKind(str, Enum):
+    """The ``kind`` of a certificate entry."""
+
+    STRICT_CQLF = "strict-cqlf"
+    HESPANHA = "hespanha"
+    NO_STRICT_CQLF = "no-strict-cqlf"
+    NO_COMMON_LYAPUNOV = "no-common-lyapunov"
+    DWELL_TIME = "dwell-time"
+    PLANAR = "planar"
+
+
+class ArbitrarySwitching(str, Enum):
+    """Stability under arbitrary switching, as the verified certificates imply it."""
+
+    UGES = "UGES"
+    UGS = "UGS"
+    UGS_NOT_UGES = "UGS-not-UGES"
+    UNBOUNDED = "unbounded"
+    UNKNOWN = "unknown"
+
+
+class Existence(str, Enum):
+    """Whether a (strict) common quadratic Lyapunov function exists."""
+
+    EXISTS = "exists"
+    NONE = "none"
+    UNKNOWN = "unknown"
+
+
+#: ``Verdict.dwell_time`` when every positive dwell time works.
+ANY_DWELL = "any"
+
+
+@dataclass(frozen=True)
+class Check:
+    """One verified statement: ``name`` (which certificate), ``holds`` and the reason when it does not."""
+
+    name: str
+    holds: bool
+    detail: str = ""
+
+    def to_json(self) -> dict[str, Any]:
+        return {"name": self.name, "holds": self.holds, "detail": self.detail}
+
+    def __str__(self) -> str:
+        return f"{self.name}: {'holds' if self.holds else 'FAILS'}{(' - ' + self.detail) if self.detail else ''}"
+
+
+def _enum(kind: type[Enum], value: Any, what: str) -> Any:
+    try:
+        return kind(value)
+    except ValueError:
+        raise CertificateError(f"{what} is {value!r}; expected one of {[k.value for k in kind]}") from None
+
+
+@dataclass(frozen=True)
+class Verdict:
+    """What the certificates that hold imply.
+
+    ``dwell_time`` is ``"any"`` (every positive dwell time), a rational string
+    (the certified dwell time ``tau_D``) or None (nothing certified).
+    """
+
+    arbitrary_switching: ArbitrarySwitching
+    dwell_time: str | None
+    strict_cqlf: Existence
+    common_lyapunov: Existence
+
+    def to_json(self) -> dict[str, Any]:
+        return {"arbitrary_switching": self.arbitrary_switching.value, "dwell_time": self.dwell_time,
+                "strict_cqlf": self.strict_cqlf.value, "common_lyapunov": self.common_lyapunov.value}
+
+    @classmethod
+    def from_json(cls, data: Any) -> "Verdict":
+        if not isinstance(data, Mapping):
+            raise CertificateError(f"certificate 'verdict' must be an object, got {data!r}")
+        keys = set(cls.__dataclass_fields__)
+        if set(data) != keys:
+            raise CertificateError(f"certificate 'verdict' must have the keys {sorted(keys)}, got {sorted(data)}")
+        dwell = data["dwell_time"]
+        if dwell is not None and not isinstance(dwell, str):
+            raise CertificateError(f"verdict dwell_time is {dwell!r}; expected 'any', a rational string or null")
+        return cls(_enum(ArbitrarySwitching, data["arbitrary_switching"], "verdict arbitrary_switching"), dwell,
+                   _enum(Existence, data["strict_cqlf"], "verdict strict_cqlf"),
+                   _enum(Existence, data["common_lyapunov"], "verdict common_lyapunov"))
+
+
+# ----------------------------------------------------------------------------- sections
+@dataclass(frozen=True)
+class FamilySection:
+    """The switched family ``{A_p}``: names and matrices (rows of rational strings)."""
+
+    names: Sequence[Any]
+    matrices: Sequence[Any]
+
+    def to_json(self) -> dict[str, Any]:
+        return {"names": list(self.names), "matrices": list(self.matrices)}
+
+    @classmethod
+    def from_json(cls, data: Any) -> "FamilySection":
+        if not isinstance(data, Mapping) or "matrices" not in data:
+            raise CertificateError("certificate has no 'family' with 'matrices'")
+        mats = data["matrices"]
+        if not isinstance(mats, list) or not mats:
+            raise CertificateError("certificate 'family.matrices' must be a non-empty list of matrices")
+        names = data.get("names") or [f"A_{i + 1}" for i in range(len(mats))]
+        if len(names) != len(mats):
+            raise CertificateError(f"'family.names' has {len(names)} names for {len(mats)} matrices")
+        return cls(tuple(names), tuple(mats))
+
+
+class OptionalSection(Protocol):
+    """What a top-level section other than family, certificates, verdict and provenance provides."""
+
+    KEY: ClassVar[str]
+
+    def to_json(self) -> dict[str, Any]: ...
+
+    @classmethod
+    def from_json(cls, data: Any) -> "OptionalSection": ...
+
+    def check(self, names: Sequence[str], matrices: Sequence[Any]) -> Check: ...
+
+
+#: Optional top-level sections, by key, in the order they are written.
+SECTIONS: dict[str, type[OptionalSection]] = {}
+
+
+def document_section(cls: type) -> type:
+    """Register an optional top-level section (written after ``family``, in registration order)."""
+    SECTIONS[cls.KEY] = cls
+    return cls
+
+
+@document_section
+@dataclass(frozen=True)
+class ObserverSection:
+    """The observer the family comes from: ``A``, ``C``, ``K_plus``, ``K_minus`` as rational strings.
+
+    Its check re-derives ``A_plus = A - K_plus C`` and ``A_minus = -A + K_minus C``
+    and compares them with the family.
+    """
+
+    KEY: ClassVar[str] = "observer"
+    A: Any
+    C: Any
+    K_plus: Any
+    K_minus: Any
+
+    def to_json(self) -> dict[str, Any]:
+        return {"A": self.A, "C": self.C, "K_plus": self.K_plus, "K_minus": self.K_minus}
+
+    @classmethod
+    def from_json(cls, data: Any) -> "ObserverSection":
+        if not isinstance(data, Mapping):
+            raise CertificateError(f"certificate 'observer' must be an object, got {data!r}")
+        return cls(data.get("A"), data.get("C"), data.get("K_plus", []), data.get("K_minus", []))
+
+    def check(self, names: Sequence[str], matrices: Sequence[Any]) -> Check:
+        from ._exact import add, fraction_matrix, matmul, scale, sub
+
+        n = len(matrices[0])
+        A = fraction_matrix(self.A, what="observer A", rows=n, cols=n)
+        C = fraction_matrix(self.C, what="observer C", cols=n)
+        Kp = fraction_matrix([[x] for x in self.K_plus], what="K_plus", rows=n, cols=1)
+        Km = fraction_matrix([[x] for x in self.K_minus], what="K_minus", rows=n, cols=1)
+        expected = {"A_plus": sub(A, matmul(Kp, C)), "A_minus": add(scale(-1, A), matmul(Km, C))}
+        for nm, M in zip(names, matrices):
+            if nm in expected and expected[nm] != M:
+                which = "A - K_plus C" if nm == "A_plus" else "-A + K_minus C"
+                return Check("observer", False, f"{nm} in the family differs from {which} computed from the "
+                                                "observer's A, C and gains")
+        return Check("observer", True)
+
+
+# ----------------------------------------------------------------------------- certificate entries
+class _Entry:
+    """JSON of a certificate entry: ``kind`` first, then the fields in declaration order (the JSON keys)."""
+
+    kind: CertificateKind
+
+    def _writes(self, name: str) -> bool:
+        return True
+
+    def to_json(self) -> dict[str, Any]:
+        out: dict[str, Any] = {"kind": self.kind.value}
+        out.update({f.name: getattr(self, f.name) for f in fields(self) if f.name != "kind" and self._writes(f.name)})
+        return out
+
+    @classmethod
+    def from_json(cls, data: Mapping[str, Any]) -> Any:
+        values = {f.name: data.get(f.name, None if f.default is MISSING else f.default)
+                  for f in fields(cls) if f.init}
+        if "kind" in values:
+            values["kind"] = CertificateKind(data["kind"])
+        return cls(**values)
+
+
+@dataclass(frozen=True)
+class LyapunovEntry(_Entry):
+    """``strict-cqlf`` (``P``) or ``hespanha`` (``P`` and one output matrix ``C_p`` per mode)."""
+
+    kind: CertificateKind
+    P: Any
+    C: Any = None
+    margin: float | None = None
+    method: str = ""
+    solver: str = ""
+
+    def _writes(self, name: str) -> bool:
+        return name != "C" or self.kind is CertificateKind.HESPANHA
+
+
+@dataclass(frozen=True)
+class DualEntry(_Entry):
+    """``no-strict-cqlf`` or ``no-common-lyapunov``: one ``R_p >= 0`` per mode."""
+
+    kind: CertificateKind
+    R: Any
+    margin: float | None = None
+    method: str = ""
+    solver: str = ""
+
+
+@dataclass(frozen=True)
+class DwellTimeEntry(_Entry):
+    """``dwell-time``: ``tau_D`` (a rational string) and one ``P_p`` per mode (Geromel–Colaneri)."""
+
+    tau_D: Any
+    P: Any
+    margin: float | None = None
+    method: str = ""
+    solver: str = ""
+    kind: CertificateKind = field(default=CertificateKind.DWELL_TIME, init=False)
+
+
+@dataclass(frozen=True)
+class PlanarEntry(_Entry):
+    """``planar``: the Balde–Boscain–Mason case, ``Gamma``, the numeric ``R`` of case iv and its verdict."""
+
+    case: Any
+    Gamma: str = ""
+    R: float | None = None
+    verdict: str = ""
+    kind: CertificateKind = field(default=CertificateKind.PLANAR, init=False)
+
+
+CertificateEntry = LyapunovEntry | DualEntry | DwellTimeEntry | PlanarEntry
+
+_ENTRIES: dict[CertificateKind, Callable[[Mapping[str, Any]], CertificateEntry]] = {
+    CertificateKind.STRICT_CQLF: LyapunovEntry.from_json,
+    CertificateKind.HESPANHA: LyapunovEntry.from_json,
+    CertificateKind.NO_STRICT_CQLF: DualEntry.from_json,
+    CertificateKind.NO_COMMON_LYAPUNOV: DualEntry.from_json,
+    CertificateKind.DWELL_TIME: DwellTimeEntry.from_json,
+    CertificateKind.PLANAR: PlanarEntry.from_json,
+}
+
+
+def _entry(data: Any) -> CertificateEntry:
+    kind = data.get("kind") if isinstance(data, Mapping) else None
+    if kind not in {k.value for k in CertificateKind}:
+        raise CertificateError(f"unknown certificate kind {kind!r}; known kinds: "
+                               f"{', '.join(k.value for k in CertificateKind)}")
+    return _ENTRIES[CertificateKind(kind)](data)
+
+
+# ----------------------------------------------------------------------------- document
+@dataclass(frozen=True)
+class CertificateDocument:
+    """A whole certificate: the family, optional sections, the entries, the claimed verdict, provenance."""
+
+    family: FamilySection
+    certificates: tuple[CertificateEntry, ...]
+    verdict: Verdict
+    provenance: Mapping[str, Any] = field(default_factory=dict)
+    sections: Mapping[str, OptionalSection] = field(default_factory=dict)
+
+    def to_json(self) -> dict[str, Any]:
+        out: dict[str, Any] = {"format": FORMAT, "version": VERSION, "family": self.family.to_json()}
+        out.update({key: self.sections[key].to_json() for key in SECTIONS if key in self.sections})
+        out["certificates"] = [c.to_json() for c in self.certificates]
+        out["verdict"] = self.verdict.to_json()
+        out["provenance"] = dict(self.provenance)
+        return out
+
+    @classmethod
+    def from_json(cls, data: Mapping[str, Any]) -> "CertificateDocument":
+        """Read a document; raises :class:`CertificateError` for a wrong format, version or structure."""
+        if data.get("format") != FORMAT:
+            raise CertificateError(f"not a switchobs certificate: format is {data.get('format')!r}, "
+                                   f"expected {FORMAT!r}")
+        if data.get("version") != VERSION:
+            raise CertificateError(f"unsupported certificate version {data.get('version')!r} "
+                                   f"(this checker reads {VERSION})")
+        family = FamilySection.from_json(data.get("family"))
+        certs = data.get("certificates")
+        if not isinstance(certs, list) or not certs:
+            raise CertificateError("certificate has no 'certificates' list")
+        sections = {key: SECTIONS[key].from_json(data[key]) for key in SECTIONS if data.get(key) is not None}
+        return cls(family, tuple(_entry(c) for c in certs), Verdict.from_json(data.get("verdict")),
+                   dict(data.get("provenance") or {}), sections)
