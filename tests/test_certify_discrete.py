@@ -8,7 +8,7 @@ import sympy as sp
 
 from switchobs.certify._discrete import (STEP_METHODS, DiscreteVerdict, check_discrete, decrease_polynomial,
                                          discrete_certificate, speed_table)
-from switchobs.design import design
+from switchobs.design import design_gains as design
 from switchobs.exceptions import CertificateError
 from switchobs.model import Model, builtin_model
 
@@ -179,3 +179,64 @@ def test_speed_table_in_abs_units():
     v, rate = speed_table(0.0279, accel_max=150.0, rate_hz=1000.0, speed_min=1.0)
     assert v == pytest.approx(5.376, rel=1e-3) and rate == pytest.approx(5376, rel=1e-3)
     assert speed_table(None, accel_max=150.0, rate_hz=1000.0, speed_min=1.0) == (0.0, 0.0)
+
+
+# ----------------------------------------------------------------------------- certificate, verify, CLI, docs
+@pytest.fixture(scope="module")
+def xbs3_discrete():
+    from switchobs.certify import certify_model
+
+    model = builtin_model("abs-xbs3")
+    return {m: certify_model(model, spectrum="-100,-100,-100", discrete=m, dwell=False) for m in ("radau3", "rk4")}
+
+
+def test_certificate_discrete_section_verifies_and_rejects_tampering(xbs3_discrete):
+    import copy
+
+    from switchobs.certify import verify_certificate
+
+    for method, rep in xbs3_discrete.items():
+        assert rep.document["discrete"]["method"] == method
+        assert verify_certificate(rep.document).holds
+    assert xbs3_discrete["radau3"].discrete_certified is True
+    assert xbs3_discrete["rk4"].discrete_certified is False and xbs3_discrete["rk4"].certified
+    doc = xbs3_discrete["radau3"].document
+    for path, value in ((["discrete", "h_max"], "1/100"), (["discrete", "method"], "rk4"),
+                        (["discrete", "P_d", 1, 1], "1/2"), (["discrete", "strict"], False)):
+        bad = copy.deepcopy(doc)
+        node = bad
+        for key in path[:-1]:
+            node = node[key]
+        node[path[-1]] = value
+        report = verify_certificate(bad)
+        assert not report.holds and [c.name for c in report.checks if not c.holds] == ["discrete"], path
+
+
+def test_cli_certify_discrete_exit_codes_and_units(tmp_path, capsys):
+    from switchobs.cli.main import main
+
+    out = tmp_path / "cert.json"
+    assert main(["certify", "abs-xbs3", "--spectrum=-100,-100,-100", "--no-dwell", "--discrete", "radau3",
+                 "--out", str(out)]) == 0
+    text = capsys.readouterr().out
+    assert "certified for every |s(y,t)|*dt" in text and "strictly decreases" in text
+    assert main(["verify", str(out)]) == 0
+    assert main(["certify", "abs-xbs3", "--spectrum=-100,-100,-100", "--no-dwell", "--discrete", "rk4"]) == 1
+    text = capsys.readouterr().out
+    assert "impossible" in text and "NOT certified" in text and "vx >= 5.39 m/s" in text
+    assert main(["certify", "abs-xbs3", "--spectrum=-100,-100,-100", "--discrete", "rk4", "--rate-hz", "0"]) == 2
+    assert "--rate-hz" in capsys.readouterr().err
+
+
+def test_docs_sampled_observer_table_is_a_fresh_run():
+    """docs/certify.md quotes switchobs.report.sampled_observer_table for the demo designs verbatim."""
+    import re
+    from pathlib import Path
+
+    from switchobs.report import sampled_observer_table
+
+    doc = (Path(__file__).resolve().parents[1] / "docs" / "certify.md").read_text("utf-8")
+    quoted = re.search(r"<!-- sampled-observer-table:start -->\n(.*?)\n<!-- sampled-observer-table:end -->", doc,
+                       re.S).group(1)
+    fresh = sampled_observer_table([("abs-xbs3", "-beta1,-beta2,-beta2"), ("abs-xbs4", "-beta1,-beta1,-beta2,-beta2")])
+    assert quoted == fresh

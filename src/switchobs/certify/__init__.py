@@ -13,6 +13,9 @@ common_lyapunov           -- Hespanha's non-strict common Lyapunov condition (LM
 strict_common_lyapunov    -- strict CQLF, or an exact dual proof that none exists
 infeasibility_certificate -- the dual (theorem of alternatives) certificate alone
 dwell_time                -- Geromel–Colaneri dwell-time bound, bisected on tau, certified exactly
+discrete_certificate      -- the sampled observer e+ = R(h A_pm) e for every step h = |s| dt (exact SOS proof
+                             or exact refutation; rk4, euler, midpoint, radau3)
+check_discrete            -- the exact re-check of a stored discrete section
 classify_planar           -- Balde–Boscain–Mason cases i–iv with Gamma, det, tr(A1 A2) and R
 verify_certificate        -- independent exact check of a certificate document
 load_certificate          -- read a certificate JSON file
@@ -25,7 +28,8 @@ admissible_constants      -- alpha (and dwell-time bounds for a beta) of Theorem
 as_family                 -- the validation gate for a family of matrices
 
 Results: CertificationReport, LyapunovResult, DualCertificate, DwellTimeResult,
-PlanarClassification, VerificationReport, TrajectoryReport, AdmissibleConstants,
+PlanarClassification, VerificationReport, TrajectoryReport, AdmissibleConstants, DiscreteCertificate,
+DiscreteVerdict,
 ZeroCrossing, Family.
 
 Certificate schema (one frozen class per section, ``to_json`` / ``from_json``):
@@ -35,6 +39,7 @@ Existence; document_section registers a new optional section.
 """
 
 from ._certify import CertificationReport, certify, certify_model, verdict_text
+from ._discrete import DiscreteCertificate, DiscreteVerdict, check_discrete, discrete_certificate
 from ._dwell import DwellTimeResult, dwell_time
 from ._family import Family, as_family
 from ._lyapunov import (DEFAULT_EPS, DualCertificate, LyapunovResult, common_lyapunov,
@@ -49,6 +54,7 @@ from ._verify import Check, VerificationReport, load_certificate, verify_certifi
 
 __all__ = [
     "CertificationReport", "certify", "certify_model", "verdict_text",
+    "DiscreteCertificate", "DiscreteVerdict", "check_discrete", "discrete_certificate",
     "DwellTimeResult", "dwell_time",
     "Family", "as_family",
     "DEFAULT_EPS", "DualCertificate", "LyapunovResult", "common_lyapunov", "infeasibility_certificate",

@@ -23,16 +23,17 @@ from typing import Any
 import sympy as sp
 
 from ..design import GainDesign
-from ..exceptions import FreeSymbolError, SpectrumError
+from ..exceptions import CertificateError, FreeSymbolError, SpectrumError
 from ..model import Model
 from ._exact import fraction_matrix, matrix_strings
 from ._family import Family, FamilyLike, as_family, format_spectrum
+from ._discrete import DiscreteCertificate, discrete_certificate, stability_function
 from ._dwell import DwellTimeResult, dwell_time
 from ._lmi import DEFAULT_SOLVERS
 from ._lyapunov import DEFAULT_EPS, LyapunovResult, common_lyapunov, strict_common_lyapunov
 from ._planar import PlanarClassification, classify_planar
 from ._schema import (ANY_DWELL, ArbitrarySwitching, CertificateDocument, CertificateKind, FamilySection,
-                      ObserverSection, PlanarEntry, Verdict)
+                      DiscreteSection, ObserverSection, PlanarEntry, Verdict)
 from ._verify import VerificationReport, implied_verdict, verify_certificate
 
 __all__ = ["CertificationReport", "certify", "certify_model", "verdict_text"]
@@ -92,6 +93,11 @@ class CertificationReport:
         The verdict in one sentence.
     timings : dict
         Wall time [s] of each check.
+    discrete : DiscreteCertificate or None
+        The sampled observer's certificate (``certify(..., discrete=METHOD)``);
+        None when not asked for or when no continuous common ``P`` is certified.
+    discrete_method : str or None
+        The step method asked for.
     """
 
     family: Family
@@ -104,6 +110,15 @@ class CertificationReport:
     verdict: Verdict
     text: str
     timings: dict[str, float] = field(default_factory=dict)
+    discrete: DiscreteCertificate | None = None
+    discrete_method: str | None = None
+
+    @property
+    def discrete_certified(self) -> bool | None:
+        """The sampled observer's certificate holds (None when it was not asked for)."""
+        if self.discrete_method is None:
+            return None
+        return self.discrete is not None and self.discrete.certified and self.verification.holds
 
     @property
     def certified(self) -> bool:
@@ -121,6 +136,7 @@ class CertificationReport:
                 "dwell_time": None if self.dwell is None else self.dwell.to_json(),
                 "planar": None if self.planar is None else self.planar.to_json(),
                 "verification": self.verification.to_json(), "timings": self.timings,
+                "discrete": None if self.discrete is None else self.discrete.to_json(),
                 "spectra": {nm: format_spectrum(M) for nm, M in zip(self.family.names, self.family.numeric)},
                 "certificate": self.document}
 
@@ -152,7 +168,13 @@ class CertificationReport:
         lines.insert(1, "  ".join("-" * w for w in widths))
         head = [f"{self.family} (spectra: " + "; ".join(f"{nm} {format_spectrum(M)}" for nm, M in
                                                          zip(self.family.names, self.family.numeric)) + ")"]
-        tail = [f"verdict: {self.text}",
+        tail = [f"verdict: {self.text}"]
+        if self.discrete is not None:
+            tail.append(str(self.discrete))
+        elif self.discrete_method is not None:
+            tail.append(f"discrete certificate ({self.discrete_method}): not attempted, no continuous common "
+                        "Lyapunov matrix is certified")
+        tail += [
                 f"independent exact check of the certificate: {'holds' if self.verification.holds else 'FAILS'}"]
         if not self.verification.holds:
             tail += [f"  {c}" for c in self.verification.checks if not c.holds]
@@ -169,8 +191,8 @@ def _exact_col(ok: bool) -> str:
 
 def certify(family: FamilyLike, *, names: Sequence[str] | None = None, output: Any = None,
             dwell: bool = True, eps: float = DEFAULT_EPS, solvers: Sequence[str] = DEFAULT_SOLVERS,
-            observer: ObserverSection | None = None, provenance: Mapping[str, Any] | None = None
-            ) -> CertificationReport:
+            observer: ObserverSection | None = None, provenance: Mapping[str, Any] | None = None,
+            discrete: str | None = None) -> CertificationReport:
     """Run every applicable check on a switched family and return the verified certificate.
 
     Parameters
@@ -189,6 +211,10 @@ def certify(family: FamilyLike, *, names: Sequence[str] | None = None, output: A
         also re-derives ``A_plus``, ``A_minus`` from them.
     provenance : mapping, optional
         Free-form information stored in the document (model, values, spectrum).
+    discrete : {"rk4", "euler", "midpoint", "radau3"}, optional
+        Also certify the sampled observer of this step method for every step
+        length (:func:`~switchobs.certify.discrete_certificate`, with the
+        certified common ``P``); needs the family ``[A_plus, A_minus]`` and ``output``.
 
     Returns
     -------
@@ -197,6 +223,8 @@ def certify(family: FamilyLike, *, names: Sequence[str] | None = None, output: A
     Raises
     ------
     DimensionError, ModelError, NotHurwitzError, SolverFailure
+    CertificateError
+        An unknown ``discrete`` method, or ``discrete`` without ``output``.
 
     Examples
     --------
@@ -205,6 +233,11 @@ def certify(family: FamilyLike, *, names: Sequence[str] | None = None, output: A
     ('any', 'ii')
     """
     fam = as_family(family, names)
+    if discrete is not None:
+        stability_function(discrete)
+        if output is None or list(fam.names) != ["A_plus", "A_minus"]:
+            raise CertificateError("the discrete certificate needs the observer's family [A_plus, A_minus] and "
+                                   f"its output C; got {list(fam.names)} and output {output!r}")
     timings: dict[str, float] = {}
     t0 = time.perf_counter()
     strict = strict_common_lyapunov(fam, eps=eps, solvers=solvers)
@@ -227,12 +260,20 @@ def certify(family: FamilyLike, *, names: Sequence[str] | None = None, output: A
                          dw.certificate() if dw is not None else None) if c is not None]
     if planar is not None:
         certs.append(PlanarEntry(planar.case, str(planar.gamma), planar.R, planar.verdict))
+    sections: dict[str, Any] = {} if observer is None else {ObserverSection.KEY: observer}
+    disc = None
+    common = hesp if hesp.certified else strict if strict.certified else None
+    if discrete is not None and common is not None:
+        t0 = time.perf_counter()
+        disc = discrete_certificate(fam.exact[0], fam.exact[1], fraction_matrix(output, what="output C"), common.P,
+                                    method=discrete)
+        sections[DiscreteSection.KEY] = DiscreteSection(disc.to_json())
+        timings["discrete"] = time.perf_counter() - t0
     holding = [c.kind for c in certs if c.kind is not CertificateKind.PLANAR]
     tau = [Fraction(c.tau_D) for c in certs if c.kind is CertificateKind.DWELL_TIME]
     verdict = implied_verdict(holding, planar.case if planar is not None else None, tau)
     document = CertificateDocument(FamilySection(**fam.to_json()), tuple(certs), verdict,
-                                   {**(provenance or {}), "produced_by": "switchobs certify"},
-                                   {} if observer is None else {ObserverSection.KEY: observer})
+                                   {**(provenance or {}), "produced_by": "switchobs certify"}, sections)
     doc = document.to_json()
     t0 = time.perf_counter()
     if certs:
@@ -241,12 +282,13 @@ def certify(family: FamilyLike, *, names: Sequence[str] | None = None, output: A
         check = VerificationReport(False, (), verdict, verdict)
     timings["verify"] = time.perf_counter() - t0
     return CertificationReport(fam, strict, hesp, dw, planar, doc, check, verdict, verdict_text(verdict, planar),
-                               timings)
+                               timings, disc, discrete)
 
 
 def certify_model(model: Model, *, values: Mapping[str, Any] | None = None, spectrum: str | Sequence | None = None,
                   gains: GainDesign | None = None, K_plus: Any = None, K_minus: Any = None, dwell: bool = True,
-                  eps: float = DEFAULT_EPS, solvers: Sequence[str] = DEFAULT_SOLVERS) -> CertificationReport:
+                  eps: float = DEFAULT_EPS, solvers: Sequence[str] = DEFAULT_SOLVERS,
+                  discrete: str | None = None) -> CertificationReport:
     """Certify the switched observer of a numeric model (seed 004; seed 000 eq. (13)).
 
     The error dynamics in the rescaled time are ``A_plus = A - K_plus C`` and
@@ -268,7 +310,7 @@ def certify_model(model: Model, *, values: Mapping[str, Any] | None = None, spec
         the model's values (its design symbols must have values already).
     K_plus, K_minus : str or sequence, optional
         Numeric gains, e.g. ``"84,-7312/375,-64/3"`` (the command line's form).
-    dwell, eps, solvers
+    dwell, eps, solvers, discrete
         As in :func:`certify`.
 
     Returns
@@ -325,4 +367,4 @@ def certify_model(model: Model, *, values: Mapping[str, Any] | None = None, spec
                                                              else [str(p) for p in spectrum]),
                   "references": dict(model.references)}
     return certify([A_plus, A_minus], names=["A_plus", "A_minus"], output=model.C, dwell=dwell, eps=eps,
-                   solvers=solvers, observer=observer, provenance=provenance)
+                   solvers=solvers, observer=observer, provenance=provenance, discrete=discrete)

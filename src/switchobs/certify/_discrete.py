@@ -379,6 +379,10 @@ class DiscreteCertificate:
     modes : tuple of ModeProof
     statement : str
         The claim in plain words.
+    reasons : tuple of str
+        Why a verdict is what it is (the uniqueness lemma, what was not attempted).
+    C : Matrix
+        The output row the refutation's observability coordinates use.
     """
 
     method: str
@@ -389,6 +393,7 @@ class DiscreteCertificate:
     modes: tuple[ModeProof, ...]
     statement: str
     reasons: tuple[str, ...] = field(default=())
+    C: Matrix = field(default_factory=list)
 
     @property
     def certified(self) -> bool:
@@ -407,8 +412,8 @@ class DiscreteCertificate:
 
     def to_json(self) -> dict[str, Any]:
         return {"method": self.method, "verdict": self.verdict.value, "h_max": self.h_max_text(),
-                "strict": self.strict, "P_d": matrix_strings(self.P_d),
-                "modes": [m.to_json() for m in self.modes], "statement": self.statement}
+                "strict": self.strict, "statement": self.statement, "P_d": matrix_strings(self.P_d),
+                "C": matrix_strings(self.C), "modes": [m.to_json() for m in self.modes]}
 
     def __str__(self) -> str:
         rho = self.h_rho
@@ -540,7 +545,7 @@ def check_discrete(A_plus: Any, A_minus: Any, C: Any, P: Any, method: str, data:
         verdict = DiscreteVerdict.INCONCLUSIVE
     h_max = None
     cert = DiscreteCertificate(m.name, verdict, h_max, verdict is DiscreteVerdict.CERTIFIED and strict_all, Pm,
-                               tuple(modes), _statement(m, verdict, h_max, strict_all), tuple(reasons))
+                               tuple(modes), _statement(m, verdict, h_max, strict_all), tuple(reasons), Cm)
     if data is not None:
         _compare(cert, data)
     return cert

@@ -32,7 +32,7 @@ from ..exceptions import CertificateError
 
 __all__ = ["FORMAT", "VERSION", "CertificateKind", "ArbitrarySwitching", "Existence", "ANY_DWELL", "Verdict",
            "FamilySection", "ObserverSection", "LyapunovEntry", "DualEntry", "DwellTimeEntry", "PlanarEntry",
-           "CertificateEntry", "CertificateDocument", "document_section", "Check"]
+           "CertificateEntry", "CertificateDocument", "document_section", "Check", "DiscreteSection"]
 
 FORMAT = "switchobs-certificate"
 VERSION = 1
@@ -211,6 +211,49 @@ class ObserverSection:
                 return Check("observer", False, f"{nm} in the family differs from {which} computed from the "
                                                 "observer's A, C and gains")
         return Check("observer", True)
+
+
+@document_section
+@dataclass(frozen=True)
+class DiscreteSection:
+    """The sampled observer: the step method's certificate for every ``h = |s| dt`` in ``(0, h_max]``.
+
+    Written by ``switchobs certify --discrete METHOD``; the data is
+    :meth:`switchobs.certify.DiscreteCertificate.to_json` (method, verdict,
+    ``h_max`` as ``"inf"``, a rational string or ``"none"``, ``P_d``, ``C``
+    and per mode an SOS decomposition or a refuting witness).  Its check
+    re-derives the claim from the family's ``A_plus``, ``A_minus`` exactly.
+    """
+
+    KEY: ClassVar[str] = "discrete"
+    data: Mapping[str, Any]
+
+    def to_json(self) -> dict[str, Any]:
+        return dict(self.data)
+
+    @classmethod
+    def from_json(cls, data: Any) -> "DiscreteSection":
+        if not isinstance(data, Mapping):
+            raise CertificateError(f"certificate 'discrete' must be an object, got {data!r}")
+        for key, kind in (("method", str), ("verdict", str), ("h_max", str), ("strict", bool), ("P_d", list),
+                          ("C", list), ("modes", list)):
+            if not isinstance(data.get(key), kind):
+                raise CertificateError(f"certificate 'discrete' needs {key!r} as a {kind.__name__}, "
+                                       f"got {data.get(key)!r}")
+        return cls(dict(data))
+
+    def check(self, names: Sequence[str], matrices: Sequence[Any]) -> Check:
+        from ._discrete import check_discrete
+
+        if list(names) != ["A_plus", "A_minus"]:
+            return Check("discrete", False, f"the discrete section needs the family [A_plus, A_minus], got "
+                                            f"{list(names)}")
+        try:
+            cert = check_discrete(matrices[0], matrices[1], self.data["C"], self.data["P_d"],
+                                  self.data["method"], self.data)
+        except CertificateError as exc:
+            return Check("discrete", False, str(exc))
+        return Check("discrete", True, f"{cert.method}: {cert.verdict.value}, h_max = {cert.h_max_text()}")
 
 
 # ----------------------------------------------------------------------------- certificate entries

@@ -3,8 +3,10 @@
 from __future__ import annotations
 
 import argparse
+import math
 
 from ..certify import certify_model
+from ..certify._discrete import STEP_METHODS
 from ..exceptions import SpectrumError
 from ..model import load_model
 from ._common import add_model_arguments, emit_json, parse_params
@@ -18,7 +20,9 @@ def register(sub: argparse._SubParsersAction) -> None:
         description="Build A_plus = A - K_plus C and A_minus = -A + K_minus C for MODEL with numeric values, "
                     "run the strict and Hespanha common-Lyapunov LMIs, the Geromel-Colaneri dwell time and "
                     "(n = 2) the Balde-Boscain-Mason classification, re-check every certificate in exact "
-                    "arithmetic and print the verdict. Exit status 0 if a stability certificate holds, "
+                    "arithmetic and print the verdict. With --discrete METHOD, also certify the sampled "
+                    "observer that runs in C (one METHOD step per sample, h = |s|*dt) for every step length. "
+                    "Exit status 0 if a stability certificate holds (and, with --discrete, the sampled one too), "
                     "1 if none does, 2 on bad input.")
     add_model_arguments(p)
     p.add_argument("--spectrum", help='poles of A_plus, e.g. "-10,-20,-20" (gains by Theorem 1, seed 004)')
@@ -27,6 +31,11 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--solver", choices=("CLARABEL", "SCS"), help="use only this cvxpy solver "
                    "(default: CLARABEL, then SCS as fallback)")
     p.add_argument("--no-dwell", action="store_true", help="skip the dwell-time bisection")
+    p.add_argument("--discrete", choices=tuple(STEP_METHODS), metavar="METHOD",
+                   help=f"also certify the sampled observer of this step method ({', '.join(STEP_METHODS)}): "
+                        "adds a 'discrete' section to the certificate")
+    p.add_argument("--rate-hz", type=float, default=1000.0,
+                   help="sample rate used to state the discrete certificate in the user's units (default 1000)")
     p.add_argument("--json", action="store_true", help="print the full report as JSON")
     p.add_argument("--out", metavar="CERT.json", help="write the certificate (checkable with switchobs verify)")
     p.set_defaults(func=run)
@@ -37,11 +46,13 @@ def run(args: argparse.Namespace) -> int:
         raise SpectrumError("--gains-minus needs --gains-plus")
     if (args.spectrum is None) == (args.gains_plus is None):
         raise SpectrumError("give either a spectrum (--spectrum) or the gains (--gains-plus [--gains-minus])")
+    if not (math.isfinite(args.rate_hz) and args.rate_hz > 0):
+        raise SpectrumError(f"--rate-hz must be a positive number of samples per second, got {args.rate_hz!r}")
     model = load_model(args.model)
     solvers = (args.solver,) if args.solver else ("CLARABEL", "SCS")
     report = certify_model(model, values=parse_params(args.param), spectrum=args.spectrum,
                            K_plus=args.gains_plus, K_minus=args.gains_minus, dwell=not args.no_dwell,
-                           solvers=solvers)
+                           solvers=solvers, discrete=args.discrete)
     if args.out:
         report.write(args.out)
     if args.json:
@@ -54,6 +65,11 @@ def run(args: argparse.Namespace) -> int:
         print(f"  K_plus  = [{', '.join(obs.get('K_plus', []))}]")
         print(f"  K_minus = [{', '.join(obs.get('K_minus', []))}]")
         print(report)
+        if report.discrete is not None:
+            from ..report import sampled_lines
+
+            for line in sampled_lines(model, report.discrete, rate_hz=args.rate_hz):
+                print(line)
         if args.out:
             print(f"certificate written to {args.out}")
-    return 0 if report.certified else 1
+    return 0 if report.certified and report.discrete_certified is not False else 1

@@ -9,13 +9,15 @@ theory_document(s)     -- the theory/*.md documents generated from switchobs.des
 write_theory           -- write them into a directory
 demo_figures, mark_road_changes -- figures of the demo (matplotlib Figure objects)
 Progress, Stage, check_prerequisites -- stage lines with elapsed times; prerequisites of a pipeline
+sampled_lines, sampled_observer_table -- the sampled observer's certificate in sample rate and vehicle speed
 """
 
 from ._demo import DEMO_BETAS, DEMO_MODELS, STAGES, DemoReport, ModelResult, run_demo
 from ._plots import demo_figures, mark_road_changes
 from ._progress import Progress, Stage, check_prerequisites
+from ._sampled import sampled_lines, sampled_observer_table
 from ._theory import THEORY_MODELS, TheoryDocument, theory_document, theory_documents, write_theory
 
 __all__ = ["DEMO_BETAS", "DEMO_MODELS", "STAGES", "DemoReport", "ModelResult", "run_demo", "mark_road_changes",
            "demo_figures", "Progress", "Stage", "check_prerequisites", "THEORY_MODELS", "TheoryDocument",
-           "theory_document", "theory_documents", "write_theory"]
+           "theory_document", "theory_documents", "write_theory", "sampled_lines", "sampled_observer_table"]
