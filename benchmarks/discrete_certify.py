@@ -11,8 +11,11 @@ in the same run (``REPEATS`` runs of ``STEPS`` chained steps, state reset every 
   sub-stepped C, the mean number of sub-steps, and ns per sub-step (today's step is not stable there:
   its state overflows, so it is not timed on these signals).
 
-The certificate-timing half (how long ``switchobs.certify.discrete_certificate`` takes) is added by
-the certify layer next to :func:`step_timings`.
+Certificate half (:func:`certificate_timings`): CPU time of ``switchobs.certify.discrete_certificate``
+(analysis and exact proof or refutation) and of its re-check from the JSON section, for n = 3, 4, 8, 16
+(radau3: certified; rk4: refuted), beside what a user would do instead, a float eigenvalue check of
+``P - R'PR`` on a grid of step lengths (which proves nothing between the points and, at n >= 3, cannot see
+the rk4 increase of order h^5 below rounding).
 Run: ``.venv/bin/python benchmarks/discrete_certify.py``.
 """
 
@@ -21,6 +24,7 @@ from __future__ import annotations
 import re
 import shutil
 import statistics
+import time
 import subprocess
 import tempfile
 from fractions import Fraction
@@ -28,6 +32,8 @@ from pathlib import Path
 
 import numpy as np
 
+from switchobs.certify import check_discrete, discrete_certificate
+from switchobs.certify._discrete import stability_function
 from switchobs.codegen import generate_observer
 from switchobs.design import design
 from switchobs.model import builtin_model
@@ -120,7 +126,111 @@ def step_timings(model_name: str, cc: str, tmp: Path) -> dict[str, float]:
             "substeps": substeps, "per_substep": statistics.median(stiff) / substeps, "failures": failures}
 
 
+# ----------------------------------------------------------------------------- certificate half
+CERT_SIZES = (3, 4, 8, 16)
+CERT_REPEATS = 5
+GRID_POINTS = 1000
+
+
+def normal_form_pair(n: int) -> tuple[list, list, list, list]:
+    """A Theorem 1 pair in observer normal form with spectrum -1..-n, and its exact common P.
+
+    ``A_plus`` is the companion matrix with first column ``-alpha`` (seed 004), ``A_minus = D A_plus D``
+    with ``D = diag(1, -1, ...)``; ``P`` solves ``A_plus' P + P A_plus = -e1 e1'`` exactly (Fractions).
+    """
+    alpha = [Fraction(1)]
+    for k in range(1, n + 1):  # prod (s + k)
+        alpha = [a + k * b for a, b in zip(alpha + [Fraction(0)], [Fraction(0)] + alpha)]
+    alpha = alpha[1:]
+    Ap = [[-alpha[i] if j == 0 else Fraction(int(j == i + 1)) for j in range(n)] for i in range(n)]
+    sign = [(-1) ** i for i in range(n)]
+    Am = [[sign[i] * Ap[i][j] * sign[j] for j in range(n)] for i in range(n)]
+    # the n(n+1)/2 unknowns of P, one exact elimination
+    idx = {(i, j): k for k, (i, j) in enumerate((i, j) for i in range(n) for j in range(i, n))}
+    m = len(idx)
+    rows = []
+    for (i, j), _ in idx.items():
+        row = [Fraction(0)] * (m + 1)
+        for k in range(n):  # (A'P + PA)_ij = sum_k A_ki P_kj + P_ik A_kj
+            if Ap[k][i]:
+                row[idx[min(k, j), max(k, j)]] += Ap[k][i]
+            if Ap[k][j]:
+                row[idx[min(i, k), max(i, k)]] += Ap[k][j]
+        row[m] = Fraction(-1 if (i, j) == (0, 0) else 0)
+        rows.append(row)
+    for c in range(m):
+        piv = next(r for r in range(c, m) if rows[r][c] != 0)
+        rows[c], rows[piv] = rows[piv], rows[c]
+        inv = 1 / rows[c][c]
+        rows[c] = [x * inv for x in rows[c]]
+        for r in range(m):
+            if r != c and rows[r][c] != 0:
+                f = rows[r][c]
+                rows[r] = [x - f * y for x, y in zip(rows[r], rows[c])]
+    P = [[rows[idx[min(i, j), max(i, j)]][m] for j in range(n)] for i in range(n)]
+    C = [[Fraction(int(j == 0)) for j in range(n)]]
+    return Ap, Am, C, P
+
+
+def grid_check(pair: tuple, method: str, points: int = GRID_POINTS) -> bool:
+    """The baseline a user would write instead: eigenvalues of P - R'PR on a float grid of h (no proof)."""
+    import scipy.linalg
+
+    m = stability_function(method)
+    P = np.array(pair[3], dtype=float)
+    ok = True
+    for A in pair[:2]:
+        Af = np.array(A, dtype=float)
+        for h in np.linspace(1e-3, 1.0, points):
+            Z = h * Af
+            N = sum(float(c) * np.linalg.matrix_power(Z, k) for k, c in enumerate(m.numerator))
+            D = sum(float(c) * np.linalg.matrix_power(Z, k) for k, c in enumerate(m.denominator))
+            R = np.linalg.solve(D, N)
+            ok &= bool(scipy.linalg.eigh(P - R.T @ P @ R, P, eigvals_only=True).min() >= -1e-9)
+    return ok
+
+
+def certificate_timings() -> list[dict]:
+    """CPU seconds of the discrete certificate (analysis + exact proof), its re-check from JSON, and the grid."""
+
+    out = []
+    for n in CERT_SIZES:
+        pair = normal_form_pair(n)
+        for method in ("radau3", "rk4"):
+            make, check = [], []
+            for _ in range(CERT_REPEATS):
+                t0 = time.process_time()
+                cert = discrete_certificate(*pair, method=method)
+                make.append(time.process_time() - t0)
+                section = cert.to_json()
+                t0 = time.process_time()
+                check_discrete(pair[0], pair[1], pair[2], section["P_d"], method, section)
+                check.append(time.process_time() - t0)
+            t0 = time.process_time()
+            grid_ok = grid_check(pair, method)
+            grid = time.process_time() - t0
+            out.append({"n": n, "method": method, "verdict": cert.verdict.value,
+                        "certificate_s": statistics.median(make), "spread": (min(make), max(make)),
+                        "recheck_s": statistics.median(check), "grid_s": grid, "grid_ok": grid_ok})
+    return out
+
+
+def print_certificate_timings() -> None:
+    rows = certificate_timings()
+    print(f"Discrete certificate (normal form, spectrum -1..-n, exact): CPU s, median [min-max] of {CERT_REPEATS}; "
+          f"baseline: float eigenvalues of P - R'PR on a {GRID_POINTS}-point grid of h in [1e-3, 1] (no proof)")
+    print("| n | method | verdict | certificate s | re-check from JSON s | grid baseline s | grid says |")
+    print("| ---: | --- | --- | ---: | ---: | ---: | --- |")
+    for r in rows:
+        print(f"| {r['n']} | {r['method']} | {r['verdict']} | {r['certificate_s']:.3f} "
+              f"[{r['spread'][0]:.3f}-{r['spread'][1]:.3f}] | {r['recheck_s']:.3f} | {r['grid_s']:.3f} "
+              f"| {'decreases' if r['grid_ok'] else 'increases somewhere'} |")
+    worst8 = max(r["certificate_s"] for r in rows if r["n"] == 8)
+    print(f"goal: n = 8 discrete certificate < 5 s: {'met' if worst8 < 5 else 'NOT met'} ({worst8:.3f} s)")
+
+
 def main() -> None:
+    print_certificate_timings()
     compilers = [cc for cc in ("gcc", "clang") if shutil.which(cc)]
     rows = []
     with tempfile.TemporaryDirectory() as tmp:
