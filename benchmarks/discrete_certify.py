@@ -34,6 +34,7 @@ import numpy as np
 
 from switchobs.certify import check_discrete, discrete_certificate
 from switchobs.certify._discrete import stability_function
+from switchobs.certify._exact import solve
 from switchobs.codegen import generate_observer
 from switchobs.design import design
 from switchobs.model import builtin_model
@@ -145,29 +146,21 @@ def normal_form_pair(n: int) -> tuple[list, list, list, list]:
     Ap = [[-alpha[i] if j == 0 else Fraction(int(j == i + 1)) for j in range(n)] for i in range(n)]
     sign = [(-1) ** i for i in range(n)]
     Am = [[sign[i] * Ap[i][j] * sign[j] for j in range(n)] for i in range(n)]
-    # the n(n+1)/2 unknowns of P, one exact elimination
+    # the n(n+1)/2 unknowns of P, one exact solve
     idx = {(i, j): k for k, (i, j) in enumerate((i, j) for i in range(n) for j in range(i, n))}
     m = len(idx)
-    rows = []
+    rows, rhs = [], []
     for (i, j), _ in idx.items():
-        row = [Fraction(0)] * (m + 1)
+        row = [Fraction(0)] * m
         for k in range(n):  # (A'P + PA)_ij = sum_k A_ki P_kj + P_ik A_kj
             if Ap[k][i]:
                 row[idx[min(k, j), max(k, j)]] += Ap[k][i]
             if Ap[k][j]:
                 row[idx[min(i, k), max(i, k)]] += Ap[k][j]
-        row[m] = Fraction(-1 if (i, j) == (0, 0) else 0)
         rows.append(row)
-    for c in range(m):
-        piv = next(r for r in range(c, m) if rows[r][c] != 0)
-        rows[c], rows[piv] = rows[piv], rows[c]
-        inv = 1 / rows[c][c]
-        rows[c] = [x * inv for x in rows[c]]
-        for r in range(m):
-            if r != c and rows[r][c] != 0:
-                f = rows[r][c]
-                rows[r] = [x - f * y for x, y in zip(rows[r], rows[c])]
-    P = [[rows[idx[min(i, j), max(i, j)]][m] for j in range(n)] for i in range(n)]
+        rhs.append([Fraction(-1 if (i, j) == (0, 0) else 0)])
+    x = solve(rows, rhs)
+    P = [[x[idx[min(i, j), max(i, j)]][0] for j in range(n)] for i in range(n)]
     C = [[Fraction(int(j == 0)) for j in range(n)]]
     return Ap, Am, C, P
 

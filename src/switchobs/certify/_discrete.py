@@ -47,7 +47,7 @@ from typing import Any
 
 from ..exceptions import CertificateError, DimensionError
 from ._exact import (Matrix, definiteness, fraction_matrix, identity, inf_norm, is_zero, lyapunov_form, matmul,
-                     matrix_strings, nullspace, observable, to_fraction, transpose, zeros)
+                     matrix_strings, nullspace, observable, solve, to_fraction, transpose, zeros)
 
 __all__ = ["StepMethod", "STEP_METHODS", "DiscreteVerdict", "DiscreteCertificate", "discrete_certificate",
            "check_discrete", "stability_function"]
@@ -236,30 +236,16 @@ def _sos_expand(terms: Sequence[SosTerm], n: int) -> MatPoly:
 
 
 # ------------------------------------------------------ observability scaling
-def _inverse(M: Matrix) -> Matrix:
-    n = len(M)
-    aug = [list(map(Fraction, row)) + [Fraction(int(i == j)) for j in range(n)] for i, row in enumerate(M)]
-    for c in range(n):
-        piv = next((i for i in range(c, n) if aug[i][c] != 0), None)
-        if piv is None:
-            raise CertificateError("the observability matrix is singular")
-        aug[c], aug[piv] = aug[piv], aug[c]
-        inv = 1 / aug[c][c]
-        aug[c] = [x * inv for x in aug[c]]
-        for i in range(n):
-            if i != c and aug[i][c] != 0:
-                f = aug[i][c]
-                aug[i] = [x - f * y for x, y in zip(aug[i], aug[c])]
-    return [row[n:] for row in aug]
-
-
 def _scaled(A: Matrix, C: Matrix, W: MatPoly) -> list[Matrix]:
     """``O^-T W_m O^-1`` for each coefficient: the decrease in observability coordinates ``w = O e``."""
     n = len(A)
     O = [C[0]]
     for _ in range(n - 1):
         O.append(matmul([O[-1]], A)[0])
-    Oi = _inverse(O)
+    try:
+        Oi = solve(O, identity(n))
+    except DimensionError:
+        raise CertificateError("(A, C) is not observable: the observability matrix is singular") from None
     Oit = transpose(Oi)
     return [matmul(Oit, matmul(Wk, Oi)) for Wk in W]
 

@@ -25,7 +25,7 @@ from ..exceptions import CertificateError, DimensionError
 __all__ = [
     "Matrix", "to_fraction", "fraction_matrix", "matrix_strings", "identity", "zeros", "transpose",
     "matmul", "add", "sub", "scale", "lyapunov_form", "integer_form", "Definiteness", "definiteness",
-    "rank", "nullspace", "observable", "expm_enclosure", "inf_norm", "sqrt_lower", "sqrt_upper",
+    "rank", "nullspace", "solve", "observable", "expm_enclosure", "inf_norm", "sqrt_lower", "sqrt_upper",
     "is_zero",
 ]
 
@@ -279,6 +279,15 @@ def rank(M: Sequence[Sequence[Any]]) -> int:
     if not M or not M[0]:
         return 0
     return len(_rref(M)[1])
+
+
+def solve(M: Sequence[Sequence[Any]], B: Sequence[Sequence[Any]]) -> list[list[Fraction]]:
+    """``X`` with ``M X = B`` for a square nonsingular rational ``M`` (exact Gauss-Jordan)."""
+    n = len(M)
+    R, pivots = _rref([list(row) + list(b) for row, b in zip(M, B)])
+    if pivots[:n] != list(range(n)):
+        raise DimensionError(f"the {n} x {n} matrix is singular (rank {sum(p < n for p in pivots)})")
+    return [row[n:] for row in R]
 
 
 def nullspace(M: Sequence[Sequence[Any]], cols: int | None = None) -> list[list[Fraction]]:
