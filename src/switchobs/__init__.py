@@ -10,8 +10,9 @@ Public API (sub-packages follow the pipeline; each has its own ``__all__``)
 Model, builtin_model, load_model            -- switchobs.model
 design_gains, GainDesign, observer_normal_form -- switchobs.design (sympy, exact)
 certify_model, common_lyapunov, strict_common_lyapunov, dwell_time,
-classify_planar, verify_certificate, trajectory_conditions
-                                            -- switchobs.certify (cvxpy + exact re-check)
+classify_planar, verify_certificate, trajectory_conditions, discrete_certificate
+                                            -- switchobs.certify (cvxpy + exact re-check; the sampled
+                                               observer of each step method for every step length)
 generate_observer, compile_observer, CObserver
                                             -- switchobs.codegen (casadi -> C)
 SwitchedObserver, AdaptiveSwitchedObserver, xbs3_observer, xbs4_observer,
@@ -48,7 +49,7 @@ _EXPORTS = {
     "switchobs.model": ("Model", "builtin_model", "load_model"),
     "switchobs.design": ("design_gains", "GainDesign", "observer_normal_form"),
     "switchobs.certify": ("certify_model", "common_lyapunov", "strict_common_lyapunov", "dwell_time",
-                          "classify_planar", "verify_certificate", "trajectory_conditions"),
+                          "classify_planar", "verify_certificate", "trajectory_conditions", "discrete_certificate"),
     "switchobs.codegen": ("generate_observer", "compile_observer", "CObserver"),
     "switchobs.observers": ("SwitchedObserver", "AdaptiveSwitchedObserver", "xbs3_observer", "xbs4_observer",
                             "adaptive_xbs_observer"),
