@@ -51,7 +51,8 @@ from sympy.printing.pycode import PythonCodePrinter
 from .._validate import DEFAULT_MAX_SUBSTEPS, named_vector
 from ..exceptions import FreeSymbolError, ModelError, ObserverInputError, SimulationError
 from ..model import Model, numeric
-from ..spec import METHODS, SCALE, ObserverSpec, StepStatus
+from ..spec import (METHODS, SCALE, STEP_METHODS, ObserverSpec, StepStatus, affine_jacobian, implicit_increment,
+                    require_explicit)
 
 __all__ = ["ErrorCode", "METHODS", "Kernel", "check_free"]
 
@@ -284,6 +285,11 @@ class _Source:
         if method == "euler":
             lines += [f"{indent}{new[k]} = {x[k]} + dt*{k1[k]}" for k in range(N)]
             return lines, new
+        if not STEP_METHODS[method].explicit:
+            lines.append(f"{indent}inc = implicit(s, ({''.join(g + ', ' for g in self.g)}), "
+                         f"({''.join(k + ', ' for k in k1)}), dt)")
+            lines += [f"{indent}{new[k]} = {x[k]} + dt*inc[{k}]" for k in range(N)]
+            return lines, new
         k2, k3, k4 = ([f"k{j}_{k}" for k in range(N)] for j in (2, 3, 4))
         t = [f"t{k}" for k in range(N)]
         lines += [f"{indent}{t[k]} = {x[k]} + h*{k1[k]}" for k in range(N)]
@@ -344,6 +350,29 @@ class _Source:
         return "\n".join(line for line in src if line != "") + "\n"
 
 
+def _implicit_step(spec: _Lowered, method: str):
+    """``implicit(s, g, f, dt)``: the increment of one implicit step (NaN where ``D(Z)`` is singular).
+
+    ``J = s A - g C`` with the lowered numbers, then :func:`switchobs.spec.implicit_increment`,
+    the very function the C translation evaluates on casadi SX.  It never raises: a zero or
+    non-finite ``det D(Z)`` gives NaN, which the step reports as ``NONFINITE_RESULT``.
+    """
+    A = [[None if a == 0.0 else float(a) for a in row] for row in spec.A]
+    C = [None if c == 0.0 else float(c) for c in spec.C]
+    m = STEP_METHODS[method]
+    failed = [math.nan] * spec.n
+
+    def implicit(s: float, g: Sequence[float], f: Sequence[float], dt: float) -> list[float]:
+        inc, det = implicit_increment(m, affine_jacobian(A, C, s, g), f, dt, _safe)
+        return inc if det != 0.0 and math.isfinite(det) else failed
+
+    return implicit
+
+
+def _safe(det: float) -> float:
+    return det if det != 0.0 else 1.0
+
+
 # --------------------------------------------------------------------------- kernel
 _NONFINITE = ("the step produced a non-finite state (overflow, or a domain error in d(y), b(y)); "
               "reduce dt or check the signals")
@@ -360,11 +389,15 @@ class Kernel:
                  max_substeps: int = DEFAULT_MAX_SUBSTEPS):
         if method not in METHODS:
             raise SimulationError(f"unknown discretisation method {method!r}; choose one of {list(METHODS)}")
+        if spec.p:
+            require_explicit(method, "the adaptive observer's right-hand side", SimulationError)
         self.spec = spec
         self.method = method
         self.lowered = _lower(spec)
         self.source = _Source(self.lowered).module(method)
         namespace: dict = {"math": math, "numpy": np}
+        if not STEP_METHODS[method].explicit:
+            namespace["implicit"] = _implicit_step(self.lowered, method)
         exec(compile(self.source, f"<switchobs observer kernel ({method})>", "exec"), namespace)
         self._scale = namespace["scale"]
         self._advance = namespace["advance"]

@@ -28,12 +28,10 @@ import sympy as sp
 
 from ..exceptions import ModelError
 from ..model import Model
+from ._methods import METHODS
 
 __all__ = ["METHODS", "SCALE", "STATUS_TEXT", "REFERENCE_STATUSES", "StepStatus", "Guard", "domain_guards",
            "ObserverSpec"]
-
-#: Discretisations of one step: classic fourth-order Runge-Kutta (default) and forward Euler.
-METHODS = ("rk4", "euler")
 
 #: The symbol standing for the time scaling ``s`` in :attr:`ObserverSpec.drift` and ``regressor``.
 SCALE = sp.Symbol("s", real=True)
