@@ -13,6 +13,7 @@ common_lyapunov           -- Hespanha's non-strict common Lyapunov condition (LM
 strict_common_lyapunov    -- strict CQLF, or an exact dual proof that none exists
 infeasibility_certificate -- the dual (theorem of alternatives) certificate alone
 dwell_time                -- Geromel–Colaneri dwell-time bound, bisected on tau, certified exactly
+discrete_certificate      -- the sampled error map e+ = R(h A_pm) e for every step length (exact proof or refutation)
 classify_planar           -- Balde–Boscain–Mason cases i–iv with Gamma, det, tr(A1 A2) and R
 verify_certificate        -- independent exact check of a certificate document
 load_certificate          -- read a certificate JSON file
@@ -24,7 +25,7 @@ regressor_excitation      -- eigenvalues of windowed ∫ Psi'Psi (seed 001 Fig. 
 admissible_constants      -- alpha (and dwell-time bounds for a beta) of Theorem 3, seed 004
 as_family                 -- the validation gate for a family of matrices
 
-Results: CertificationReport, LyapunovResult, DualCertificate, DwellTimeResult,
+Results: CertificationReport, DiscreteCertificate (verdict DiscreteVerdict), LyapunovResult, DualCertificate, DwellTimeResult,
 PlanarClassification, VerificationReport, TrajectoryReport, AdmissibleConstants,
 ZeroCrossing, Family.
 
@@ -35,6 +36,7 @@ Existence; document_section registers a new optional section.
 """
 
 from ._certify import CertificationReport, certify, certify_model, verdict_text
+from ._discrete import DiscreteCertificate, DiscreteVerdict, discrete_certificate
 from ._dwell import DwellTimeResult, dwell_time
 from ._family import Family, as_family
 from ._lyapunov import (DEFAULT_EPS, DualCertificate, LyapunovResult, common_lyapunov,
@@ -49,6 +51,7 @@ from ._verify import Check, VerificationReport, load_certificate, verify_certifi
 
 __all__ = [
     "CertificationReport", "certify", "certify_model", "verdict_text",
+    "DiscreteCertificate", "DiscreteVerdict", "discrete_certificate",
     "DwellTimeResult", "dwell_time",
     "Family", "as_family",
     "DEFAULT_EPS", "DualCertificate", "LyapunovResult", "common_lyapunov", "infeasibility_certificate",

@@ -134,6 +134,9 @@ class GeneratedObserver:
         ``<PREFIX>_H_MAX``: ``h_max`` rounded down to ``real``.
     max_substeps : int or None
         ``<PREFIX>_MAX_SUBSTEPS``: most sub-steps of one step before ``SUBSTEP_LIMIT``.
+    certificate : str or None
+        The statement of the discrete certificate proved for this design and method (``--h-max auto``),
+        recorded in the header and README; None: none was checked.
     step_function : casadi.Function
         One step *without* sub-stepping as a casadi Function ``(x, signals, params, dt) -> x_next``
         (not compared, not in JSON).
@@ -162,6 +165,7 @@ class GeneratedObserver:
     h_max: Fraction | None = None
     h_max_c: float | None = None
     max_substeps: int | None = None
+    certificate: str | None = None
     step_function: ca.Function | None = field(default=None, repr=False, compare=False)
 
     @property
@@ -220,7 +224,7 @@ class GeneratedObserver:
             "status_codes": {s.name: int(s) for s in StepStatus},
             "temporaries": self.temporaries, "stack_reals": self.stack_reals,
             "h_max": None if self.h_max is None else str(self.h_max), "h_max_c": self.h_max_c,
-            "max_substeps": self.max_substeps,
+            "max_substeps": self.max_substeps, "certificate": self.certificate,
             "files": sorted(self.files), "casadi_version": self.casadi_version,
             "references": dict(self.references),
         }
@@ -368,7 +372,8 @@ def _substep_check(tr: Translation, real: str, P: str) -> list[str]:
 
 
 def _assemble(tr: Translation, *, info: _Info, kind: str, real: str, method: str, prefix: str,
-              command: str | None, bound: tuple[Fraction, int] | None = None) -> GeneratedObserver:
+              command: str | None, bound: tuple[Fraction, int] | None = None,
+              certificate: str | None = None) -> GeneratedObserver:
     if kind == "adaptive":
         require_explicit(method, "the adaptive observer's right-hand side", CodegenError)
     if method not in tr.methods:
@@ -424,7 +429,8 @@ def _assemble(tr: Translation, *, info: _Info, kind: str, real: str, method: str
         stack_reals += len(tr.state_names) + 3
     text_args = dict(tr=tr, info=info, kind=kind, real=real, method=method, prefix=prefix, P=P,
                      x_macros=x_macros, s_macros=s_macros, p_macros=p_macros, command=command,
-                     temporaries=step_k.temporaries, stack_reals=stack_reals, bound=bound, h_max_c=h_max_c)
+                     temporaries=step_k.temporaries, stack_reals=stack_reals, bound=bound, h_max_c=h_max_c,
+                     certificate=certificate)
     header = _header(**text_args)
     source = _source(kernels=kernels, checks=checks, **text_args)
     gen = GeneratedObserver(
@@ -434,7 +440,7 @@ def _assemble(tr: Translation, *, info: _Info, kind: str, real: str, method: str
         header=header, source=source, readme="", casadi_version=ca.__version__, description=info.description,
         equations=info.equations, signal_roles=info.signal_roles, references=dict(info.references),
         h_max=None if bound is None else bound[0], h_max_c=h_max_c, max_substeps=None if bound is None else bound[1],
-        step_function=step_fn)
+        certificate=certificate, step_function=step_fn)
     return dataclasses.replace(gen, readme=readme(gen, command=command))
 
 
@@ -447,7 +453,7 @@ def generate_observer(model: Model, gains: GainDesign | tuple[Sequence[float], S
                       prefix: str | None = None, unknown: Sequence[str] = (),
                       Gamma: Sequence[Sequence[float]] | np.ndarray | None = None,
                       h_max: float | Fraction | str | None = None, max_substeps: int | None = None,
-                      command: str | None = None) -> GeneratedObserver:
+                      certificate: str | None = None, command: str | None = None) -> GeneratedObserver:
     """Generate the C observer of a model and its gain pair.
 
     Parameters
@@ -462,8 +468,11 @@ def generate_observer(model: Model, gains: GainDesign | tuple[Sequence[float], S
         Values of design symbols (``beta1``...) and overrides of the model's
         parameter values (defaults of the runtime parameters).
     real : {"double", "float"}
-    method : {"rk4", "euler"}
-        Classic RK4 (default) or forward Euler, signals held over the step.
+    method : {"rk4", "euler", "midpoint", "radau3"}
+        Classic RK4 (default), forward Euler, the implicit midpoint rule or 2-stage Radau IIA, signals held
+        over the step.  The implicit methods (switched observer only) solve ``D(Z) v = F(Z) f(x)``, ``Z = dt J``,
+        by cofactors; a singular ``D(Z)`` returns ``NONFINITE_RESULT``.  They keep the design's continuous
+        Lyapunov matrix decreasing at every step length (``switchobs.certify.discrete_certificate``).
     prefix : str, optional
         C prefix; default ``switchobs_<model>`` (:func:`default_prefix`).
     unknown : sequence of str, optional
@@ -482,6 +491,8 @@ def generate_observer(model: Model, gains: GainDesign | tuple[Sequence[float], S
         ``<PREFIX>_MAX_SUBSTEPS`` (default 64, only with ``h_max``): a step
         needing more returns ``SUBSTEP_LIMIT`` with the state unchanged; it
         bounds the worst-case time of one step.
+    certificate : str, optional
+        Statement of a discrete certificate proved for this design and method, recorded in the files.
     command : str, optional
         Command line recorded in the files' comments.
 
@@ -535,7 +546,7 @@ def generate_observer(model: Model, gains: GainDesign | tuple[Sequence[float], S
         tr = translate_switched(spec)
         kind = "switched"
     return _assemble(tr, info=_model_info(model, kind), kind=kind, real=real, method=method, prefix=prefix,
-                     command=command, bound=bound)
+                     command=command, bound=bound, certificate=certificate)
 
 
 def generate_super_twisting(lam: float, alpha: float, *, real: str = "double",
@@ -579,7 +590,8 @@ def generate_super_twisting(lam: float, alpha: float, *, real: str = "double",
 # ----------------------------------------------------------------------------- text
 def _header(*, tr: Translation, info: _Info, kind: str, real: str, method: str, prefix: str, P: str,
             x_macros: Sequence[str], s_macros: Sequence[str], p_macros: Sequence[str], command: str | None,
-            temporaries: int, stack_reals: int, bound: tuple[Fraction, int] | None, h_max_c: float | None) -> str:
+            temporaries: int, stack_reals: int, bound: tuple[Fraction, int] | None, h_max_c: float | None,
+            certificate: str | None) -> str:
     guard = f"{P}_H"
     scheme = _SCHEMES[method][0] + ", signals held over the step (zero-order hold)"
     lines = [
@@ -589,6 +601,8 @@ def _header(*, tr: Translation, info: _Info, kind: str, real: str, method: str, 
         f" * Discretisation: {scheme}.  Real type: {real}.",
         " * No heap allocation, no global mutable state: re-entrant and thread-safe.",
     ]
+    if certificate:
+        lines.append(f" * Discrete certificate (switchobs.certify.discrete_certificate, exact): {_comment(certificate)}.")
     if command:
         lines.append(f" * Regenerate with: {_comment(command)}")
     lines += [" */", f"#ifndef {guard}", f"#define {guard}", "", "#include <stdint.h>", "",
