@@ -140,9 +140,10 @@ def test_stack_is_static_and_within_the_documented_bound(tmp_path, name):
     """-fstack-usage: every frame is static (no VLA, no alloca), the deepest chain within STACK_REALS reals
     plus the frames of three calls; no heap, no writable global data (size: data = bss = 0)."""
     for real in ("double", "float"):
-        for opt, h_max in (("-O0", None), ("-O2", None), ("-O2", "1/100")):
-            gen = builtin(name, real, h_max=h_max)
-            d = tmp_path / f"{real}{opt}{h_max is not None}"
+        for opt, h_max, method in (("-O0", None, "rk4"), ("-O2", None, "rk4"), ("-O2", "1/100", "rk4"),
+                                   ("-O0", None, "radau3"), ("-O2", None, "radau3")):
+            gen = builtin(name, real, method, h_max=h_max)
+            d = tmp_path / f"{real}{opt}{h_max is not None}{method}"
             src = written(gen, d)
             compile_c("gcc", ["-std=c99", opt, "-fstack-usage"], [src], d / "obj.o")
             frames = {}

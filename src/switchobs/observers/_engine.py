@@ -286,10 +286,7 @@ class _Source:
             lines += [f"{indent}{new[k]} = {x[k]} + dt*{k1[k]}" for k in range(N)]
             return lines, new
         if not STEP_METHODS[method].explicit:
-            lines.append(f"{indent}inc = implicit(s, ({''.join(g + ', ' for g in self.g)}), "
-                         f"({''.join(k + ', ' for k in k1)}), dt)")
-            lines += [f"{indent}{new[k]} = {x[k]} + dt*inc[{k}]" for k in range(N)]
-            return lines, new
+            return lines + self.implicit(method, k1, new, indent), new
         k2, k3, k4 = ([f"k{j}_{k}" for k in range(N)] for j in (2, 3, 4))
         t = [f"t{k}" for k in range(N)]
         lines += [f"{indent}{t[k]} = {x[k]} + h*{k1[k]}" for k in range(N)]
@@ -301,6 +298,25 @@ class _Source:
         lines += [f"{indent}{new[k]} = {x[k]} + dt6*({k1[k]} + 2.0*{k2[k]} + 2.0*{k3[k]} + {k4[k]})"
                   for k in range(N)]
         return lines, new
+
+    def implicit(self, method: str, f: Sequence[str], new: Sequence[str], indent: str) -> list[str]:
+        """Lines of ``new = x + dt D(Z)^-1 F(Z) f`` (NaN where ``D(Z)`` is singular), straight-line.
+
+        They are the operations of :func:`switchobs.spec.implicit_increment` on ``J = s A - g C`` (the
+        function the C translation evaluates on casadi SX), recorded by running it on :class:`_Recorder`
+        scalars, so that a step is plain float arithmetic and cannot raise.
+        """
+        spec, lines = self.spec, []
+        leaf = lambda name: _Recorder(name, lines)  # noqa: E731
+        A = [[None if a == 0.0 else float(a) for a in row] for row in spec.A]
+        C = [None if c == 0.0 else float(c) for c in spec.C]
+        J = affine_jacobian(A, C, leaf("s"), [leaf(g) for g in self.g])
+        inc, det = implicit_increment(STEP_METHODS[method], J, [leaf(k) for k in f], leaf("dt"), _Recorder.safe)
+        out = [f"{indent}{line}" for line in lines]
+        out.append(f"{indent}ok = {_operand(det)} != 0.0 and math.isfinite({_operand(det)})")
+        out += [f"{indent}{new[k]} = {self.x[k]} + dt*{_operand(inc[k])} if ok else math.nan"
+                for k in range(spec.size)]
+        return out
 
     def module(self, method: str) -> str:
         spec = self.spec
@@ -350,27 +366,38 @@ class _Source:
         return "\n".join(line for line in src if line != "") + "\n"
 
 
-def _implicit_step(spec: _Lowered, method: str):
-    """``implicit(s, g, f, dt)``: the increment of one implicit step (NaN where ``D(Z)`` is singular).
-
-    ``J = s A - g C`` with the lowered numbers, then :func:`switchobs.spec.implicit_increment`,
-    the very function the C translation evaluates on casadi SX.  It never raises: a zero or
-    non-finite ``det D(Z)`` gives NaN, which the step reports as ``NONFINITE_RESULT``.
-    """
-    A = [[None if a == 0.0 else float(a) for a in row] for row in spec.A]
-    C = [None if c == 0.0 else float(c) for c in spec.C]
-    m = STEP_METHODS[method]
-    failed = [math.nan] * spec.n
-
-    def implicit(s: float, g: Sequence[float], f: Sequence[float], dt: float) -> list[float]:
-        inc, det = implicit_increment(m, affine_jacobian(A, C, s, g), f, dt, _safe)
-        return inc if det != 0.0 and math.isfinite(det) else failed
-
-    return implicit
+def _operand(value) -> str:
+    """A recorded temporary by name, a constant as a literal that round-trips exactly."""
+    return value.name if isinstance(value, _Recorder) else f"({_lit(value)})"
 
 
-def _safe(det: float) -> float:
-    return det if det != 0.0 else 1.0
+class _Recorder:
+    """A scalar that writes every operation on it as a line ``_tK = a op b`` of straight-line Python."""
+
+    def __init__(self, name: str, lines: list[str]):
+        self.name, self.lines = name, lines
+
+    def _op(self, template: str, *args) -> _Recorder:
+        name = f"_t{len(self.lines)}"
+        self.lines.append(f"{name} = {template.format(*map(_operand, args))}")
+        return _Recorder(name, self.lines)
+
+    def __add__(self, other): return self._op("{} + {}", self, other)  # noqa: E704
+    def __radd__(self, other): return self._op("{} + {}", other, self)  # noqa: E704
+    def __sub__(self, other): return self._op("{} - {}", self, other)  # noqa: E704
+    def __rsub__(self, other): return self._op("{} - {}", other, self)  # noqa: E704
+    def __mul__(self, other): return self._op("{}*{}", self, other)  # noqa: E704
+    def __rmul__(self, other): return self._op("{}*{}", other, self)  # noqa: E704
+    def __truediv__(self, other): return self._op("{}/{}", self, other)  # noqa: E704
+    def __rtruediv__(self, other): return self._op("{}/{}", other, self)  # noqa: E704
+    def __neg__(self): return self._op("-{}", self)  # noqa: E704
+
+    @staticmethod
+    def safe(det):
+        """``det`` where it is nonzero, else 1 (the solve divides by it)."""
+        if isinstance(det, _Recorder):
+            return det._op("{0} if {0} != 0.0 else 1.0", det)
+        return det if det != 0.0 else 1.0
 
 
 # --------------------------------------------------------------------------- kernel
@@ -396,8 +423,6 @@ class Kernel:
         self.lowered = _lower(spec)
         self.source = _Source(self.lowered).module(method)
         namespace: dict = {"math": math, "numpy": np}
-        if not STEP_METHODS[method].explicit:
-            namespace["implicit"] = _implicit_step(self.lowered, method)
         exec(compile(self.source, f"<switchobs observer kernel ({method})>", "exec"), namespace)
         self._scale = namespace["scale"]
         self._advance = namespace["advance"]
