@@ -14,6 +14,14 @@ on the real axis (Euler: first order, ``< 2``), a fixed count of operations,
 no iteration and no allocation -- what a brake ECU wants -- and the same
 scheme as the Python reference observers, so that the two agree to rounding.
 
+The implicit midpoint rule and 2-stage Radau IIA (switched observer only, whose
+held-signal right-hand side ``f = J x + c``, ``J = s A - g C``, is affine) step
+``x+ = x + dt D(Z)^-1 F(Z) f(x)``, ``Z = dt J`` (``switchobs.spec.implicit_increment``
+on casadi SX: cofactors, one division by ``det D(Z)`` made safe); the kernel
+returns ``det D(Z)`` after the new state and a zero or non-finite determinant is
+``NONFINITE_RESULT``.  They keep the design's Lyapunov function decreasing at
+every step length, so they need no step bound.
+
 With a certified step bound ``h_max`` (in the rescaled time ``tau = ∫|s| dt``,
 where the signals-held step is ``h = |s| dt``), a step whose ``|s| dt``
 exceeds ``H_MAX`` is split into ``n = ceil(|s| dt / H_MAX)`` sub-steps of
@@ -103,7 +111,7 @@ class GeneratedObserver:
     prefix : str
         C prefix of every public name (``switchobs_abs_xbs3``).
     real : {"double", "float"}
-    method : {"rk4", "euler"}
+    method : {"rk4", "euler", "midpoint", "radau3"}
     kind : {"switched", "adaptive"}
     model_name : str
     state_names, signal_names, param_names : tuple of str

@@ -1,4 +1,4 @@
-"""The numeric engine shared by every switchobs observer: validation, RK4 / Euler, run loops.
+"""The numeric engine shared by every switchobs observer: validation, the step methods, run loops.
 
 All observers of this package integrate a right-hand side of the form
 (signals ``sig`` held constant over a step, zero-order hold)::
@@ -35,6 +35,12 @@ split into ``n = ceil(|s| dt / h_max)`` sub-steps of ``dt / n`` with the same
 held signals, with the very float operations of the generated C
 (``switchobs.codegen``), so that both choose the same ``n`` and agree bit for
 bit; more than ``max_substeps`` is refused (``SUBSTEP_LIMIT``).
+
+The implicit methods ("midpoint", "radau3"; switched observer only, ``p = 0``)
+use that the held-signal right-hand side is affine, ``f = J x + c`` with
+``J = s A - g C``: one step is ``x + dt D(Z)^-1 F(Z) f(x)``, ``Z = dt J``,
+straight-line Python recorded from :func:`switchobs.spec.implicit_increment`
+(the function the C translation evaluates on casadi SX).
 """
 
 from __future__ import annotations
