@@ -9,7 +9,9 @@ in the same run (``REPEATS`` runs of ``STEPS`` chained steps, state reset every 
   (min-max over the runs), and the median of the paired ratios (goal: <= 1.05);
 * stiff signals (``|s| dt`` up to 0.09, low speed and large wheel acceleration): ns per step of the
   sub-stepped C, the mean number of sub-steps, and ns per sub-step (today's step is not stable there:
-  its state overflows, so it is not timed on these signals).
+  its state overflows, so it is not timed on these signals);
+* the radau3 step (2-stage Radau IIA, certified for every dt, no sub-steps) of the same design in the
+  same binary and run, on both signal sets: ns per step, median.
 
 Certificate half (:func:`certificate_timings`): CPU time of ``switchobs.certify.discrete_certificate``
 (analysis and exact proof or refutation) and of its re-check from the JSON section, for n = 3, 4, 8, 16
@@ -52,6 +54,7 @@ DRIVER = r"""
 #include <time.h>
 #include "plain.h"
 #include "bounded.h"
+#include "implicit.h"
 #define ROWS 4096
 #define NX PLAIN_NX
 typedef int32_t (*stepper)(double *, const double *, const double *, double);
@@ -83,6 +86,8 @@ int main(void)
     for (r = 0; r < @REPEATS@; ++r) {   /* alternate, so that both see the same machine load */
         printf("calm %.4f %.4f\n", bench(plain_step, calm, @STEPS@, &fail), bench(bounded_step, calm, @STEPS@, &fail));
         printf("stiff %.4f\n", bench(bounded_step, stiff, @STEPS@ / 4, &fail));
+        printf("radau3 %.4f %.4f\n", bench(implicit_step, calm, @STEPS@, &fail),
+               bench(implicit_step, stiff, @STEPS@, &fail));
     }
     printf("failures %ld\n", fail);
     return 0;
@@ -107,16 +112,18 @@ def step_timings(model_name: str, cc: str, tmp: Path) -> dict[str, float]:
     gains = design(model, DESIGNS[model_name])
     plain = generate_observer(model, gains, prefix="plain")
     bounded = generate_observer(model, gains, prefix="bounded", h_max=H_MAX)
+    implicit = generate_observer(model, gains, prefix="implicit", method="radau3")
     d = tmp / f"{model_name}-{Path(cc).name}"
-    plain.write(d)
-    bounded.write(d)
+    for gen in (plain, bounded, implicit):
+        gen.write(d)
     (d / "driver.c").write_text(DRIVER.replace("@REPEATS@", str(REPEATS)).replace("@STEPS@", str(STEPS)))
-    for name in ("plain", "bounded", "driver"):
+    for name in ("plain", "bounded", "implicit", "driver"):
         _run([cc, *CFLAGS, "-c", f"{name}.c"], d)
-    _run([cc, "-o", "bench", "driver.o", "plain.o", "bounded.o", "-lm"], d)
+    _run([cc, "-o", "bench", "driver.o", "plain.o", "bounded.o", "implicit.o", "-lm"], d)
     out = _run(["./bench"], d)
     calm = [(float(a), float(b)) for a, b in re.findall(r"calm (\S+) (\S+)", out)]
-    stiff = [float(v) for v in re.findall(r"stiff (\S+)", out)]
+    stiff = [float(v) for v in re.findall(r"^stiff (\S+)", out, re.M)]
+    radau = [(float(a), float(b)) for a, b in re.findall(r"radau3 (\S+) (\S+)", out)]
     failures = int(re.search(r"failures (\d+)", out).group(1))
     plain_ns, bounded_ns = [a for a, _ in calm], [b for _, b in calm]
     substeps = _mean_substeps(bounded.h_max_c)
@@ -124,7 +131,8 @@ def step_timings(model_name: str, cc: str, tmp: Path) -> dict[str, float]:
             "bounded": statistics.median(bounded_ns), "bounded_min": min(bounded_ns),
             "bounded_max": max(bounded_ns), "ratio": statistics.median(b / a for a, b in calm),
             "stiff": statistics.median(stiff), "stiff_min": min(stiff), "stiff_max": max(stiff),
-            "substeps": substeps, "per_substep": statistics.median(stiff) / substeps, "failures": failures}
+            "substeps": substeps, "per_substep": statistics.median(stiff) / substeps, "failures": failures,
+            "radau3": statistics.median(a for a, _ in radau), "radau3_stiff": statistics.median(b for _, b in radau)}
 
 
 # ----------------------------------------------------------------------------- certificate half
@@ -232,13 +240,13 @@ def main() -> None:
                 rows.append((model_name, cc, step_timings(model_name, cc, Path(tmp))))
     print(f"Generated C step (double, -O2), h_max = {H_MAX}: ns per step, median [min-max] of {REPEATS} runs")
     print("| model | compiler | today's step ns | with sub-stepping, non-stiff ns | ratio (median of pairs) "
-          "| stiff ns per step | sub-steps per stiff step | ns per sub-step |")
-    print("| --- | --- | ---: | ---: | ---: | ---: | ---: | ---: |")
+          "| stiff ns per step | sub-steps per stiff step | ns per sub-step | radau3 ns, non-stiff | radau3 ns, stiff |")
+    print("| --- | --- | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: |")
     for model_name, cc, t in rows:
         print(f"| {model_name} | {cc} | {t['plain']:.1f} [{t['plain_min']:.1f}-{t['plain_max']:.1f}] "
               f"| {t['bounded']:.1f} [{t['bounded_min']:.1f}-{t['bounded_max']:.1f}] | {t['ratio']:.3f} "
               f"| {t['stiff']:.1f} [{t['stiff_min']:.1f}-{t['stiff_max']:.1f}] | {t['substeps']:.2f} "
-              f"| {t['per_substep']:.1f} |")
+              f"| {t['per_substep']:.1f} | {t['radau3']:.1f} | {t['radau3_stiff']:.1f} |")
     bad = sum(t["failures"] for _, _, t in rows)
     if bad:
         print(f"warning: {bad} benchmark steps were refused")

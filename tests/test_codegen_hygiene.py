@@ -20,6 +20,7 @@ from switchobs.codegen._emit import kernel
 from switchobs.exceptions import CodegenError
 from switchobs.design import design
 from switchobs.model import Model, builtin_model
+from switchobs.spec import METHODS
 
 from test_codegen_translate import random_model_toml
 
@@ -64,7 +65,7 @@ def generated_cases() -> list[tuple[str, GeneratedObserver]]:
     cases = []
     for name in SPECTRA:
         for real in ("double", "float"):
-            for method in ("rk4", "euler"):
+            for method in METHODS:
                 cases.append((f"{name}-{real}-{method}", builtin(name, real, method)))
     cases += [(f"adaptive-{r}", adaptive(r)) for r in ("double", "float")]
     cases += [(f"super-twisting-{r}", generate_super_twisting(400.0, 2000.0, real=r)) for r in ("double", "float")]
@@ -79,6 +80,7 @@ def generated_cases() -> list[tuple[str, GeneratedObserver]]:
         for real in ("double", "float"):
             cases.append((f"{name}-{real}-substeps", builtin(name, real, h_max="1/100", max_substeps=16)))
     cases.append(("adaptive-float-substeps", adaptive("float", h_max="1/50")))
+    cases += [(f"abs-xbs4-{r}-radau3-substeps", builtin("abs-xbs4", r, "radau3", h_max="1/100")) for r in ("double", "float")]
     cases.append(("constant-scale-substeps", generate_observer(constant_scale_model(), ([1.0, 2.0], [3.0, 4.0]),
                                                               h_max="1/100")))
     return cases
@@ -96,7 +98,7 @@ def test_generated_c_compiles_clean_with_strict_flags(tmp_path, cc):
     """-std=c99 -Wall -Wextra -Wpedantic -Wconversion -Wfloat-conversion -Wdouble-promotion -Werror, gcc and clang."""
     cc = compiler(cc)
     cases = generated_cases()
-    assert len(cases) == 12 + 2 + 2 + 12 + 6 + 2
+    assert len(cases) == 3 * 2 * len(METHODS) + 2 + 2 + 12 + 6 + 2 + 2
     for label, gen in cases:
         src = written(gen, tmp_path / label)
         compile_c(cc, STRICT + ["-O2"], [src], tmp_path / label / "obj.o")
@@ -138,9 +140,10 @@ def test_stack_is_static_and_within_the_documented_bound(tmp_path, name):
     """-fstack-usage: every frame is static (no VLA, no alloca), the deepest chain within STACK_REALS reals
     plus the frames of three calls; no heap, no writable global data (size: data = bss = 0)."""
     for real in ("double", "float"):
-        for opt, h_max in (("-O0", None), ("-O2", None), ("-O2", "1/100")):
-            gen = builtin(name, real, h_max=h_max)
-            d = tmp_path / f"{real}{opt}{h_max is not None}"
+        for opt, h_max, method in (("-O0", None, "rk4"), ("-O2", None, "rk4"), ("-O2", "1/100", "rk4"),
+                                   ("-O0", None, "radau3"), ("-O2", None, "radau3")):
+            gen = builtin(name, real, method, h_max=h_max)
+            d = tmp_path / f"{real}{opt}{h_max is not None}{method}"
             src = written(gen, d)
             compile_c("gcc", ["-std=c99", opt, "-fstack-usage"], [src], d / "obj.o")
             frames = {}
@@ -279,12 +282,13 @@ def sanitizer_cases() -> list[GeneratedObserver]:
                            "values": {"m": "2"}})
     return [builtin("abs-xbs4"), builtin("abs-xbs3", "float"), adaptive(), adaptive("float"),
             generate_observer(dom, ([1.0, 2.0], [3.0, 4.0])), generate_super_twisting(400.0, 2000.0, real="float"),
-            builtin("abs-xbs4", h_max="1/100", max_substeps=16), builtin("abs-xbs3", "float", h_max="1/100")]
+            builtin("abs-xbs4", h_max="1/100", max_substeps=16), builtin("abs-xbs3", "float", h_max="1/100"),
+            builtin("abs-xbs4", method="radau3"), builtin("abs-xbs3", "float", "radau3", h_max="1/100")]
 
 
 #: (case, compiler): every case with gcc; with clang the sub-stepped ones and one adaptive (clang's runtime is
 #: the same sanitizer family, so a few cases suffice to keep the test time low).
-SANITIZED = [(i, "gcc") for i in range(8)] + [(i, "clang") for i in (3, 6, 7)]
+SANITIZED = [(i, "gcc") for i in range(10)] + [(i, "clang") for i in (3, 6, 7, 8)]
 
 
 @pytest.mark.slow

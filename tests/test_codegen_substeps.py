@@ -90,6 +90,17 @@ def test_braking_record_diverges_without_substeps_and_stays_bounded_with_h_max(x
     assert np.abs(fine[10000:, 1] - XBS).max() < 0.15 * error[1000:].max()
 
 
+def test_braking_record_radau3_stays_bounded_without_substeps(xbs3):
+    """radau3 is certified for every dt: the same record, one step per sample, stays bounded like sub-stepped rk4."""
+    m, d = xbs3
+    rows = braking_record(1e-3)
+    gen = generate_observer(m, d, method="radau3")
+    assert gen.h_max is None and "_H_MAX" not in gen.header
+    traj = compile_observer(gen).run([0.0, 0.0, 0.0], rows, 1e-3)
+    assert np.isfinite(traj).all()
+    assert np.abs(traj[1000:, 1] - XBS).max() < 1.1  # the criterion of the sub-stepped rk4 above
+
+
 def needed_substeps(rows: np.ndarray, dt: float, h_max_c: float) -> np.ndarray:
     a = np.abs(rows[:, 0] / rows[:, 1]) * dt
     return np.where(a <= h_max_c, 1, np.ceil(a / h_max_c)).astype(int)
@@ -217,7 +228,9 @@ def test_bad_bounds_are_refused():
 
 
 class _Certificate:
+    certified = True
     h_max = Fraction(1, 100)
+    statement = "certified while |s(y,t)|*dt <= 1/100 (a stand-in)"
 
 
 def test_cli_h_max_value_and_auto(tmp_path, capsys, monkeypatch):
@@ -228,15 +241,17 @@ def test_cli_h_max_value_and_auto(tmp_path, capsys, monkeypatch):
     assert "#define SWITCHOBS_ABS_XBS3_MAX_SUBSTEPS 20" in header and "--h-max=1/100" in header
     seen = {}
 
-    def fake(A_plus, A_minus, *, method):
-        seen.update(A_plus=A_plus, A_minus=A_minus, method=method)
+    def fake(A_plus, A_minus, C, P, *, method):
+        seen.update(A_plus=A_plus, A_minus=A_minus, C=C, P=P, method=method)
         return _Certificate()
 
-    monkeypatch.setattr(certify, "discrete_certificate", fake, raising=False)
+    monkeypatch.setattr(certify, "discrete_certificate", fake)
     assert main(["codegen", "abs-xbs3", "--spectrum", "-beta1,-beta2,-beta2", "--param", "beta1=100",
                  "--param", "beta2=100", "--h-max", "auto", "--out", str(tmp_path / "a")]) == 0
-    assert "H_MAX 0.009999999999999998" in (tmp_path / "a" / "switchobs_abs_xbs3.h").read_text()
+    header = (tmp_path / "a" / "switchobs_abs_xbs3.h").read_text()
+    assert "H_MAX 0.009999999999999998" in header and "(a stand-in)" in header
     assert seen["method"] == "rk4" and not seen["A_plus"].free_symbols and seen["A_minus"][0, 0] == -266
+    assert not seen["P"].free_symbols and seen["P"].is_symmetric() and list(seen["C"]) == [1, 0, 0]
     capsys.readouterr()
     monkeypatch.delattr(certify, "discrete_certificate")
     assert main(["codegen", "abs-xbs3", "--spectrum", "-100,-100,-100", "--h-max", "auto",

@@ -46,61 +46,12 @@ from fractions import Fraction
 from typing import Any
 
 from ..exceptions import CertificateError, DimensionError
+from ..spec import STEP_METHODS, StepMethod
 from ._exact import (Matrix, definiteness, fraction_matrix, identity, inf_norm, is_zero, lyapunov_form, matmul,
                      matrix_strings, nullspace, observable, solve, to_fraction, transpose, zeros)
 
 __all__ = ["StepMethod", "STEP_METHODS", "DiscreteVerdict", "DiscreteCertificate", "discrete_certificate",
            "check_discrete", "stability_function"]
-
-
-# ------------------------------------------------------------------ methods
-@dataclass(frozen=True)
-class StepMethod:
-    """A one-step method through its stability function ``R(z) = N(z) / D(z)`` (coefficients from ``z^0``).
-
-    For the observer's held-signal right-hand side ``f(x) = J x + c`` (affine
-    in the state) one step is ``x+ = x + dt D(Z)^-1 F(Z) f(x)`` with
-    ``Z = dt J`` and ``F(z) = (N(z) - D(z)) / z``; for an explicit method
-    ``D = 1``.
-    """
-
-    name: str
-    numerator: tuple[Fraction, ...]
-    denominator: tuple[Fraction, ...]
-    order: int
-    description: str
-
-    @property
-    def explicit(self) -> bool:
-        return len(self.denominator) == 1
-
-    @property
-    def increment(self) -> tuple[Fraction, ...]:
-        """Coefficients of ``F(z) = (N(z) - D(z)) / z``."""
-        size = max(len(self.numerator), len(self.denominator))
-        num = list(self.numerator) + [Fraction(0)] * (size - len(self.numerator))
-        den = list(self.denominator) + [Fraction(0)] * (size - len(self.denominator))
-        diff = [a - b for a, b in zip(num, den)]
-        if diff[0] != 0:
-            raise CertificateError(f"method {self.name}: R(0) must be 1")
-        while len(diff) > 2 and diff[-1] == 0:
-            diff.pop()
-        return tuple(diff[1:])
-
-
-def _fr(*values: int | str) -> tuple[Fraction, ...]:
-    return tuple(Fraction(v) for v in values)
-
-
-#: The step methods of the generated C and the Python observers, by stability function.
-STEP_METHODS: dict[str, StepMethod] = {
-    "euler": StepMethod("euler", _fr(1, 1), _fr(1), 1, "forward Euler (explicit, order 1)"),
-    "rk4": StepMethod("rk4", _fr(1, 1, "1/2", "1/6", "1/24"), _fr(1), 4, "classic Runge-Kutta (explicit, order 4)"),
-    "midpoint": StepMethod("midpoint", _fr(1, "1/2"), _fr(1, "-1/2"), 2,
-                           "implicit midpoint rule (1-stage Gauss, A-stable, order 2)"),
-    "radau3": StepMethod("radau3", _fr(1, "1/3"), _fr(1, "-2/3", "1/6"), 3,
-                         "2-stage Radau IIA (L-stable, algebraically stable, order 3)"),
-}
 
 
 def _method(name: str) -> StepMethod:

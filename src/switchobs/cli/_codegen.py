@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import argparse
 import shlex
+import sys
 from fractions import Fraction
 from typing import Any
 
@@ -13,6 +14,7 @@ from ..codegen import generate_observer, generate_super_twisting
 from ..design import GainDesign, design
 from ..exceptions import CodegenError, FreeSymbolError, PrerequisiteError, SpectrumError
 from ..model import Model, load_model, rational_value
+from ..spec import METHODS
 from ._common import emit_json, parse_params
 
 __all__ = ["register"]
@@ -41,12 +43,15 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--unknown", help="parameters estimated by the adaptive observer of seed 001 (3.4), e.g. c,d")
     p.add_argument("--gamma", help="adaptation gain Gamma: its diagonal (\"50,20\") or rows (\"50,0;0,20\")")
     p.add_argument("--real", choices=("double", "float"), default="double", help="C real type (default double)")
-    p.add_argument("--method", choices=("rk4", "euler"), default=None,
-                   help="discretisation, signals held over the step (default rk4; super-twisting: euler)")
+    p.add_argument("--method", choices=METHODS, default=None,
+                   help="discretisation, signals held over the step (default rk4; super-twisting: euler); "
+                        "midpoint and radau3 are implicit and certified for every dt")
     p.add_argument("--h-max", metavar="auto|VALUE",
-                   help="certified bound on the step |s|*dt in the rescaled time: a step beyond it is split into "
-                        "sub-steps (H_MAX in the header, rounded down); VALUE is exact (0.01 or 1/100), auto takes "
-                        "the h_max of the discrete certificate of A_plus, A_minus (default: no sub-stepping)")
+                   help="bound on the step |s|*dt in the rescaled time: a step beyond it is split into "
+                        "sub-steps (H_MAX in the header, rounded down); VALUE is exact (0.01 or 1/100); auto "
+                        "proves the discrete certificate of the design for --method: certified for every dt "
+                        "(midpoint, radau3) needs no bound, no certificate (rk4, euler) exits 1 "
+                        "(default: no sub-stepping)")
     p.add_argument("--max-substeps", type=int, metavar="N",
                    help="most sub-steps per step with --h-max, 1..16777216 (default 64); beyond: status SUBSTEP_LIMIT")
     p.add_argument("--prefix", help="C prefix (default switchobs_<model>, non-identifier characters as _)")
@@ -85,8 +90,8 @@ def _gamma(text: str) -> list[list[float]] | list[float]:
         raise CodegenError(f"--gamma expects numbers like \"50,20\" or \"50,0;0,20\", got {text!r}") from None
 
 
-def _certified_h_max(model: Model, gains: GainDesign, values: dict[str, str], method: str) -> Fraction:
-    """``h_max`` of the discrete certificate of the exact A_plus, A_minus at the given values."""
+def _discrete_certificate(model: Model, gains: GainDesign, values: dict[str, str], method: str):
+    """The discrete certificate of the exact A_plus, A_minus, C and P of the design at the given values."""
     try:
         from ..certify import discrete_certificate
     except ImportError as exc:
@@ -100,8 +105,8 @@ def _certified_h_max(model: Model, gains: GainDesign, values: dict[str, str], me
             raise FreeSymbolError(f"{name} depends on {free}; give their values with --param")
         return sp.ImmutableMatrix(M.xreplace({x: merged[str(x)] for x in M.free_symbols}))
 
-    cert = discrete_certificate(exact(gains.A_plus, "A_plus"), exact(gains.A_minus, "A_minus"), method=method)
-    return cert.h_max
+    return discrete_certificate(exact(gains.A_plus, "A_plus"), exact(gains.A_minus, "A_minus"),
+                                exact(model.C, "C"), exact(gains.P, "P"), method=method)
 
 
 def run(args: argparse.Namespace) -> int:
@@ -140,11 +145,19 @@ def run(args: argparse.Namespace) -> int:
         if args.h_max == "auto" and unknown:
             raise CodegenError("--h-max auto certifies the switched observer's error dynamics (A_plus, A_minus); "
                                "the adaptive observer's error also has the parameter estimates: give --h-max VALUE")
-        h_max = (_certified_h_max(model, gains, values, method) if args.h_max == "auto" else args.h_max)
+        h_max, certificate = args.h_max, None
+        if args.h_max == "auto":
+            cert = _discrete_certificate(model, gains, values, method)
+            if not cert.certified:
+                print(f"switchobs codegen: method {method} has no discrete certificate for this design "
+                      f"({cert.verdict.value}); use --method radau3 (certified for every dt), or --h-max VALUE "
+                      "(uncertified, but it bounds the step)", file=sys.stderr)
+                return 1
+            h_max, certificate = cert.h_max, cert.statement
         gen = generate_observer(model, gains, values=values, real=args.real, method=method,
                                 prefix=args.prefix, unknown=unknown,
                                 Gamma=_gamma(args.gamma) if args.gamma else None, h_max=h_max,
-                                max_substeps=args.max_substeps, command=command)
+                                max_substeps=args.max_substeps, certificate=certificate, command=command)
     paths = gen.write(args.out)
     if args.json:
         data = gen.to_json()

@@ -14,6 +14,14 @@ on the real axis (Euler: first order, ``< 2``), a fixed count of operations,
 no iteration and no allocation -- what a brake ECU wants -- and the same
 scheme as the Python reference observers, so that the two agree to rounding.
 
+The implicit midpoint rule and 2-stage Radau IIA (switched observer only, whose
+held-signal right-hand side ``f = J x + c``, ``J = s A - g C``, is affine) step
+``x+ = x + dt D(Z)^-1 F(Z) f(x)``, ``Z = dt J`` (``switchobs.spec.implicit_increment``
+on casadi SX: cofactors, one division by ``det D(Z)`` made safe); the kernel
+returns ``det D(Z)`` after the new state and a zero or non-finite determinant is
+``NONFINITE_RESULT``.  They keep the design's Lyapunov function decreasing at
+every step length, so they need no step bound.
+
 With a certified step bound ``h_max`` (in the rescaled time ``tau = ∫|s| dt``,
 where the signals-held step is ``h = |s| dt``), a step whose ``|s| dt``
 exceeds ``H_MAX`` is split into ``n = ceil(|s| dt / H_MAX)`` sub-steps of
@@ -40,7 +48,7 @@ from ..design import GainDesign
 from .._validate import adaptation_gain, round_down, substep_bound
 from ..exceptions import CodegenError, DimensionError, ModelError
 from ..model import Model, numeric, rational_value
-from ..spec import METHODS, STATUS_TEXT, Guard, ObserverSpec, StepStatus
+from ..spec import METHODS, STATUS_TEXT, STEP_METHODS, Guard, ObserverSpec, StepStatus, require_explicit
 from ._emit import CFunction, float_literal, kernel
 from ._readme import readme
 from ._translate import GUARD_TESTS, Translation, translate_adaptive, translate_super_twisting, translate_switched
@@ -48,6 +56,16 @@ from ._translate import GUARD_TESTS, Translation, translate_adaptive, translate_
 __all__ = ["GeneratedObserver", "generate_observer", "generate_super_twisting", "default_prefix", "REALS", "METHODS"]
 
 REALS = ("double", "float")
+
+#: Per method: the discretisation as the header states it, the step's name in the source comment.
+_SCHEMES = {
+    "rk4": ("classic RK4", "RK4"),
+    "euler": ("forward Euler", "Euler"),
+    "midpoint": ("implicit midpoint rule, x+ = x + dt (I - Z/2)^-1 f(x) with Z = dt J, J = s A - g C "
+                 "(1-stage Gauss, order 2, A-stable)", "implicit midpoint"),
+    "radau3": ("2-stage Radau IIA, x+ = x + dt (I - 2Z/3 + Z^2/6)^-1 (I - Z/6) f(x) with Z = dt J, J = s A - g C "
+               "(order 3, L-stable)", "Radau IIA"),
+}
 
 _C_KEYWORDS = frozenset(
     "auto break case char const continue default do double else enum extern float for goto if inline int long "
@@ -93,7 +111,7 @@ class GeneratedObserver:
     prefix : str
         C prefix of every public name (``switchobs_abs_xbs3``).
     real : {"double", "float"}
-    method : {"rk4", "euler"}
+    method : {"rk4", "euler", "midpoint", "radau3"}
     kind : {"switched", "adaptive"}
     model_name : str
     state_names, signal_names, param_names : tuple of str
@@ -124,6 +142,9 @@ class GeneratedObserver:
         ``<PREFIX>_H_MAX``: ``h_max`` rounded down to ``real``.
     max_substeps : int or None
         ``<PREFIX>_MAX_SUBSTEPS``: most sub-steps of one step before ``SUBSTEP_LIMIT``.
+    certificate : str or None
+        The statement of the discrete certificate proved for this design and method (``--h-max auto``),
+        recorded in the header and README; None: none was checked.
     step_function : casadi.Function
         One step *without* sub-stepping as a casadi Function ``(x, signals, params, dt) -> x_next``
         (not compared, not in JSON).
@@ -152,6 +173,7 @@ class GeneratedObserver:
     h_max: Fraction | None = None
     h_max_c: float | None = None
     max_substeps: int | None = None
+    certificate: str | None = None
     step_function: ca.Function | None = field(default=None, repr=False, compare=False)
 
     @property
@@ -210,7 +232,7 @@ class GeneratedObserver:
             "status_codes": {s.name: int(s) for s in StepStatus},
             "temporaries": self.temporaries, "stack_reals": self.stack_reals,
             "h_max": None if self.h_max is None else str(self.h_max), "h_max_c": self.h_max_c,
-            "max_substeps": self.max_substeps,
+            "max_substeps": self.max_substeps, "certificate": self.certificate,
             "files": sorted(self.files), "casadi_version": self.casadi_version,
             "references": dict(self.references),
         }
@@ -278,8 +300,12 @@ def _defaults(model: Model, values: Mapping[str, Any], extra_names: Sequence[str
 
 # ----------------------------------------------------------------------------- assembly
 def _step_expression(tr: Translation, method: str) -> ca.SX:
+    """The step ``x_next``; for an implicit method ``(x_next, det D(Z))``, the determinant last."""
     if tr.advance is not None:
         return tr.advance(method)
+    if not STEP_METHODS[method].explicit:
+        x_next, det = tr.implicit(method)
+        return ca.vertcat(x_next, det)
     x, dt = tr.x, tr.dt
     k1 = tr.rhs(x)
     if method == "euler":
@@ -354,7 +380,10 @@ def _substep_check(tr: Translation, real: str, P: str) -> list[str]:
 
 
 def _assemble(tr: Translation, *, info: _Info, kind: str, real: str, method: str, prefix: str,
-              command: str | None, bound: tuple[Fraction, int] | None = None) -> GeneratedObserver:
+              command: str | None, bound: tuple[Fraction, int] | None = None,
+              certificate: str | None = None) -> GeneratedObserver:
+    if kind == "adaptive":
+        require_explicit(method, "the adaptive observer's right-hand side", CodegenError)
     if method not in tr.methods:
         raise CodegenError(f"the {kind} observer admits only method {list(tr.methods)}, got {method!r}")
     P = prefix.upper()
@@ -399,14 +428,17 @@ def _assemble(tr: Translation, *, info: _Info, kind: str, real: str, method: str
         checks += scale_check
 
     full = step_expr if tr.s is None else ca.substitute(step_expr, tr.s, tr.scale)
-    step_fn = ca.Function(f"{prefix}_step", [tr.x, tr.signals, tr.params, tr.dt], [full],
+    step_fn = ca.Function(f"{prefix}_step", [tr.x, tr.signals, tr.params, tr.dt], [full[:len(tr.state_names)]],
                           ["x", "signals", "params", "dt"], ["x_next"])
     stack_reals = max(k.temporaries for k in kernels) + len(tr.state_names) + 2
+    if not STEP_METHODS[method].explicit:  # det D(Z) after the new state
+        stack_reals += 1
     if bound is not None:  # the sub-step's input state, a, q, h
         stack_reals += len(tr.state_names) + 3
     text_args = dict(tr=tr, info=info, kind=kind, real=real, method=method, prefix=prefix, P=P,
                      x_macros=x_macros, s_macros=s_macros, p_macros=p_macros, command=command,
-                     temporaries=step_k.temporaries, stack_reals=stack_reals, bound=bound, h_max_c=h_max_c)
+                     temporaries=step_k.temporaries, stack_reals=stack_reals, bound=bound, h_max_c=h_max_c,
+                     certificate=certificate)
     header = _header(**text_args)
     source = _source(kernels=kernels, checks=checks, **text_args)
     gen = GeneratedObserver(
@@ -416,7 +448,7 @@ def _assemble(tr: Translation, *, info: _Info, kind: str, real: str, method: str
         header=header, source=source, readme="", casadi_version=ca.__version__, description=info.description,
         equations=info.equations, signal_roles=info.signal_roles, references=dict(info.references),
         h_max=None if bound is None else bound[0], h_max_c=h_max_c, max_substeps=None if bound is None else bound[1],
-        step_function=step_fn)
+        certificate=certificate, step_function=step_fn)
     return dataclasses.replace(gen, readme=readme(gen, command=command))
 
 
@@ -429,7 +461,7 @@ def generate_observer(model: Model, gains: GainDesign | tuple[Sequence[float], S
                       prefix: str | None = None, unknown: Sequence[str] = (),
                       Gamma: Sequence[Sequence[float]] | np.ndarray | None = None,
                       h_max: float | Fraction | str | None = None, max_substeps: int | None = None,
-                      command: str | None = None) -> GeneratedObserver:
+                      certificate: str | None = None, command: str | None = None) -> GeneratedObserver:
     """Generate the C observer of a model and its gain pair.
 
     Parameters
@@ -444,8 +476,11 @@ def generate_observer(model: Model, gains: GainDesign | tuple[Sequence[float], S
         Values of design symbols (``beta1``...) and overrides of the model's
         parameter values (defaults of the runtime parameters).
     real : {"double", "float"}
-    method : {"rk4", "euler"}
-        Classic RK4 (default) or forward Euler, signals held over the step.
+    method : {"rk4", "euler", "midpoint", "radau3"}
+        Classic RK4 (default), forward Euler, the implicit midpoint rule or 2-stage Radau IIA, signals held
+        over the step.  The implicit methods (switched observer only) solve ``D(Z) v = F(Z) f(x)``, ``Z = dt J``,
+        by cofactors; a singular ``D(Z)`` returns ``NONFINITE_RESULT``.  They keep the design's continuous
+        Lyapunov matrix decreasing at every step length (``switchobs.certify.discrete_certificate``).
     prefix : str, optional
         C prefix; default ``switchobs_<model>`` (:func:`default_prefix`).
     unknown : sequence of str, optional
@@ -464,6 +499,8 @@ def generate_observer(model: Model, gains: GainDesign | tuple[Sequence[float], S
         ``<PREFIX>_MAX_SUBSTEPS`` (default 64, only with ``h_max``): a step
         needing more returns ``SUBSTEP_LIMIT`` with the state unchanged; it
         bounds the worst-case time of one step.
+    certificate : str, optional
+        Statement of a discrete certificate proved for this design and method, recorded in the files.
     command : str, optional
         Command line recorded in the files' comments.
 
@@ -517,7 +554,7 @@ def generate_observer(model: Model, gains: GainDesign | tuple[Sequence[float], S
         tr = translate_switched(spec)
         kind = "switched"
     return _assemble(tr, info=_model_info(model, kind), kind=kind, real=real, method=method, prefix=prefix,
-                     command=command, bound=bound)
+                     command=command, bound=bound, certificate=certificate)
 
 
 def generate_super_twisting(lam: float, alpha: float, *, real: str = "double",
@@ -561,9 +598,10 @@ def generate_super_twisting(lam: float, alpha: float, *, real: str = "double",
 # ----------------------------------------------------------------------------- text
 def _header(*, tr: Translation, info: _Info, kind: str, real: str, method: str, prefix: str, P: str,
             x_macros: Sequence[str], s_macros: Sequence[str], p_macros: Sequence[str], command: str | None,
-            temporaries: int, stack_reals: int, bound: tuple[Fraction, int] | None, h_max_c: float | None) -> str:
+            temporaries: int, stack_reals: int, bound: tuple[Fraction, int] | None, h_max_c: float | None,
+            certificate: str | None) -> str:
     guard = f"{P}_H"
-    scheme = ("classic RK4" if method == "rk4" else "forward Euler") + ", signals held over the step (zero-order hold)"
+    scheme = _SCHEMES[method][0] + ", signals held over the step (zero-order hold)"
     lines = [
         f"/* {prefix}.h -- generated by switchobs with casadi {ca.__version__}; do not edit.",
         f" * Model {info.name!r}: {info.description}.",
@@ -571,6 +609,8 @@ def _header(*, tr: Translation, info: _Info, kind: str, real: str, method: str, 
         f" * Discretisation: {scheme}.  Real type: {real}.",
         " * No heap allocation, no global mutable state: re-entrant and thread-safe.",
     ]
+    if certificate:
+        lines.append(f" * Discrete certificate (switchobs.certify.discrete_certificate, exact): {_comment(certificate)}.")
     if command:
         lines.append(f" * Regenerate with: {_comment(command)}")
     lines += [" */", f"#ifndef {guard}", f"#define {guard}", "", "#include <stdint.h>", "",
@@ -639,17 +679,25 @@ def _source(*, tr: Translation, info: _Info, kind: str, real: str, method: str, 
                                                                                        tr.default_params))
     status_cases = "\n".join(f"    case {int(s)}: return \"{STATUS_TEXT[s]}\";" for s in StepStatus)
     call = kernels[0].call
+    implicit = not STEP_METHODS[method].explicit
+    # an implicit kernel writes det D(Z) after the new state; the solve divided by it only where it is nonzero
+    singular = [f"if (!(next[{nx}] < {zero} || next[{nx}] > {zero}) || !isfinite(next[{nx}])) "
+                f"return {P}_ERR_NONFINITE_RESULT;  /* D(Z) singular */"] if implicit else []
+    size = f"{nx} + 1" if implicit else nx
     if bound is None:
-        stepping = ["    " + call("next", x="x", sig="sig", par="par", dt="dt", s="s")]
+        stepping = ["    " + call("next", x="x", sig="sig", par="par", dt="dt", s="s"),
+                    *("    " + c for c in singular)]
     else:
         stepping = ["    " + call("next", x="x", sig="sig", par="par", dt="h", s="s"),
+                    *("    " + c for c in singular),
                     "    for (j = 1; j < n; ++j) {  /* sub-steps, signals held */",
                     f"        for (i = 0; i < {nx}; ++i) cur[i] = next[i];",
                     "        " + call("next", x="cur", sig="sig", par="par", dt="h", s="s"),
+                    *("        " + c for c in singular),
                     "    }"]
     body = [
         f"/* {prefix}.c -- generated by switchobs with casadi {ca.__version__}; do not edit.",
-        f" * Kernels: casadi C of the {'RK4' if method == 'rk4' else 'Euler'} step, post-processed for {real}.",
+        f" * Kernels: casadi C of the {_SCHEMES[method][1]} step, post-processed for {real}.",
         " */",
         f'#include "{prefix}.h"',
         "",
@@ -687,7 +735,7 @@ def _source(*, tr: Translation, info: _Info, kind: str, real: str, method: str, 
         "",
         f"int32_t {prefix}_step({real} *xhat, const {real} *signals, const {real} *params, {real} dt)",
         "{",
-        f"    {real} next[{nx}];",
+        f"    {real} next[{size}];",
         "    int32_t i, status;",
         f"    if (xhat == NULL || signals == NULL) return {P}_ERR_BAD_ARGUMENT;",
         f"    status = {prefix}_advance(xhat, signals, params != NULL ? params : {prefix}_default_params, dt, next);",
@@ -699,7 +747,7 @@ def _source(*, tr: Translation, info: _Info, kind: str, real: str, method: str, 
         f"int32_t {prefix}_run({real} *xhat, const {real} *signals, int32_t n_steps, const {real} *params,",
         f"    {real} dt, {real} *trajectory)",
         "{",
-        f"    {real} next[{nx}];",
+        f"    {real} next[{size}];",
         "    int32_t i, k, status;",
         f"    if (xhat == NULL || n_steps < 0 || (signals == NULL && n_steps > 0)) return {P}_ERR_BAD_ARGUMENT;",
         f"    if (params == NULL) params = {prefix}_default_params;",

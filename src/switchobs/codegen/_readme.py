@@ -5,7 +5,7 @@ from __future__ import annotations
 from typing import TYPE_CHECKING
 
 from ._emit import float_literal
-from ..spec import STATUS_TEXT, StepStatus
+from ..spec import METHODS, STATUS_TEXT, STEP_METHODS, StepStatus
 
 if TYPE_CHECKING:  # pragma: no cover
     from ._generate import GeneratedObserver
@@ -67,9 +67,8 @@ def _bound_section(gen: "GeneratedObserver") -> list[str]:
         if gen.kind == "super-twisting":
             return []
         return ["## Step bound", "",
-                "None: every call takes one step of `dt`, whatever `|s|*dt` is.  In the rescaled time",
-                "`tau = ∫|s| dt` of the error dynamics a step is `h = |s|*dt`; regenerate with `--h-max` (a bound",
-                "certified for the sampled error dynamics) to split steps beyond it.", ""]
+                "None: every call takes one step of `dt`, whatever `|s|*dt` is; regenerate with `--h-max` to split",
+                "longer steps (see below which methods need it).", ""]
     return [
         "## Step bound (certified sub-stepping)", "",
         f"The sampled error dynamics are certified for every step `h = |s|*dt` (rescaled time) up to",
@@ -87,9 +86,26 @@ def _bound_section(gen: "GeneratedObserver") -> list[str]:
         "The certificate is for the default gains and parameters: other `params` need their own bound.", ""]
 
 
+def _certificate_section(gen: "GeneratedObserver") -> list[str]:
+    """Which step methods keep the design's Lyapunov function decreasing for every dt (docs/codegen.md)."""
+    every = [m for m in METHODS if not STEP_METHODS[m].explicit]
+    out = ["## Certified step lengths", "",
+           "In the rescaled time `tau = ∫|s| dt` one step is a step `h = |s|*dt` of the sampled error dynamics "
+           "`e+ = R(h A) e`, and `h` is not under your control (a slow wheel makes `|s|` large).",
+           f"Certified for every `dt` ({', '.join(every)}: algebraically stable, `switchobs.certify."
+           "discrete_certificate` proves exactly that the design's Lyapunov function decreases at every step of "
+           "either mode); "
+           f"{' and '.join(m for m in METHODS if STEP_METHODS[m].explicit)}: no quadratic discrete certificate for "
+           "any step bound (n >= 3 for rk4, n >= 2 for euler), so bound the step with `--h-max VALUE` "
+           "(uncertified) or use `--method radau3`.",
+           f"This file: `{gen.method}`" + (f"; {gen.certificate}." if gen.certificate else "."), ""]
+    return out
+
+
 def readme(gen: "GeneratedObserver", *, command: str | None) -> str:
     P, p, real = gen.prefix.upper(), gen.prefix, gen.real
-    method = "classic fourth-order Runge-Kutta (RK4)" if gen.method == "rk4" else "forward Euler"
+    method = {"rk4": "classic fourth-order Runge-Kutta (RK4)", "euler": "forward Euler"}.get(
+        gen.method, STEP_METHODS[gen.method].description)
     kind = {"adaptive": "switched adaptive observer of seed 001 eq. (3.4)",
             "super-twisting": "super-twisting observer of seed 003 eq. (8)-(9)"}.get(
         gen.kind, "switched observer (seed 000 eq. (8)-(9), seed 004)")
@@ -135,6 +151,7 @@ def readme(gen: "GeneratedObserver", *, command: str | None) -> str:
         "Status and counts are `int32_t` (`<stdint.h>`), the same width on every target.",
         "",
         *_bound_section(gen),
+        *([] if gen.kind == "super-twisting" else _certificate_section(gen)),
         f"## State (`{P}_NX` = {gen.nx})",
         "",
         "| index macro | state |",

@@ -34,7 +34,8 @@ import sympy as sp
 
 from ..exceptions import CodegenError
 from ..model import Model
-from ..spec import METHODS, SCALE, Guard, ObserverSpec, StepStatus
+from ..spec import (METHODS, SCALE, STEP_METHODS, Guard, ObserverSpec, StepStatus, affine_jacobian,
+                    implicit_increment)
 
 __all__ = ["Translation", "to_casadi", "translate_switched", "translate_adaptive", "translate_super_twisting"]
 
@@ -57,6 +58,10 @@ _FUNCTIONS: Mapping[type, Callable[[ca.SX], ca.SX]] = {
     sp.Abs: ca.fabs,
     sp.sign: ca.sign,
 }
+
+
+#: The methods of a right-hand side that is not affine in the state (the adaptive observer).
+EXPLICIT = tuple(m for m in METHODS if STEP_METHODS[m].explicit)
 
 
 def _power(base: ca.SX, exponent: sp.Expr) -> ca.SX:
@@ -170,6 +175,9 @@ class Translation:
         ``advance(method) -> x_next`` replacing the generic RK4 / Euler step of ``rhs``.
     methods : tuple of str
         The discretisations this observer admits.
+    implicit : callable, optional
+        ``implicit(method) -> (x_next, det)`` for an implicit method: ``x + dt D(Z)^-1 F(Z) f(x)``
+        and ``det D(Z)``, which the step checks (zero or not finite: ``NONFINITE_RESULT``).
     """
 
     x: ca.SX
@@ -186,6 +194,7 @@ class Translation:
     advance: Callable[[str], ca.SX] | None = None
     methods: tuple[str, ...] = METHODS
     s: ca.SX | None = None
+    implicit: Callable[[str], tuple[ca.SX, ca.SX]] | None = None
 
 
 def _environment(model: Model, extra_params: Sequence[str]) -> tuple[ca.SX, ca.SX, ca.SX, dict, dict]:
@@ -292,10 +301,17 @@ def translate_switched(spec: ObserverSpec) -> Translation:
             rows.append(_sum([None if Aw is None else s * Aw, c[i], g[i] * e]))
         return ca.vertcat(*rows)
 
+    def implicit(method: str) -> tuple[ca.SX, ca.SX]:
+        """One implicit step of the affine ``f(w) = J w + c``, ``J = s A - g C`` (switchobs.spec)."""
+        f = rhs(x)
+        inc, det = implicit_increment(STEP_METHODS[method], affine_jacobian(A, C, s, g), [f[i] for i in range(n)],
+                                      dt, lambda d: ca.if_else(d != 0, d, 1))
+        return x + dt * ca.vertcat(*inc), det
+
     values = [float(spec.values[name]) for name in model.parameters] + list(spec.K_plus) + list(spec.K_minus)
     return Translation(x=x, signals=sig, params=par, dt=dt, rhs=rhs, scale=s_expr, s=s, guards=_guards(spec, env),
                        state_names=spec.state_names, signal_names=spec.signal_names,
-                       param_names=tuple(index), default_params=tuple(values))
+                       param_names=tuple(index), default_params=tuple(values), implicit=implicit)
 
 
 def translate_adaptive(spec: ObserverSpec) -> Translation:
@@ -351,7 +367,7 @@ def translate_adaptive(spec: ObserverSpec) -> Translation:
               + list(spec.K_minus) + flat_gamma)
     return Translation(x=x, signals=sig, params=par, dt=dt, rhs=rhs, scale=s_expr, s=s, guards=_guards(spec, env),
                        state_names=spec.state_names, signal_names=spec.signal_names, param_names=tuple(index),
-                       default_params=tuple(values))
+                       default_params=tuple(values), methods=EXPLICIT)
 
 
 def translate_super_twisting(lam: float, alpha: float) -> Translation:

@@ -9,7 +9,7 @@ xbs4_observer            -- 4D unknown-road XBS observer (abs-xbs4, seed 000 Sec
 adaptive_xbs_observer    -- switched adaptive XBS observer (abs-adaptive2, seed 001 Ch. 3), gains from beta, Gamma
 xbs_gains                -- the beta-parametrised gain pairs of the three built-in XBS models
 ErrorCode                -- status codes of a refused step: switchobs.spec.StepStatus, shared with the generated C
-METHODS                  -- discretisations: "rk4" (default), "euler"
+METHODS                  -- discretisations: "rk4" (default), "euler", "midpoint", "radau3" (switched only)
 
 Every observer has ``step(xhat, signals, dt)``, ``run(xhat0, signal_rows, dt)``,
 ``derivative(xhat, signals)`` and ``readout(xhat)``; signals are ordered as

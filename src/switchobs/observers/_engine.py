@@ -1,4 +1,4 @@
-"""The numeric engine shared by every switchobs observer: validation, RK4 / Euler, run loops.
+"""The numeric engine shared by every switchobs observer: validation, the step methods, run loops.
 
 All observers of this package integrate a right-hand side of the form
 (signals ``sig`` held constant over a step, zero-order hold)::
@@ -35,6 +35,12 @@ split into ``n = ceil(|s| dt / h_max)`` sub-steps of ``dt / n`` with the same
 held signals, with the very float operations of the generated C
 (``switchobs.codegen``), so that both choose the same ``n`` and agree bit for
 bit; more than ``max_substeps`` is refused (``SUBSTEP_LIMIT``).
+
+The implicit methods ("midpoint", "radau3"; switched observer only, ``p = 0``)
+use that the held-signal right-hand side is affine, ``f = J x + c`` with
+``J = s A - g C``: one step is ``x + dt D(Z)^-1 F(Z) f(x)``, ``Z = dt J``,
+straight-line Python recorded from :func:`switchobs.spec.implicit_increment`
+(the function the C translation evaluates on casadi SX).
 """
 
 from __future__ import annotations
@@ -51,7 +57,8 @@ from sympy.printing.pycode import PythonCodePrinter
 from .._validate import DEFAULT_MAX_SUBSTEPS, named_vector
 from ..exceptions import FreeSymbolError, ModelError, ObserverInputError, SimulationError
 from ..model import Model, numeric
-from ..spec import METHODS, SCALE, ObserverSpec, StepStatus
+from ..spec import (METHODS, SCALE, STEP_METHODS, ObserverSpec, StepStatus, affine_jacobian, implicit_increment,
+                    require_explicit)
 
 __all__ = ["ErrorCode", "METHODS", "Kernel", "check_free"]
 
@@ -284,6 +291,8 @@ class _Source:
         if method == "euler":
             lines += [f"{indent}{new[k]} = {x[k]} + dt*{k1[k]}" for k in range(N)]
             return lines, new
+        if not STEP_METHODS[method].explicit:
+            return lines + self.implicit(method, k1, new, indent), new
         k2, k3, k4 = ([f"k{j}_{k}" for k in range(N)] for j in (2, 3, 4))
         t = [f"t{k}" for k in range(N)]
         lines += [f"{indent}{t[k]} = {x[k]} + h*{k1[k]}" for k in range(N)]
@@ -295,6 +304,25 @@ class _Source:
         lines += [f"{indent}{new[k]} = {x[k]} + dt6*({k1[k]} + 2.0*{k2[k]} + 2.0*{k3[k]} + {k4[k]})"
                   for k in range(N)]
         return lines, new
+
+    def implicit(self, method: str, f: Sequence[str], new: Sequence[str], indent: str) -> list[str]:
+        """Lines of ``new = x + dt D(Z)^-1 F(Z) f`` (NaN where ``D(Z)`` is singular), straight-line.
+
+        They are the operations of :func:`switchobs.spec.implicit_increment` on ``J = s A - g C`` (the
+        function the C translation evaluates on casadi SX), recorded by running it on :class:`_Recorder`
+        scalars, so that a step is plain float arithmetic and cannot raise.
+        """
+        spec, lines = self.spec, []
+        leaf = lambda name: _Recorder(name, lines)  # noqa: E731
+        A = [[None if a == 0.0 else float(a) for a in row] for row in spec.A]
+        C = [None if c == 0.0 else float(c) for c in spec.C]
+        J = affine_jacobian(A, C, leaf("s"), [leaf(g) for g in self.g])
+        inc, det = implicit_increment(STEP_METHODS[method], J, [leaf(k) for k in f], leaf("dt"), _Recorder.safe)
+        out = [f"{indent}{line}" for line in lines]
+        out.append(f"{indent}ok = {_operand(det)} != 0.0 and math.isfinite({_operand(det)})")
+        out += [f"{indent}{new[k]} = {self.x[k]} + dt*{_operand(inc[k])} if ok else math.nan"
+                for k in range(spec.size)]
+        return out
 
     def module(self, method: str) -> str:
         spec = self.spec
@@ -344,6 +372,40 @@ class _Source:
         return "\n".join(line for line in src if line != "") + "\n"
 
 
+def _operand(value) -> str:
+    """A recorded temporary by name, a constant as a literal that round-trips exactly."""
+    return value.name if isinstance(value, _Recorder) else f"({_lit(value)})"
+
+
+class _Recorder:
+    """A scalar that writes every operation on it as a line ``_tK = a op b`` of straight-line Python."""
+
+    def __init__(self, name: str, lines: list[str]):
+        self.name, self.lines = name, lines
+
+    def _op(self, template: str, *args) -> _Recorder:
+        name = f"_t{len(self.lines)}"
+        self.lines.append(f"{name} = {template.format(*map(_operand, args))}")
+        return _Recorder(name, self.lines)
+
+    def __add__(self, other): return self._op("{} + {}", self, other)  # noqa: E704
+    def __radd__(self, other): return self._op("{} + {}", other, self)  # noqa: E704
+    def __sub__(self, other): return self._op("{} - {}", self, other)  # noqa: E704
+    def __rsub__(self, other): return self._op("{} - {}", other, self)  # noqa: E704
+    def __mul__(self, other): return self._op("{}*{}", self, other)  # noqa: E704
+    def __rmul__(self, other): return self._op("{}*{}", other, self)  # noqa: E704
+    def __truediv__(self, other): return self._op("{}/{}", self, other)  # noqa: E704
+    def __rtruediv__(self, other): return self._op("{}/{}", other, self)  # noqa: E704
+    def __neg__(self): return self._op("-{}", self)  # noqa: E704
+
+    @staticmethod
+    def safe(det):
+        """``det`` where it is nonzero, else 1 (the solve divides by it)."""
+        if isinstance(det, _Recorder):
+            return det._op("{0} if {0} != 0.0 else 1.0", det)
+        return det if det != 0.0 else 1.0
+
+
 # --------------------------------------------------------------------------- kernel
 _NONFINITE = ("the step produced a non-finite state (overflow, or a domain error in d(y), b(y)); "
               "reduce dt or check the signals")
@@ -360,6 +422,8 @@ class Kernel:
                  max_substeps: int = DEFAULT_MAX_SUBSTEPS):
         if method not in METHODS:
             raise SimulationError(f"unknown discretisation method {method!r}; choose one of {list(METHODS)}")
+        if spec.p:
+            require_explicit(method, "the adaptive observer's right-hand side", SimulationError)
         self.spec = spec
         self.method = method
         self.lowered = _lower(spec)

@@ -115,7 +115,7 @@ class _Observer:
     # ------------------------------------------------------------------ info
     @property
     def method(self) -> str:
-        """``"rk4"`` or ``"euler"``."""
+        """One of :data:`switchobs.spec.METHODS`."""
         return self._kernel.method
 
     @property
@@ -299,9 +299,11 @@ class SwitchedObserver(_Observer):
         with :meth:`GainDesign.at`) with ``K_minus`` omitted, or two numeric gains.
     params : mapping, optional
         Parameter values overriding the model's (numbers or fraction strings).
-    method : {"rk4", "euler"}
+    method : {"rk4", "euler", "midpoint", "radau3"}
         One classic RK4 step per ``dt`` with the signals held constant (the
-        default), or forward Euler.
+        default), forward Euler, the implicit midpoint rule or 2-stage Radau
+        IIA (``x + dt D(Z)^-1 F(Z) f(x)``, ``Z = dt (s A - g C)``; certified for
+        every step length by ``switchobs.certify.discrete_certificate``).
     readout : str, optional
         An expression in the state names and parameters evaluated by
         :meth:`readout` (e.g. ``"z2"``, the XBS estimate of abs-xbs3).

@@ -101,7 +101,7 @@ def xbs3_observer(beta1: float, beta2: float, *, params: Mapping[str, Any] | Non
     params : mapping, optional
         Overrides of ``a = R^2 Fz / I``, ``b = -R gamma_b / I``, ``c = -c2`` (the
         built-in values are the TU Delft rig of seed 000 Fig. 2).
-    method : {"rk4", "euler"}
+    method : {"rk4", "euler", "midpoint", "radau3"}
 
     Examples
     --------
@@ -149,6 +149,7 @@ def adaptive_xbs_observer(beta: float, Gamma: Any, *, params: Mapping[str, Any] 
     params : mapping, optional
         Overrides of ``a`` and ``b`` (``c`` and ``d`` are estimated).
     method : {"rk4", "euler"}
+        The adaptive observer is not affine in its state: the implicit methods are refused.
     """
     gains = _xbs_design("abs-adaptive2", {"beta": beta}, params)
     return AdaptiveSwitchedObserver(builtin_model("abs-adaptive2"), gains, unknown=("c", "d"), Gamma=Gamma,

@@ -12,7 +12,7 @@ the gains, the estimated parameters and this split, computed once and
 checked once (the strict linearity test of seed 001 eq. (3.2)): the
 observers (``switchobs.observers``) lower it to floats, the code generator
 (``switchobs.codegen``) to casadi.  :class:`StepStatus` is the one set of
-status codes of a step, :data:`METHODS` the one set of discretisations, and
+status codes of a step (the discretisations are in ``_methods``), and
 :func:`domain_guards` says where the right-hand side is defined.
 """
 
@@ -29,11 +29,8 @@ import sympy as sp
 from ..exceptions import ModelError
 from ..model import Model
 
-__all__ = ["METHODS", "SCALE", "STATUS_TEXT", "REFERENCE_STATUSES", "StepStatus", "Guard", "domain_guards",
+__all__ = ["SCALE", "STATUS_TEXT", "REFERENCE_STATUSES", "StepStatus", "Guard", "domain_guards",
            "ObserverSpec"]
-
-#: Discretisations of one step: classic fourth-order Runge-Kutta (default) and forward Euler.
-METHODS = ("rk4", "euler")
 
 #: The symbol standing for the time scaling ``s`` in :attr:`ObserverSpec.drift` and ``regressor``.
 SCALE = sp.Symbol("s", real=True)
