@@ -200,3 +200,21 @@ def test_cli_auto_with_radau3_needs_no_bound_and_rk4_has_no_certificate(tmp_path
         err = capsys.readouterr().err
         assert err.count("\n") == 1 and f"method {method} has no discrete certificate" in err
         assert "--method radau3" in err and "--h-max VALUE" in err and not (tmp_path / method).exists()
+
+
+def test_implicit_step_refused_beyond_the_cofactor_size_limit():
+    """The cofactor solve grows like 2^n: beyond IMPLICIT_MAX_N the method is refused with the way out."""
+    from switchobs.exceptions import ModelError
+    from switchobs.spec import STEP_METHODS, implicit_increment
+    from switchobs.spec._methods import IMPLICIT_MAX_N
+
+    n = IMPLICIT_MAX_N + 1
+    J = [[-1.0 if i == j else None for j in range(n)] for i in range(n)]
+    with pytest.raises(ModelError, match=rf"n = {n} > {IMPLICIT_MAX_N}; use an explicit method"):
+        implicit_increment(STEP_METHODS["radau3"], J, [1.0] * n, 0.1, lambda d: d if d != 0 else 1.0)
+    # at the limit's other side a decoupled system steps each state alike: (1 - z/6) / (1 - 2z/3 + z^2/6), z = -0.1
+    inc, det = implicit_increment(STEP_METHODS["radau3"], [[-1.0, None], [None, -1.0]], [1.0, 1.0], 0.1,
+                                  lambda d: d if d != 0 else 1.0)
+    z = -0.1
+    assert inc[0] == inc[1] and inc[0] == pytest.approx((1 - z / 6) / (1 - 2 * z / 3 + z * z / 6), rel=1e-14)
+    assert det == pytest.approx((1 - 2 * z / 3 + z * z / 6) ** 2, rel=1e-14)
