@@ -91,6 +91,20 @@ def test_hoang2014_sec3e_sec4d_demo_gains_at_beta_100(demo_run):
 
 
 @pytest.mark.slow
+def test_demo_ships_the_certified_sampled_observer(demo_run):
+    """Issue 'certify what ships': the C in the loop is the radau3 step, and its certificate covers every dt."""
+    out, _ = demo_run
+    for m in json.loads((out / "report.json").read_text())["models"]:
+        assert m["method"] == "radau3" and "certified for every dt" in m["discrete"]
+        cert = json.loads((out / m["certificate"]).read_text()) if not Path(m["certificate"]).is_absolute() \
+            else json.loads(Path(m["certificate"]).read_text())
+        assert cert["discrete"]["method"] == "radau3" and cert["discrete"]["verdict"] == "certified"
+        assert cert["discrete"]["h_max"] == "inf" and cert["discrete"]["strict"] is True
+        header = next((out / "c").glob(f"*{m['model'].replace('-', '_')}*/*.h")).read_text()
+        assert "2-stage Radau IIA" in header
+
+
+@pytest.mark.slow
 def test_demo_braking_numbers_are_physical(demo_run):
     out, _ = demo_run
     b = json.loads((out / "report.json").read_text())["braking"]
@@ -187,8 +201,8 @@ def _short_demo_scenario(duration_s: float = 1.2) -> BrakingScenario:
 @pytest.fixture(scope="module")
 def loop_run():
     sc = _short_demo_scenario()
-    obs = xbs4_observer(100.0, 100.0)
-    est = EncoderLoopEstimator([("xbs4", obs, {"z2": 0.5})], spectral_radius=100.0,
+    obs = xbs4_observer(100.0, 100.0, method="radau3")  # certified for every step: one step per sample
+    est = EncoderLoopEstimator([("xbs4", obs, {"z2": 0.5})],
                                encoder=Encoder(ppr=60, dnl_cycles=0.01, eccentricity=0.003, clock_hz=1e6, seed=1),
                                radius_m=sc.vehicle.radius_m,
                                beside=[("exact", ObserverXbsEstimator(obs, initial_state={"z2": 0.5}))])
@@ -231,11 +245,11 @@ def test_encoder_loop_rejects_bad_settings():
     obs = xbs4_observer(100.0, 100.0)
     enc = Encoder(ppr=60)
     with pytest.raises(SimulationError, match="at least one observer"):
-        EncoderLoopEstimator([], spectral_radius=1.0, encoder=enc, radius_m=0.3)
-    with pytest.raises(SimulationError, match="spectral_radius must be finite and > 0, got -1"):
-        EncoderLoopEstimator([("x", obs, {})], spectral_radius=-1.0, encoder=enc, radius_m=0.3)
+        EncoderLoopEstimator([], encoder=enc, radius_m=0.3)
+    with pytest.raises(SimulationError, match="rate_hz must be finite and > 0, got -1"):
+        EncoderLoopEstimator([("x", obs, {})], encoder=enc, radius_m=0.3, rate_hz=-1.0)
     with pytest.raises(SimulationError, match="window n = 2 must exceed"):
-        EncoderLoopEstimator([("x", obs, {})], spectral_radius=1.0, encoder=enc, radius_m=0.3, window=2)
+        EncoderLoopEstimator([("x", obs, {})], encoder=enc, radius_m=0.3, window=2)
 
 
 # ------------------------------------------------------------------ reference (21)

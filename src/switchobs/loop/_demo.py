@@ -120,7 +120,6 @@ class BrakingSummary:
     omega_reconstruction_max: float
     lag_mean_ms: float
     encoder_events: int
-    max_substeps: int
     reference_segments: int
     wall_time_s: float
 
@@ -150,7 +149,7 @@ def demo_scenario(settings: DemoSettings | None = None) -> BrakingScenario:
 
 
 
-def demo_braking(c_observers: Mapping[str, SteppingObserver], spectral_radius: float,
+def demo_braking(c_observers: Mapping[str, SteppingObserver],
                  settings: DemoSettings | None = None) -> tuple[BrakingScenario, BrakingResult, EncoderLoopRecord]:
     """Brake the demo's car with the encoder-fed ``abs-xbs4`` observer in the loop.
 
@@ -158,10 +157,8 @@ def demo_braking(c_observers: Mapping[str, SteppingObserver], spectral_radius: f
     ----------
     c_observers : mapping
         ``"abs-xbs4"`` and ``"abs-xbs3"`` observers (signals ``(y, vx, u)``,
-        readout the XBS): the demo passes the compiled C observers.
-    spectral_radius : float
-        Largest ``|eigenvalue|`` of their ``A_plus``, ``A_minus`` (sets the sub-steps,
-        :class:`EncoderLoopEstimator`).
+        readout the XBS): the demo passes the compiled radau3 C observers, certified for every
+        step length, so each sample is one step (no sub-steps in the harness).
     settings : DemoSettings, optional
 
     Returns
@@ -175,7 +172,7 @@ def demo_braking(c_observers: Mapping[str, SteppingObserver], spectral_radius: f
     estimator = EncoderLoopEstimator(
         [("xbs4 (C), encoder, in the loop", c_observers["abs-xbs4"], {"z2": 0.5}),
          ("xbs3 (C, c = 34), encoder, beside", c_observers["abs-xbs3"], {"z2": 0.5})],
-        spectral_radius=spectral_radius, encoder=encoder, radius_m=sc.vehicle.radius_m,
+        encoder=encoder, radius_m=sc.vehicle.radius_m,
         window=settings.tsa_window, harmonics=settings.harmonics,
         beside=[("xbs4 (C), exact x2, beside", ObserverXbsEstimator(c_observers["abs-xbs4"],
                                                                      initial_state={"z2": 0.5}))])
@@ -248,4 +245,4 @@ def summarise_braking(sc: BrakingScenario, result: BrakingResult, record: Encode
         slip_mean=m.slip_mean, errors=tuple(errors), x2_rms=x2_rms,
         omega_reconstruction_max=float(np.max(np.abs(omega_true - record.omega_steps))),
         lag_mean_ms=float(np.nanmean(record.lag_s) * 1e3), encoder_events=record.events,
-        max_substeps=int(record.substeps.max()), reference_segments=reference_segments, wall_time_s=wall)
+        reference_segments=reference_segments, wall_time_s=wall)

@@ -53,11 +53,6 @@ __all__ = ["EncoderLoopEstimator", "EncoderLoopRecord"]
 
 Array = npt.NDArray[np.float64]
 
-#: Largest ``|s| h rho`` of one observer sub-step (``rho`` the spectral radius of A_plus, A_minus):
-#: well inside the real-axis stability interval (-2.78, 0) of RK4, with room for the Jordan blocks.
-STIFFNESS_LIMIT = 1.0
-
-
 @dataclass(frozen=True, eq=False)
 class EncoderLoopRecord:
     """What the encoder chain and the observers saw.
@@ -77,8 +72,6 @@ class EncoderLoopRecord:
         Vehicle speed at the samples [m/s].
     estimates : dict of str -> ndarray
         XBS estimate of each encoder-fed observer at the samples (NaN before the first measurement).
-    substeps : ndarray of int
-        Observer sub-steps of each sample (more where ``|s| = |x2| / vx`` is large).
     events : int
         Encoder edges generated.
     steps_t : ndarray
@@ -97,7 +90,6 @@ class EncoderLoopRecord:
     omega_measured: Array
     vx: Array
     estimates: dict[str, Array]
-    substeps: npt.NDArray[np.int_]
     events: int
     steps_t: Array
     omega_steps: Array
@@ -116,7 +108,7 @@ class EncoderLoopRecord:
                 "x2_measured": clean(self.x2_measured), "omega_tsa": clean(self.omega_tsa),
                 "omega_measured": clean(self.omega_measured), "vx": clean(self.vx),
                 "estimates": {k: clean(v) for k, v in self.estimates.items()},
-                "substeps": [int(v) for v in self.substeps], "events": self.events,
+                "events": self.events,
                 "steps_t": clean(self.steps_t), "omega_steps": clean(self.omega_steps),
                 "beside": {k: clean(v) for k, v in self.beside.items()}}
 
@@ -137,11 +129,10 @@ class EncoderLoopEstimator:
         reference observers or compiled C observers (:class:`switchobs.codegen.CObserver`).
         The first one's estimate is returned to the controller; the others run beside it on
         the same measurements.  ``initial_state`` maps state names to initial values; the first
-        state (the measured ``z1``) starts at the first measurement.
-    spectral_radius : float
-        Largest ``|eigenvalue|`` of ``A_plus`` and ``A_minus`` over the observers: a step is
-        split into sub-steps so that ``|s| h rho <= STIFFNESS_LIMIT`` (the observer's
-        real-time eigenvalues are ``s spec(A_±)``, RK4 needs ``|s| h rho < 2.78``).
+        state (the measured ``z1``) starts at the first measurement.  Each interval between two
+        measurements is ONE observer step: the observer's own step method and step bound decide
+        whether that is safe (``radau3`` and ``midpoint`` are certified for every step length,
+        ``switchobs certify --discrete``; an ``rk4`` observer needs ``h_max``).
     encoder : Encoder
     radius_m : float
         Wheel radius ``R`` [m].
@@ -163,19 +154,18 @@ class EncoderLoopEstimator:
     """
 
     def __init__(self, observers: Sequence[tuple[str, SteppingObserver, dict[str, float]]], *,
-                 spectral_radius: float, encoder: Encoder, radius_m: float, rate_hz: float = 1000.0,
+                 encoder: Encoder, radius_m: float, rate_hz: float = 1000.0,
                  order: int = 2, window: int = 15, harmonics: int = 5, initial_xbs: float = 0.5,
                  beside: Sequence[tuple[str, ObserverXbsEstimator]] = ()):
         if not observers:
             raise SimulationError("EncoderLoopEstimator needs at least one observer")
         for label, obs, _ in observers:
             check_xbs_signals(obs, f"the encoder loop's observer {label!r}")
-        for name, value in (("spectral_radius", spectral_radius), ("rate_hz", rate_hz), ("radius_m", radius_m)):
+        for name, value in (("rate_hz", rate_hz), ("radius_m", radius_m)):
             if not (isinstance(value, (int, float)) and math.isfinite(value) and value > 0):
                 raise SimulationError(f"{name} must be finite and > 0, got {value!r}")
         self._observers = list(observers)
         self._beside = list(beside)
-        self._rho = float(spectral_radius)
         self._encoder = encoder
         self._R = float(radius_m)
         self._rate = float(rate_hz)
@@ -282,14 +272,13 @@ class EncoderLoopEstimator:
         vx_s = self._history(ts)[0]
         th_m, om_m, al_m = self._tsa.estimate(ts)
         if math.isnan(om_m):
-            self._rows.append((ts, math.nan, math.nan, math.nan, math.nan, math.nan, vx_s, 0.0,
+            self._rows.append((ts, math.nan, math.nan, math.nan, math.nan, math.nan, vx_s,
                                *(math.nan for _ in self._observers)))
             return
         om_c, al_c = self._comp.update(th_m, om_m, al_m)
         tc = sum(self._stamps) / len(self._stamps)
         vx_c, U_c, ax_c = self._history(tc)
         y_meas = self._R * al_c - ax_c
-        n_sub = 0
         if self._last is None:
             self._states = [initial_xbs_state(obs, y_meas, init) for _, obs, init in self._observers]
             self._last = (tc, y_meas, vx_c, U_c)
@@ -299,25 +288,20 @@ class EncoderLoopEstimator:
             tc0, y0, vx0, U0 = self._last
             span = tc - tc0
             y_hold, vx_hold, u_mean = 0.5 * (y0 + y_meas), 0.5 * (vx0 + vx_c), (U_c - U0) / span
-            n_sub = max(1, math.ceil(abs(y_hold) / vx_hold * span * self._rho / STIFFNESS_LIMIT))
-            h = span / n_sub
             for i, (_, obs, _) in enumerate(self._observers):
-                x = self._states[i]
-                for _ in range(n_sub):
-                    x = obs.step(x, (y_hold, vx_hold, u_mean), h)
-                self._states[i] = x
+                self._states[i] = obs.step(self._states[i], (y_hold, vx_hold, u_mean), span)
             self._last = (tc, y_meas, vx_c, U_c)
         estimates = [float(obs.readout(self._states[i])) for i, (_, obs, _) in enumerate(self._observers)]
         self._estimate = estimates[0]
-        self._rows.append((ts, tc, self._R * al_m - ax_c, y_meas, om_m, om_c, vx_s, float(n_sub), *estimates))
+        self._rows.append((ts, tc, self._R * al_m - ax_c, y_meas, om_m, om_c, vx_s, *estimates))
 
     def record(self) -> EncoderLoopRecord:
         """What happened so far (call after the simulation)."""
-        data = np.array(self._rows, dtype=float).reshape(-1, 8 + len(self._observers))
+        data = np.array(self._rows, dtype=float).reshape(-1, 7 + len(self._observers))
         beside = np.array(self._beside_rows, dtype=float).reshape(-1, len(self._beside))
         return EncoderLoopRecord(
             t=data[:, 0], t_measured=data[:, 1], x2_tsa=data[:, 2], x2_measured=data[:, 3],
-            omega_tsa=data[:, 4], omega_measured=data[:, 5], vx=data[:, 6], substeps=data[:, 7].astype(int),
-            estimates={label: data[:, 8 + i] for i, (label, _, _) in enumerate(self._observers)},
+            omega_tsa=data[:, 4], omega_measured=data[:, 5], vx=data[:, 6],
+            estimates={label: data[:, 7 + i] for i, (label, _, _) in enumerate(self._observers)},
             events=self._events, steps_t=np.array(self._hist_t), omega_steps=np.array(self._omega_steps),
             beside={label: beside[:, i] for i, (label, _) in enumerate(self._beside)})

@@ -11,10 +11,12 @@ Stages (``switchobs demo``, ``make demo``):
    seed 004 for ``K_minus``), re-checked exactly (:meth:`GainDesign.verify`),
    evaluated at ``beta1 = beta2 = 100`` (``docs/observers.md``).
 3. **certify** -- LMIs and dwell time re-checked in exact arithmetic
-   (:func:`switchobs.certify.certify_model`); the certificate is written to
+   (:func:`switchobs.certify.certify_model`), and the sampled observer that
+   ships (one radau3 step per sample, certified for every step length,
+   ``discrete`` section); the certificate is written to
    JSON and checked again from the file by :func:`switchobs.certify.verify_certificate`,
    the function behind ``switchobs verify``.
-4. **codegen** -- C99 observers (:func:`switchobs.codegen.generate_observer`),
+4. **codegen** -- C99 observers with the radau3 step (:func:`switchobs.codegen.generate_observer`),
    compiled, compared with the Python reference observers and timed.
 5. **braking** -- the quarter car of seed 001 (2.1) on the Table I roads of
    seed 000, dry -> wet -> snow, five-phase ABS with wheel-acceleration
@@ -42,13 +44,16 @@ from ._progress import Progress, Stage, check_prerequisites
 if TYPE_CHECKING:       # the loop layer is imported when a stage needs it (its prerequisites are checked first)
     from ..loop import BrakingSummary, DemoSettings
 
-__all__ = ["DEMO_BETAS", "DEMO_MODELS", "DemoReport", "ModelResult", "run_demo", "STAGES"]
+__all__ = ["DEMO_BETAS", "DEMO_METHOD", "DEMO_MODELS", "DemoReport", "ModelResult", "run_demo", "STAGES"]
 
 #: beta1 = beta2 = 100: the defaults docs/observers.md recommends for the quarter car at 1 ms.
 DEMO_BETAS: Mapping[str, int] = {"beta1": 100, "beta2": 100}
 #: The built-in models of the demo and their symbolic spectra (seed 000 Sec. III-E and IV-D).
 DEMO_MODELS: tuple[tuple[str, str], ...] = (("abs-xbs3", "-beta1,-beta2,-beta2"),
                                            ("abs-xbs4", "-beta1,-beta1,-beta2,-beta2"))
+#: The step of the generated C observers: 2-stage Radau IIA, certified for every step length h = |s| dt
+#: (``switchobs certify --discrete radau3``); RK4 has no discrete certificate for these designs at any dt.
+DEMO_METHOD = "radau3"
 #: ``c = -c2 = 34`` of the rig in seed 000 (the value of the abs-xbs3 model file).
 RIG_C = 34
 
@@ -74,7 +79,8 @@ class ModelResult:
     exact_checks: Mapping[str, bool]
     K_plus: tuple[float, ...]
     K_minus: tuple[float, ...]
-    spectral_radius: float
+    method: str
+    discrete: str
     certificate: str
     certified: bool
     verdict: str
@@ -127,7 +133,8 @@ class DemoReport:
         for m in self.models:
             lines.append(f"  {m.model}: exact checks {'ok' if all(m.exact_checks.values()) else 'FAILED'}; "
                          f"certificate {'verified' if m.verified else 'NOT verified'}: {m.verdict}; "
-                         f"C step {m.c_run_ns:.0f} ns")
+                         f"C step ({m.method}, sampled observer {'certified for every dt' if m.certified else 'NOT certified'}) "
+                         f"{m.c_run_ns:.0f} ns")
         b = self.braking
         dist = "n/a" if b.braking_distance_m is None else f"{b.braking_distance_m:.1f} m"
         lines.append(f"  braking: {b.status}, stopping distance {b.stopping_distance_m:.1f} m, braking distance "
@@ -174,11 +181,13 @@ def _exact_gains(d: Any) -> Any:
 def _certify(model: Any, d: Any, out: Path) -> dict[str, Any]:
     from ..certify import certify_model, verify_certificate
 
-    report = certify_model(model, gains=_exact_gains(d))
+    report = certify_model(model, gains=_exact_gains(d), discrete=DEMO_METHOD)
     path = out / f"certificate-{model.name}.json"
     report.write(path)
     check = verify_certificate(path)          # from the file, as `switchobs verify` does
-    return {"path": path, "certified": report.certified, "verdict": report.text, "verified": check.holds,
+    return {"path": path, "certified": report.certified and bool(report.discrete_certified),
+            "verdict": report.text, "discrete": report.discrete.statement if report.discrete else "not certified",
+            "verified": check.holds,
             "checks": tuple((c.name, c.holds) for c in check.checks)}
 
 
@@ -193,14 +202,14 @@ def _codegen(model: Any, d: Any, numeric: dict[str, np.ndarray], out: Path, sett
     from ..codegen import compile_observer, generate_observer
     from ..observers import SwitchedObserver
 
-    gen = generate_observer(model, d, values=dict(DEMO_BETAS),
+    gen = generate_observer(model, d, values=dict(DEMO_BETAS), method=DEMO_METHOD,
                             command=f"switchobs demo (spectrum {dict(DEMO_MODELS)[model.name]}, beta1 = beta2 = 100)")
     target = out / "c" / gen.prefix
     target.mkdir(parents=True, exist_ok=True)
     gen.write(target)
     z2 = gen.state_names.index("z2")
     c_obs = compile_observer(gen, readout=lambda x, i=z2: np.asarray(x)[..., i])
-    ref = SwitchedObserver(model, numeric["K_plus"], numeric["K_minus"], readout="z2")
+    ref = SwitchedObserver(model, numeric["K_plus"], numeric["K_minus"], readout="z2", method=DEMO_METHOD)
     rows = _abs_like_rows(2000)
     x0 = np.zeros(model.n)
     x0[1] = 0.5
@@ -280,11 +289,9 @@ def run_demo(out_dir: str | Path = "out/demo", *, fast: bool = False,
         for name, _ in DEMO_MODELS:
             code[name] = _codegen(models[name], *designs[name], out, settings)
             progress.note(f"{name}: {code[name]['prefix']}, {code[name]['run_ns']:.0f} ns per step")
-    rho = max(float(np.max(np.abs(np.linalg.eigvals(designs[n][1][k])))) for n, _ in DEMO_MODELS
-              for k in ("A_plus", "A_minus"))
     with progress.stage("braking", "dry -> wet -> snow, encoder chain, C observer in the loop"):
         t0 = time.perf_counter()
-        sc, result, record = demo_braking({n: c["observer"] for n, c in code.items()}, rho, settings)
+        sc, result, record = demo_braking({n: c["observer"] for n, c in code.items()}, settings)
         braking = summarise_braking(sc, result, record, time.perf_counter() - t0)
         progress.note(f"{result.status}, {float(result.series['t'][-1]):.2f} s simulated, "
                       f"{record.events} encoder edges")
@@ -295,7 +302,8 @@ def run_demo(out_dir: str | Path = "out/demo", *, fast: bool = False,
                     exact_checks=designs[name][0].verify(),
                     K_plus=tuple(float(k) for k in designs[name][1]["K_plus"]),
                     K_minus=tuple(float(k) for k in designs[name][1]["K_minus"]),
-                    spectral_radius=rho, certificate=str(certs[name]["path"]), certified=certs[name]["certified"],
+                    method=DEMO_METHOD, discrete=certs[name]["discrete"], certificate=str(certs[name]["path"]),
+                    certified=certs[name]["certified"],
                     verdict=certs[name]["verdict"], verified=certs[name]["verified"],
                     verification=certs[name]["checks"], c_prefix=code[name]["prefix"], c_files=code[name]["files"],
                     c_run_ns=code[name]["run_ns"], c_step_us=code[name]["step_us"],
