@@ -61,7 +61,7 @@ def example_program(gen: "GeneratedObserver") -> str:
 
 
 def _bound_section(gen: "GeneratedObserver") -> list[str]:
-    """The certified step bound: what is certified, the worst-case time and the status beyond it."""
+    """The step bound: what it guarantees (a certificate only where one exists), the worst case, the status beyond."""
     P = gen.prefix.upper()
     if gen.h_max is None:
         if gen.kind == "super-twisting":
@@ -69,21 +69,26 @@ def _bound_section(gen: "GeneratedObserver") -> list[str]:
         return ["## Step bound", "",
                 "None: every call takes one step of `dt`, whatever `|s|*dt` is; regenerate with `--h-max` to split",
                 "longer steps (see below which methods need it).", ""]
+    certified = gen.certificate is not None
+    claim = (f"The sampled error dynamics are certified for every step `h = |s|*dt` (rescaled time) up to "
+             f"`h_max = {gen.h_max}` ({gen.certificate})." if certified else
+             f"Every step `h = |s|*dt` (rescaled time) is kept at or below `h_max = {gen.h_max}`, a bound you "
+             "chose: it is NOT a certificate (for rk4 and euler none exists at any bound, see below); it keeps "
+             "each mode's step inside the method's stability region when `h_max` is below that bound.")
     return [
-        "## Step bound (certified sub-stepping)", "",
-        f"The sampled error dynamics are certified for every step `h = |s|*dt` (rescaled time) up to",
-        f"`h_max = {gen.h_max}`.  `{P}_H_MAX` = `{float_literal(gen.h_max_c, gen.real)}` is `h_max` rounded DOWN "
-        f"to `{gen.real}`,",
-        "so the C never steps beyond the certified bound.  A call computes `s` once (signals held) and:",
+        "## Step bound (sub-stepping)", "",
+        claim,
+        f"`{P}_H_MAX` = `{float_literal(gen.h_max_c, gen.real)}` is `h_max` rounded DOWN to `{gen.real}`, "
+        "so the C never steps beyond it.  A call computes `s` once (signals held) and:",
         "",
-        f"- `|s|*dt <= {P}_H_MAX`: one step of `dt`, exactly as without a bound (certified);",
-        f"- otherwise `n = ceil(|s|*dt / {P}_H_MAX)` sub-steps of `dt/n`, signals held (each certified);",
+        f"- `|s|*dt <= {P}_H_MAX`: one step of `dt`, exactly as without a bound;",
+        f"- otherwise `n = ceil(|s|*dt / {P}_H_MAX)` sub-steps of `dt/n`, signals held;",
         f"- more than `{P}_MAX_SUBSTEPS` = {gen.max_substeps} sub-steps: `{P}_ERR_SUBSTEP_LIMIT` = "
         f"{int(StepStatus.SUBSTEP_LIMIT)}, `xhat` unchanged.",
         "",
         f"Worst-case time of one call: `{P}_MAX_SUBSTEPS` = {gen.max_substeps} evaluations of the step kernel "
         "(plus the checks).",
-        "The certificate is for the default gains and parameters: other `params` need their own bound.", ""]
+        "The bound is for the default gains and parameters: other `params` need their own bound.", ""]
 
 
 def _certificate_section(gen: "GeneratedObserver") -> list[str]:
