@@ -41,6 +41,19 @@ STEPS = 300_000
 RUN_ROWS = 100_000
 CFLAGS = ["-std=c99", "-O2"]
 
+# The checks of the generated step (status codes of the C API), shared by both hand-written steps.
+CHECKS = r"""
+    if (x == NULL || sig == NULL) return 7;
+    if (!(dt > 0) || !isfinite(dt)) return 1;
+    for (i = 0; i < N; ++i) if (!isfinite(x[i])) return 2;
+    for (i = 0; i < 3; ++i) if (!isfinite(sig[i])) return 3;
+    for (i = 0; i < NP; ++i) if (!isfinite(p[i])) return 6;
+    if (!(p[0] > 0) || !(p[1] < 0)) return 6;
+    if (!(sig[1] > 0)) return 4;
+    y = sig[0];
+    s = y / sig[1];
+    if (!isfinite(s)) return 4;"""
+
 # The same RK4 step written by hand (same parameter layout and checks as the generated code).
 HAND = r"""
 #include <math.h>
@@ -76,16 +89,7 @@ int32_t NAME(real *x, const real *sig, const real *p, real dt)
     real x0, x1, x2, x3, t0, t1, t2, t3, a0, a1, a2, a3, b0, b1, b2, b3, c0, c1, c2, c3, d0, d1, d2, d3;
     int i;
     LOAD
-    if (x == NULL || sig == NULL) return 7;
-    if (!(dt > 0) || !isfinite(dt)) return 1;
-    for (i = 0; i < N; ++i) if (!isfinite(x[i])) return 2;
-    for (i = 0; i < 3; ++i) if (!isfinite(sig[i])) return 3;
-    for (i = 0; i < NP; ++i) if (!isfinite(p[i])) return 6;
-    if (!(p[0] > 0) || !(p[1] < 0)) return 6;
-    if (!(sig[1] > 0)) return 4;
-    y = sig[0];
-    s = y / sig[1];
-    if (!isfinite(s)) return 4;
+@CHECKS@
     x3 = t3 = a3 = b3 = c3 = d3 = g3 = 0;
 #define GAIN(i) g##i = s > 0 ? s * p[NP - 2 * N + i] : s * p[NP - N + i];
 #define LOADX(i) x##i = x[i];
@@ -140,16 +144,7 @@ int32_t NAME(real *x, const real *sig, const real *p, real dt)
 {
     real s, y, bu, g[N], k1[N], k2[N], k3[N], k4[N], t[N];
     int i;
-    if (x == NULL || sig == NULL) return 7;
-    if (!(dt > 0) || !isfinite(dt)) return 1;
-    for (i = 0; i < N; ++i) if (!isfinite(x[i])) return 2;
-    for (i = 0; i < 3; ++i) if (!isfinite(sig[i])) return 3;
-    for (i = 0; i < NP; ++i) if (!isfinite(p[i])) return 6;
-    if (!(p[0] > 0) || !(p[1] < 0)) return 6;
-    if (!(sig[1] > 0)) return 4;
-    y = sig[0];
-    s = y / sig[1];
-    if (!isfinite(s)) return 4;
+@CHECKS@
     for (i = 0; i < N; ++i) g[i] = s > 0 ? s * p[NP - 2 * N + i] : s * p[NP - N + i];
     bu = sig[2] * p[1];
     rhs(x, s, y, bu, g, p, k1);
@@ -250,8 +245,8 @@ def c_timings(obs: CObserver, model: str, tmp: Path) -> dict:
     gen.write(d)
     use_casadi = gen.real == "double"  # casadi_real is double
     work = casadi_source(obs, model, d) if use_casadi else 1
-    (d / "hand.c").write_text(HAND)
-    (d / "natural.c").write_text(NATURAL)
+    (d / "hand.c").write_text(HAND.replace("@CHECKS@", CHECKS))
+    (d / "natural.c").write_text(NATURAL.replace("@CHECKS@", CHECKS))
     (d / "driver.c").write_text(DRIVER.replace("@P@", gen.prefix).replace("@PU@", gen.prefix.upper())
                                 .replace("@REAL@", gen.real).replace("@M@", model).replace("@STEPS@", str(STEPS))
                                 .replace("@CASADI@", str(int(use_casadi))).replace("@CASADI_W@", str(work)))

@@ -64,14 +64,10 @@ def _naive(n: int, queue) -> None:
     import sympy as sp
     from sympy.core.cache import clear_cache
 
-    from switchobs.design import naive_lyapunov
+    from switchobs.design import naive_lyapunov, normal_form_matrix
 
     alpha = sp.symbols(f"c1:{n + 1}")
-    F = sp.zeros(n, n)
-    for i in range(n):
-        F[i, 0] = -alpha[i]
-        if i + 1 < n:
-            F[i, i + 1] = 1
+    F = normal_form_matrix([-c for c in alpha])  # the observer form, det(sI - F) = s^n + c1 s^(n-1) + ...
     E = sp.zeros(n, n)
     E[0, 0] = 1
     naive_lyapunov(sp.Matrix([[-alpha[0]]]), sp.Matrix([[1]]))  # loads linsolve's code paths, not timed
