@@ -20,6 +20,7 @@ from __future__ import annotations
 
 import argparse
 import multiprocessing as mp
+import queue as queue_module
 
 from _harness import MIN_REPEATS, Stats, cli_cpu, cpu, number, publish, ratio
 
@@ -35,7 +36,7 @@ def _clear_caches() -> None:
     _generic_identities_hold.cache_clear()
 
 
-def _in_process(n: int, repeats: int, queue) -> None:
+def _in_process(n: int, repeats: int) -> dict:
     import sympy as sp
 
     from switchobs.design import design, observer_form_gramian
@@ -55,10 +56,11 @@ def _in_process(n: int, repeats: int, queue) -> None:
     if not all(checks[-1].values()):
         raise SystemExit(f"N = {n}: the exact re-check failed: {checks[-1]}")
     text = cpu(lambda: str(results[-1]), repeats)
-    queue.put({"p": p_only, "design": full, "recheck": recheck, "text": text, "chars": len(str(results[-1]))})
+    return {"p": p_only, "design": full, "recheck": recheck, "text": text, "chars": len(str(results[-1]))}
 
 
-def _naive(n: int, queue) -> None:
+def _naive(n: int, repeats: int, queue) -> None:
+    """Puts the CPU time of each of ``repeats`` cold naive solves as soon as it is done."""
     import time
 
     import sympy as sp
@@ -71,25 +73,34 @@ def _naive(n: int, queue) -> None:
     E = sp.zeros(n, n)
     E[0, 0] = 1
     naive_lyapunov(sp.Matrix([[-alpha[0]]]), sp.Matrix([[1]]))  # loads linsolve's code paths, not timed
-    clear_cache()
-    t0 = time.process_time()
-    naive_lyapunov(F, E)
-    queue.put(time.process_time() - t0)
+    for _ in range(repeats):
+        clear_cache()
+        t0 = time.process_time()
+        naive_lyapunov(F, E)
+        queue.put(time.process_time() - t0)
 
 
-def _child(target, args: tuple, limit: float | None = None):
-    """``target(*args, queue)`` in a fresh process; None if it runs past ``limit`` seconds."""
+def _in_child(n: int, repeats: int, queue) -> None:
+    queue.put(_in_process(n, repeats))
+
+
+def _naive_times(n: int, repeats: int, limit: float) -> list[float] | None:
+    """The naive solves in one fresh process; None as soon as one takes longer than ``limit`` seconds."""
     queue = mp.Queue()
-    proc = mp.Process(target=target, args=(*args, queue))
+    proc = mp.Process(target=_naive, args=(n, repeats, queue))
     proc.start()
-    proc.join(limit)
-    if proc.is_alive():
+    times = []
+    try:
+        for _ in range(repeats):
+            times.append(queue.get(timeout=limit + 30))  # + the start-up of the child
+            if times[-1] > limit:
+                return None
+    except queue_module.Empty:
+        return None
+    finally:
         proc.terminate()
         proc.join()
-        return None
-    if proc.exitcode != 0:
-        raise SystemExit(f"{target.__name__}{args}: the child process failed ({proc.exitcode})")
-    return queue.get()
+    return times
 
 
 def main() -> None:
@@ -99,18 +110,19 @@ def main() -> None:
     parser.add_argument("--repeats", type=int, default=MIN_REPEATS)
     parser.add_argument("--baseline-limit", type=float, default=20.0)
     args = parser.parse_args()
-    max_n = 6 if args.quick else args.max_n
+    max_n = min(args.max_n, 6) if args.quick else args.max_n
     table = ["| N | P only [ms] | naive P [ms] | P vs naive | design [ms] | exact re-check [ms] | text [ms] "
              "| text [kB] | CLI process [s] |",
              "|---:|---:|---:|---|---:|---:|---:|---:|---:|"]
     naive_on = True
     for n in range(2, max_n + 1):
-        r = _child(_in_process, (n, args.repeats))
-        naive = []
-        while naive_on and len(naive) < args.repeats:
-            t = _child(_naive, (n,), args.baseline_limit)
-            naive_on = t is not None
-            naive += [t] if t is not None else []
+        queue = mp.Queue()
+        proc = mp.Process(target=_in_child, args=(n, args.repeats, queue))
+        proc.start()
+        r = queue.get()
+        proc.join()
+        naive = _naive_times(n, args.repeats, args.baseline_limit) if naive_on else None
+        naive_on = naive is not None
         if naive_on:
             naive_s, versus = Stats(tuple(naive)).show(1e3), ratio(r["p"].median, Stats(tuple(naive)).median)
         else:

@@ -234,25 +234,25 @@ class GainDesign:
         (:mod:`switchobs.design._recheck`), which keeps fully symbolic designs
         past N = 7 within seconds.
         """
+        # a design in observer normal form is re-checked by substituting into identities proved once per n
+        generic = None if self.conditional or not self.normal_form.is_identity else lyapunov_by_substitution(
+            self.A_plus, self.A_minus, self.P, self.C_plus, self.C_minus, self.alpha_plus)
+
         def residual_zero(A: sp.MatrixBase, C: sp.MatrixBase) -> bool:
-            return lyapunov_residual_is_zero(A, self.P, sp.Matrix(C).T * sp.Matrix(C))
+            return generic if generic is not None else lyapunov_residual_is_zero(A, self.P, sp.Matrix(C).T * C)
 
         s = LAPLACE
         cp_plus = self.A_plus.charpoly(s).as_expr() - self.characteristic_polynomial("plus")
         cp_minus = self.A_minus.charpoly(s).as_expr() - self.characteristic_polynomial("minus")
         subs = dict(zip(self.family_symbols, self.K_minus))
-        # a design in observer normal form is re-checked by substituting into identities proved once per n
-        generic = None if self.conditional or not self.normal_form.is_identity else lyapunov_by_substitution(
-            self.A_plus, self.A_minus, self.P, self.C_plus, self.C_minus, self.alpha_plus)
         checks = {
-            "lyapunov_plus": generic if generic is not None else residual_zero(self.A_plus, self.C_plus),
+            "lyapunov_plus": residual_zero(self.A_plus, self.C_plus),
             "charpoly_plus": sp.cancel(cp_plus) == 0,
             "charpoly_minus": sp.cancel(cp_minus) == 0,
             "P_symmetric": all(sp.cancel(x) == 0 for x in self.P - self.P.T),
         }
         if not self.conditional:
-            checks["lyapunov_minus"] = (generic if generic is not None
-                                        else residual_zero(self.A_minus, self.C_minus))
+            checks["lyapunov_minus"] = residual_zero(self.A_minus, self.C_minus)
             checks["gain_constraints"] = all(sp.cancel(c.lhs.xreplace(subs) - c.rhs.xreplace(subs)) == 0
                                              for c in self.gain_constraints)
         return checks
