@@ -130,4 +130,6 @@ def ratio(ours: float, theirs: float) -> str:
     r = theirs / ours
     if 1 / 1.05 < r < 1.05:
         return "about the same"
-    return f"{r:.2g}× faster" if r >= 1 else f"{1 / r:.2g}× slower"
+    times = r if r >= 1 else 1 / r
+    return f"{times:.2g}× {'faster' if r >= 1 else 'slower'}" if times < 10 else \
+        f"{times:.0f}× {'faster' if r >= 1 else 'slower'}"
