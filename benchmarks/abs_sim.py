@@ -13,6 +13,7 @@ Run: ``python benchmarks/abs_sim.py [--quick] [--repeats 5]``.
 from __future__ import annotations
 
 import argparse
+import time
 from dataclasses import replace
 
 from _harness import MIN_REPEATS, Stats, cli_cpu, cpu, number, publish
@@ -22,17 +23,15 @@ from switchobs.plants import TwoPhaseABS, scenario, simulate, table41
 
 
 def measure(label: str, sc, observer: str, repeats: int, in_loop: bool = True, impl: str = "python") -> str:
-    import time
-
-    cpu, shares, steps, sim = [], [], 0, 0.0
+    cpu_s, shares, steps, sim = [], [], 0, 0.0
     for _ in range(repeats):
         est = xbs_estimator(EstimatorSpec(observer, impl=impl), sc.vehicle, sc.roads.initial)
         c0 = time.process_time()
         res = simulate(sc, estimator=est, observer_in_loop=in_loop)
-        cpu.append(time.process_time() - c0)
+        cpu_s.append(time.process_time() - c0)
         shares.append(res.observer_time_s / res.wall_time_s)
         steps, sim = res.steps, float(res.series["t"][-1])
-    t = Stats(tuple(cpu))
+    t = Stats(tuple(cpu_s))
     name = observer if impl == "python" else f"{observer} (C)"
     share = sorted(shares)[len(shares) // 2]
     return (f"| {label} | {name} | {steps} | {t.show()} | {number(sim / t.median)} | {100 * share:.0f} % | "

@@ -20,14 +20,13 @@ from __future__ import annotations
 
 import argparse
 import re
-import statistics
 import subprocess
 import tempfile
 from pathlib import Path
 
 import casadi as ca
 import numpy as np
-from _harness import MIN_REPEATS, Stats, cpu, number, publish, ratio
+from _harness import MIN_REPEATS, Stats, cpu, publish, ratio
 
 from switchobs.codegen import CObserver
 from switchobs.observers import xbs3_observer, xbs4_observer

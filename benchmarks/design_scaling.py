@@ -156,7 +156,7 @@ def main() -> None:
             f"*design*: gains, $K_-$, Routh–Hurwitz conditions, $P$ and the coupling constraints; *exact "
             f"re-check*: `GainDesign.verify()`; *text*: `str()` of the design (compact past N = 4); *CLI "
             f"process*: `switchobs design normal-form-N --gains-plus k1,...,kN` end to end with the default "
-            f"exact re-check.",
+            f"exact re-check (even N and the last N only: each run costs seconds).",
             tables)
 
 
