@@ -40,7 +40,9 @@ def measure(label: str, sc, observer: str, repeats: int, in_loop: bool = True, i
 
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--quick", action="store_true", help="no observer and the adaptive one only")
+    parser.add_argument("--quick", action="store_true",
+                        help="smoke run: no observer and the adaptive one only"
+                             "; printed, not written to benchmarks/results")
     parser.add_argument("--repeats", type=int, default=MIN_REPEATS)
     args = parser.parse_args()
     sc = scenario("aguado-sec34")
@@ -70,7 +72,7 @@ def main() -> None:
             f"[min–max] of {args.repeats} runs; × real time = simulated time / median CPU time. The observer's "
             "share is of the simulation's wall time (median run). The whole process adds the interpreter, the "
             "imports and the cold symbolic design of the observer: what a user waits for.",
-            [table, cli], notes)
+            [table, cli], notes, write=not args.quick)
 
 
 if __name__ == "__main__":

@@ -87,7 +87,8 @@ def measure(n: int, solver: str | None, repeats: int) -> dict:
 
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--quick", action="store_true", help="n up to 16 only")
+    parser.add_argument("--quick", action="store_true",
+                        help="smoke run: n up to 16 only; printed, not written to benchmarks/results")
     parser.add_argument("--max-n", type=int, default=32)
     parser.add_argument("--repeats", type=int, default=MIN_REPEATS)
     args = parser.parse_args()
@@ -118,7 +119,7 @@ def main() -> None:
             f"slower or faster the complete certificate (balancing, margin LMI, rounding, exact re-check) is "
             f"than the bare LMI. The second table is the default solver order (SCS first from "
             f"n = {SCS_FIRST_FROM_N}), against the faster single solver of the first table.",
-            [table, default])
+            [table, default], write=not args.quick)
 
 
 if __name__ == "__main__":

@@ -185,7 +185,12 @@ static int32_t casadi_wrap(real *x, const real *sig, const real *p, real dt)
 #endif
 #define ROWS 4096
 #define REPEATS 41
-static double now(void) { struct timespec t; clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &t); return t.tv_sec + 1e-9 * t.tv_nsec; }
+static double now(void)
+{
+    struct timespec t;
+    clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &t);
+    return t.tv_sec + 1e-9 * t.tv_nsec;
+}
 typedef int32_t (*stepper)(real *, const real *, const real *, real);
 static double bench(stepper f, const real *rows, long steps, long *failures)
 {
@@ -369,7 +374,9 @@ def python_timings(ref, obs: CObserver, repeats: int, rows_n: int) -> dict:
 
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--quick", action="store_true", help="abs-xbs4 only, 20 000 rows from Python")
+    parser.add_argument("--quick", action="store_true",
+                        help="smoke run: abs-xbs4 only, 20 000 rows from Python"
+                             "; printed, not written to benchmarks/results")
     parser.add_argument("--repeats", type=int, default=MIN_REPEATS)
     args = parser.parse_args()
     refs = {"xbs4": xbs4_observer(10.0, 20.0)}
@@ -419,7 +426,7 @@ def main() -> None:
             f"of {args.repeats} runs of {rows_n} rows; the numba loop is the same checked step "
             f"(numba {numba.__version__ if numba else 'not installed'}), compiled before timing; "
             "*vs*: how the generated code compares (faster or slower).",
-            [c_table, py_table], notes)
+            [c_table, py_table], notes, write=not args.quick)
 
 
 if __name__ == "__main__":

@@ -105,7 +105,8 @@ def _naive_times(n: int, repeats: int, limit: float) -> list[float] | None:
 
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--quick", action="store_true", help="N up to 6, no goals")
+    parser.add_argument("--quick", action="store_true",
+                        help="smoke run: N up to 6, no goals; printed, not written to benchmarks/results")
     parser.add_argument("--max-n", type=int, default=8)
     parser.add_argument("--repeats", type=int, default=MIN_REPEATS)
     parser.add_argument("--baseline-limit", type=float, default=20.0)
@@ -157,7 +158,7 @@ def main() -> None:
             f"re-check*: `GainDesign.verify()`; *text*: `str()` of the design (compact past N = 4); *CLI "
             f"process*: `switchobs design normal-form-N --gains-plus k1,...,kN` end to end with the default "
             f"exact re-check (even N and the last N only: each run costs seconds).",
-            tables)
+            tables, write=not args.quick)
 
 
 if __name__ == "__main__":

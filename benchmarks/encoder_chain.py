@@ -23,7 +23,9 @@ DURATION_S = 10.0
 
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--quick", action="store_true", help="the stages without the whole chains")
+    parser.add_argument("--quick", action="store_true",
+                        help="smoke run: the stages without the whole chains"
+                             "; printed, not written to benchmarks/results")
     parser.add_argument("--repeats", type=int, default=MIN_REPEATS)
     args = parser.parse_args()
 
@@ -77,7 +79,7 @@ def main() -> None:
             f"(`time.process_time`), median [min–max] of {args.repeats} runs; × real time = simulated time / "
             "median CPU time. The whole `switchobs encoder` process (`RUSAGE_CHILDREN`) adds the interpreter, "
             "the imports and the simulation of the wheel: what a user waits for.",
-            [table, cli])
+            [table, cli], write=not args.quick)
 
 
 if __name__ == "__main__":

@@ -30,7 +30,8 @@ def main() -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--steps", type=int, default=10_000)
     parser.add_argument("--repeats", type=int, default=MIN_REPEATS)
-    parser.add_argument("--quick", action="store_true", help="1 000 steps")
+    parser.add_argument("--quick", action="store_true",
+                        help="smoke run: 1 000 steps; printed, not written to benchmarks/results")
     args = parser.parse_args()
     n, dt = (1_000 if args.quick else args.steps), 1e-3
     rows = _signals(n, dt)
@@ -76,7 +77,7 @@ def main() -> int:
             f"{n} steps of dt = {dt * 1e3:g} ms of ABS-like signals; CPU time (`time.process_time`), median "
             f"[min–max] of {args.repeats} runs, µs per step; *C `_run`*: the generated C of the same observer "
             "through `CObserver.like(observer).run`; *vs*: the Python `run` against it.",
-            [table])
+            [table], write=not args.quick)
     return 0
 
 

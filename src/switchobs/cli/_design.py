@@ -38,7 +38,8 @@ def run(args: argparse.Namespace) -> int:
     model = model_from_args(args)
     # progress on stderr for the symbolic stages that take seconds from n = 5 on
     progress = Progress(1 if args.no_verify else 2, stream=None if model.n <= 4 else sys.stderr)
-    with progress.stage("design", f"gains, Routh–Hurwitz conditions and the common P of {model.name} (n = {model.n})"):
+    what = f"gains, Routh–Hurwitz conditions and the common P of {model.name} (n = {model.n})"
+    with progress.stage("design", what):
         result = design_gains(model, args.spectrum, characteristic_polynomial=args.charpoly,
                               K_plus=args.gains_plus, K_minus=args.gains_minus)
     checks = None
