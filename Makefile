@@ -34,8 +34,13 @@ cc-tools:
 test: $(STAMP) cc-tools
 	$(PY) -m pytest -n 2 -q
 
+# Every benchmark script (benchmarks/_*.py are helpers), then their result tables into the docs pages.
 bench: $(STAMP)
-	@for f in benchmarks/*.py; do echo "== $$f"; $(PY) $$f || exit 1; done
+	@$(PY) -m pip install --quiet -e ".[bench]" || echo "!!! could not install numba: codegen_step.py will say that its numba column is missing !!!"
+	@for f in benchmarks/[!_]*.py; do \
+	  [ "$$f" = benchmarks/render_docs.py ] && continue; \
+	  echo "== $$f"; $(PY) $$f || exit 1; done
+	$(PY) benchmarks/render_docs.py
 
 docs: $(STAMP)
 	NO_MKDOCS_2_WARNING=1 $(VENV)/bin/mkdocs build --strict --site-dir site

@@ -1,8 +1,10 @@
-"""Cost of the Python reference observers: microseconds per step, ``step`` vs ``run`` (and the ABS adapter).
+"""Cost of the Python reference observers per step (``step``, ``run``, the ABS adapter) against the C twin.
 
-Usage: ``python benchmarks/observer_step.py [--steps N]``.  Prints a markdown
-table; each figure is the best of 3 repetitions over N steps (default 10 000,
-i.e. 10 s of signals at 1 kHz).
+CPU time (``time.process_time``), median [min–max] of 5 runs over N steps (default 10 000, i.e. 10 s of
+signals at 1 kHz); the baseline a user would pick for speed is the generated C of the same observer,
+``CObserver.like(observer).run`` (compiled before timing).  Build is the constructor's CPU time (the first
+one per model includes the cold symbolic design).
+Usage: ``python benchmarks/observer_step.py [--quick] [--steps N] [--repeats 5]``.
 """
 
 from __future__ import annotations
@@ -11,18 +13,11 @@ import argparse
 import time
 
 import numpy as np
+from _harness import MIN_REPEATS, cpu, number, publish, ratio
 
+from switchobs.codegen import CObserver
 from switchobs.loop import ObserverXbsEstimator
 from switchobs.observers import adaptive_xbs_observer, xbs3_observer, xbs4_observer
-
-
-def _best(fn, repeat: int = 3) -> float:
-    best = float("inf")
-    for _ in range(repeat):
-        t0 = time.perf_counter()
-        fn()
-        best = min(best, time.perf_counter() - t0)
-    return best
 
 
 def _signals(n: int, dt: float) -> np.ndarray:
@@ -34,23 +29,25 @@ def _signals(n: int, dt: float) -> np.ndarray:
 def main() -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--steps", type=int, default=10_000)
+    parser.add_argument("--repeats", type=int, default=MIN_REPEATS)
+    parser.add_argument("--quick", action="store_true",
+                        help="smoke run: 1 000 steps; printed, not written to benchmarks/results")
     args = parser.parse_args()
-    n, dt = args.steps, 1e-3
+    n, dt = (1_000 if args.quick else args.steps), 1e-3
     rows = _signals(n, dt)
     makers = [
         ("xbs3 (abs-xbs3, n=3)", lambda m: xbs3_observer(100.0, 100.0, method=m)),
         ("xbs4 (abs-xbs4, n=4)", lambda m: xbs4_observer(100.0, 100.0, method=m)),
         ("adaptive (abs-adaptive2, n=8)", lambda m: adaptive_xbs_observer(60.0, [1e3, 1e3], method=m)),
     ]
-    print(f"{n} steps of dt = {dt * 1e3:g} ms (best of 3); µs per step")
-    print()
-    print("| observer | method | build [s] | step [µs] | run [µs] | adapter update [µs] | run of 10 s at 1 kHz [s] |")
-    print("| --- | --- | ---: | ---: | ---: | ---: | ---: |")
+    table = ["| observer | method | build [s] | `step` [µs] | `run` [µs] | adapter update [µs] | C `_run` [µs] "
+             "| `run` vs C `_run` | `run` of 10 s at 1 kHz [ms] |",
+             "| --- | --- | ---: | ---: | ---: | ---: | ---: | --- | ---: |"]
     for name, make in makers:
         for method in ("rk4", "euler"):
-            t0 = time.perf_counter()
+            t0 = time.process_time()
             obs = make(method)
-            build = time.perf_counter() - t0
+            build = time.process_time() - t0
             x0 = np.zeros(obs.size)
             x0[0] = rows[0, 0]
 
@@ -58,9 +55,6 @@ def main() -> int:
                 x = x0
                 for row in rows:
                     x = obs.step(x, row, dt)
-
-            def by_run() -> None:
-                obs.run(x0, rows, dt)
 
             est = ObserverXbsEstimator(obs)
             y, vx, u = rows[:, 0].tolist(), rows[:, 1].tolist(), rows[:, 2].tolist()
@@ -70,10 +64,20 @@ def main() -> int:
                 for k in range(1, n):
                     est.update(k * dt, y[k], vx[k], u[k], dt)
 
-            t_step, t_run, t_adapter = _best(by_step), _best(by_run), _best(by_adapter)
-            ten_s = t_run * 10_000 / n
-            print(f"| {name} | {method} | {build:.2f} | {t_step / n * 1e6:.2f} | {t_run / n * 1e6:.2f} | "
-                  f"{t_adapter / (n - 1) * 1e6:.2f} | {ten_s:.3f} |")
+            c_obs = CObserver.like(obs)
+            t_step = cpu(by_step, args.repeats).scaled(1e6 / n)
+            t_run = cpu(lambda: obs.run(x0, rows, dt), args.repeats).scaled(1e6 / n)
+            t_adapter = cpu(by_adapter, args.repeats).scaled(1e6 / (n - 1))
+            t_c = cpu(lambda: c_obs.run(x0, rows, dt), args.repeats).scaled(1e6 / n)
+            table.append(f"| {name} | {method} | {number(build)} | {t_step.show()} | {t_run.show()} | "
+                         f"{t_adapter.show()} | {t_c.show()} | {ratio(t_run.median, t_c.median)} | "
+                         f"{number(t_run.median * 10_000 / 1e3)} |")
+            print(table[-1], flush=True)
+    publish("observer_step",
+            f"{n} steps of dt = {dt * 1e3:g} ms of ABS-like signals; CPU time (`time.process_time`), median "
+            f"[min–max] of {args.repeats} runs, µs per step; *C `_run`*: the generated C of the same observer "
+            "through `CObserver.like(observer).run`; *vs*: the Python `run` against it.",
+            [table], write=not args.quick)
     return 0
 
 

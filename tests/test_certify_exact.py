@@ -10,8 +10,8 @@ import sympy as sp
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from switchobs.certify._exact import (definiteness, expm_enclosure, fraction_matrix, nullspace, observable, rank,
-                                      to_fraction)
+from switchobs.certify._exact import (definiteness, expm_enclosure, fraction_matrix, lyapunov_form, nullspace,
+                                      observable, rank, to_fraction)
 from switchobs.certify._rounding import factor_rows, range_basis, short_sqrt_lower
 from switchobs.exceptions import CertificateError, DimensionError
 
@@ -120,3 +120,23 @@ def test_range_basis_snaps_a_noisy_coordinate_face():
     v = np.array([1.0, 3e-5, -2e-5])
     basis = range_basis(np.outer(v, v) * 4.0 + 1e-10 * np.eye(3), 1e-5)
     assert basis == [[Fraction(1)], [Fraction(0)], [Fraction(0)]]
+
+
+@settings(max_examples=25, deadline=None)
+@given(st.integers(1, 4).flatmap(lambda n: st.tuples(
+    st.lists(st.lists(st.fractions(max_denominator=50), min_size=n, max_size=n), min_size=n, max_size=n),
+    st.lists(st.lists(st.fractions(max_denominator=2**20), min_size=n, max_size=n), min_size=n, max_size=n))))
+def test_lyapunov_form_on_a_common_denominator_equals_fraction_arithmetic(AP):
+    A, upper = AP
+    n = len(A)
+    P = [[upper[min(i, j)][max(i, j)] for j in range(n)] for i in range(n)]  # symmetric, as P is
+    expected = [[sum(A[k][i] * P[k][j] + P[i][k] * A[k][j] for k in range(n)) for j in range(n)] for i in range(n)]
+    got = lyapunov_form(A, P)
+    assert got == expected
+    assert all(type(x) is Fraction for row in got for x in row)
+
+
+def test_lyapunov_form_keeps_integers_integer():
+    got = lyapunov_form([[1, 2], [3, 4]], [[2, 1], [1, 2]])
+    assert got == [[10, 15], [15, 20]]  # A' P = [[5, 7], [8, 10]] plus its transpose
+    assert all(type(x) is int for row in got for x in row)

@@ -133,11 +133,7 @@ def test_theorem1_dual_certificate_R_equals_e2e2_in_any_dimension(n):
     assert not strict_common_lyapunov([Ap, Am]).certified
 
 
-@st.composite
-def planted_family(draw):
-    n = draw(st.integers(2, 5))
-    count = draw(st.integers(2, 3))
-    seed = draw(st.integers(0, 10 ** 6))
+def _planted(n: int, count: int = 2, seed: int = 0) -> tuple[list[np.ndarray], np.ndarray]:
     rng = np.random.default_rng(seed)
     G = rng.integers(-3, 4, (n, n))
     P = G @ G.T + n * np.eye(n, dtype=int)
@@ -149,6 +145,11 @@ def planted_family(draw):
         Q = Q @ Q.T + np.eye(n, dtype=int)
         mats.append(Pinv @ ((S - S.T) - Q / 2))  # A' P + P A = -Q
     return mats, P
+
+
+@st.composite
+def planted_family(draw):
+    return _planted(draw(st.integers(2, 5)), draw(st.integers(2, 3)), draw(st.integers(0, 10 ** 6)))
 
 
 @settings(max_examples=20, deadline=None)
@@ -259,3 +260,19 @@ def _strict_holds(res):
     return res.P is not None and all(
         definiteness([[-x for x in r] for r in lyapunov_form(A, res.P)], strict=True).holds
         for A in res.family.exact)
+
+
+def test_default_solver_order_follows_the_measured_cross_over():
+    assert _lmi.by_size(_lmi.DEFAULT_SOLVERS, _lmi.SCS_FIRST_FROM_N - 1) == ("CLARABEL", "SCS")
+    assert _lmi.by_size(_lmi.DEFAULT_SOLVERS, _lmi.SCS_FIRST_FROM_N) == ("SCS", "CLARABEL")
+    assert _lmi.by_size(["CLARABEL"], 64) == ("CLARABEL",)  # an explicit choice is kept
+    assert _lmi.by_size(("SCS", "CLARABEL"), 2) == ("SCS", "CLARABEL")
+
+
+def test_a_large_planted_pair_is_certified_exactly_with_scs_first():
+    n = _lmi.SCS_FIRST_FROM_N
+    mats, _ = _planted(n, seed=n)
+    res = strict_common_lyapunov(mats, dual=False)
+    assert res.certified and res.solver.solver == "SCS"
+    for A in as_family(mats).exact:
+        assert definiteness([[-x for x in r] for r in lyapunov_form(A, res.P)], strict=True).holds

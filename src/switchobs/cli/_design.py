@@ -3,9 +3,11 @@
 from __future__ import annotations
 
 import argparse
+import sys
 
 from ..design import design_gains
 from ..exceptions import SpectrumError
+from ..report import Progress
 from ._common import add_model_arguments, emit_json, model_from_args
 
 __all__ = ["register"]
@@ -22,7 +24,9 @@ def register(sub: argparse._SubParsersAction) -> None:
     target.add_argument("--gains-plus", help='K_plus entries, comma-separated (numbers, expressions or new '
                         'symbols, e.g. "k1,k2,k3")')
     p.add_argument("--gains-minus", help="K_minus entries (default: the Theorem 1 choice)")
-    p.add_argument("--json", action="store_true", help="print the certificate as JSON")
+    p.add_argument("--json", action="store_true", help="print the certificate as JSON (full matrices)")
+    p.add_argument("--full", action="store_true",
+                   help="print full matrices also for n > 4 (default there: gains as lists, P by its n free entries)")
     p.add_argument("--no-verify", action="store_true",
                    help="skip the exact re-check of the Lyapunov equations (for large symbolic models)")
     p.set_defaults(func=run)
@@ -32,15 +36,22 @@ def run(args: argparse.Namespace) -> int:
     if not (args.spectrum or args.charpoly or args.gains_plus):
         raise SpectrumError("give the target with --spectrum, --charpoly or --gains-plus")
     model = model_from_args(args)
-    result = design_gains(model, args.spectrum, characteristic_polynomial=args.charpoly,
-                    K_plus=args.gains_plus, K_minus=args.gains_minus)
-    checks = None if args.no_verify else result.verify()
+    # progress on stderr for the symbolic stages that take seconds from n = 5 on
+    progress = Progress(1 if args.no_verify else 2, stream=None if model.n <= 4 else sys.stderr)
+    what = f"gains, Routh–Hurwitz conditions and the common P of {model.name} (n = {model.n})"
+    with progress.stage("design", what):
+        result = design_gains(model, args.spectrum, characteristic_polynomial=args.charpoly,
+                              K_plus=args.gains_plus, K_minus=args.gains_minus)
+    checks = None
+    if not args.no_verify:
+        with progress.stage("re-check", "exact re-check of the certificate"):
+            checks = result.verify()
     if args.json:
         data = result.to_json()
         data["verified"] = checks
         emit_json(data)
     else:
-        print(result)
+        print(result.describe(full=True) if args.full else result)
         if checks is not None:
             status = "all hold exactly" if all(checks.values()) else "FAILED: " + ", ".join(
                 k for k, v in checks.items() if not v)

@@ -153,6 +153,12 @@ class CObserver:
         self._s_type = self._ctype * generated.ns
         self._step = getattr(self._lib, f"{generated.prefix}_step")
         self._run = getattr(self._lib, f"{generated.prefix}_run")
+        # the same _run with untyped pointers: run() passes the arrays' addresses, without a ctypes
+        # pointer object per argument (the per-call cost of run() on short records)
+        self._run_addr = ctypes.CFUNCTYPE(ctypes.c_int32, ctypes.c_void_p, ctypes.c_void_p, ctypes.c_int32,
+                                          ctypes.c_void_p, self._ctype, ctypes.c_void_p)(
+            ctypes.cast(self._run, ctypes.c_void_p).value)
+        self._params_addr = self.params.ctypes.data
         self._readout = readout
 
     # ------------------------------------------------------------------ construction
@@ -286,8 +292,11 @@ class CObserver:
         x = self._vector(xhat0, self.state_names, "xhat0").copy()
         rows = signal_matrix(signal_rows, self.signal_names)
         dt_f = self._dt(dt)
-        with np.errstate(over="ignore"):
-            rows_c = np.ascontiguousarray(rows, dtype=self._dtype)
+        if self._dtype is np.float64:
+            rows_c = np.ascontiguousarray(rows)
+        else:
+            with np.errstate(over="ignore"):  # out-of-range doubles become inf, which the C checks refuse
+                rows_c = np.ascontiguousarray(rows, dtype=self._dtype)
         k = rows_c.shape[0]
         if k > _INT32_MAX:
             raise DimensionError(f"signal_rows has {k} rows; the C _run takes at most {_INT32_MAX} (int32_t) "
@@ -310,8 +319,8 @@ class CObserver:
         return traj if traj.dtype == np.float64 else traj.astype(float)
 
     def _call_run(self, x: np.ndarray, rows: np.ndarray, traj: np.ndarray, dt: float) -> int:
-        return self._run(x.ctypes.data_as(self._ptr), rows.ctypes.data_as(self._ptr), rows.shape[0],
-                         self._params_ptr, self._ctype(dt), traj.ctypes.data_as(self._ptr))
+        return self._run_addr(x.ctypes.data, rows.ctypes.data, rows.shape[0], self._params_addr, dt,
+                              traj.ctypes.data)
 
     def readout(self, xhat: npt.ArrayLike) -> Any:
         """The readout given at construction (e.g. the XBS estimate) of a state or trajectory."""

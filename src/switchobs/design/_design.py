@@ -27,13 +27,13 @@ from typing import Any
 
 import numpy as np
 import sympy as sp
-from sympy.polys.matrices import DomainMatrix
 
 from ..exceptions import (CertificateError, DimensionError, ExpressionError, ModelError, NotHurwitzError,
                           NotObservableError, SpectrumError)
 from ..model import Model, free_names, make_symbol, numeric, parse_expression, rational_value
 from ._lyapunov import _generic_solution, observer_form_gramian
 from ._normal_form import ObserverNormalForm, observer_normal_form
+from ._recheck import lyapunov_by_substitution, lyapunov_residual_is_zero
 from ._routh import hurwitz_conditions, readable_condition
 from ._spectrum import LAPLACE, parse_spectrum, polynomial_coefficients, spectrum_coefficients
 
@@ -43,6 +43,7 @@ __all__ = ["GainDesign", "design_gains", "design", "theorem1_K_minus", "hoang_fa
 
 #: Coupling constraints are expanded and tidied up to this dimension (readability vs cost).
 _FACTOR_MAX_DIMENSION = 3
+PRETTY_MAX_N = 4  # up to this dimension str() shows full pretty-printed matrices; beyond, the compact form
 
 
 def _column(values: Sequence[sp.Expr]) -> sp.ImmutableMatrix:
@@ -227,15 +228,18 @@ class GainDesign:
         the matrices against ``alpha_plus``/``alpha_minus``, symmetry of P and
         the coupling constraints at the chosen K_minus.  For a conditional
         design the two minus-side checks are left out (they hold exactly on
-        the set where ``gain_constraints`` hold, not identically).
+        the set where ``gain_constraints`` hold, not identically).  For a model
+        in observer normal form the Lyapunov equations are proved once per
+        dimension for generic coefficients and re-checked here by substitution
+        (:mod:`switchobs.design._recheck`), which keeps fully symbolic designs
+        past N = 7 within seconds.
         """
+        # a design in observer normal form is re-checked by substituting into identities proved once per n
+        generic = None if self.conditional or not self.normal_form.is_identity else lyapunov_by_substitution(
+            self.A_plus, self.A_minus, self.P, self.C_plus, self.C_minus, self.alpha_plus)
+
         def residual_zero(A: sp.MatrixBase, C: sp.MatrixBase) -> bool:
-            # Polynomial-ring arithmetic (DomainMatrix) instead of cancel() on expressions:
-            # exact, and orders of magnitude faster for fully symbolic models.
-            mats = [DomainMatrix.from_Matrix(sp.Matrix(M)) for M in (A, self.P, C)]
-            dom = mats[0].domain.unify(mats[1].domain).unify(mats[2].domain)
-            A_, P_, C_ = (M.convert_to(dom) for M in mats)
-            return (A_.transpose() * P_ + P_ * A_ + C_.transpose() * C_).is_zero_matrix
+            return generic if generic is not None else lyapunov_residual_is_zero(A, self.P, sp.Matrix(C).T * C)
 
         s = LAPLACE
         cp_plus = self.A_plus.charpoly(s).as_expr() - self.characteristic_polynomial("plus")
@@ -376,29 +380,60 @@ class GainDesign:
         return json.dumps(self.to_json(), indent=indent)
 
     def __str__(self) -> str:
+        return self.describe(full=self.n <= PRETTY_MAX_N)
+
+    def describe(self, full: bool = True) -> str:
+        """The design as text: full matrices (pretty up to n = PRETTY_MAX_N, ``sstr`` beyond) or compact.
+
+        The compact form gives the gains as lists and, in observer normal form, ``P`` by its ``n`` free
+        entries ``u_m = P_mm`` (the checkerboard rule of seed 004 Theorem 1 gives the rest) over their
+        common denominator: megabytes less text for a fully symbolic model past N = 7.
+        """
+        small = self.n <= PRETTY_MAX_N
+
         def mat(M: sp.MatrixBase) -> str:
-            return "\n".join("    " + line for line in sp.pretty(M, use_unicode=True).splitlines())
+            text = sp.pretty(M, use_unicode=True) if small else sp.sstr(M.tolist())
+            return "\n".join("    " + line for line in text.splitlines())
 
         def conds(cs: Sequence[sp.Basic]) -> str:
             return "\n".join(f"    {sp.sstr(c)}" for c in cs) if cs else "    (none left: Hurwitz by construction)"
 
         nf = self.normal_form
+        if full:
+            gains = ["  K_plus =", mat(self.K_plus), "  K_minus =", mat(self.K_minus)]
+            lyapunov = ["  common Lyapunov matrix P =", mat(self.P)]
+        else:
+            gains = [f"  K_plus = {sp.sstr(list(self.K_plus))}", f"  K_minus = {sp.sstr(list(self.K_minus))}"]
+            lyapunov = self._compact_P()
         lines = [
             f"switched observer design for model {self.model.name!r} (n = {self.n}, choice: {self.choice}"
             f"{', conditional on the coupling constraints' if self.conditional else ''})",
             f"  spectrum of A_plus: {', '.join(map(str, self.spectrum)) if self.spectrum else 'from the given K_plus'}",
             f"  observable iff: {', '.join(map(str, nf.observability_conditions)) or 'always'}",
             f"  normal form a = {list(nf.a)}",
-            "  K_plus =", mat(self.K_plus),
-            "  K_minus =", mat(self.K_minus),
+            *gains,
             "  Routh–Hurwitz conditions for A_plus:", conds(self.hurwitz_plus),
             "  Routh–Hurwitz conditions for A_minus:", conds(self.hurwitz_minus),
-            "  common Lyapunov matrix P =", mat(self.P),
+            *lyapunov,
             f"  C_plus = {list(self.C_plus)},  C_minus = {list(self.C_minus)}",
             "  coupling constraints on K_minus (Hoang family):",
             "\n".join(f"    {sp.sstr(c)}" for c in self.gain_constraints) or "    (none)",
         ]
+        if not full:
+            lines.append("  (compact: full matrices with `switchobs design --full` or in `--json`)")
         return "\n".join(lines)
+
+    def _compact_P(self) -> list[str]:
+        if not self.normal_form.is_identity:
+            return ["  common Lyapunov matrix P (rows) =", *(f"    {sp.sstr(list(row))}" for row in
+                                                           self.P.tolist())]
+        parts = [sp.fraction(self.P[m, m]) for m in range(self.n)]
+        head = ["  common Lyapunov matrix P: P_ij = (-1)^((j-i)/2) u_((i+j)/2) for i + j even, 0 otherwise, with"]
+        dens = {d for _, d in parts}
+        if len(dens) == 1 and dens != {1}:
+            return [*head, f"    u_m = N_m / D,  D = {sp.sstr(dens.pop())}",
+                    *(f"    N_{m + 1} = {sp.sstr(num)}" for m, (num, _) in enumerate(parts))]
+        return [*head, *(f"    u_{m + 1} = {sp.sstr(self.P[m, m])}" for m in range(self.n))]
 
 
 def design_gains(model: Model, spectrum: str | Sequence | None = None, *,
