@@ -21,9 +21,12 @@ Torque-driven quarter car (vehicle and roads of switchobs.plants)
 Chain
     encoder_chain, compare_estimators, ChainSettings, ChainResult, EstimatorComparison,
     ESTIMATORS, rms_error, estimate_lag, plot_comparison (a matplotlib Figure)
+Seed 001 Table 6.1
+    TABLE61_SEED, TABLE61_ENCODER, TABLE61_PROFILES
 """
 
-from ._chain import ESTIMATORS, ChainResult, ChainSettings, EstimatorComparison, compare_estimators, encoder_chain
+from ._chain import (ESTIMATORS, TABLE61_ENCODER, TABLE61_PROFILES, TABLE61_SEED, ChainResult, ChainSettings,
+                     EstimatorComparison, compare_estimators, encoder_chain)
 from ._encoder import Encoder, EncoderEvents
 from ._identify import StiffnessEstimate, identify_stiffness
 from ._plot import plot_comparison
@@ -44,5 +47,5 @@ __all__ = [
     "SuperTwistingRun", "low_pass", "StiffnessEstimate", "identify_stiffness",
     "WheelRun", "simulate_wheel", "braking_trajectory", "linear_tyre", "burckhardt_tyre",
     "encoder_chain", "compare_estimators", "ChainSettings", "ChainResult", "EstimatorComparison",
-    "ESTIMATORS", "rms_error", "estimate_lag", "plot_comparison",
+    "ESTIMATORS", "TABLE61_SEED", "TABLE61_ENCODER", "TABLE61_PROFILES", "rms_error", "estimate_lag", "plot_comparison",
 ]

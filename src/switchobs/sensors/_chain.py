@@ -10,6 +10,7 @@ reference encoder (Table 6.1).
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 from dataclasses import asdict, dataclass
 from typing import Any
 
@@ -21,11 +22,11 @@ from ._encoder import Encoder, EncoderEvents
 from ._series import SpeedEstimate, estimate_lag, rms_error
 from ._super_twisting import low_pass, super_twisting, super_twisting_gains
 from ._three_stage import notch, three_stage
-from ._trajectory import AngleTrajectory
+from ._trajectory import AngleTrajectory, constant_speed, varying_speed
 from ._tsa import check_order_window, controller_times, time_stamping
 from ._validate import check_int, check_positive
 
-__all__ = ["ESTIMATORS", "ChainSettings", "ChainResult", "EstimatorComparison", "encoder_chain",
+__all__ = ["ESTIMATORS", "TABLE61_SEED", "TABLE61_ENCODER", "TABLE61_PROFILES", "ChainSettings", "ChainResult", "EstimatorComparison", "encoder_chain",
            "compare_estimators"]
 
 Array = npt.NDArray[np.float64]
@@ -312,3 +313,18 @@ def compare_estimators(
     results = tuple(_score(trajectory, _estimate(events, ts, name, settings), len(events), settings)
                     for name in estimators)
     return EstimatorComparison(trajectory=trajectory.name, encoder=encoder, results=results)
+
+
+#: Seed 001 Table 6.1: RMS (velocity [rad/s], acceleration [rad/s^2]) per profile and estimator.
+TABLE61_SEED: dict[str, dict[str, tuple[float, float]]] = {
+    "constant": {"tsa": (0.3007, 30.0886), "notch": (3.0730, 7.9528), "three-stage": (0.0716, 7.9405)},
+    "varying": {"tsa": (0.1430, 12.8528), "notch": (5.2597, 33.5899), "three-stage": (0.0783, 5.9237)},
+}
+#: Our encoder for Table 6.1: imperfections fitted to the seed's constant-speed TSA row (docs/encoders.md).
+TABLE61_ENCODER = Encoder(ppr=60, dnl_cycles=0.01, eccentricity=0.003, clock_hz=1e6, seed=1)
+#: Table 6.1 speed profiles: name -> (how it was chosen, trajectory of the given duration).
+TABLE61_PROFILES: dict[str, tuple[str, Callable[[float], AngleTrajectory]]] = {
+    "constant": ("1020 rpm (seed 001 Fig. 5.4)", lambda duration_s: constant_speed(1020.0, duration_s)),
+    "varying": ("$\\omega = 106.8 + 40\\sin(2\\pi t)$ rad/s (ours: the seed's Fig. 6.4 is not given analytically)",
+                lambda duration_s: varying_speed(1020.0, duration_s)),
+}
