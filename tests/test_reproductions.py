@@ -20,7 +20,7 @@ def pages():
 
 @pytest.mark.slow
 def test_committed_reproduction_pages_equal_a_fresh_run(pages):
-    assert sorted(pages) == sorted(["docs/reproductions.md", *GENERATED_SECTIONS])
+    assert sorted(pages) == sorted({"docs/reproductions.md", *(path for path, _ in GENERATED_SECTIONS)})
     stale = [path for path, page in pages.items() if (ROOT / path).read_text("utf-8") != page.text]
     assert not stale, f"{stale} differ from a fresh run: run `switchobs reproduce`"
 
@@ -37,12 +37,12 @@ def test_every_seed_number_is_beside_ours_with_its_deviation(pages):
 def test_reproduce_check_flags_a_hand_edit_and_a_missing_marker(tmp_path, capsys, monkeypatch):
     import switchobs.cli._reproduce as cli
 
-    for path in GENERATED_SECTIONS:
+    for path, _ in GENERATED_SECTIONS:
         (tmp_path / path).parent.mkdir(parents=True, exist_ok=True)
         shutil.copy(ROOT / path, tmp_path / path)
     shutil.copy(ROOT / "docs/reproductions.md", tmp_path / "docs/reproductions.md")
     # no runs here: the pages are what is committed, except one edited number
-    committed = {p: (ROOT / p).read_text("utf-8") for p in ["docs/reproductions.md", *GENERATED_SECTIONS]}
+    committed = {p: (ROOT / p).read_text("utf-8") for p in ["docs/reproductions.md", *(p for p, _ in GENERATED_SECTIONS)]}
     monkeypatch.setattr(cli, "stale_pages", lambda root: tuple(
         p for p, text in committed.items() if (Path(root) / p).read_text("utf-8") != text))
     assert main(["reproduce", "--check", "--root", str(tmp_path)]) == 0
@@ -54,6 +54,6 @@ def test_reproduce_check_flags_a_hand_edit_and_a_missing_marker(tmp_path, capsys
     (tmp_path / "docs/abs.md").write_text("# ABS\n", encoding="utf-8")
     assert main(["reproduce", "--root", str(tmp_path)]) == 2
     err = capsys.readouterr().err
-    assert err.count("\n") == 1 and "no generated section 'table41'" in err
+    assert err.count("\n") == 1 and "no generated section 'step_halving'" in err
     assert main(["reproduce", "--root", str(tmp_path / "nowhere")]) == 2
     assert "does not exist" in capsys.readouterr().err

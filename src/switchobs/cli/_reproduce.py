@@ -16,7 +16,7 @@ def register(sub: argparse._SubParsersAction) -> None:
         "reproduce", help="regenerate docs/reproductions.md and the Table 4.1 / 6.1 sections from runs",
         description="Run the seed reproductions (Table 4.1, Table 6.1, the seeds' scenarios, Appendix C, the "
                     "Poincaré map, the super-twisting orders) and write docs/reproductions.md and the generated "
-                    f"sections of {', '.join(GENERATED_SECTIONS)}. About a minute. With --check, write nothing and "
+                    f"sections of {', '.join(sorted({path for path, _ in GENERATED_SECTIONS}))}. About a minute. With --check, write nothing and "
                     "exit 1 if a committed page differs from the fresh run.")
     p.add_argument("--root", default=".", metavar="DIR", help="repository root holding docs/ (default: .)")
     p.add_argument("--check", action="store_true", help="compare the committed pages with a fresh run instead")
