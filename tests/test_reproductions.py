@@ -57,3 +57,11 @@ def test_reproduce_check_flags_a_hand_edit_and_a_missing_marker(tmp_path, capsys
     assert err.count("\n") == 1 and "no generated section 'step_halving'" in err
     assert main(["reproduce", "--root", str(tmp_path / "nowhere")]) == 2
     assert "does not exist" in capsys.readouterr().err
+
+
+@pytest.mark.slow
+def test_encoder_cli_output_shown_on_the_page_is_what_the_command_prints(capsys):
+    page = (ROOT / "docs/encoders.md").read_text("utf-8")
+    assert main(["encoder", "--profile", "braking"]) == 0
+    out = capsys.readouterr().out
+    assert "$ switchobs encoder --profile braking\n" + out in page
