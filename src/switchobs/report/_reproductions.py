@@ -19,8 +19,9 @@ from pathlib import Path
 import numpy as np
 
 from ..exceptions import PrerequisiteError
-from ..loop import xbs_estimator
-from ..plants import (GRAVITY, TABLE41_SEED, BrakingResult, BrakingScenario, FivePhaseABS, TwoPhaseABS, PoincareMap, Table41Result, TwoAxleResult,
+from ..loop import EstimatorSpec, xbs_estimator
+from ..plants import (GRAVITY, TABLE41_SEED, BrakingResult, BrakingScenario, FivePhaseABS, PoincareMap, Table41Result,
+                      TwoAxleResult, TwoPhaseABS,
                       aguado_sec36, fit_exponential, road, scenario, simulate, simulate_two_axle, table41)
 from ..observers import xbs3_observer
 from ..sensors import (ROBUSTNESS_PROFILES, TABLE61_ENCODER, TABLE61_PROFILES, TABLE61_SEED, AngleTrajectory,
@@ -77,14 +78,15 @@ class _Runs:
                        observer="adaptive")
 
     def __init__(self) -> None:
-        self._brakings: dict[tuple[str, str], BrakingResult] = {}
+        self._brakings: dict[tuple[str, EstimatorSpec], BrakingResult] = {}
 
-    def braking(self, name: str, kind: str) -> BrakingResult:
+    def braking(self, name: str, kind: str | EstimatorSpec) -> BrakingResult:
         """The built-in scenario ``name`` with the observer ``kind`` in the loop."""
-        if (name, kind) not in self._brakings:
+        spec = kind if isinstance(kind, EstimatorSpec) else EstimatorSpec(kind)
+        if (name, spec) not in self._brakings:
             sc = scenario(name)
-            self._brakings[name, kind] = simulate(sc, estimator=xbs_estimator(kind, sc.vehicle, sc.roads.initial))
-        return self._brakings[name, kind]
+            self._brakings[name, spec] = simulate(sc, estimator=xbs_estimator(spec, sc.vehicle, sc.roads.initial))
+        return self._brakings[name, spec]
 
     @cached_property
     def sec36(self) -> TwoAxleResult:
@@ -112,6 +114,12 @@ class _Runs:
             arrivals.append(float(t[np.flatnonzero(err2 > band)[-1] + 1]))
             bands.append(band)
         return steps, arrivals, e1, e2
+
+
+def _segment_rms(res: BrakingResult, a: float, b: float) -> float:
+    s = res.series
+    keep = (s["t"] >= a) & (s["t"] < b)
+    return float(np.sqrt(np.mean((s["xbs_hat"][keep] - s["xbs"][keep]) ** 2)))
 
 
 def _reconv(res: BrakingResult, label: str) -> float | None:
@@ -417,9 +425,9 @@ def _seed000(runs: _Runs) -> list[str]:
 
 def _seed001(runs: _Runs) -> list[str]:
     sec34 = runs.braking("aguado-sec34", "adaptive")
-    others = [(f"augmented {kind[-1]}D (seed 000 Sec. {sec}), {gains}", runs.braking("aguado-sec34", kind))
-              for kind, sec, gains in (("xbs3", "III, knows the initial road's $c$", "$\\beta_1 = \\beta_2 = 150$"),
-                                       ("xbs4", "IV", "$\\beta_1 = \\beta_2 = 100$"))]
+    others = [(f"augmented {kind[-1]}D (seed 000 Sec. {sec}), $\\beta_1 = \\beta_2 = 100$",
+               runs.braking("aguado-sec34", EstimatorSpec(kind, beta=100.0)))
+              for kind, sec in (("xbs3", "III, knows the initial road's $c$"), ("xbs4", "IV"))]
     a1 = sec34.metrics.assumption1
     m36 = runs.sec36.metrics
     dry = road("dry-asphalt")
@@ -443,11 +451,32 @@ def _seed001(runs: _Runs) -> list[str]:
         lines.append(_row(label, f"{res.metrics.xbs_rms_error:.3f}", _fmt_s(_reconv(res, "-> wet-asphalt")),
                           _fmt_s(_reconv(res, "-> dry-concrete"))))
     best = min([("adaptive", sec34), *others], key=lambda p: p[1].metrics.xbs_rms_error)[0].split(" (")[0]
+    segments = ((2.5, 3.0, "dry asphalt, before the change"), (3.0, 3.5, "first 0.5 s on wet asphalt"),
+                (5.5, 6.0, "wet asphalt, 2.5 s after the change"), (6.0, 6.5, "first 0.5 s on dry concrete"),
+                (9.5, 10.0, "dry concrete, 3.5 s after the change"))
     lines += ["", f"Re-converged: the error stays within 10 % of the true XBS's peak-to-peak range on the segment. "
-              f"Lowest RMS here: **{best}** (seed: adaptive). See [ABS plants](abs.md) for why.", "",
+              f"Lowest RMS over the run: **{best}** (seed: adaptive). The RMS is dominated by the 0.5 s after each "
+              "change; per segment (RMS XBS error):", "",
+              _row("interval [s]", "adaptive", "augmented 3D", "augmented 4D"), _row(*["---"] * 4)]
+    for a, b, label in segments:
+        lines.append(_row(f"{a:g}–{b:g}, {label}", *(f"{_segment_rms(r, a, b):.3f}"
+                                                     for r in (sec34, *(r for _, r in others)))))
+    gammas = (1e4, 2e4, 3e4)
+    with np.errstate(over="ignore", invalid="ignore"):     # the diverging runs overflow on purpose
+        finite = {g: runs.braking("aguado-sec34", EstimatorSpec("adaptive", gamma=g)).metrics.xbs_rms_error < 1e3
+                  for g in gammas}
+    lines += ["", "Why the seed's ordering holds only in part here: the adaptive observer re-identifies $(c, d)$ at "
+              "the rate set by $\\Gamma$, and $\\Gamma$ is bounded by the 1 kHz discretisation (RK4 with held "
+              "signals): " + ", ".join(f"$\\Gamma = {g:g}\\,I$ {'runs' if ok else 'blows up (RMS error above 1000)'}"
+                                      for g, ok in finite.items())
+              + ". So after dry → wet asphalt its parameters need seconds, while the augmented observers track the "
+              "XBS as a state at the rate $\\beta$; once the parameters have converged (the end of the dry-concrete "
+              "segment) the adaptive observer is the most accurate, and the 3D observer, which keeps the initial "
+              "road's $c$, is biased. `test_aguado2020_sec34_adaptive_best_at_steady_state_not_after_dry_to_wet` "
+              "checks both.", "",
               "*Chosen by us:* the drum speed $25 - 1.96t$ m/s (the seed gives the deceleration), 25 ms road "
-              "transitions, the five-phase ABS with its stall exit, the gains above, initial estimates "
-              "$(\\hat c, \\hat d) = (20, 10)$.", "",
+              "transitions, the five-phase ABS with its stall exit, the gains above (equal rates $\\beta = 100$), "
+              "initial estimates $(\\hat c, \\hat d) = (20, 10)$; the seed gives none of them.", "",
               "### Sec. 3.6: two-axle vehicle", "",
               _row("item", "seed", "ours", "deviation"), _row(*["---"] * 4),
               _row("mean speed error", "−18 % (underestimated)", f"{m36['speed_error_mean_pct']:.1f} % "
