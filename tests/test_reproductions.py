@@ -49,7 +49,7 @@ def test_reproduce_check_flags_a_hand_edit_and_a_missing_marker(tmp_path, capsys
     page = tmp_path / "docs/reproductions.md"
     page.write_text(page.read_text("utf-8").replace("Table 4.1", "Table 4.2", 1), encoding="utf-8")
     assert main(["reproduce", "--check", "--root", str(tmp_path)]) == 1
-    assert "reproductions.md: differs from a fresh run" in capsys.readouterr().err
+    assert "reproductions.md: differs from the generated text" in capsys.readouterr().err
     # a page without its markers is a bad environment (exit 2, one line), found before anything runs
     (tmp_path / "docs/abs.md").write_text("# ABS\n", encoding="utf-8")
     assert main(["reproduce", "--root", str(tmp_path)]) == 2

@@ -3,10 +3,10 @@
 from __future__ import annotations
 
 import argparse
-import sys
 from pathlib import Path
 
 from ..report import GENERATED_SECTIONS, stale_pages, write_reproductions
+from ._common import write_or_check
 
 __all__ = ["register"]
 
@@ -25,14 +25,5 @@ def register(sub: argparse._SubParsersAction) -> None:
 
 def run(args: argparse.Namespace) -> int:
     root = Path(args.root)
-    if args.check:
-        stale = stale_pages(root)
-        for path in stale:
-            print(f"{root / path}: differs from a fresh run; run `switchobs reproduce --root {root}`",
-                  file=sys.stderr)
-        if not stale:
-            print(f"{root}: reproduction pages up to date")
-        return 1 if stale else 0
-    for path in write_reproductions(root):
-        print(f"wrote {path}")
-    return 0
+    return write_or_check(args.check, lambda: [root / path for path in stale_pages(root)],
+                          lambda: write_reproductions(root), f"switchobs reproduce --root {root}", root)
