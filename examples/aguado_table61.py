@@ -11,23 +11,20 @@ import os
 import sys
 from pathlib import Path
 
-from switchobs.sensors import Encoder, compare_estimators, constant_speed, varying_speed
+from switchobs.sensors import TABLE61_ENCODER, TABLE61_PROFILES, TABLE61_SEED, compare_estimators
 
 FAST = os.environ.get("SWITCHOBS_FAST") == "1"
 OUT = Path(sys.argv[1] if len(sys.argv) > 1 else os.environ.get("SWITCHOBS_EXAMPLES_OUT", "out/examples"))
 OUT.mkdir(parents=True, exist_ok=True)
 
 duration = 4.0 if FAST else 10.0
-encoder = Encoder(ppr=60, dnl_cycles=0.01, eccentricity=0.003, clock_hz=1e6, seed=1)   # docs/encoders.md
-SEED = {"constant": {"tsa": (0.3007, 30.0886), "notch": (3.0730, 7.9528), "three-stage": (0.0716, 7.9405)},
-        "varying": {"tsa": (0.1430, 12.8528), "notch": (5.2597, 33.5899), "three-stage": (0.0783, 5.9237)}}
 runs = {}
-for profile, trajectory in (("constant", constant_speed(1020, duration)), ("varying", varying_speed(1020, duration))):
-    runs[profile] = compare_estimators(trajectory, encoder, estimators=("tsa", "notch", "three-stage"))
+for profile, (_, build) in TABLE61_PROFILES.items():   # the encoder and profiles of docs/reproductions.md
+    runs[profile] = compare_estimators(build(duration), TABLE61_ENCODER, estimators=("tsa", "notch", "three-stage"))
     print(runs[profile])
     print(f"{'estimator':<12} {'ours w':>8} {'seed w':>8} {'ours a':>8} {'seed a':>8}")
     for r in runs[profile].results:
-        w, a = SEED[profile][r.estimator]
+        w, a = TABLE61_SEED[profile][r.estimator]
         print(f"{r.estimator:<12} {r.rms_omega:8.4f} {w:8.4f} {r.rms_alpha:8.3f} {a:8.3f}")
     tsa, comp = runs[profile]["tsa"], runs[profile]["three-stage"]
     assert comp.rms_omega < tsa.rms_omega / 2 and comp.rms_alpha < tsa.rms_alpha

@@ -10,12 +10,12 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from switchobs.exceptions import SimulationError
-from switchobs.sensors import (ChainSettings, Encoder, NotchFilter, ThreeStageEstimator, compare_estimators,
-                               constant_speed, varying_speed)
+from switchobs.sensors import (ROBUSTNESS_PROFILES, TABLE61_ENCODER, TABLE61_PROFILES, ChainSettings,
+                               NotchFilter, ThreeStageEstimator, compare_estimators)
 
 #: Our simulated 60-ppr encoder: transition noise and eccentricity chosen so that the raw TSA errors at
 #: 1020 rpm (0.31 rad/s, 29 rad/s^2) are those of the seed's measured row (0.30 rad/s, 30 rad/s^2).
-ENCODER = Encoder(ppr=60, dnl_cycles=0.01, eccentricity=0.003, clock_hz=1e6, seed=1)
+ENCODER = TABLE61_ENCODER
 SETTINGS = ChainSettings(window=15, harmonics=5, warmup_s=1.0)
 
 
@@ -36,9 +36,10 @@ def _fourier(theta: float, coef: np.ndarray) -> tuple[float, float]:
             float(np.sum(k**2 * (a * np.sin(k * theta) + b * np.cos(k * theta)))))
 
 
-@pytest.mark.parametrize("cutoff_hz, tol", [(0.1, 3e-5), (1.0, 3e-4)])
-def test_aguado_eq65_rls_recovers_the_velocity_coefficients_and_omega_r(cutoff_hz, tol):
-    # exact up to the stage-1 phase lead atan(f_c / f_rev) (the seed assumes an ideal high-pass)
+@pytest.mark.parametrize("cutoff_hz, tol, w_tol", [(None, 3e-5, 1e-4), (0.1, 3e-5, 3e-5), (1.0, 3e-4, 3e-4)])
+def test_aguado_eq65_rls_recovers_the_velocity_coefficients_and_omega_r(cutoff_hz, tol, w_tol):
+    # the seed's high-pass stage 1: exact up to its phase lead atan(f_c / f_rev) (the seed assumes an ideal
+    # filter); ours (None, the mean over the surrounding revolutions) has no phase lead
     rng = np.random.default_rng(3)
     coef_w = rng.uniform(-3e-3, 3e-3, 6)
     w_r, dt = 100.0, 1e-3
@@ -48,7 +49,8 @@ def test_aguado_eq65_rls_recovers_the_velocity_coefficients_and_omega_r(cutoff_h
         pw, _ = _fourier(th, coef_w)
         w_hat, _ = est.update(th, w_r / (1.0 - pw), 0.0)  # (6.5) solved for omega_m, omega_r constant
     np.testing.assert_allclose(est.coefficients_velocity, coef_w, atol=tol)
-    assert w_hat == pytest.approx(w_r, abs=tol * w_r)
+    # omega_m = omega_r / (1 - p) has a mean omega_r mean(p^2) ~ 5e-5 omega_r beyond the linear model
+    assert w_hat == pytest.approx(w_r, abs=w_tol * w_r)
 
 
 def test_aguado_eq66_acceleration_coefficients_identified():
@@ -84,17 +86,19 @@ def test_notch_removes_its_centre_frequency_and_passes_dc():
 
 @pytest.fixture(scope="module")
 def table61():
-    return {name: compare_estimators(traj, ENCODER, estimators=("tsa", "notch", "three-stage"), settings=SETTINGS)
-            for name, traj in (("constant", constant_speed(1020.0, 6.0)), ("varying", varying_speed(1020.0, 6.0)))}
+    return {name: compare_estimators(build(6.0), ENCODER, estimators=("tsa", "notch", "three-stage"),
+                                     settings=SETTINGS)
+            for name, (_, build) in TABLE61_PROFILES.items()}
 
 
-@pytest.mark.parametrize("profile", ["constant", "varying"])
-def test_aguado_table61_three_stage_beats_raw_tsa(table61, profile):
+@pytest.mark.parametrize("profile, seed_tsa_omega", [("constant", 0.3007), ("varying", 0.1430)])
+def test_aguado_table61_three_stage_beats_raw_tsa(table61, profile, seed_tsa_omega):
     c = table61[profile]
     tsa, est = c["tsa"], c["three-stage"]
-    assert 0.2 < tsa.rms_omega < 0.5 and 20.0 < tsa.rms_alpha < 50.0  # the seed's measured row: 0.30, 30
+    # the seed's measured rows: fitted at constant speed, predicted by the re-derived varying profile
+    assert tsa.rms_omega == pytest.approx(seed_tsa_omega, rel=0.1)
     assert est.rms_omega < 0.5 * tsa.rms_omega
-    assert est.rms_alpha < 0.6 * tsa.rms_alpha
+    assert est.rms_alpha < 0.7 * tsa.rms_alpha   # seed: 0.26 (constant), 0.46 (varying)
 
 
 def test_aguado_table61_notch_lags_on_the_varying_profile(table61):
@@ -106,6 +110,26 @@ def test_aguado_table61_notch_lags_on_the_varying_profile(table61):
     assert notch.rms_omega > 2.0 * tsa.rms_omega
     # ... but not at constant speed, where it only removes the first harmonic
     assert table61["constant"]["notch"].rms_omega < table61["constant"]["tsa"].rms_omega
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("label, build", ROBUSTNESS_PROFILES, ids=[label for label, _ in ROBUSTNESS_PROFILES])
+def test_three_stage_never_worse_than_the_raw_tsa_from_300_to_1500_rpm(label, build):
+    c = compare_estimators(build(6.0), ENCODER, estimators=("tsa", "three-stage"), settings=SETTINGS)
+    tsa, est = c["tsa"], c["three-stage"]
+    assert est.rms_omega <= tsa.rms_omega and est.rms_alpha <= tsa.rms_alpha
+    if label.startswith("constant"):   # at constant speed the compensation removes most of the ripple
+        assert est.rms_omega < 0.5 * tsa.rms_omega
+
+
+def test_the_seeds_high_pass_stage_1_leaks_a_speed_swing_ours_does_not():
+    # 600 rpm +- 40 rad/s at 1 Hz: the revolution (3.6-16 Hz) comes near the swing, which the 1 Hz
+    # high-pass lets into the regression
+    build = dict(ROBUSTNESS_PROFILES)["600 rpm ± 40 rad/s at 1 Hz"]
+    runs = {hp: compare_estimators(build(4.0), ENCODER, estimators=("tsa", "three-stage"),
+                                   settings=ChainSettings(highpass_hz=hp)) for hp in (None, 1.0)}
+    tsa = runs[None]["tsa"].rms_omega
+    assert runs[1.0]["three-stage"].rms_omega > 3.0 * tsa > 3.0 * runs[None]["three-stage"].rms_omega
 
 
 @pytest.mark.parametrize("kwargs, match", [

@@ -1,16 +1,18 @@
-"""Helpers shared by the sub-commands: model loading with --param, JSON output."""
+"""Helpers shared by the sub-commands: model loading with --param, JSON output, generated files."""
 
 from __future__ import annotations
 
 import argparse
 import json
 import sys
+from collections.abc import Callable, Iterable
+from pathlib import Path
 from typing import Any
 
 from ..exceptions import ModelError
 from ..model import Model, load_model
 
-__all__ = ["add_model_arguments", "model_from_args", "parse_params", "emit_json"]
+__all__ = ["add_model_arguments", "model_from_args", "parse_params", "emit_json", "write_or_check"]
 
 
 def add_model_arguments(parser: argparse.ArgumentParser) -> None:
@@ -42,3 +44,18 @@ def model_from_args(args: argparse.Namespace) -> Model:
 def emit_json(data: Any) -> None:
     json.dump(data, sys.stdout, indent=2)
     sys.stdout.write("\n")
+
+
+def write_or_check(check: bool, stale: Callable[[], Iterable[Path]], write: Callable[[], Iterable[Path]],
+                   regenerate: str, target: Path) -> int:
+    """Generated files: list the ``stale`` ones and exit 1 (``check``), or ``write`` them and say so."""
+    if check:
+        paths = list(stale())
+        for path in paths:
+            print(f"{path}: differs from the generated text; run `{regenerate}`", file=sys.stderr)
+        if not paths:
+            print(f"{target}: up to date")
+        return 1 if paths else 0
+    for path in write():
+        print(f"wrote {path}")
+    return 0

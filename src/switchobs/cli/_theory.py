@@ -3,10 +3,10 @@
 from __future__ import annotations
 
 import argparse
-import sys
 from pathlib import Path
 
 from ..report import theory_documents, write_theory
+from ._common import write_or_check
 
 __all__ = ["register"]
 
@@ -25,15 +25,8 @@ def register(sub: argparse._SubParsersAction) -> None:
 
 def run(args: argparse.Namespace) -> int:
     out = Path(args.out)
-    if args.check:
-        stale = [doc.filename for doc in theory_documents()
-                 if not (out / doc.filename).is_file() or (out / doc.filename).read_text("utf-8") != doc.text]
-        for name in stale:
-            print(f"{out / name}: differs from the generated document; run `switchobs theory --out {out}`",
-                  file=sys.stderr)
-        if not stale:
-            print(f"{out}: up to date")
-        return 1 if stale else 0
-    for path in write_theory(out):
-        print(f"wrote {path}")
-    return 0
+
+    def stale() -> list[Path]:
+        return [out / doc.filename for doc in theory_documents()
+                if not (out / doc.filename).is_file() or (out / doc.filename).read_text("utf-8") != doc.text]
+    return write_or_check(args.check, stale, lambda: write_theory(out), f"switchobs theory --out {out}", out)

@@ -160,8 +160,8 @@ class TwoAxleScenario:
 
     roads: RoadSchedule
     speed_m_s: float
-    front: FivePhaseABS | TwoPhaseABS = field(default_factory=lambda: FivePhaseABS(stall_timeout_s=0.1))
-    rear: FivePhaseABS | TwoPhaseABS = field(default_factory=lambda: FivePhaseABS(stall_timeout_s=0.1))
+    front: FivePhaseABS | TwoPhaseABS = field(default_factory=FivePhaseABS)
+    rear: FivePhaseABS | TwoPhaseABS = field(default_factory=FivePhaseABS)
     vehicle: TwoAxleVehicle = field(default_factory=TwoAxleVehicle)
     actuator: BrakeActuator = field(default_factory=BrakeActuator)
     accelerometer: Accelerometer = field(default_factory=Accelerometer)

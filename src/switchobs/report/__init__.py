@@ -7,6 +7,8 @@ DemoReport, ModelResult -- its results (the braking part: switchobs.loop.Braking
 DEMO_BETAS, DEMO_MODELS, STAGES -- the demo's gains, models and stages
 theory_document(s)     -- the theory/*.md documents generated from switchobs.design (``switchobs theory``)
 write_theory           -- write them into a directory
+reproduction_pages, write_reproductions, stale_pages, ReproductionPage, GENERATED_SECTIONS -- the reproduction
+                       pages generated from runs (``switchobs reproduce``)
 demo_figures, mark_road_changes -- figures of the demo (matplotlib Figure objects)
 Progress, Stage, check_prerequisites -- stage lines with elapsed times; prerequisites of a pipeline
 sampled_lines, sampled_observer_table -- the sampled observer's certificate in sample rate and vehicle speed
@@ -15,9 +17,12 @@ sampled_lines, sampled_observer_table -- the sampled observer's certificate in s
 from ._demo import DEMO_BETAS, DEMO_MODELS, STAGES, DemoReport, ModelResult, run_demo
 from ._plots import demo_figures, mark_road_changes
 from ._progress import Progress, Stage, check_prerequisites
+from ._reproductions import (GENERATED_SECTIONS, ReproductionPage, reproduction_pages, stale_pages,
+                             write_reproductions)
 from ._sampled import sampled_lines, sampled_observer_table
 from ._theory import THEORY_MODELS, TheoryDocument, theory_document, theory_documents, write_theory
 
 __all__ = ["DEMO_BETAS", "DEMO_MODELS", "STAGES", "DemoReport", "ModelResult", "run_demo", "mark_road_changes",
            "demo_figures", "Progress", "Stage", "check_prerequisites", "THEORY_MODELS", "TheoryDocument",
-           "theory_document", "theory_documents", "write_theory", "sampled_lines", "sampled_observer_table"]
+           "theory_document", "theory_documents", "write_theory", "sampled_lines", "sampled_observer_table",
+           "GENERATED_SECTIONS", "ReproductionPage", "reproduction_pages", "stale_pages", "write_reproductions"]

@@ -6,7 +6,7 @@ imperfections, three-stage harmonic compensation, notch baseline) and seed 003
 identification).
 
 Trajectories
-    AngleTrajectory, constant_speed, varying_speed, rpm_to_rad_s
+    AngleTrajectory, constant_speed, varying_speed, trapezoid_speed, rpm_to_rad_s
 Encoder
     Encoder, EncoderEvents
 Time-stamping algorithm
@@ -21,9 +21,12 @@ Torque-driven quarter car (vehicle and roads of switchobs.plants)
 Chain
     encoder_chain, compare_estimators, ChainSettings, ChainResult, EstimatorComparison,
     ESTIMATORS, rms_error, estimate_lag, plot_comparison (a matplotlib Figure)
+Seed 001 Table 6.1
+    TABLE61_SEED, TABLE61_ENCODER, TABLE61_PROFILES, ROBUSTNESS_PROFILES (300-1500 rpm)
 """
 
-from ._chain import ESTIMATORS, ChainResult, ChainSettings, EstimatorComparison, compare_estimators, encoder_chain
+from ._chain import (ESTIMATORS, ROBUSTNESS_PROFILES, TABLE61_ENCODER, TABLE61_PROFILES, TABLE61_SEED, ChainResult, ChainSettings,
+                     EstimatorComparison, compare_estimators, encoder_chain)
 from ._encoder import Encoder, EncoderEvents
 from ._identify import StiffnessEstimate, identify_stiffness
 from ._plot import plot_comparison
@@ -32,11 +35,11 @@ from ._series import SpeedEstimate, estimate_lag, rms_error
 from ._super_twisting import (SuperTwistingGains, SuperTwistingObserver, SuperTwistingRun, low_pass,
                               super_twisting, super_twisting_gains)
 from ._three_stage import NotchFilter, ThreeStageEstimator, notch, three_stage
-from ._trajectory import AngleTrajectory, constant_speed, rpm_to_rad_s, varying_speed
+from ._trajectory import AngleTrajectory, constant_speed, rpm_to_rad_s, trapezoid_speed, varying_speed
 from ._tsa import TimeStamper, TsaEstimate, controller_times, time_stamping, tsa_condition_number
 
 __all__ = [
-    "AngleTrajectory", "constant_speed", "varying_speed", "rpm_to_rad_s",
+    "AngleTrajectory", "constant_speed", "varying_speed", "trapezoid_speed", "rpm_to_rad_s",
     "Encoder", "EncoderEvents",
     "time_stamping", "TsaEstimate", "tsa_condition_number", "controller_times", "TimeStamper",
     "ThreeStageEstimator", "three_stage", "NotchFilter", "notch", "SpeedEstimate",
@@ -44,5 +47,6 @@ __all__ = [
     "SuperTwistingRun", "low_pass", "StiffnessEstimate", "identify_stiffness",
     "WheelRun", "simulate_wheel", "braking_trajectory", "linear_tyre", "burckhardt_tyre",
     "encoder_chain", "compare_estimators", "ChainSettings", "ChainResult", "EstimatorComparison",
-    "ESTIMATORS", "rms_error", "estimate_lag", "plot_comparison",
+    "ESTIMATORS", "TABLE61_SEED", "TABLE61_ENCODER", "TABLE61_PROFILES", "ROBUSTNESS_PROFILES",
+    "rms_error", "estimate_lag", "plot_comparison",
 ]

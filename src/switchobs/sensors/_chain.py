@@ -10,6 +10,7 @@ reference encoder (Table 6.1).
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 from dataclasses import asdict, dataclass
 from typing import Any
 
@@ -21,11 +22,12 @@ from ._encoder import Encoder, EncoderEvents
 from ._series import SpeedEstimate, estimate_lag, rms_error
 from ._super_twisting import low_pass, super_twisting, super_twisting_gains
 from ._three_stage import notch, three_stage
-from ._trajectory import AngleTrajectory
+from ._trajectory import AngleTrajectory, constant_speed, rpm_to_rad_s, trapezoid_speed, varying_speed
 from ._tsa import check_order_window, controller_times, time_stamping
 from ._validate import check_int, check_positive
 
-__all__ = ["ESTIMATORS", "ChainSettings", "ChainResult", "EstimatorComparison", "encoder_chain",
+__all__ = ["ESTIMATORS", "TABLE61_SEED", "TABLE61_ENCODER", "TABLE61_PROFILES", "ROBUSTNESS_PROFILES",
+           "ChainSettings", "ChainResult", "EstimatorComparison", "encoder_chain",
            "compare_estimators"]
 
 Array = npt.NDArray[np.float64]
@@ -51,8 +53,9 @@ class ChainSettings:
     gamma0 : float
         Scale of ``Gamma_0``: ``gamma_k = gamma0 / k`` (a weak prior, so the
         least squares converge within a few revolutions).
-    highpass_hz : float
-        Stage-1 cut-off (seed: 1 Hz).
+    highpass_hz : float or None
+        Stage 1 of the three-stage estimator: ``None`` (ours) the mean over the
+        surrounding revolution, a number the seed's high-pass cut-off (1 Hz).
     damping : float
         Notch damping ratio (seed: 0.5).
     st_f_plus : float
@@ -74,7 +77,7 @@ class ChainSettings:
     kappa: float = 1.0
     beta: float = 0.1
     gamma0: float = 1e5
-    highpass_hz: float = 1.0
+    highpass_hz: float | None = None
     damping: float = 0.5
     st_f_plus: float = 500.0
     st_tau_s: float = 0.005
@@ -85,8 +88,10 @@ class ChainSettings:
         check_positive(self.rate_hz, "rate_hz")
         check_order_window(self.order, self.window)
         check_int(self.harmonics, "harmonics (M)", minimum=1)
-        for name in ("kappa", "gamma0", "highpass_hz", "st_f_plus", "st_tau_s"):
+        for name in ("kappa", "gamma0", "st_f_plus", "st_tau_s"):
             check_positive(getattr(self, name), name)
+        if self.highpass_hz is not None:
+            check_positive(self.highpass_hz, "highpass_hz")
         check_positive(self.beta, "beta", allow_zero=True)
         check_positive(self.warmup_s, "warmup_s", allow_zero=True)
         check_int(self.st_substeps, "st_substeps", minimum=1)
@@ -312,3 +317,40 @@ def compare_estimators(
     results = tuple(_score(trajectory, _estimate(events, ts, name, settings), len(events), settings)
                     for name in estimators)
     return EstimatorComparison(trajectory=trajectory.name, encoder=encoder, results=results)
+
+
+#: Seed 001 Table 6.1: RMS (velocity [rad/s], acceleration [rad/s^2]) per profile and estimator.
+TABLE61_SEED: dict[str, dict[str, tuple[float, float]]] = {
+    "constant": {"tsa": (0.3007, 30.0886), "notch": (3.0730, 7.9528), "three-stage": (0.0716, 7.9405)},
+    "varying": {"tsa": (0.1430, 12.8528), "notch": (5.2597, 33.5899), "three-stage": (0.0783, 5.9237)},
+}
+#: Our encoder for Table 6.1: imperfections fitted to the seed's constant-speed TSA row (docs/encoders.md).
+TABLE61_ENCODER = Encoder(ppr=60, dnl_cycles=0.01, eccentricity=0.003, clock_hz=1e6, seed=1)
+#: Table 6.1 speed profiles: name -> (how it was chosen, trajectory of the given duration).  The varying one
+#: follows the seed's hints (docs/encoders.md): constant-speed and constant-acceleration intervals, and an RMS
+#: speed of 0.476 x 1020 rpm, the ratio of the seed's varying and constant TSA velocity errors.
+TABLE61_PROFILES: dict[str, tuple[str, Callable[[float], AngleTrajectory]]] = {
+    "constant": ("1020 rpm (seed 001 Fig. 5.4)", lambda duration_s: constant_speed(1020.0, duration_s)),
+    "varying": ("plateaus at 312 and 624 rpm joined by 1 s ramps at 32.7 rad/s², 1 s per segment (derived from "
+                "the seed's hints, see [Wheel encoders](encoders.md))",
+                lambda duration_s: trapezoid_speed(312.0, 624.0, duration_s)),
+}
+
+
+def _constant(rpm: float) -> Callable[[float], AngleTrajectory]:
+    return lambda duration_s: constant_speed(rpm, duration_s)
+
+
+def _swing(rpm: float, amplitude_rad_s: float) -> Callable[[float], AngleTrajectory]:
+    return lambda duration_s: varying_speed(rpm, duration_s, amplitude_rad_s=amplitude_rad_s)
+
+
+#: The speed range over which the three-stage estimator must not be worse than the raw TSA (300-1500 rpm):
+#: constant speeds, the sinusoidal swing at the relative size of the former Table 6.1 profile (+-40 rad/s at
+#: 1020 rpm, i.e. +-37.5 %), the +-40 rad/s swing at lower mean speeds, and the Table 6.1 varying profile.
+ROBUSTNESS_PROFILES: tuple[tuple[str, Callable[[float], AngleTrajectory]], ...] = (
+    *((f"constant {rpm:g} rpm", _constant(rpm)) for rpm in (300.0, 600.0, 1500.0)),
+    *((f"{rpm:g} rpm ± 37.5 % at 1 Hz", _swing(rpm, 0.375 * rpm_to_rad_s(rpm))) for rpm in (300.0, 600.0, 1500.0)),
+    *((f"{rpm:g} rpm ± 40 rad/s at 1 Hz", _swing(rpm, 40.0)) for rpm in (470.0, 600.0, 1020.0)),
+    ("Table 6.1 varying", TABLE61_PROFILES["varying"][1]),
+)

@@ -47,6 +47,60 @@ class _HighPass:
         return self._y
 
 
+class _RevolutionDetrend:
+    """Stage 1 (ours): each sample minus its local trend, the mean over the wheel revolution(s) centred on it.
+
+    The perturbation (6.2) is periodic in the angle, so its mean over one or
+    two revolutions vanishes, while a smooth true signal differs from those
+    centred means by ``T^2 f''/24`` and ``4 T^2 f''/24`` (``T`` one
+    revolution); their Richardson combination cancels that term (no phase
+    lead, no leak of a speed swing).  Samples where the term is large against
+    the speed (``curvature``) are left out.  The result is available one
+    revolution late: it feeds the
+    identification only, whose coefficients are constant, while the
+    compensation (stage 3) stays on the current sample.  The window is the
+    revolution at the current measured speed.  Below ``1 / max_revolution_s``
+    revolutions per second no sample is returned (the identification pauses):
+    a revolution then lasts as long as a change of speed, and nothing separates
+    the two.
+    """
+
+    def __init__(self, dt_s: float, max_revolution_s: float = 0.25, curvature: float = 0.03) -> None:
+        self._dt = dt_s
+        self._curvature = curvature
+        self._size = max(8, 2 * int(math.ceil(max_revolution_s / dt_s)) + 6)
+        self._rows = np.zeros((self._size, 3))     # theta, omega, alpha
+        self._sums = np.zeros((self._size, 2))     # running sums of omega and alpha
+        self._k = -1
+
+    def __call__(self, theta: float, omega: float, alpha: float) -> tuple[float, float, float, float, float] | None:
+        """Push a sample; return ``(theta, omega, alpha, zeta_omega, zeta_alpha)`` of the centre sample, if any."""
+        k, n = self._k + 1, self._size
+        self._k = k
+        self._rows[k % n] = theta, omega, alpha
+        self._sums[k % n] = self._sums[(k - 1) % n] + (omega, alpha) if k else (omega, alpha)
+        if omega == 0.0:
+            return None
+        half = math.pi / (abs(omega) * self._dt)      # half a revolution, in samples (not rounded)
+        centre = k - math.ceil(2.0 * half + 0.5)
+        if centre - 2.0 * half - 1.5 < max(0, k - n + 1):
+            return None
+
+        def integral(x: float) -> npt.NDArray[np.float64]:
+            # running sum of the samples, each spread over [i - 1/2, i + 1/2), up to x (fractional)
+            j = math.floor(x - 0.5)
+            return self._sums[j % n] + (x - 0.5 - j) * self._rows[(j + 1) % n, 1:]
+
+        one = (integral(centre + half) - integral(centre - half)) / (2.0 * half)
+        two = (integral(centre + 2.0 * half) - integral(centre - 2.0 * half)) / (4.0 * half)
+        row = self._rows[centre % n]
+        # where the T^2 f'' term is large against the speed the expansion is not to be trusted
+        if abs(one[0] - two[0]) > self._curvature * abs(omega):
+            return None
+        mean = (4.0 * one - two) / 3.0
+        return (float(row[0]), float(row[1]), float(row[2]), float(row[1] - mean[0]), float(row[2] - mean[1]))
+
+
 class _Rls:
     """Normalised least squares with forgetting (6.8), one step of ``dt`` per sample.
 
@@ -90,11 +144,15 @@ class ThreeStageEstimator:
         means ``gamma_k = g / k``.  The default is a weak prior, so the
         estimates are close to the least-squares fit of the data seen so far
         after a few revolutions.
-    highpass_hz : float
-        Cut-off of the stage-1 high-pass filter, well below the revolution
-        frequency (seed: 1 Hz).  Its phase lead ``atan(f_c / f_rev)`` at the
-        revolution frequency rotates the identified coefficients slightly (the
-        seed assumes ideal filters): about 3.6 degrees at 1 Hz and 1020 rpm.
+    highpass_hz : float, optional
+        Stage 1.  ``None`` (default, ours): subtract the mean over the
+        surrounding revolution and identify half a revolution late (see
+        ``docs/encoders.md``).  A number: the seed's first-order high-pass with
+        that cut-off (seed: 1 Hz), whose phase lead ``atan(f_c / f_rev)``
+        rotates the identified coefficients slightly and which lets a speed
+        swing near the revolution frequency into the regression: at 600 rpm
+        with a +-40 rad/s swing at 1 Hz it makes the estimate six times worse
+        than the raw TSA.
 
     Raises
     ------
@@ -115,7 +173,7 @@ class ThreeStageEstimator:
         kappa: float = 1.0,
         beta: float = 0.1,
         gamma0: float | Sequence[float] = 1e5,
-        highpass_hz: float = 1.0,
+        highpass_hz: float | None = None,
     ) -> None:
         self.harmonics = check_int(harmonics, "harmonics (M)", minimum=1)
         self.dt_s = check_positive(dt_s, "dt_s")
@@ -123,7 +181,8 @@ class ThreeStageEstimator:
         beta = check_positive(beta, "beta", allow_zero=True)
         if beta * self.dt_s >= 1.0:
             raise SimulationError(f"beta * dt_s = {beta * self.dt_s:g} must be below 1")
-        highpass_hz = check_positive(highpass_hz, "highpass_hz")
+        if highpass_hz is not None:
+            highpass_hz = check_positive(highpass_hz, "highpass_hz")
         k = np.arange(1, self.harmonics + 1, dtype=float)
         if np.ndim(gamma0) == 0:
             gam = check_positive(gamma0, "gamma0") / k
@@ -140,8 +199,12 @@ class ThreeStageEstimator:
         g0 = np.repeat(gam, 2)
         self._rls_w = _Rls(g0, kappa, beta, self.dt_s)
         self._rls_a = _Rls(g0, kappa, beta, self.dt_s)
-        self._hp_w = _HighPass(highpass_hz, self.dt_s)
-        self._hp_a = _HighPass(highpass_hz, self.dt_s)
+        if highpass_hz is None:
+            self._detrend: _RevolutionDetrend | None = _RevolutionDetrend(self.dt_s)
+        else:
+            self._detrend = None
+            self._hp_w = _HighPass(highpass_hz, self.dt_s)
+            self._hp_a = _HighPass(highpass_hz, self.dt_s)
 
     @property
     def coefficients_velocity(self) -> Array:
@@ -183,8 +246,14 @@ class ThreeStageEstimator:
             TSA angle (rad), speed (rad/s) and acceleration (rad/s^2), (5.1), (5.4), (5.5).
         """
         phi_w, phi_a, nw, na = self.regressors(theta_m, omega_m, alpha_m)
-        self._rls_w.step(phi_w, nw, self._hp_w(omega_m))
-        self._rls_a.step(phi_a, na, self._hp_a(alpha_m))
+        if self._detrend is None:
+            self._rls_w.step(phi_w, nw, self._hp_w(omega_m))
+            self._rls_a.step(phi_a, na, self._hp_a(alpha_m))
+        elif (centre := self._detrend(theta_m, omega_m, alpha_m)) is not None:
+            th, w, a, zeta_w, zeta_a = centre
+            cw, ca, cnw, cna = self.regressors(th, w, a)
+            self._rls_w.step(cw, cnw, zeta_w)
+            self._rls_a.step(ca, cna, zeta_a)
         return (omega_m - float(phi_w @ self._rls_w.theta), alpha_m - float(phi_a @ self._rls_a.theta))
 
 
@@ -247,7 +316,7 @@ def three_stage(
     kappa: float = 1.0,
     beta: float = 0.1,
     gamma0: float | Sequence[float] = 1e5,
-    highpass_hz: float = 1.0,
+    highpass_hz: float | None = None,
 ) -> SpeedEstimate:
     """Run the three-stage estimator over a TSA record (seed 001, Fig. 6.2).
 

@@ -20,7 +20,7 @@ from scipy.interpolate import BPoly, CubicHermiteSpline, CubicSpline, PchipInter
 from ..exceptions import SimulationError
 from ._validate import as_signal, check_increasing, check_positive
 
-__all__ = ["AngleTrajectory", "constant_speed", "varying_speed", "rpm_to_rad_s"]
+__all__ = ["AngleTrajectory", "constant_speed", "varying_speed", "trapezoid_speed", "rpm_to_rad_s"]
 
 Array = npt.NDArray[np.float64]
 Signal = Callable[[Array], Array]
@@ -254,3 +254,50 @@ def varying_speed(
         alpha=lambda t: amp * wf * np.cos(wf * np.asarray(t)),
         t_start=0.0, t_end=dur, grid=_grid(0.0, dur, 1e-2),
         name=f"varying {rpm:g} rpm +- {amp:g} rad/s at {f:g} Hz")
+
+
+def trapezoid_speed(low_rpm: float, high_rpm: float, duration_s: float = 10.0, *, segment_s: float = 1.0,
+                    theta0: float = 0.0) -> AngleTrajectory:
+    """Plateaus at constant speed joined by ramps at constant acceleration (a motor test rig's profile).
+
+    Each ``segment_s``: a plateau at ``low_rpm``, a ramp up, a plateau at
+    ``high_rpm``, a ramp down, repeated.  Seed 001 Sec. 6.3 describes its
+    time-varying reference (Fig. 6.4) by "the intervals in which the velocity
+    or the acceleration are constant"; ``docs/encoders.md`` derives the speeds
+    from its Table 6.1.
+
+    Raises
+    ------
+    SimulationError
+        If ``low_rpm >= high_rpm`` or a value is not positive.
+    """
+    lo = rpm_to_rad_s(check_positive(low_rpm, "low_rpm"))
+    hi = rpm_to_rad_s(check_positive(high_rpm, "high_rpm"))
+    if lo >= hi:
+        raise SimulationError(f"low_rpm = {low_rpm:g} must be below high_rpm = {high_rpm:g}")
+    dur = check_positive(duration_s, "duration_s")
+    seg = check_positive(segment_s, "segment_s")
+    knots = np.arange(0.0, dur + seg, seg)
+    speeds = np.resize([lo, lo, hi, hi], knots.size)     # lo plateau, ramp up, hi plateau, ramp down
+    slopes = np.diff(speeds) / seg
+    angles = theta0 + np.concatenate([[0.0], np.cumsum(0.5 * (speeds[1:] + speeds[:-1]) * seg)])
+
+    def cell(t: Array) -> tuple[Array, Array]:
+        t = np.asarray(t, dtype=float)
+        i = np.clip(np.searchsorted(knots, t, side="right") - 1, 0, slopes.size - 1)
+        return i, t - knots[i]
+
+    def theta(t: Array) -> Array:
+        i, h = cell(t)
+        return angles[i] + h * (speeds[i] + 0.5 * slopes[i] * h)
+
+    def omega(t: Array) -> Array:
+        i, h = cell(t)
+        return speeds[i] + slopes[i] * h
+
+    def alpha(t: Array) -> Array:
+        return slopes[cell(t)[0]]
+
+    return AngleTrajectory(theta=theta, omega=omega, alpha=alpha, t_start=0.0, t_end=dur,
+                           grid=_grid(0.0, dur, 1e-2),
+                           name=f"trapezoid {low_rpm:g}-{high_rpm:g} rpm, {seg:g} s segments")

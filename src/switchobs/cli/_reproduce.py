@@ -1,0 +1,29 @@
+"""``switchobs reproduce [--root DIR] [--check]``: write (or check) the reproduction pages generated from runs."""
+
+from __future__ import annotations
+
+import argparse
+from pathlib import Path
+
+from ..report import GENERATED_SECTIONS, stale_pages, write_reproductions
+from ._common import write_or_check
+
+__all__ = ["register"]
+
+
+def register(sub: argparse._SubParsersAction) -> None:
+    p = sub.add_parser(
+        "reproduce", help="regenerate docs/reproductions.md and the Table 4.1 / 6.1 sections from runs",
+        description="Run the seed reproductions (Table 4.1, Table 6.1, the seeds' scenarios, Appendix C, the "
+                    "Poincaré map, the super-twisting orders) and write docs/reproductions.md and the generated "
+                    f"sections of {', '.join(sorted({path for path, _ in GENERATED_SECTIONS}))}. About a minute. With --check, write nothing and "
+                    "exit 1 if a committed page differs from the fresh run.")
+    p.add_argument("--root", default=".", metavar="DIR", help="repository root holding docs/ (default: .)")
+    p.add_argument("--check", action="store_true", help="compare the committed pages with a fresh run instead")
+    p.set_defaults(func=run)
+
+
+def run(args: argparse.Namespace) -> int:
+    root = Path(args.root)
+    return write_or_check(args.check, lambda: [root / path for path in stale_pages(root)],
+                          lambda: write_reproductions(root), f"switchobs reproduce --root {root}", root)
