@@ -16,6 +16,9 @@ dwell_time                -- Geromel–Colaneri dwell-time bound, bisected on ta
 discrete_certificate      -- the sampled observer e+ = R(h A_pm) e for every step h = |s| dt (exact SOS proof
                              or exact refutation; rk4, euler, midpoint, radau3)
 check_discrete            -- the exact re-check of a stored discrete section
+certify_box               -- one certificate (strict common P or dwell time) for every parameter value of a box,
+                             or the largest certified sub-box around the nominal point
+parse_box                 -- "a=150:230" items -> ParameterBox
 classify_planar           -- Balde–Boscain–Mason cases i–iv with Gamma, det, tr(A1 A2) and R
 verify_certificate        -- independent exact check of a certificate document
 load_certificate          -- read a certificate JSON file
@@ -29,15 +32,16 @@ as_family                 -- the validation gate for a family of matrices
 
 Results: CertificationReport, LyapunovResult, DualCertificate, DwellTimeResult,
 PlanarClassification, VerificationReport, TrajectoryReport, AdmissibleConstants, DiscreteCertificate,
-DiscreteVerdict,
+DiscreteVerdict, BoxCertificate, ParameterBox,
 ZeroCrossing, Family.
 
 Certificate schema (one frozen class per section, ``to_json`` / ``from_json``):
 CertificateDocument, FamilySection, ObserverSection, LyapunovEntry, DualEntry,
-DwellTimeEntry, PlanarEntry, Verdict; enums CertificateKind, ArbitrarySwitching,
+DwellTimeEntry, PlanarEntry, BoxSection, Verdict; enums CertificateKind, ArbitrarySwitching,
 Existence; document_section registers a new optional section.
 """
 
+from ._box import BoxCertificate, ParameterBox, certify_box, parse_box
 from ._certify import CertificationReport, certify, certify_model, verdict_text
 from ._discrete import DiscreteCertificate, DiscreteVerdict, check_discrete, discrete_certificate
 from ._dwell import DwellTimeResult, dwell_time
@@ -45,7 +49,7 @@ from ._family import Family, as_family
 from ._lyapunov import (DEFAULT_EPS, DualCertificate, LyapunovResult, common_lyapunov,
                         infeasibility_certificate, strict_common_lyapunov)
 from ._planar import PlanarClassification, classify_planar
-from ._schema import (ArbitrarySwitching, CertificateDocument, CertificateKind, DualEntry, DwellTimeEntry, Existence,
+from ._schema import (ArbitrarySwitching, BoxSection, CertificateDocument, CertificateKind, DualEntry, DwellTimeEntry, Existence,
                       FamilySection, LyapunovEntry, ObserverSection, PlanarEntry, Verdict, document_section)
 from ._trajectory import (AdmissibleConstants, TrajectoryReport, ZeroCrossing, admissible_constants, pe_level,
                           regressor_excitation, time_rescaling, trajectory_conditions, windowed_energy,
@@ -54,6 +58,7 @@ from ._verify import Check, VerificationReport, load_certificate, verify_certifi
 
 __all__ = [
     "CertificationReport", "certify", "certify_model", "verdict_text",
+    "BoxCertificate", "ParameterBox", "certify_box", "parse_box", "BoxSection",
     "DiscreteCertificate", "DiscreteVerdict", "check_discrete", "discrete_certificate",
     "DwellTimeResult", "dwell_time",
     "Family", "as_family",
