@@ -19,6 +19,10 @@ check_discrete            -- the exact re-check of a stored discrete section
 certify_box               -- one certificate (strict common P or dwell time) for every parameter value of a box,
                              or the largest certified sub-box around the nominal point
 parse_box                 -- "a=150:230" items -> ParameterBox
+synthesize                -- K_plus, K_minus by LMIs (Y = X K): decay rate in tau, smallest H2 noise gain,
+                             re-checked exactly (a model at its values)
+synthesize_gains          -- the same for matrices A, C (one or more outputs)
+noise_gain                -- H2 norm from measurement noise to the weighted estimation error of one mode
 classify_planar           -- Balde–Boscain–Mason cases i–iv with Gamma, det, tr(A1 A2) and R
 verify_certificate        -- independent exact check of a certificate document
 load_certificate          -- read a certificate JSON file
@@ -32,7 +36,7 @@ as_family                 -- the validation gate for a family of matrices
 
 Results: CertificationReport, LyapunovResult, DualCertificate, DwellTimeResult,
 PlanarClassification, VerificationReport, TrajectoryReport, AdmissibleConstants, DiscreteCertificate,
-DiscreteVerdict, BoxCertificate, ParameterBox,
+DiscreteVerdict, BoxCertificate, ParameterBox, GainSynthesis,
 ZeroCrossing, Family.
 
 Certificate schema (one frozen class per section, ``to_json`` / ``from_json``):
@@ -49,6 +53,7 @@ from ._family import Family, as_family
 from ._lyapunov import (DEFAULT_EPS, DualCertificate, LyapunovResult, common_lyapunov,
                         infeasibility_certificate, strict_common_lyapunov)
 from ._planar import PlanarClassification, classify_planar
+from ._synthesis import GainSynthesis, noise_gain, synthesize, synthesize_gains
 from ._schema import (ArbitrarySwitching, BoxSection, CertificateDocument, CertificateKind, DualEntry, DwellTimeEntry, Existence,
                       FamilySection, LyapunovEntry, ObserverSection, PlanarEntry, Verdict, document_section)
 from ._trajectory import (AdmissibleConstants, TrajectoryReport, ZeroCrossing, admissible_constants, pe_level,
@@ -59,6 +64,7 @@ from ._verify import Check, VerificationReport, load_certificate, verify_certifi
 __all__ = [
     "CertificationReport", "certify", "certify_model", "verdict_text",
     "BoxCertificate", "ParameterBox", "certify_box", "parse_box", "BoxSection",
+    "GainSynthesis", "noise_gain", "synthesize", "synthesize_gains",
     "DiscreteCertificate", "DiscreteVerdict", "check_discrete", "discrete_certificate",
     "DwellTimeResult", "dwell_time",
     "Family", "as_family",
