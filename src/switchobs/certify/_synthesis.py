@@ -63,7 +63,7 @@ from ._lmi import DEFAULT_SOLVERS, SolveInfo, solve
 from ._rounding import dyadic
 
 __all__ = ["GainSynthesis", "synthesize_gains", "synthesize", "noise_gain", "decay_holds", "STRICT_IMPOSSIBLE",
-           "RATE_MARGIN"]
+           "RATE_MARGIN", "FrontPoint", "noise_decay_front"]
 
 #: The LMI is solved at ``rate * (1 + RATE_MARGIN)`` so that the rounded matrices keep ``rate`` exactly.
 RATE_MARGIN = 1e-2
@@ -351,7 +351,7 @@ def synthesize_gains(A: Any, C: Any, *, decay_rate: Any, noise_weight: float = 0
     exact_s = time.perf_counter() - t0
     if reason:
         return fail(f"the rounded gains fail the exact check: {reason}", info, solve_s)
-    fl = [np.array([[float(x) for x in r] for r in M]) for M in (A_plus, A_minus, K_plus, K_minus)]
+    fl = [_floats(M) for M in (A_plus, A_minus, K_plus, K_minus)]
     gains = {"A_plus": noise_gain(fl[0], fl[2], E), "A_minus": noise_gain(fl[1], fl[3], E)}
     # H2^2 in the scaled time is sigma times H2^2 in tau
     scaled = np.trace(X_num) + (noise_weight * sigma) ** 2 * max(float(np.trace(Z.value)) for Z in v["Z"])
@@ -386,3 +386,77 @@ def synthesize(model: Model, *, decay_rate: Any, noise_weight: float = 0.0, esti
     C = fraction_matrix(numeric.C, what="C")
     return synthesize_gains(A, C, decay_rate=decay_rate, noise_weight=noise_weight, estimate=rows, strict=strict,
                             solvers=solvers)
+
+
+@dataclass(frozen=True)
+class FrontPoint:
+    """One design on the noise-gain / decay-rate plane (:func:`noise_decay_front`).
+
+    Attributes
+    ----------
+    design : str
+        ``"beta"`` (Theorem 1 with every pole at ``-beta``) or ``"lmi W=<weight>"``.
+    decay_rate : float
+        Spectral abscissa of ``A_plus`` (both modes: equal spectra) with the sign flipped, in ``tau``.
+    noise_gain : dict
+        H2 gain from the measurement noise to the weighted error, per mode.
+    K_plus, K_minus : tuple of str
+        The exact gains (one output).
+    """
+
+    design: str
+    decay_rate: float
+    noise_gain: dict[str, float]
+    K_plus: tuple[str, ...]
+    K_minus: tuple[str, ...]
+
+    @property
+    def worst_noise_gain(self) -> float:
+        return max(self.noise_gain.values())
+
+    def to_json(self) -> dict[str, Any]:
+        return {"design": self.design, "decay_rate": self.decay_rate, "noise_gain": dict(self.noise_gain),
+                "K_plus": list(self.K_plus), "K_minus": list(self.K_minus)}
+
+    def __str__(self) -> str:
+        return (f"{self.design}: decay rate {self.decay_rate:.4g}, noise gain "
+                + ", ".join(f"{k} {v:.4g}" for k, v in self.noise_gain.items()))
+
+
+def noise_decay_front(model: Model, rates: Sequence[Any], *, noise_weights: Sequence[float] = (0.0, 1e-2),
+                      estimate: Sequence[str] = ("z2",), values: Mapping[str, Any] | None = None,
+                      solvers: Sequence[str] = DEFAULT_SOLVERS) -> tuple[FrontPoint, ...]:
+    """Theorem 1 designs with all poles at ``-rate`` beside the LMI designs at each rate and noise weight.
+
+    The comparison of the issue's Pareto front: noise gain (H2, measurement noise on ``y`` to the error
+    of ``estimate``) against the decay rate achieved, for a single-output model.
+    """
+    from ..design import design_gains
+
+    numeric = model.with_values(dict(values or {})).numeric()
+    names = list(model.states)
+    E = np.eye(model.n)[[names.index(s) for s in estimate]]
+    A = np.array(numeric.A.tolist(), dtype=float)
+    C = np.array(numeric.C.tolist(), dtype=float)
+    points = []
+
+    def point(design: str, Kp: np.ndarray, Km: np.ndarray, texts: tuple[tuple[str, ...], tuple[str, ...]]) -> None:
+        Ap, Am = A - Kp @ C, -A + Km @ C
+        rate = -max(float(np.max(np.linalg.eigvals(M).real)) for M in (Ap, Am))
+        points.append(FrontPoint(design, rate, {"A_plus": noise_gain(Ap, Kp, E), "A_minus": noise_gain(Am, Km, E)},
+                                 *texts))
+
+    for r in rates:
+        beta = design_gains(numeric, ",".join([f"-{r}"] * model.n))
+        Kp, Km = (np.array(K.tolist(), dtype=float) for K in (beta.K_plus, beta.K_minus))
+        point("beta", Kp, Km, (tuple(str(x) for x in beta.K_plus), tuple(str(x) for x in beta.K_minus)))
+        for W in noise_weights:
+            res = synthesize(model, decay_rate=r, noise_weight=W, estimate=estimate, values=values, solvers=solvers)
+            if res.feasible:
+                point(f"lmi W={W:g}", _floats(res.K_plus), _floats(res.K_minus),
+                      tuple(tuple(",".join(str(x) for x in row) for row in M) for M in (res.K_plus, res.K_minus)))
+    return tuple(points)
+
+
+def _floats(M: Matrix) -> np.ndarray:
+    return np.array([[float(x) for x in row] for row in M])
