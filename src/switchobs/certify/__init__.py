@@ -23,6 +23,7 @@ synthesize                -- K_plus, K_minus by LMIs (Y = X K): decay rate in ta
                              re-checked exactly (a model at its values)
 synthesize_gains          -- the same for matrices A, C (one or more outputs)
 noise_gain                -- H2 norm from measurement noise to the weighted estimation error of one mode
+noise_decay_front         -- Theorem 1 designs (all poles at -rate) beside LMI designs: noise gain vs decay rate
 classify_planar           -- Balde–Boscain–Mason cases i–iv with Gamma, det, tr(A1 A2) and R
 verify_certificate        -- independent exact check of a certificate document
 load_certificate          -- read a certificate JSON file
@@ -36,7 +37,7 @@ as_family                 -- the validation gate for a family of matrices
 
 Results: CertificationReport, LyapunovResult, DualCertificate, DwellTimeResult,
 PlanarClassification, VerificationReport, TrajectoryReport, AdmissibleConstants, DiscreteCertificate,
-DiscreteVerdict, BoxCertificate, ParameterBox, GainSynthesis,
+DiscreteVerdict, BoxCertificate, ParameterBox, GainSynthesis, FrontPoint,
 ZeroCrossing, Family.
 
 Certificate schema (one frozen class per section, ``to_json`` / ``from_json``):
@@ -53,7 +54,7 @@ from ._family import Family, as_family
 from ._lyapunov import (DEFAULT_EPS, DualCertificate, LyapunovResult, common_lyapunov,
                         infeasibility_certificate, strict_common_lyapunov)
 from ._planar import PlanarClassification, classify_planar
-from ._synthesis import GainSynthesis, noise_gain, synthesize, synthesize_gains
+from ._synthesis import FrontPoint, GainSynthesis, noise_decay_front, noise_gain, synthesize, synthesize_gains
 from ._schema import (ArbitrarySwitching, BoxSection, CertificateDocument, CertificateKind, DualEntry, DwellTimeEntry, Existence,
                       FamilySection, LyapunovEntry, ObserverSection, PlanarEntry, Verdict, document_section)
 from ._trajectory import (AdmissibleConstants, TrajectoryReport, ZeroCrossing, admissible_constants, pe_level,
@@ -64,7 +65,7 @@ from ._verify import Check, VerificationReport, load_certificate, verify_certifi
 __all__ = [
     "CertificationReport", "certify", "certify_model", "verdict_text",
     "BoxCertificate", "ParameterBox", "certify_box", "parse_box", "BoxSection",
-    "GainSynthesis", "noise_gain", "synthesize", "synthesize_gains",
+    "FrontPoint", "GainSynthesis", "noise_decay_front", "noise_gain", "synthesize", "synthesize_gains",
     "DiscreteCertificate", "DiscreteVerdict", "check_discrete", "discrete_certificate",
     "DwellTimeResult", "dwell_time",
     "Family", "as_family",

@@ -159,7 +159,7 @@ class GainSynthesis:
             f"  certified: {what}",
             f"  noise gain (H2, v -> estimated states {list(self.estimate)}): "
             + ", ".join(f"{k} {v:.4g}" for k, v in self.noise_gain.items())
-            + f"; LMI bound {self.noise_bound:.4g}"])
+            + f"; LMI bound of the weighted H2 gain ([w; W v] -> E e) {self.noise_bound:.4g}"])
 
 
 def _short(x: Fraction) -> str:
