@@ -133,3 +133,20 @@ def test_cli_certify_with_a_box(tmp_path, capsys):
     assert main(["certify", "abs-xbs3", "--spectrum=-10,-20,-20", "--box", "c=20"]) == 2
     err = capsys.readouterr().err
     assert err.count("\n") == 1 and "NAME=LOWER:UPPER" in err
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("command", [
+    "switchobs certify abs-xbs3 --spectrum=-100,-100,-100 --no-dwell --box a=150:230 --box c=20:40",
+    "switchobs synthesize abs-xbs3 --decay 100 --noise-weight 0.1 --estimate z2",
+])
+def test_cli_output_shown_on_the_certify_page_is_what_the_command_prints(command, capsys):
+    import re
+    import shlex
+    from pathlib import Path
+
+    page = (Path(__file__).resolve().parents[1] / "docs" / "certify.md").read_text("utf-8")
+    block = re.search(r"^\$ " + re.escape(command) + r"\n(.*?)\n```", page, re.S | re.M)
+    assert block, f"certify.md has no output of `{command}`"
+    main(shlex.split(command)[1:])
+    assert capsys.readouterr().out.rstrip("\n") == block.group(1).rstrip("\n")
