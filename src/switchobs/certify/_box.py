@@ -30,7 +30,6 @@ certified sub-box.
 
 from __future__ import annotations
 
-import math
 import time
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
@@ -46,8 +45,10 @@ from ..model import Model
 from ._box_check import Interval, check_dwell, check_strict, vertex_matrices
 from ._exact import Matrix, fraction_matrix, matrix_strings, to_fraction
 from ._lmi import DEFAULT_SOLVERS, SolveInfo, balance, primal_margin, solve
+from ._dwell import _round_up
 from ._lyapunov import DEFAULT_EPS
 from ._rounding import dyadic
+from ._synthesis import _floats
 
 __all__ = ["ParameterBox", "parse_box", "BoxCertificate", "certify_box", "model_terms", "DEFAULT_SEGMENTS",
            "SEARCH_STEPS"]
@@ -253,10 +254,6 @@ class BoxCertificate:
 
 
 # ----------------------------------------------------------------------------- LMIs
-def _floats(M: Matrix) -> np.ndarray:
-    return np.array([[float(x) for x in row] for row in M])
-
-
 def pwl_margin(modes: Sequence[Sequence[np.ndarray]], T: float, segments: int, *,
                solvers: Sequence[str] = DEFAULT_SOLVERS) -> tuple[list[list[np.ndarray]], float, SolveInfo]:
     """Normalised margin of the piecewise-linear dwell-time LMIs at dwell time ``T`` (positive: feasible)."""
@@ -286,12 +283,6 @@ def pwl_margin(modes: Sequence[Sequence[np.ndarray]], T: float, segments: int, *
     v, info = solve(fn, solvers=solvers, what=f"piecewise-linear dwell-time LMI at T = {T:.6g}")
     Ps = [[(np.asarray(P.value) + np.asarray(P.value).T) / 2 for P in seq] for seq in v["P"]]
     return Ps, float(v["t"].value), info
-
-
-def _round_up(x: float, digits: int = 4) -> Fraction:
-    e = math.floor(math.log10(x)) - digits + 1
-    q = Fraction(10) ** e
-    return math.ceil(Fraction(x) / q) * q
 
 
 @dataclass(frozen=True)
