@@ -20,6 +20,7 @@ EXPECTED = {
     "aguado_table41.py": ["aguado_table41.png"],
     "aguado_table61.py": ["aguado_table61.png"],
     "poincare_two_phase.py": ["poincare_two_phase.png"],
+    "noise_decay_front.py": ["noise_decay_front.png"],
     "c_observer.py": ["c_observer.png", "c_observer/observer_demo", "c_observer/switchobs_abs_xbs4.h"],
 }
 

@@ -16,6 +16,14 @@ dwell_time                -- Geromel–Colaneri dwell-time bound, bisected on ta
 discrete_certificate      -- the sampled observer e+ = R(h A_pm) e for every step h = |s| dt (exact SOS proof
                              or exact refutation; rk4, euler, midpoint, radau3)
 check_discrete            -- the exact re-check of a stored discrete section
+certify_box               -- one certificate (strict common P or dwell time) for every parameter value of a box,
+                             or the largest certified sub-box around the nominal point
+parse_box                 -- "a=150:230" items -> ParameterBox
+synthesize                -- K_plus, K_minus by LMIs (Y = X K): decay rate in tau, smallest H2 noise gain,
+                             re-checked exactly (a model at its values)
+synthesize_gains          -- the same for matrices A, C (one or more outputs)
+noise_gain                -- H2 norm from measurement noise to the weighted estimation error of one mode
+noise_decay_front         -- Theorem 1 designs (all poles at -rate) beside LMI designs: noise gain vs decay rate
 classify_planar           -- Balde–Boscain–Mason cases i–iv with Gamma, det, tr(A1 A2) and R
 verify_certificate        -- independent exact check of a certificate document
 load_certificate          -- read a certificate JSON file
@@ -29,15 +37,16 @@ as_family                 -- the validation gate for a family of matrices
 
 Results: CertificationReport, LyapunovResult, DualCertificate, DwellTimeResult,
 PlanarClassification, VerificationReport, TrajectoryReport, AdmissibleConstants, DiscreteCertificate,
-DiscreteVerdict,
+DiscreteVerdict, BoxCertificate, ParameterBox, GainSynthesis, FrontPoint,
 ZeroCrossing, Family.
 
 Certificate schema (one frozen class per section, ``to_json`` / ``from_json``):
 CertificateDocument, FamilySection, ObserverSection, LyapunovEntry, DualEntry,
-DwellTimeEntry, PlanarEntry, Verdict; enums CertificateKind, ArbitrarySwitching,
+DwellTimeEntry, PlanarEntry, BoxSection, Verdict; enums CertificateKind, ArbitrarySwitching,
 Existence; document_section registers a new optional section.
 """
 
+from ._box import BoxCertificate, ParameterBox, certify_box, parse_box
 from ._certify import CertificationReport, certify, certify_model, verdict_text
 from ._discrete import DiscreteCertificate, DiscreteVerdict, check_discrete, discrete_certificate
 from ._dwell import DwellTimeResult, dwell_time
@@ -45,7 +54,8 @@ from ._family import Family, as_family
 from ._lyapunov import (DEFAULT_EPS, DualCertificate, LyapunovResult, common_lyapunov,
                         infeasibility_certificate, strict_common_lyapunov)
 from ._planar import PlanarClassification, classify_planar
-from ._schema import (ArbitrarySwitching, CertificateDocument, CertificateKind, DualEntry, DwellTimeEntry, Existence,
+from ._synthesis import FrontPoint, GainSynthesis, noise_decay_front, noise_gain, synthesize, synthesize_gains
+from ._schema import (ArbitrarySwitching, BoxSection, CertificateDocument, CertificateKind, DualEntry, DwellTimeEntry, Existence,
                       FamilySection, LyapunovEntry, ObserverSection, PlanarEntry, Verdict, document_section)
 from ._trajectory import (AdmissibleConstants, TrajectoryReport, ZeroCrossing, admissible_constants, pe_level,
                           regressor_excitation, time_rescaling, trajectory_conditions, windowed_energy,
@@ -54,6 +64,8 @@ from ._verify import Check, VerificationReport, load_certificate, verify_certifi
 
 __all__ = [
     "CertificationReport", "certify", "certify_model", "verdict_text",
+    "BoxCertificate", "ParameterBox", "certify_box", "parse_box", "BoxSection",
+    "FrontPoint", "GainSynthesis", "noise_decay_front", "noise_gain", "synthesize", "synthesize_gains",
     "DiscreteCertificate", "DiscreteVerdict", "check_discrete", "discrete_certificate",
     "DwellTimeResult", "dwell_time",
     "Family", "as_family",

@@ -25,6 +25,7 @@ import sympy as sp
 from ..design import GainDesign
 from ..exceptions import CertificateError, FreeSymbolError, SpectrumError
 from ..model import Model
+from ._box import BoxCertificate, certify_box
 from ._exact import fraction_matrix, matrix_strings
 from ._family import Family, FamilyLike, as_family, format_spectrum
 from ._discrete import DiscreteCertificate, discrete_certificate, stability_function
@@ -32,8 +33,8 @@ from ._dwell import DwellTimeResult, dwell_time
 from ._lmi import DEFAULT_SOLVERS
 from ._lyapunov import DEFAULT_EPS, LyapunovResult, common_lyapunov, strict_common_lyapunov
 from ._planar import PlanarClassification, classify_planar
-from ._schema import (ANY_DWELL, ArbitrarySwitching, CertificateDocument, CertificateKind, FamilySection,
-                      DiscreteSection, ObserverSection, PlanarEntry, Verdict)
+from ._schema import (ANY_DWELL, ArbitrarySwitching, BoxSection, CertificateDocument, CertificateKind,
+                      FamilySection, DiscreteSection, ObserverSection, PlanarEntry, Verdict)
 from ._verify import VerificationReport, implied_verdict, verify_certificate
 
 __all__ = ["CertificationReport", "certify", "certify_model", "verdict_text"]
@@ -98,6 +99,8 @@ class CertificationReport:
         None when not asked for or when no continuous common ``P`` is certified.
     discrete_method : str or None
         The step method asked for.
+    box : BoxCertificate or None
+        The certificate over a parameter box (``certify_model(..., box=...)``).
     """
 
     family: Family
@@ -112,6 +115,7 @@ class CertificationReport:
     timings: dict[str, float] = field(default_factory=dict)
     discrete: DiscreteCertificate | None = None
     discrete_method: str | None = None
+    box: BoxCertificate | None = None
 
     @property
     def discrete_certified(self) -> bool | None:
@@ -137,6 +141,7 @@ class CertificationReport:
                 "planar": None if self.planar is None else self.planar.to_json(),
                 "verification": self.verification.to_json(), "timings": self.timings,
                 "discrete": None if self.discrete is None else self.discrete.to_json(),
+                "box": None if self.box is None else self.box.to_json(),
                 "spectra": {nm: format_spectrum(M) for nm, M in zip(self.family.names, self.family.numeric)},
                 "certificate": self.document}
 
@@ -169,6 +174,8 @@ class CertificationReport:
         head = [f"{self.family} (spectra: " + "; ".join(f"{nm} {format_spectrum(M)}" for nm, M in
                                                          zip(self.family.names, self.family.numeric)) + ")"]
         tail = [f"verdict: {self.text}"]
+        if self.box is not None:
+            tail.append(str(self.box))
         if self.discrete is not None:
             tail.append(str(self.discrete))
         elif self.discrete_method is not None:
@@ -192,7 +199,7 @@ def _exact_col(ok: bool) -> str:
 def certify(family: FamilyLike, *, names: Sequence[str] | None = None, output: Any = None,
             dwell: bool = True, eps: float = DEFAULT_EPS, solvers: Sequence[str] = DEFAULT_SOLVERS,
             observer: ObserverSection | None = None, provenance: Mapping[str, Any] | None = None,
-            discrete: str | None = None) -> CertificationReport:
+            discrete: str | None = None, box: BoxCertificate | None = None) -> CertificationReport:
     """Run every applicable check on a switched family and return the verified certificate.
 
     Parameters
@@ -215,6 +222,9 @@ def certify(family: FamilyLike, *, names: Sequence[str] | None = None, output: A
         Also certify the sampled observer of this step method for every step
         length (:func:`~switchobs.certify.discrete_certificate`, with the
         certified common ``P``); needs the family ``[A_plus, A_minus]`` and ``output``.
+    box : BoxCertificate, optional
+        A certificate over a parameter box (:func:`~switchobs.certify.certify_box`); when it certified a
+        box, it becomes the document's ``box`` section, re-checked by ``verify``.
 
     Returns
     -------
@@ -269,6 +279,8 @@ def certify(family: FamilyLike, *, names: Sequence[str] | None = None, output: A
                                     method=discrete)
         sections[DiscreteSection.KEY] = DiscreteSection(disc.to_json())
         timings["discrete"] = time.perf_counter() - t0
+    if box is not None and box.data is not None:
+        sections[BoxSection.KEY] = BoxSection(box.data)
     holding = [c.kind for c in certs if c.kind is not CertificateKind.PLANAR]
     tau = [Fraction(c.tau_D) for c in certs if c.kind is CertificateKind.DWELL_TIME]
     verdict = implied_verdict(holding, planar.case if planar is not None else None, tau)
@@ -282,13 +294,13 @@ def certify(family: FamilyLike, *, names: Sequence[str] | None = None, output: A
         check = VerificationReport(False, (), verdict, verdict)
     timings["verify"] = time.perf_counter() - t0
     return CertificationReport(fam, strict, hesp, dw, planar, doc, check, verdict, verdict_text(verdict, planar),
-                               timings, disc, discrete)
+                               timings, disc, discrete, box)
 
 
 def certify_model(model: Model, *, values: Mapping[str, Any] | None = None, spectrum: str | Sequence | None = None,
                   gains: GainDesign | None = None, K_plus: Any = None, K_minus: Any = None, dwell: bool = True,
                   eps: float = DEFAULT_EPS, solvers: Sequence[str] = DEFAULT_SOLVERS,
-                  discrete: str | None = None) -> CertificationReport:
+                  discrete: str | None = None, box: Any = None) -> CertificationReport:
     """Certify the switched observer of a numeric model (seed 004; seed 000 eq. (13)).
 
     The error dynamics in the rescaled time are ``A_plus = A - K_plus C`` and
@@ -312,6 +324,9 @@ def certify_model(model: Model, *, values: Mapping[str, Any] | None = None, spec
         Numeric gains, e.g. ``"84,-7312/375,-64/3"`` (the command line's form).
     dwell, eps, solvers, discrete
         As in :func:`certify`.
+    box : ParameterBox, ``["a=150:230", ...]`` or mapping, optional
+        Also certify the gains for every parameter value of this box
+        (:func:`~switchobs.certify.certify_box`; the largest certified sub-box when not all of it).
 
     Returns
     -------
@@ -342,7 +357,7 @@ def certify_model(model: Model, *, values: Mapping[str, Any] | None = None, spec
         gains.check_model(model)
         if not gains.is_numeric:
             gains = gains.at({k: v for k, v in used.items() if k in gains.model.parameters})
-    model = model.with_values(dict(values or {})).numeric()
+    parametric, model = model, model.with_values(dict(values or {})).numeric()
     if gains is not None:
         Kp, Km = gains.K_plus, gains.K_minus
     elif spectrum is not None:
@@ -366,5 +381,6 @@ def certify_model(model: Model, *, values: Mapping[str, Any] | None = None, spec
                   "spectrum": None if spectrum is None else (spectrum if isinstance(spectrum, str)
                                                              else [str(p) for p in spectrum]),
                   "references": dict(model.references)}
+    robust = None if box is None else certify_box(parametric, box, Kp, Km, values=values, eps=eps, solvers=solvers)
     return certify([A_plus, A_minus], names=["A_plus", "A_minus"], output=model.C, dwell=dwell, eps=eps,
-                   solvers=solvers, observer=observer, provenance=provenance, discrete=discrete)
+                   solvers=solvers, observer=observer, provenance=provenance, discrete=discrete, box=robust)

@@ -32,7 +32,8 @@ from ..exceptions import CertificateError
 
 __all__ = ["FORMAT", "VERSION", "CertificateKind", "ArbitrarySwitching", "Existence", "ANY_DWELL", "Verdict",
            "FamilySection", "ObserverSection", "LyapunovEntry", "DualEntry", "DwellTimeEntry", "PlanarEntry",
-           "CertificateEntry", "CertificateDocument", "document_section", "Check", "DiscreteSection"]
+           "CertificateEntry", "CertificateDocument", "document_section", "Check", "DiscreteSection",
+           "BoxSection"]
 
 FORMAT = "switchobs-certificate"
 VERSION = 1
@@ -254,6 +255,52 @@ class DiscreteSection:
         except CertificateError as exc:
             return Check("discrete", False, str(exc))
         return Check("discrete", True, f"{cert.method}: {cert.verdict.value}, h_max = {cert.h_max_text()}")
+
+
+@document_section
+@dataclass(frozen=True)
+class BoxSection:
+    """A certificate valid for every parameter value of a box (``switchobs certify --box``).
+
+    The data is :attr:`switchobs.certify.BoxCertificate.data`: the parameters,
+    nominal values, the certified box, ``A(theta)`` as one matrix per
+    monomial, ``C``, the gains and the certificate (``strict-cqlf`` with ``P``
+    or ``dwell-time`` with ``tau_D`` and the piecewise-linear ``P_plus``,
+    ``P_minus``).  Its check rebuilds the vertex matrices and re-checks every
+    inequality exactly (:mod:`switchobs.certify._box_check`).
+    """
+
+    KEY: ClassVar[str] = "box"
+    data: Mapping[str, Any]
+
+    def to_json(self) -> dict[str, Any]:
+        return dict(self.data)
+
+    @classmethod
+    def from_json(cls, data: Any) -> "BoxSection":
+        if not isinstance(data, Mapping):
+            raise CertificateError(f"certificate 'box' must be an object, got {data!r}")
+        for key, kind in (("parameters", list), ("nominal", Mapping), ("box", Mapping), ("A_terms", list),
+                          ("C", list), ("K_plus", list), ("K_minus", list), ("certificate", Mapping)):
+            if not isinstance(data.get(key), kind):
+                raise CertificateError(f"certificate 'box' needs {key!r} as a {getattr(kind, '__name__', kind)}, "
+                                       f"got {data.get(key)!r}")
+        return cls(dict(data))
+
+    def check(self, names: Sequence[str], matrices: Sequence[Any]) -> Check:
+        from ._box_check import check_box_data
+
+        family = matrices if list(names) == ["A_plus", "A_minus"] else None
+        try:
+            reason = check_box_data(self.data, family)
+        except (CertificateError, KeyError, TypeError, ValueError) as exc:
+            return Check("box", False, f"malformed box section: {exc}")
+        if reason:
+            return Check("box", False, reason)
+        cert = self.data["certificate"]
+        what = "strict common P" if cert.get("kind") == "strict-cqlf" else f"dwell time {cert.get('tau_D')}"
+        return Check("box", True, f"{what} on " + ", ".join(f"{p} in [{lo}, {hi}]" for p, (lo, hi) in
+                                                             self.data["box"].items()))
 
 
 # ----------------------------------------------------------------------------- certificate entries

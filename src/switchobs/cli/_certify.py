@@ -22,7 +22,10 @@ def register(sub: argparse._SubParsersAction) -> None:
                     "(n = 2) the Balde-Boscain-Mason classification, re-check every certificate in exact "
                     "arithmetic and print the verdict. With --discrete METHOD, also certify the sampled "
                     "observer that runs in C (one METHOD step per sample, h = |s|*dt) for every step length. "
-                    "Exit status 0 if a stability certificate holds (and, with --discrete, the sampled one too), "
+                    "With --box NAME=LOWER:UPPER (repeatable), also certify the same gains for every parameter "
+                    "value of the box (or find the largest certified sub-box around the nominal point). "
+                    "Exit status 0 if a stability certificate holds (and, with --discrete, the sampled one too, and "
+                    "with --box, the whole box), "
                     "1 if none does, 2 on bad input.")
     add_model_arguments(p)
     p.add_argument("--spectrum", help='poles of A_plus, e.g. "-10,-20,-20" (gains by Theorem 1, seed 004)')
@@ -36,6 +39,9 @@ def register(sub: argparse._SubParsersAction) -> None:
                         "adds a 'discrete' section to the certificate")
     p.add_argument("--rate-hz", type=float, default=1000.0,
                    help="sample rate used to state the discrete certificate in the user's units (default 1000)")
+    p.add_argument("--box", action="append", metavar="NAME=LOWER:UPPER",
+                   help="uncertain parameter range, e.g. a=150:230 (repeatable): adds a 'box' section, valid for "
+                        "every value in the box, even varying in time")
     p.add_argument("--json", action="store_true", help="print the full report as JSON")
     p.add_argument("--out", metavar="CERT.json", help="write the certificate (checkable with switchobs verify)")
     p.set_defaults(func=run)
@@ -52,7 +58,7 @@ def run(args: argparse.Namespace) -> int:
     solvers = (args.solver,) if args.solver else ("CLARABEL", "SCS")
     report = certify_model(model, values=parse_params(args.param), spectrum=args.spectrum,
                            K_plus=args.gains_plus, K_minus=args.gains_minus, dwell=not args.no_dwell,
-                           solvers=solvers, discrete=args.discrete)
+                           solvers=solvers, discrete=args.discrete, box=args.box)
     if args.out:
         report.write(args.out)
     if args.json:
@@ -72,4 +78,5 @@ def run(args: argparse.Namespace) -> int:
                 print(line)
         if args.out:
             print(f"certificate written to {args.out}")
-    return 0 if report.certified and report.discrete_certified is not False else 1
+    box_ok = report.box is None or report.box.certified
+    return 0 if report.certified and report.discrete_certified is not False and box_ok else 1

@@ -21,7 +21,8 @@ from ..exceptions import FreeSymbolError, PrerequisiteError, SwitchobsError
 __all__ = ["main", "build_parser"]
 
 #: Sub-command modules, in the order of ``switchobs --help``.
-COMMANDS: tuple[str, ...] = ("design", "demo", "encoder", "codegen", "simulate", "certify", "verify", "classify", "theory", "reproduce")
+COMMANDS: tuple[str, ...] = ("design", "demo", "encoder", "codegen", "simulate", "certify", "synthesize", "verify",
+                            "classify", "theory", "reproduce")
 
 
 def build_parser() -> argparse.ArgumentParser:

@@ -1,0 +1,461 @@
+"""Certificates over parameter boxes: one Lyapunov certificate for every parameter value of a box.
+
+The gains are fixed at the nominal design; the uncertain parameters
+``theta`` (a box ``lo_i <= theta_i <= hi_i`` around the nominal values) enter
+``A`` polynomially, so ``A_plus(theta) = A(theta) - K_plus C`` and
+``A_minus(theta) = -A(theta) + K_minus C``.  The LMIs are posed at the
+vertices of a polytope containing ``{A(theta)}`` (the box's vertices when
+``A`` is affine in ``theta``; monomial lifting on sub-boxes otherwise, see
+:mod:`switchobs.certify._box_check`), solved with margins, rounded to
+rationals and re-checked exactly at every vertex.
+
+Properties that can hold on a box:
+
+* **strict common P** (UGES under arbitrary switching, for every ``theta`` and
+  even for ``theta`` varying in time) -- impossible for a single output
+  (``A_plus + A_minus = (K_minus - K_plus) C``), possible with two outputs;
+* **dwell time** with piecewise-linear time-varying Lyapunov matrices
+  (Allerhand & Shaked 2011): conditions affine in ``A``, so vertex checks are
+  exact proofs for the box, no matrix exponential is needed;
+* Hespanha's non-strict common P is *not* attempted: for one output every
+  common non-strict P of the pair at ``theta`` is a multiple of the
+  observability Gramian of ``(A_plus(theta), C)``, which changes direction
+  with ``theta`` (for abs-xbs3 ``p_12 = c/a``, ``p_13 = 1/a``, seed 000 (24)),
+  so no single P serves a box in ``a`` or ``c``.
+
+When the whole box is not certified, :func:`certify_box` bisects on the scale
+``rho`` of the box ``nominal + rho (box - nominal)`` for the largest
+certified sub-box.
+"""
+
+from __future__ import annotations
+
+import time
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass, field
+from fractions import Fraction
+from typing import Any
+
+import cvxpy as cp
+import numpy as np
+import sympy as sp
+
+from ..exceptions import CertificateError, FreeSymbolError, ModelError
+from ..model import Model
+from ._box_check import Interval, check_dwell, check_strict, vertex_matrices
+from ._exact import Matrix, fraction_matrix, matrix_strings, to_fraction
+from ._lmi import DEFAULT_SOLVERS, SolveInfo, balance, primal_margin, solve
+from ._dwell import _round_up
+from ._lyapunov import DEFAULT_EPS
+from ._rounding import dyadic
+from ._synthesis import _floats
+
+__all__ = ["ParameterBox", "parse_box", "BoxCertificate", "certify_box", "model_terms", "DEFAULT_SEGMENTS",
+           "SEARCH_STEPS"]
+
+#: Segments of the piecewise-linear Lyapunov matrices over the dwell time.
+DEFAULT_SEGMENTS = 2
+#: Bisection steps on the box scale (the scale is a multiple of 2^-SEARCH_STEPS).
+SEARCH_STEPS = 6
+#: Candidates ``tau * 1.1^k`` tried for the exact dwell-time certificate.
+_CERTIFY_ATTEMPTS = 8
+
+
+@dataclass(frozen=True)
+class ParameterBox:
+    """A box ``lower_i <= theta_i <= upper_i`` of named parameters (exact rationals)."""
+
+    names: tuple[str, ...]
+    lower: tuple[Fraction, ...]
+    upper: tuple[Fraction, ...]
+
+    @property
+    def intervals(self) -> list[Interval]:
+        return list(zip(self.lower, self.upper))
+
+    def scaled(self, nominal: Sequence[Fraction], rho: Fraction) -> "ParameterBox":
+        """``nominal + rho (box - nominal)``: the box shrunk towards the nominal point."""
+        return ParameterBox(self.names, tuple(v - rho * (v - lo) for v, lo in zip(nominal, self.lower)),
+                            tuple(v + rho * (hi - v) for v, hi in zip(nominal, self.upper)))
+
+    def contains(self, point: Sequence[Fraction]) -> bool:
+        return all(lo <= v <= hi for v, lo, hi in zip(point, self.lower, self.upper))
+
+    def to_json(self) -> dict[str, list[str]]:
+        return {nm: [str(lo), str(hi)] for nm, lo, hi in zip(self.names, self.lower, self.upper)}
+
+    def __str__(self) -> str:
+        return ", ".join(f"{nm} in [{_num(lo)}, {_num(hi)}]" for nm, lo, hi in zip(self.names, self.lower, self.upper))
+
+
+def _num(x: Fraction) -> str:
+    return str(x) if x.denominator == 1 else f"{float(x):.6g}"
+
+
+def parse_box(items: Sequence[str] | Mapping[str, Sequence[Any]]) -> ParameterBox:
+    """``["a=150:230", "c=20:40"]`` (the command line's form) or ``{"a": (150, 230)}`` -> :class:`ParameterBox`.
+
+    Raises
+    ------
+    ModelError
+        Malformed item, repeated name or empty interval.
+    """
+    pairs: list[tuple[str, Any, Any]] = []
+    if isinstance(items, Mapping):
+        for name, rng in items.items():
+            if not isinstance(rng, (list, tuple)) or len(rng) != 2:
+                raise ModelError(f"box for {name!r} must be (lower, upper), got {rng!r}")
+            pairs.append((str(name), rng[0], rng[1]))
+    else:
+        for item in items:
+            name, sep, rng = str(item).partition("=")
+            lo, colon, hi = rng.partition(":")
+            if not sep or not colon or not name.strip() or not lo.strip() or not hi.strip():
+                raise ModelError(f"--box expects NAME=LOWER:UPPER, e.g. a=150:230, got {item!r}")
+            pairs.append((name.strip(), lo, hi))
+    if not pairs:
+        raise ModelError("the parameter box is empty; give at least one NAME=LOWER:UPPER")
+    names = [p[0] for p in pairs]
+    if len(set(names)) != len(names):
+        raise ModelError(f"the box names a parameter twice: {names}")
+    lower, upper = [], []
+    for name, lo, hi in pairs:
+        try:
+            a, b = to_fraction(lo, what=f"box {name} lower"), to_fraction(hi, what=f"box {name} upper")
+        except CertificateError as exc:
+            raise ModelError(str(exc)) from None
+        if a > b:
+            raise ModelError(f"box {name} = [{a}, {b}] is empty; write LOWER:UPPER with LOWER <= UPPER")
+        lower.append(a)
+        upper.append(b)
+    return ParameterBox(tuple(names), tuple(lower), tuple(upper))
+
+
+def model_terms(model: Model, box: ParameterBox, values: Mapping[str, Any] | None = None
+                ) -> tuple[list[tuple[list[int], Matrix]], list[Fraction], tuple[str, ...]]:
+    """``A(theta) = sum_m theta^m M_m`` for the box parameters, the others at their values.
+
+    Returns
+    -------
+    terms : list of (exponents, exact matrix)
+    nominal : the box parameters' nominal values
+    inactive : box parameters that do not enter ``A`` (they enter ``d`` or ``b`` only, which the
+        observer injects from measured signals: they do not change the error dynamics' stability)
+
+    Raises
+    ------
+    ModelError
+        A box name that is not a parameter, a nominal value outside the box, or ``A``
+        not polynomial in the box parameters.
+    FreeSymbolError
+        Another parameter has no value.
+    """
+    merged = {k: v for k, v in model.values.items()}
+    merged.update(dict(values or {}))
+    for nm in box.names:
+        if nm not in model.parameters:
+            raise ModelError(f"box parameter {nm!r} is not a parameter of model {model.name!r} "
+                             f"(parameters: {list(model.parameters)})")
+        if nm not in merged:
+            raise FreeSymbolError(f"box parameter {nm!r} has no nominal value; give it with --param {nm}=VALUE")
+    nominal = [to_fraction(sp.Rational(str(merged[nm])), what=nm) for nm in box.names]
+    if not box.contains(nominal):
+        raise ModelError(f"the nominal point ({', '.join(f'{nm} = {v}' for nm, v in zip(box.names, nominal))}) "
+                         f"is outside the box {box}; the box must contain the design point")
+    fixed = model.with_values({k: v for k, v in merged.items() if k not in box.names and k in model.parameters})
+    syms = [model.symbols[nm] for nm in box.names]
+    n = model.n
+    coeffs: dict[tuple[int, ...], list[list[Fraction]]] = {}
+    for i in range(n):
+        for j in range(n):
+            expr = sp.expand(fixed.A[i, j])
+            left = sorted(str(s) for s in expr.free_symbols - set(syms))
+            if left:
+                raise FreeSymbolError(f"A[{i + 1},{j + 1}] = {expr} still depends on {left}; give their values")
+            try:
+                poly = sp.Poly(expr, *syms)
+            except sp.PolynomialError:
+                raise ModelError(f"A[{i + 1},{j + 1}] = {expr} is not polynomial in the box parameters "
+                                 f"{list(box.names)}; box certificates need polynomial dependence "
+                                 "(reparametrise, e.g. box the load Fz instead of 1/Fz)") from None
+            for mono, c in poly.terms():
+                coeffs.setdefault(tuple(mono), [[Fraction(0)] * n for _ in range(n)])[i][j] = \
+                    to_fraction(c, what=f"A[{i + 1},{j + 1}]")
+    zero = tuple(0 for _ in syms)
+    coeffs.setdefault(zero, [[Fraction(0)] * n for _ in range(n)])
+    terms = [(list(m), coeffs[m]) for m in sorted(coeffs)]
+    active = {i for m, _ in terms for i, e in enumerate(m) if e}
+    inactive = tuple(nm for i, nm in enumerate(box.names) if i not in active)
+    return terms, nominal, inactive
+
+
+@dataclass(frozen=True)
+class BoxCertificate:
+    """Outcome of :func:`certify_box`.
+
+    Attributes
+    ----------
+    requested : ParameterBox
+        The box asked for.
+    box : ParameterBox or None
+        The box certified: the requested one, or the largest scaled sub-box found (None if none).
+    scale : Fraction
+        ``rho`` of the certified box ``nominal + rho (requested - nominal)`` (1: all of it; 0: none).
+    kind : str
+        ``"strict-cqlf"`` (UGES under arbitrary switching on the box) or ``"dwell-time"``; empty if none.
+    tau_D : Fraction or None
+        Certified dwell time (rescaled time) for ``"dwell-time"``.
+    vertices : int
+        Vertex matrices per mode of the certified box.
+    inactive : tuple of str
+        Box parameters that do not enter ``A`` (no effect on the certificate).
+    data : dict or None
+        The ``box`` section of the certificate document (what ``verify`` re-checks).
+    detail : str
+        Why the requested box (or any box) is not certified.
+    timings : dict
+        Wall time [s] of the stages.
+    """
+
+    requested: ParameterBox
+    box: ParameterBox | None
+    scale: Fraction
+    kind: str
+    tau_D: Fraction | None
+    vertices: int
+    inactive: tuple[str, ...]
+    data: dict[str, Any] | None
+    detail: str = ""
+    timings: dict[str, float] = field(default_factory=dict)
+
+    @property
+    def certified(self) -> bool:
+        """The whole requested box is certified."""
+        return self.data is not None and self.scale == 1
+
+    def to_json(self) -> dict[str, Any]:
+        return {"requested": self.requested.to_json(), "box": None if self.box is None else self.box.to_json(),
+                "scale": str(self.scale), "certified": self.certified, "kind": self.kind,
+                "tau_D": None if self.tau_D is None else str(self.tau_D), "vertices": self.vertices,
+                "inactive": list(self.inactive), "detail": self.detail, "timings": self.timings}
+
+    def __str__(self) -> str:
+        if self.data is None or self.box is None:
+            return f"box {self.requested}: nothing certified ({self.detail})"
+        what = ("strict common P: UGES under arbitrary switching" if self.kind == "strict-cqlf" else
+                f"dwell time tau_D = {self.tau_D} = {float(self.tau_D):.5g} (piecewise-linear Lyapunov)")
+        head = (f"box {self.box}: certified exactly at {self.vertices} vertices per mode, {what}"
+                if self.certified else
+                f"box {self.requested}: NOT certified ({self.detail}); largest certified sub-box "
+                f"(scale {_num(self.scale)}): {self.box}, {what}")
+        if self.inactive:
+            head += f"\n  {', '.join(self.inactive)} enter(s) only d or b, not the error dynamics: no effect"
+        return head
+
+
+# ----------------------------------------------------------------------------- LMIs
+def pwl_margin(modes: Sequence[Sequence[np.ndarray]], T: float, segments: int, *,
+               solvers: Sequence[str] = DEFAULT_SOLVERS) -> tuple[list[list[np.ndarray]], float, SolveInfo]:
+    """Normalised margin of the piecewise-linear dwell-time LMIs at dwell time ``T`` (positive: feasible)."""
+    n = modes[0][0].shape[0]
+    K = segments
+    delta = T / K
+    eye = np.eye(n)
+
+    def fn() -> tuple[cp.Problem, dict]:
+        Ps = [[cp.Variable((n, n), symmetric=True) for _ in range(K + 1)] for _ in modes]
+        t = cp.Variable()
+        cons = [sum(cp.trace(P) for seq in Ps for P in seq) == len(modes) * (K + 1) * n]
+        cons += [P - t * eye >> 0 for seq in Ps for P in seq]
+        for mats, seq in zip(modes, Ps):
+            for A in mats:
+                for k in range(K):
+                    slope = (seq[k + 1] - seq[k]) / delta
+                    for P in (seq[k], seq[k + 1]):
+                        X = A.T @ P
+                        cons.append(-(slope + X + X.T) - t * eye >> 0)
+                X = A.T @ seq[K]
+                cons.append(-(X + X.T) - t * eye >> 0)
+        for p, q in ((0, 1), (1, 0)):
+            cons.append(Ps[p][K] - Ps[q][0] - t * eye >> 0)
+        return cp.Problem(cp.Maximize(t), cons), {"P": Ps, "t": t}
+
+    v, info = solve(fn, solvers=solvers, what=f"piecewise-linear dwell-time LMI at T = {T:.6g}")
+    Ps = [[(np.asarray(P.value) + np.asarray(P.value).T) / 2 for P in seq] for seq in v["P"]]
+    return Ps, float(v["t"].value), info
+
+
+@dataclass(frozen=True)
+class _Attempt:
+    kind: str
+    certificate: dict[str, Any] | None
+    tau_D: Fraction | None
+    detail: str
+
+
+class _BoxProblem:
+    """The vertex LMIs of one model, gains and box family; ``attempt(rho)`` certifies one scaled box."""
+
+    def __init__(self, terms: Sequence[tuple[list[int], Matrix]], nominal: Sequence[Fraction],
+                 requested: ParameterBox, pieces: int, segments: int, C: Matrix, Kp: Matrix, Km: Matrix,
+                 eps: float, solvers: Sequence[str], tau_max: float | None) -> None:
+        self.terms, self.nominal, self.requested = terms, nominal, requested
+        self.pieces, self.segments, self.C, self.Kp, self.Km = pieces, segments, C, Kp, Km
+        self.eps, self.solvers, self.tau_max = eps, solvers, tau_max
+
+    def vertices(self, rho: Fraction) -> tuple[list[Matrix], list[Matrix]]:
+        return vertex_matrices(self.terms, self.requested.scaled(self.nominal, rho).intervals, self.pieces,
+                               self.C, self.Kp, self.Km)
+
+    def attempt(self, rho: Fraction, *, smallest_dwell: bool) -> _Attempt:
+        modes = self.vertices(rho)
+        numeric = [[_floats(A) for A in mats] for mats in modes]
+        for name, mats in zip(("A_plus", "A_minus"), numeric):
+            for i, A in enumerate(mats):
+                if np.max(np.linalg.eigvals(A).real) >= 0:
+                    return _Attempt("", None, None, f"{name} is not Hurwitz at vertex {i + 1} of the box")
+        strict = self._strict(modes, numeric)
+        if strict.certificate is not None:
+            return strict
+        return self._dwell(modes, numeric, smallest_dwell)
+
+    def _strict(self, modes: list[list[Matrix]], numeric: list[list[np.ndarray]]) -> _Attempt:
+        flat = numeric[0] + numeric[1]
+        bal = balance(flat)
+        P_b, t, _ = primal_margin(bal.matrices, [np.eye(flat[0].shape[0])] * len(flat), solvers=self.solvers,
+                                  what="box strict CQLF LMI")
+        if t <= self.eps:
+            return _Attempt("", None, None, f"no strict common P (margin {t:.3g})")
+        P = dyadic(P_b / np.outer(bal.d, bal.d))
+        reason = check_strict(modes, P)
+        if reason:
+            return _Attempt("", None, None, f"strict common P rounded but not exact: {reason}")
+        return _Attempt("strict-cqlf", {"kind": "strict-cqlf", "P": matrix_strings(P)}, None, "")
+
+    def _dwell(self, modes: list[list[Matrix]], numeric: list[list[np.ndarray]], smallest: bool) -> _Attempt:
+        bal = balance(numeric[0] + numeric[1])
+        N = len(numeric[0])
+        mats = [list(bal.matrices[:N]), list(bal.matrices[N:])]
+        slow = min(float(np.min(-np.linalg.eigvals(A).real)) for A in bal.matrices)
+        limit = self.tau_max * bal.sigma if self.tau_max is not None else 1000.0 / slow
+        hi = limit
+        if smallest:
+            hi = 1.0 / slow
+            while pwl_margin(mats, hi, self.segments, solvers=self.solvers)[1] <= self.eps:
+                if hi >= limit:
+                    return _Attempt("", None, None, f"the dwell-time LMIs are infeasible up to tau = "
+                                                    f"{hi / bal.sigma:.4g}")
+                hi = min(4 * hi, limit)
+            lo = 0.0
+            while hi - lo > 0.02 * hi:
+                mid = (lo + hi) / 2
+                if pwl_margin(mats, mid, self.segments, solvers=self.solvers)[1] > self.eps:
+                    hi = mid
+                else:
+                    lo = mid
+        detail = "the dwell-time LMIs are infeasible"
+        for k in range(_CERTIFY_ATTEMPTS if smallest else 1):
+            tau = _round_up(hi / bal.sigma * 1.1 ** k)
+            Ps_b, t, _ = pwl_margin(mats, float(tau) * bal.sigma, self.segments, solvers=self.solvers)
+            if t <= self.eps:
+                detail = f"the dwell-time LMIs are infeasible at tau = {float(tau):.4g} (margin {t:.3g})"
+                continue
+            Ps = [[dyadic(P / np.outer(bal.d, bal.d), 52) for P in seq] for seq in Ps_b]
+            reason = check_dwell(modes, Ps, tau)
+            if not reason:
+                return _Attempt("dwell-time", {"kind": "dwell-time", "tau_D": str(tau), "segments": self.segments,
+                                               "P_plus": [matrix_strings(P) for P in Ps[0]],
+                                               "P_minus": [matrix_strings(P) for P in Ps[1]]}, tau, "")
+            detail = f"rounded dwell-time matrices not exact at tau = {float(tau):.4g}: {reason}"
+        return _Attempt("", None, None, detail)
+
+
+def certify_box(model: Model, box: ParameterBox | Sequence[str] | Mapping[str, Any], K_plus: Any, K_minus: Any,
+                *, values: Mapping[str, Any] | None = None, pieces: int = 2, segments: int = DEFAULT_SEGMENTS,
+                tau_max: float | None = None, search: bool = True, eps: float = DEFAULT_EPS,
+                solvers: Sequence[str] = DEFAULT_SOLVERS) -> BoxCertificate:
+    """One certificate for every parameter value of a box (gains fixed at the nominal design).
+
+    Parameters
+    ----------
+    model : Model
+    box : ParameterBox, ``["a=150:230", ...]`` or ``{"a": (150, 230)}``
+        Must contain the nominal point (the model's values overridden by ``values``).
+    K_plus, K_minus : matrices (n x k) or columns
+        The nominal gains, exact.
+    values : mapping, optional
+        Nominal values overriding the model's.
+    pieces : int
+        Sub-boxes per parameter of degree > 1 (monomial lifting); unused when ``A`` is affine.
+    segments : int
+        Segments of the piecewise-linear Lyapunov matrices over the dwell time.
+    tau_max : float, optional
+        Largest dwell time (rescaled time) accepted; default ``1000 / slowest decay`` of the vertices.
+    search : bool
+        When the box is not certified, bisect on its scale for the largest certified sub-box.
+    eps, solvers
+        As in :func:`switchobs.certify.certify`.
+
+    Returns
+    -------
+    BoxCertificate
+
+    Raises
+    ------
+    ModelError, FreeSymbolError, DimensionError, SolverFailure
+
+    References
+    ----------
+    Boyd, El Ghaoui, Feron, Balakrishnan (1994), Sec. 5.1 (polytopic LMIs);
+    Allerhand & Shaked (2011), IEEE TAC 56(2), Theorem 1 (dwell time by piecewise-linear P).
+    """
+    if not isinstance(box, ParameterBox):
+        box = parse_box(box)
+    if pieces < 1 or segments < 1:
+        raise ModelError(f"pieces and segments must be positive integers, got {pieces} and {segments}")
+    t_start = time.perf_counter()
+    terms, nominal, inactive = model_terms(model, box, values)
+    n = model.n
+    C = fraction_matrix(model.C, what="C", cols=n)
+    Kp, Km = (_column_gain(K, n, what) for K, what in ((K_plus, "K_plus"), (K_minus, "K_minus")))
+    problem = _BoxProblem(terms, nominal, box, pieces, segments, C, Kp, Km, eps, solvers, tau_max)
+    timings: dict[str, float] = {}
+    t0 = time.perf_counter()
+    full = problem.attempt(Fraction(1), smallest_dwell=True)
+    timings["box"] = time.perf_counter() - t0
+    rho, best = Fraction(1), full
+    if full.certificate is None:
+        rho, best = Fraction(0), None
+        if search:
+            t0 = time.perf_counter()
+            lo, hi = Fraction(0), Fraction(1)
+            for _ in range(SEARCH_STEPS):
+                mid = (lo + hi) / 2
+                if problem.attempt(mid, smallest_dwell=False).certificate is not None:
+                    lo = mid
+                else:
+                    hi = mid
+            if lo > 0:
+                best = problem.attempt(lo, smallest_dwell=True)
+                rho = lo if best.certificate is not None else Fraction(0)
+            timings["search"] = time.perf_counter() - t0
+    timings["total"] = time.perf_counter() - t_start
+    certified_box = None if best is None or best.certificate is None else box.scaled(nominal, rho)
+    data = None
+    vertices = 0
+    if certified_box is not None and best is not None:
+        vertices = len(problem.vertices(rho)[0])
+        data = {"parameters": list(box.names), "nominal": {nm: str(v) for nm, v in zip(box.names, nominal)},
+                "box": certified_box.to_json(), "requested": box.to_json(), "scale": str(rho), "pieces": pieces,
+                "A_terms": [{"monomial": m, "matrix": matrix_strings(M)} for m, M in terms],
+                "C": matrix_strings(C), "K_plus": matrix_strings(Kp), "K_minus": matrix_strings(Km),
+                "certificate": best.certificate}
+    return BoxCertificate(box, certified_box, rho, best.kind if best else "", best.tau_D if best else None,
+                          vertices, inactive, data, "" if full.certificate is not None else full.detail, timings)
+
+
+def _column_gain(K: Any, n: int, what: str) -> Matrix:
+    rows = K.tolist() if hasattr(K, "tolist") else list(K)
+    if rows and not isinstance(rows[0], (list, tuple)):
+        rows = [[x] for x in rows]
+    return fraction_matrix(rows, what=what, rows=n)

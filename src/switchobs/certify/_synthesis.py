@@ -1,0 +1,462 @@
+"""LMI synthesis of switched gain pairs ``K_plus``, ``K_minus`` with a decay rate and a noise bound.
+
+Error dynamics in the rescaled time (seed 004; seed 000 eq. (13)), with
+measurement noise ``v`` on ``y`` and a unit process disturbance ``w`` on
+every state (the unknown ``z3`` of the XBS model is a random walk in
+practice)::
+
+    de/dtau = A_plus e + w - K_plus (W v),     A_plus  =  A - K_plus C
+    de/dtau = A_minus e + w + K_minus (W v),   A_minus = -A + K_minus C
+
+``W`` (``noise_weight``) is the noise intensity relative to the process
+disturbance: the Kalman filter's trade-off.  ``W = 0`` designs for the decay
+rate and the disturbance alone (high gains); a large ``W`` buys a small noise
+gain with low gains.  The performance output is ``E e``, the estimation
+error of the states the user cares about (the XBS ``z2``).
+
+Two formulations, chosen by the kernel of ``C``:
+
+**C of rank n (every state measured): strict, joint.**  Variables ``P``, ``Y_pm = P K_pm``,
+``Z``: ``He(P A_pm) + 2 rate P <= 0`` for both modes (a strict common quadratic
+Lyapunov function with decay ``rate`` under *arbitrary* switching) and the
+H2 bound ``[[He(P A_p), P, -+W Y_p], [P, -I, 0], [-+W Y_p', 0, -I]] <= 0``,
+``[[Z, E], [E', P]] >= 0``, minimising ``tr Z`` (the squared H2 bound of both
+modes, with one storage function).  All are linear in ``(P, Y_pm, Z)``.
+
+**C with a kernel (one output, or fewer independent outputs than states):
+non-strict (Hespanha) with per-mode decay.**  A strict common P never
+exists: ``A_plus + A_minus = (K_minus - K_plus) C``, so for a common P with
+``Q_pm = -He(P A_pm) >= 0`` and ``v`` in ``ker C``, ``v'(Q_plus + Q_minus) v = 0``,
+hence ``Q_pm v = 0``: no decay rate can be imposed on the common P, whatever
+the gains.  The same argument forces ``Q_pm = C' S_pm C`` (``S_pm >= 0``), and
+for one output ``P K_minus = P K_plus - ((q_plus + q_minus)/2) C'``.  The
+choice ``K_minus = K_plus - P^-1 C'`` with ``He(P A_plus) = -C'C`` gives
+``He(P A_minus) = -C'C`` and ``A_minus = P^-1 A_plus' P`` (for one output it is
+Theorem 1 of seed 004): ``A_minus`` is similar to ``A_plus'``, so it has the
+same spectrum and ``X_minus = P X_plus^-1 P`` proves the same decay rate.  The
+synthesis therefore designs ``K_plus`` by the LMI in ``(X, Y = X K_plus, Z)``
+with ``He(X A_plus) + 2 rate X <= 0`` and the H2 bound of the plus mode, then
+sets ``K_minus`` from the exact ``P``: the pair has the non-strict common P
+(Hespanha: UES for every positive dwell time) and each mode decays at
+``rate``, all checked exactly.
+"""
+
+from __future__ import annotations
+
+import time
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass
+from fractions import Fraction
+from typing import Any
+
+import cvxpy as cp
+import numpy as np
+import scipy.linalg
+import sympy as sp
+from sympy.polys.matrices import DomainMatrix
+
+from ..exceptions import CertificateError, DimensionError, ModelError
+from ..model import Model
+from ._exact import (Matrix, add, definiteness, fraction_matrix, identity, lyapunov_form, matmul, matrix_strings,
+                     rank, scale, sub, to_fraction, transpose)
+from ._lmi import DEFAULT_SOLVERS, SolveInfo, solve
+from ._rounding import dyadic
+
+__all__ = ["GainSynthesis", "synthesize_gains", "synthesize", "noise_gain", "decay_holds", "STRICT_IMPOSSIBLE",
+           "RATE_MARGIN", "FrontPoint", "noise_decay_front"]
+
+#: The LMI is solved at ``rate * (1 + RATE_MARGIN)`` so that the rounded matrices keep ``rate`` exactly.
+RATE_MARGIN = 1e-2
+
+STRICT_IMPOSSIBLE = ("a strict common Lyapunov function never exists when C has a kernel (here: fewer independent "
+                     "outputs than states): A_plus + A_minus = (K_minus - K_plus) C, so for any common P with "
+                     "-(A_pm' P + P A_pm) >= 0 both vanish on ker C, whatever the gains; use the non-strict "
+                     "(Hespanha) formulation")
+
+
+@dataclass(frozen=True)
+class GainSynthesis:
+    """Outcome of :func:`synthesize_gains`.
+
+    Attributes
+    ----------
+    formulation : str
+        ``"strict"`` (common P with decay; needs ``C`` of rank n) or ``"hespanha"``
+        (non-strict common P and per-mode decay certificates).
+    decay_rate : Fraction
+        Requested decay rate in the rescaled time (``He(X A_p) + 2 rate X < 0`` exactly).
+    noise_weight : float
+    estimate : tuple of int
+        Rows of ``E`` (0-based state indices) whose estimation error is weighted.
+    feasible : bool
+        The LMI was solved and the rounded gains passed every exact check.
+    K_plus, K_minus : Matrix or None
+        Exact gains (``n x k``).
+    P : Matrix or None
+        Common Lyapunov matrix: strict with decay, or (one output) ``He(P A_pm) = -C'C`` exactly.
+    X_plus, X_minus : Matrix or None
+        Per-mode decay certificates (for ``"strict"`` both are ``P``).
+    noise_bound : float
+        The LMI's H2 bound (``sqrt tr Z``) of the plus mode (both modes for ``"strict"``), W and w included.
+    noise_gain : dict
+        H2 norm from the measurement noise ``v`` to ``E e`` of each mode (float, from the exact gains).
+    solver : SolveInfo or None
+    detail : str
+        Why the synthesis failed, when it did.
+    solve_s, exact_s : float
+    """
+
+    formulation: str
+    decay_rate: Fraction
+    noise_weight: float
+    estimate: tuple[int, ...]
+    feasible: bool
+    K_plus: Matrix | None
+    K_minus: Matrix | None
+    P: Matrix | None
+    X_plus: Matrix | None
+    X_minus: Matrix | None
+    noise_bound: float
+    noise_gain: dict[str, float]
+    solver: SolveInfo | None
+    detail: str = ""
+    solve_s: float = 0.0
+    exact_s: float = 0.0
+
+    def gains(self) -> tuple[str, str]:
+        """``K_plus`` and ``K_minus`` of a single output as the command line's ``"k1,k2,..."`` strings."""
+        if self.K_plus is None or self.K_minus is None:
+            raise CertificateError(f"no gains: {self.detail}")
+        return (",".join(str(r[0]) for r in self.K_plus), ",".join(str(r[0]) for r in self.K_minus))
+
+    def to_json(self) -> dict[str, Any]:
+        def mat(M: Matrix | None) -> Any:
+            return None if M is None else matrix_strings(M)
+
+        return {"formulation": self.formulation, "decay_rate": str(self.decay_rate),
+                "noise_weight": self.noise_weight, "estimate": list(self.estimate), "feasible": self.feasible,
+                "K_plus": mat(self.K_plus), "K_minus": mat(self.K_minus), "P": mat(self.P),
+                "X_plus": mat(self.X_plus), "X_minus": mat(self.X_minus), "noise_bound": self.noise_bound,
+                "noise_gain": dict(self.noise_gain),
+                "solver": None if self.solver is None else f"{self.solver.solver} ({self.solver.status})",
+                "detail": self.detail, "solve_s": self.solve_s, "exact_s": self.exact_s}
+
+    def __str__(self) -> str:
+        head = f"LMI synthesis ({self.formulation}), decay rate {self.decay_rate} in tau, noise weight {self.noise_weight:g}"
+        if not self.feasible:
+            return f"{head}: infeasible ({self.detail})"
+
+        def col(M: Matrix) -> str:
+            return "[" + "; ".join(", ".join(_short(x) for x in row) for row in M) + "]"
+
+        what = ("strict common P with decay rate (UGES under arbitrary switching)" if self.formulation == "strict"
+                else "per-mode decay certificates and the non-strict common P (Hespanha: UES for every positive "
+                     "dwell time)")
+        return "\n".join([
+            head + ": feasible, checked exactly",
+            f"  K_plus  = {col(self.K_plus)}",
+            f"  K_minus = {col(self.K_minus)}",
+            f"  certified: {what}",
+            f"  noise gain (H2, v -> estimated states {list(self.estimate)}): "
+            + ", ".join(f"{k} {v:.4g}" for k, v in self.noise_gain.items())
+            + f"; LMI bound of the weighted H2 gain ([w; W v] -> E e) {self.noise_bound:.4g}"])
+
+
+def _short(x: Fraction) -> str:
+    return str(x) if x.denominator <= 1000 else f"{float(x):.8g}"
+
+
+# ----------------------------------------------------------------------------- exact helpers
+def decay_holds(A: Matrix, X: Matrix, rate: Fraction) -> str:
+    """Empty string if ``X > 0`` and ``A' X + X A + 2 rate X < 0`` exactly; else the reason."""
+    r = definiteness(X, strict=True)
+    if not r.holds:
+        return f"X > 0 fails: {r.reason}"
+    r = definiteness(scale(-1, add(lyapunov_form(A, X), scale(2 * rate, X))), strict=True)
+    return "" if r.holds else f"A' X + X A + 2 rate X < 0 fails: {r.reason}"
+
+
+def _solve_exact(M: Matrix, rhs: Matrix) -> Matrix:
+    dm = DomainMatrix.from_Matrix(sp.Matrix(M)).convert_to(sp.QQ)
+    db = DomainMatrix.from_Matrix(sp.Matrix(rhs)).convert_to(sp.QQ)
+    sol = dm.lu_solve(db).to_Matrix()
+    return [[Fraction(int(sol[i, j].p), int(sol[i, j].q)) for j in range(sol.cols)] for i in range(sol.rows)]
+
+
+def _lyapunov_exact(A: Matrix, Q: Matrix) -> Matrix:
+    """The exact ``P`` with ``A' P + P A = -Q`` (``A`` Hurwitz), by the Kronecker system."""
+    n = len(A)
+    At = transpose(A)
+    rows = []
+    for i in range(n):
+        for j in range(n):
+            row = [Fraction(0)] * (n * n)
+            for k in range(n):
+                row[k * n + j] += At[i][k]   # (A' P)_ij
+                row[i * n + k] += A[k][j]    # (P A)_ij
+            rows.append(row)
+    vec = _solve_exact(rows, [[-Q[i][j]] for i in range(n) for j in range(n)])
+    return [[vec[i * n + j][0] for j in range(n)] for i in range(n)]
+
+
+def _decay_certificate(A: Matrix, rate: Fraction, start: np.ndarray | None) -> Matrix | None:
+    """A rational ``X`` proving decay ``rate`` for ``A``: the rounded LMI point, else a shifted Lyapunov solution."""
+    if start is not None:
+        X = dyadic((start + start.T) / 2)
+        if not decay_holds(A, X, rate):
+            return X
+    Af = np.array([[float(x) for x in row] for row in A]) + float(rate) * np.eye(len(A))
+    try:
+        X_num = scipy.linalg.solve_continuous_lyapunov(Af.T, -np.eye(len(A)))
+    except (np.linalg.LinAlgError, ValueError):
+        return None
+    X = dyadic((X_num + X_num.T) / 2)
+    return None if decay_holds(A, X, rate) else X
+
+
+def noise_gain(A_mode: np.ndarray, K: np.ndarray, E: np.ndarray) -> float:
+    """H2 norm of ``v -> E e`` for ``de/dtau = A_mode e + K v`` (``inf`` if ``A_mode`` is not Hurwitz)."""
+    if np.max(np.linalg.eigvals(A_mode).real) >= 0:
+        return float("inf")
+    Wc = scipy.linalg.solve_continuous_lyapunov(A_mode, -K @ K.T)
+    return float(np.sqrt(max(np.trace(E @ Wc @ E.T), 0.0)))
+
+
+# ----------------------------------------------------------------------------- the LMIs
+def _he(M: cp.Expression) -> cp.Expression:
+    return M + M.T
+
+
+#: Weight on every state added to ``E'E`` in the LMI: keeps ``X`` definite (a decay certificate must be).
+STATE_REGULARISATION = 1e-3
+
+
+def _lmi(A: np.ndarray, C: np.ndarray, E: np.ndarray, rate: float, W: float, strict: bool,
+         solvers: Sequence[str]) -> tuple[dict, SolveInfo]:
+    """The LMIs in the time scaled by ``rate`` (``A`` and ``rate`` divided by it, ``W`` multiplied: the
+    decay rate becomes about 1, which keeps the interior point well conditioned).
+
+    H2 by the observability Gramian: ``||G_p||_2^2 <= tr X + W^2 tr(K_p' X K_p)`` when
+    ``He(X A_p) + E'E <= 0``; with ``Y_p = X K_p`` and ``[[Z_p, Y_p'], [Y_p, X]] >= 0`` all is linear."""
+    n, k = A.shape[0], C.shape[0]
+    lam = rate * (1 + RATE_MARGIN)
+    weight = E.T @ E + STATE_REGULARISATION * np.eye(n)
+
+    def fn() -> tuple[cp.Problem, dict]:
+        X = cp.Variable((n, n), symmetric=True)
+        Ys = [cp.Variable((n, k)) for _ in range(2 if strict else 1)]
+        Zs = [cp.Variable((k, k), symmetric=True) for _ in Ys]
+        cons = [X >> 0]
+        for sign, Y, Z in zip((1, -1), Ys, Zs):
+            HeA = sign * (_he(X @ A) - _he(Y @ C))
+            cons += [-(HeA + 2 * lam * X) >> 0, -(HeA + weight) >> 0, cp.bmat([[Z, Y.T], [Y, X]]) >> 0]
+        # normalised so that the objective stays of unit size whatever W
+        objective = (cp.trace(X) + W ** 2 * sum(cp.trace(Z) for Z in Zs)) / (1 + W ** 2)
+        return cp.Problem(cp.Minimize(objective), cons), {"X": X, "Y": Ys, "Z": Zs}
+
+    return solve(fn, solvers=solvers, what="gain synthesis LMI", infeasible_ok=True)
+
+
+def synthesize_gains(A: Any, C: Any, *, decay_rate: Any, noise_weight: float = 0.0,
+                     estimate: Sequence[int] | None = None, strict: bool | None = None,
+                     solvers: Sequence[str] = DEFAULT_SOLVERS) -> GainSynthesis:
+    """Synthesise ``K_plus``, ``K_minus`` by LMIs (``Y = P K``), round them and re-check exactly.
+
+    Parameters
+    ----------
+    A : n x n matrix
+        The model's ``A`` (numeric, exact rationals or floats taken exactly).
+    C : k x n matrix
+        Output rows (one or more).
+    decay_rate : number
+        Decay rate in the rescaled time ``tau`` (``He(X A_p) + 2 rate X < 0``), > 0.
+    noise_weight : float
+        ``W >= 0``: measurement-noise intensity relative to the unit process disturbance.
+    estimate : sequence of int, optional
+        0-based indices of the states whose estimation error is weighted (default all).
+    strict : bool, optional
+        Force the formulation; default strict iff ``C`` has rank ``n`` (no kernel).  Strict with a
+        kernel is reported infeasible with the reason (:data:`STRICT_IMPOSSIBLE`).
+    solvers : cvxpy solvers in order of preference
+
+    Returns
+    -------
+    GainSynthesis
+
+    Raises
+    ------
+    DimensionError, ModelError, SolverFailure
+
+    References
+    ----------
+    Boyd, El Ghaoui, Feron, Balakrishnan (1994), Sec. 5.2 and 7.2 (observer LMIs with Y = P K);
+    seed 004, Theorem 1 and the Hespanha argument.
+    """
+    A_ex = fraction_matrix(A, what="A")
+    n = len(A_ex)
+    if len(A_ex[0]) != n:
+        raise DimensionError(f"A must be square, got {n}x{len(A_ex[0])}")
+    C_ex = fraction_matrix(C, what="C", cols=n)
+    k = len(C_ex)
+    rate = to_fraction(decay_rate, what="decay_rate")
+    if rate <= 0:
+        raise ModelError(f"decay_rate must be positive, got {rate}")
+    if not (noise_weight >= 0 and np.isfinite(noise_weight)):
+        raise ModelError(f"noise_weight must be a finite number >= 0, got {noise_weight!r}")
+    rows = tuple(range(n)) if estimate is None else tuple(int(i) for i in estimate)
+    if not rows or any(i < 0 or i >= n for i in rows):
+        raise DimensionError(f"estimate must list state indices in 0..{n - 1}, got {list(rows)}")
+    full_rank = rank(C_ex) == n
+    use_strict = full_rank if strict is None else strict
+    formulation = "strict" if use_strict else "hespanha"
+
+    def fail(detail: str, info: SolveInfo | None = None, solve_s: float = 0.0) -> GainSynthesis:
+        return GainSynthesis(formulation, rate, noise_weight, rows, False, None, None, None, None, None,
+                             float("inf"), {}, info, detail, solve_s)
+
+    if use_strict and not full_rank:
+        return fail(STRICT_IMPOSSIBLE)
+    Af = np.array([[float(x) for x in r] for r in A_ex])
+    Cf = np.array([[float(x) for x in r] for r in C_ex])
+    E = np.eye(n)[list(rows)]
+    sigma = float(rate)
+    t0 = time.perf_counter()
+    v, info = _lmi(Af / sigma, Cf, E, 1.0, float(noise_weight) * sigma, use_strict, solvers)
+    solve_s = time.perf_counter() - t0
+    if info.status == cp.INFEASIBLE or v["X"].value is None:
+        return fail(f"the LMI is infeasible ({'; '.join(info.attempts)})", info, solve_s)
+    t0 = time.perf_counter()
+    X_num = np.asarray(v["X"].value)
+    K_nums = [np.linalg.solve(X_num, np.asarray(Y.value)) * sigma for Y in v["Y"]]
+    K_plus = dyadic(K_nums[0], 40)
+    A_plus = sub(A_ex, matmul(K_plus, C_ex))
+    if use_strict:
+        K_minus = dyadic(K_nums[1], 40)
+        A_minus = add(scale(-1, A_ex), matmul(K_minus, C_ex))
+        P = dyadic((X_num + X_num.T) / 2)
+        reason = decay_holds(A_plus, P, rate) or decay_holds(A_minus, P, rate)
+        X_plus = X_minus = P
+    else:
+        try:
+            P = _lyapunov_exact(A_plus, matmul(transpose(C_ex), C_ex))
+        except (ZeroDivisionError, ValueError, sp.polys.matrices.exceptions.DMError):
+            return fail("A_plus of the rounded gain is singular for the Lyapunov equation", info, solve_s)
+        K_minus = sub(K_plus, _solve_exact(P, transpose(C_ex)))
+        A_minus = add(scale(-1, A_ex), matmul(K_minus, C_ex))
+        X_plus = _decay_certificate(A_plus, rate, X_num)
+        # A_minus = P^-1 A_plus' P, so X_minus = P X_plus^-1 P proves the same decay rate
+        X_minus = None if X_plus is None else matmul(matmul(P, _solve_exact(X_plus, identity(n))), P)
+        reason = ("no exact decay certificate for A_plus" if X_minus is None else
+                  decay_holds(A_minus, X_minus, rate) or hespanha_pair_holds(A_plus, A_minus, P, C_ex))
+    exact_s = time.perf_counter() - t0
+    if reason:
+        return fail(f"the rounded gains fail the exact check: {reason}", info, solve_s)
+    fl = [_floats(M) for M in (A_plus, A_minus, K_plus, K_minus)]
+    gains = {"A_plus": noise_gain(fl[0], fl[2], E), "A_minus": noise_gain(fl[1], fl[3], E)}
+    # H2^2 in the scaled time is sigma times H2^2 in tau
+    scaled = np.trace(X_num) + (noise_weight * sigma) ** 2 * max(float(np.trace(Z.value)) for Z in v["Z"])
+    bound = float(np.sqrt(max(scaled, 0.0) / sigma))
+    return GainSynthesis(formulation, rate, noise_weight, rows, True, K_plus, K_minus, P, X_plus, X_minus, bound,
+                         gains, info, "", solve_s, exact_s)
+
+
+def hespanha_pair_holds(A_plus: Matrix, A_minus: Matrix, P: Matrix, C: Matrix) -> str:
+    """Empty string if ``P > 0`` and ``He(P A_pm) = -C'C`` exactly (the non-strict common P); else the reason."""
+    r = definiteness(P, strict=True)
+    if not r.holds:
+        return f"P > 0 fails: {r.reason}"
+    CtC = matmul(transpose(C), C)
+    for name, A in (("A_plus", A_plus), ("A_minus", A_minus)):
+        if add(lyapunov_form(A, P), CtC) != [[Fraction(0)] * len(P) for _ in P]:
+            return f"{name}' P + P {name} = -C'C fails"
+    return ""
+
+
+def synthesize(model: Model, *, decay_rate: Any, noise_weight: float = 0.0, estimate: Sequence[str] | None = None,
+               values: Mapping[str, Any] | None = None, strict: bool | None = None,
+               solvers: Sequence[str] = DEFAULT_SOLVERS) -> GainSynthesis:
+    """:func:`synthesize_gains` for a model at its numeric values; ``estimate`` names states (``["z2"]``)."""
+    numeric = model.with_values(dict(values or {})).numeric()
+    names = list(model.states)
+    unknown = [s for s in (estimate or ()) if s not in names]
+    if unknown:
+        raise ModelError(f"estimate names {unknown}, which are not states of {model.name!r} (states: {names})")
+    rows = None if not estimate else [names.index(s) for s in estimate]
+    A = fraction_matrix(numeric.A, what="A")
+    C = fraction_matrix(numeric.C, what="C")
+    return synthesize_gains(A, C, decay_rate=decay_rate, noise_weight=noise_weight, estimate=rows, strict=strict,
+                            solvers=solvers)
+
+
+@dataclass(frozen=True)
+class FrontPoint:
+    """One design on the noise-gain / decay-rate plane (:func:`noise_decay_front`).
+
+    Attributes
+    ----------
+    design : str
+        ``"beta"`` (Theorem 1 with every pole at ``-beta``) or ``"lmi W=<weight>"``.
+    decay_rate : float
+        Spectral abscissa of ``A_plus`` (both modes: equal spectra) with the sign flipped, in ``tau``.
+    noise_gain : dict
+        H2 gain from the measurement noise to the weighted error, per mode.
+    K_plus, K_minus : tuple of str
+        The exact gains (one output).
+    """
+
+    design: str
+    decay_rate: float
+    noise_gain: dict[str, float]
+    K_plus: tuple[str, ...]
+    K_minus: tuple[str, ...]
+
+    @property
+    def worst_noise_gain(self) -> float:
+        return max(self.noise_gain.values())
+
+    def to_json(self) -> dict[str, Any]:
+        return {"design": self.design, "decay_rate": self.decay_rate, "noise_gain": dict(self.noise_gain),
+                "K_plus": list(self.K_plus), "K_minus": list(self.K_minus)}
+
+    def __str__(self) -> str:
+        return (f"{self.design}: decay rate {self.decay_rate:.4g}, noise gain "
+                + ", ".join(f"{k} {v:.4g}" for k, v in self.noise_gain.items()))
+
+
+def noise_decay_front(model: Model, rates: Sequence[Any], *, noise_weights: Sequence[float] = (0.0, 1e-2),
+                      estimate: Sequence[str] = ("z2",), values: Mapping[str, Any] | None = None,
+                      solvers: Sequence[str] = DEFAULT_SOLVERS) -> tuple[FrontPoint, ...]:
+    """Theorem 1 designs with all poles at ``-rate`` beside the LMI designs at each rate and noise weight.
+
+    The comparison of the issue's Pareto front: noise gain (H2, measurement noise on ``y`` to the error
+    of ``estimate``) against the decay rate achieved, for a single-output model.
+    """
+    from ..design import design_gains
+
+    numeric = model.with_values(dict(values or {})).numeric()
+    names = list(model.states)
+    E = np.eye(model.n)[[names.index(s) for s in estimate]]
+    A = np.array(numeric.A.tolist(), dtype=float)
+    C = np.array(numeric.C.tolist(), dtype=float)
+    points = []
+
+    def point(design: str, Kp: np.ndarray, Km: np.ndarray, texts: tuple[tuple[str, ...], tuple[str, ...]]) -> None:
+        Ap, Am = A - Kp @ C, -A + Km @ C
+        rate = -max(float(np.max(np.linalg.eigvals(M).real)) for M in (Ap, Am))
+        points.append(FrontPoint(design, rate, {"A_plus": noise_gain(Ap, Kp, E), "A_minus": noise_gain(Am, Km, E)},
+                                 *texts))
+
+    for r in rates:
+        beta = design_gains(numeric, ",".join([f"-{r}"] * model.n))
+        Kp, Km = (np.array(K.tolist(), dtype=float) for K in (beta.K_plus, beta.K_minus))
+        point("beta", Kp, Km, (tuple(str(x) for x in beta.K_plus), tuple(str(x) for x in beta.K_minus)))
+        for W in noise_weights:
+            res = synthesize(model, decay_rate=r, noise_weight=W, estimate=estimate, values=values, solvers=solvers)
+            if res.feasible:
+                point(f"lmi W={W:g}", _floats(res.K_plus), _floats(res.K_minus),
+                      tuple(tuple(",".join(str(x) for x in row) for row in M) for M in (res.K_plus, res.K_minus)))
+    return tuple(points)
+
+
+def _floats(M: Matrix) -> np.ndarray:
+    return np.array([[float(x) for x in row] for row in M])

@@ -1,0 +1,100 @@
+"""LMI synthesis of gain pairs: exact re-check, the single-output obstruction, agreement with certify."""
+
+from __future__ import annotations
+
+import json
+
+import numpy as np
+import pytest
+
+from switchobs.certify import certify, certify_model, noise_gain, synthesize, synthesize_gains
+from switchobs.certify._synthesis import decay_holds, hespanha_pair_holds
+from switchobs.cli.main import main
+from switchobs.design import design_gains
+from switchobs.model import builtin_model
+
+XBS3 = builtin_model("abs-xbs3")
+
+
+def _floats(M):
+    rows = M.tolist() if hasattr(M, "tolist") else M
+    return np.array([[float(x) for x in row] for row in rows])
+
+
+@pytest.mark.parametrize("spectrum, rate", [("-10,-20,-20", 10), ("-100,-100,-100", 100)])
+def test_xbs3_synthesis_at_the_decay_rate_of_a_beta_design_without_noise_weight(spectrum, rate):
+    beta = design_gains(XBS3.numeric(), spectrum)
+    A = _floats(XBS3.numeric().A)
+    assert np.max(np.linalg.eigvals(A - _floats(beta.K_plus) @ np.array([[1.0, 0, 0]])).real) \
+        == pytest.approx(-rate, rel=1e-4)   # a triple pole: eigenvalues to ~1e-5
+    res = synthesize(XBS3, decay_rate=rate, noise_weight=0.0, estimate=["z2"])
+    assert res.feasible and res.formulation == "hespanha"
+    rep = certify_model(XBS3, K_plus=res.gains()[0], K_minus=res.gains()[1], dwell=False)
+    assert rep.certified and rep.hespanha.certified and rep.verdict.dwell_time == "any"
+
+
+def _random_pair(seed: int, n: int, k: int):
+    rng = np.random.default_rng(seed)
+    A = rng.integers(-3, 4, size=(n, n))
+    C = rng.integers(-2, 3, size=(k, n))
+    C[:, 0] += (C[:, 0] == 0)            # no zero column in front: observable for these seeds
+    return A, C
+
+
+@pytest.mark.parametrize("seed, n, k", [(1, 2, 1), (2, 3, 1), (3, 4, 1), (4, 6, 1), (5, 3, 2), (6, 4, 2),
+                                        (7, 6, 2)])
+def test_random_models_the_pair_satisfies_the_lmis_exactly_and_certify_agrees(seed, n, k):
+    A, C = _random_pair(seed, n, k)
+    res = synthesize_gains(A.tolist(), C.tolist(), decay_rate=1, noise_weight=0.1)
+    assert res.feasible, res.detail
+    Cq = [[int(x) for x in row] for row in C]
+    Ap = [[A[i][j] - sum(res.K_plus[i][m] * Cq[m][j] for m in range(k)) for j in range(n)] for i in range(n)]
+    Am = [[-A[i][j] + sum(res.K_minus[i][m] * Cq[m][j] for m in range(k)) for j in range(n)] for i in range(n)]
+    assert decay_holds(Ap, res.X_plus, res.decay_rate) == ""
+    assert decay_holds(Am, res.X_minus, res.decay_rate) == ""
+    assert hespanha_pair_holds(Ap, Am, res.P, Cq) == ""
+    assert max(np.linalg.eigvals(_floats(Ap)).real) < -1 and max(np.linalg.eigvals(_floats(Am)).real) < -1
+    rep = certify([Ap, Am], names=["A_plus", "A_minus"], output=Cq, dwell=False)
+    assert rep.hespanha.certified and rep.verification.holds
+    assert rep.strict.dual is not None and rep.strict.dual.certified      # and no strict CQLF, as proven
+
+
+def test_strict_formulation_with_a_kernel_is_reported_infeasible_with_the_reason():
+    res = synthesize(XBS3, decay_rate=10, strict=True)
+    assert not res.feasible and res.formulation == "strict"
+    assert "ker C" in res.detail and "(K_minus - K_plus) C" in res.detail
+    two = synthesize_gains(_floats(XBS3.numeric().A), [[1, 0, 0], [0, 0, 1]], decay_rate=10, strict=True)
+    assert not two.feasible and "ker C" in two.detail
+
+
+def test_every_state_measured_gives_a_strict_common_P_with_the_decay_rate():
+    A = _floats(XBS3.numeric().A)
+    res = synthesize_gains(A, np.eye(3), decay_rate=20, noise_weight=0.01, estimate=[1])
+    assert res.feasible and res.formulation == "strict" and res.X_plus is res.X_minus
+    rep = certify([np.array(A) - _floats(res.K_plus), -np.array(A) + _floats(res.K_minus)], dwell=False)
+    assert rep.strict.certified and rep.verdict.arbitrary_switching.value == "UGES"
+
+
+def test_noise_weight_trades_decay_margin_for_a_smaller_noise_gain():
+    fast = synthesize(XBS3, decay_rate=99, noise_weight=0.0, estimate=["z2"])
+    quiet = synthesize(XBS3, decay_rate=99, noise_weight=0.01, estimate=["z2"])
+    assert quiet.noise_gain["A_plus"] < fast.noise_gain["A_plus"]
+    assert quiet.noise_gain["A_minus"] < fast.noise_gain["A_minus"]
+    A = _floats(XBS3.numeric().A)
+    Kp = _floats(quiet.K_plus)
+    assert quiet.noise_gain["A_plus"] == pytest.approx(noise_gain(A - Kp @ np.array([[1.0, 0, 0]]), Kp,
+                                                                  np.eye(3)[[1]]))
+
+
+def test_cli_synthesize(tmp_path, capsys):
+    out = tmp_path / "cert.json"
+    assert main(["synthesize", "abs-xbs3", "--decay", "99", "--noise-weight", "0.01", "--estimate", "z2",
+                 "--out", str(out), "--json"]) == 0
+    data = json.loads(capsys.readouterr().out)
+    assert data["synthesis"]["feasible"] and data["certification"]["certified"]
+    assert main(["verify", str(out)]) == 0
+    capsys.readouterr()
+    assert main(["synthesize", "abs-xbs3", "--decay", "-1"]) == 2
+    assert main(["synthesize", "abs-xbs3", "--decay", "10", "--estimate", "z9"]) == 2
+    err = capsys.readouterr().err
+    assert "decay_rate must be positive" in err and "z9" in err
