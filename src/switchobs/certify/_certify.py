@@ -22,6 +22,7 @@ from typing import Any
 
 import sympy as sp
 
+from .._progress import progress
 from ..design import GainDesign
 from ..exceptions import FreeSymbolError, SpectrumError
 from ..model import Model
@@ -205,16 +206,20 @@ def certify(family: FamilyLike, *, names: Sequence[str] | None = None, output: A
     ('any', 'ii')
     """
     fam = as_family(family, names)
+    size = f"n = {fam.n}, {len(fam)} modes"
     timings: dict[str, float] = {}
     t0 = time.perf_counter()
+    progress(f"certify: strict common quadratic Lyapunov LMI and exact re-check ({size})")
     strict = strict_common_lyapunov(fam, eps=eps, solvers=solvers)
     timings["strict"] = time.perf_counter() - t0
     t0 = time.perf_counter()
+    progress(f"certify: Hespanha non-strict common Lyapunov LMI and exact re-check ({size})")
     hesp = common_lyapunov(fam, output=output, eps=eps, solvers=solvers, dual=False)
     timings["hespanha"] = time.perf_counter() - t0
     dw = None
     if dwell and not strict.certified:
         t0 = time.perf_counter()
+        progress(f"certify: Geromel-Colaneri dwell time, bisection ({size})")
         dw = dwell_time(fam, eps=eps, solvers=solvers)
         timings["dwell_time"] = time.perf_counter() - t0
     planar = None
@@ -236,6 +241,7 @@ def certify(family: FamilyLike, *, names: Sequence[str] | None = None, output: A
     doc = document.to_json()
     t0 = time.perf_counter()
     if certs:
+        progress(f"certify: independent exact check of the certificate ({size})")
         check = verify_certificate(doc)
     else:
         check = VerificationReport(False, (), verdict, verdict)
@@ -304,6 +310,7 @@ def certify_model(model: Model, *, values: Mapping[str, Any] | None = None, spec
     if gains is not None:
         Kp, Km = gains.K_plus, gains.K_minus
     elif spectrum is not None:
+        progress(f"certify: gains for the spectrum (n = {model.n})")
         d = design_gains(model, spectrum)
         Kp, Km = d.K_plus, d.K_minus
     else:

@@ -15,6 +15,7 @@ from typing import Any
 
 import numpy as np
 
+from .._progress import progress
 from ._exact import Matrix, fraction_matrix, lyapunov_form, matrix_strings
 from ._family import Family, FamilyLike, as_family
 from ._lmi import DEFAULT_SOLVERS, SolveInfo, balance, dual_margin, primal_margin
@@ -344,6 +345,8 @@ def strict_common_lyapunov(family: FamilyLike, *, names: Sequence[str] | None = 
                                  what="strict CQLF LMI")
     t0 = time.perf_counter()
     if t <= eps:
+        if dual:
+            progress(f"certify: no strict CQLF numerically; dual (infeasibility) LMI (n = {fam.n})")
         d = infeasibility_certificate(fam, eps=eps, solvers=solvers) if dual else None
         return LyapunovResult("strict-cqlf", fam, False, False, float(t), eps, None, None, info, "",
                               time.perf_counter() - t0, "no strict common P found numerically", d)
