@@ -24,7 +24,7 @@ import sympy as sp
 
 from .._progress import progress
 from ..design import GainDesign
-from ..exceptions import FreeSymbolError, SpectrumError
+from ..exceptions import CertificateError, FreeSymbolError, SpectrumError
 from ..model import Model
 from ._exact import fraction_matrix, matrix_strings
 from ._family import Family, FamilyLike, as_family, format_spectrum
@@ -32,6 +32,7 @@ from ._dwell import DwellTimeResult, dwell_time
 from ._lmi import DEFAULT_SOLVERS
 from ._lyapunov import DEFAULT_EPS, LyapunovResult, common_lyapunov, strict_common_lyapunov
 from ._planar import PlanarClassification, classify_planar
+from ._rounding import short_sqrt_lower
 from ._schema import (ANY_DWELL, ArbitrarySwitching, CertificateDocument, CertificateKind, FamilySection,
                       ObserverSection, PlanarEntry, Verdict)
 from ._verify import VerificationReport, implied_verdict, verify_certificate
@@ -170,8 +171,8 @@ def _exact_col(ok: bool) -> str:
 
 def certify(family: FamilyLike, *, names: Sequence[str] | None = None, output: Any = None,
             dwell: bool = True, eps: float = DEFAULT_EPS, solvers: Sequence[str] = DEFAULT_SOLVERS,
-            observer: ObserverSection | None = None, provenance: Mapping[str, Any] | None = None
-            ) -> CertificationReport:
+            observer: ObserverSection | None = None, provenance: Mapping[str, Any] | None = None,
+            candidate: tuple[Any, Sequence[Any]] | None = None) -> CertificationReport:
     """Run every applicable check on a switched family and return the verified certificate.
 
     Parameters
@@ -190,6 +191,9 @@ def certify(family: FamilyLike, *, names: Sequence[str] | None = None, output: A
         also re-derives ``A_plus``, ``A_minus`` from them.
     provenance : mapping, optional
         Free-form information stored in the document (model, values, spectrum).
+    candidate : (P, [C_p, ...]), optional
+        An exact Hespanha certificate known beforehand (the design's common P),
+        checked exactly before any LMI (see :func:`common_lyapunov`).
 
     Returns
     -------
@@ -214,7 +218,7 @@ def certify(family: FamilyLike, *, names: Sequence[str] | None = None, output: A
     timings["strict"] = time.perf_counter() - t0
     t0 = time.perf_counter()
     progress(f"certify: Hespanha non-strict common Lyapunov LMI and exact re-check ({size})")
-    hesp = common_lyapunov(fam, output=output, eps=eps, solvers=solvers, dual=False)
+    hesp = common_lyapunov(fam, output=output, eps=eps, solvers=solvers, dual=False, candidate=candidate)
     timings["hespanha"] = time.perf_counter() - t0
     dw = None
     if dwell and not strict.certified:
@@ -307,16 +311,22 @@ def certify_model(model: Model, *, values: Mapping[str, Any] | None = None, spec
         if not gains.is_numeric:
             gains = gains.at({k: v for k, v in used.items() if k in gains.model.parameters})
     model = model.with_values(dict(values or {})).numeric()
+    design: GainDesign | None = gains
     if gains is not None:
         Kp, Km = gains.K_plus, gains.K_minus
     elif spectrum is not None:
         progress(f"certify: gains for the spectrum (n = {model.n})")
-        d = design_gains(model, spectrum)
-        Kp, Km = d.K_plus, d.K_minus
+        design = design_gains(model, spectrum)
+        Kp, Km = design.K_plus, design.K_minus
     else:
         Kp = parse_gains(K_plus, model, what="K_plus")
         Km = parse_gains(K_minus, model, what="K_minus") if K_minus is not None else \
             theorem1_K_minus(observer_normal_form(model), Kp)
+        if not (Kp.free_symbols or Km.free_symbols):
+            try:  # gains in the Hoang family come with their exact common P
+                design = design_gains(model, K_plus=Kp, K_minus=None if K_minus is None else Km)
+            except CertificateError:
+                design = None
     A_plus = sp.Matrix(model.A - Kp * model.C)
     A_minus = sp.Matrix(-model.A + Km * model.C)
     free = sorted({str(s) for M in (A_plus, A_minus) for s in M.free_symbols})
@@ -332,4 +342,26 @@ def certify_model(model: Model, *, values: Mapping[str, Any] | None = None, spec
                                                              else [str(p) for p in spectrum]),
                   "references": dict(model.references)}
     return certify([A_plus, A_minus], names=["A_plus", "A_minus"], output=model.C, dwell=dwell, eps=eps,
-                   solvers=solvers, observer=observer, provenance=provenance)
+                   solvers=solvers, observer=observer, provenance=provenance, candidate=_design_candidate(design))
+
+
+def _design_candidate(design: GainDesign | None) -> tuple[Any, list[Any]] | None:
+    """The design's exact common P with rational outputs ``C_p``, as a Hespanha candidate.
+
+    ``A_minus' P + P A_minus = -C_minus' C_minus`` with ``C_minus = sqrt(r) C``; for a
+    Hoang-family gain ``sqrt(r)`` may be irrational, and a rational ``q <= sqrt(r)``
+    keeps the (non-strict) inequality.
+    """
+    if design is None or design.conditional or not design.is_numeric:
+        return None
+    outputs = []
+    for C in (design.C_plus, design.C_minus):
+        scale = sp.sympify(C[0] / design.model.C[0]) if design.model.C[0] != 0 else None
+        if all(sp.sympify(x).is_Rational for x in C):
+            outputs.append([[sp.Rational(x) for x in C]])
+        elif scale is not None and scale.is_positive and (scale**2).is_Rational:
+            q = short_sqrt_lower(Fraction(str(scale**2)))
+            outputs.append([[q * Fraction(str(x)) for x in design.model.C]])
+        else:
+            return None
+    return design.P, outputs

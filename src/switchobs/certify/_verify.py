@@ -267,7 +267,8 @@ def _jump_condition(A: Matrix, T: Fraction, Pq: Matrix, Pp: Matrix) -> tuple[boo
                          strict=True)
         if r.holds:
             return True, ""
-        reason = (f"the nominal inequality holds but the enclosure of exp(A tau_D) (error {float(err):.2e}) "
+        reason = (f"the nominal inequality holds but the enclosure of exp(A tau_D) (error about "
+                  f"2^{err.numerator.bit_length() - err.denominator.bit_length()}) "
                   f"is too wide to decide it ({r.reason})")
     return False, reason
 
