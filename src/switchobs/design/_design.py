@@ -140,6 +140,9 @@ def parse_gains(gains: str | Sequence, model: Model, *, what: str) -> sp.Immutab
         if isinstance(g, sp.Basic):
             out.append(g)
             continue
+        if isinstance(g, (float, np.floating)):  # its exact binary value, as everywhere (rational_value)
+            out.append(rational_value(g, what=f"{what} entry {i + 1}"))
+            continue
         text = str(g).strip()
         for name in free_names(text):
             if name in forbidden:

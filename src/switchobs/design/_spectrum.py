@@ -9,7 +9,7 @@ import sympy as sp
 from sympy import QQ_I
 
 from ..exceptions import SpectrumError
-from ..model import Model, free_names, make_symbol, parse_expression
+from ..model import Model, free_names, make_symbol, parse_expression, rational_value
 from ._routh import is_hurwitz_exact
 
 __all__ = ["parse_spectrum", "spectrum_coefficients", "polynomial_coefficients", "LAPLACE"]
@@ -63,8 +63,10 @@ def parse_spectrum(spectrum: str | Sequence, model: Model) -> tuple[sp.Expr, ...
     for i, p in enumerate(items):
         if isinstance(p, sp.Basic):
             poles.append(p)
-        elif isinstance(p, complex):
-            poles.append(sp.nsimplify(p.real, rational=True) + sp.I * sp.nsimplify(p.imag, rational=True))
+        elif isinstance(p, (float, complex)):  # exact binary values, as everywhere (rational_value)
+            z = complex(p)
+            poles.append(rational_value(z.real, what=f"spectrum pole {i + 1}")
+                         + sp.I * rational_value(z.imag, what=f"spectrum pole {i + 1}"))
         else:
             if isinstance(p, str) and not p.strip():
                 raise SpectrumError(f"pole {i + 1} of the spectrum {spectrum!r} is empty")
