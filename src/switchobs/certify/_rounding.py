@@ -183,8 +183,13 @@ def _symmetrised(M: Matrix) -> Matrix:
     return [[M[i][j] + M[j][i] for j in range(len(M))] for i in range(len(M))]
 
 
-def _qq(rows: Sequence[Sequence[Fraction]], cols: int) -> DomainMatrix:
-    return DomainMatrix([[QQ(x.numerator, x.denominator) for x in row] for row in rows], (len(rows), cols), QQ)
+def _q(M: Sequence[Sequence[Any]]) -> list[list[Any]]:
+    """Entries as QQ elements (flint's fmpq when installed): the same Python loops, in C arithmetic."""
+    return [[QQ(int(x.numerator), int(x.denominator)) for x in row] for row in M]
+
+
+def _qq(rows: Sequence[Sequence[Any]], cols: int) -> DomainMatrix:
+    return DomainMatrix(_q(rows), (len(rows), cols), QQ).to_dense()
 
 
 def _fraction(x: Any) -> Fraction:
@@ -247,8 +252,8 @@ def project_primal(As: Sequence[Matrix], P_num: np.ndarray, rel_tol: float
         return None
     zero = [[Fraction(0)] * n for _ in range(n)]
     columns: list[list[Matrix]] = []
-    eye = [[Fraction(int(i == j)) for j in range(n)] for i in range(n)]
-    As_t = [transpose(A) for A in As]
+    eye = _q([[Fraction(int(i == j)) for j in range(n)] for i in range(n)])
+    As_t = [transpose(_q(A)) for A in As]
     for a, b in p_units:  # A' E_ab + E_ab A
         columns.append([_symmetrised(_unit_image(eye, a, b, At)) for At in As_t])
     start = [Fraction(float(P_num[a, b])) for a, b in p_units]
@@ -256,8 +261,9 @@ def project_primal(As: Sequence[Matrix], P_num: np.ndarray, rel_tol: float
         if r == 0:
             continue
         start += _face_start(U, W_nums[p], r)
+        Uq = _q(U)
         for a, b in _sym_units(r):
-            img = _unit_image(U, a, b)
+            img = _unit_image(Uq, a, b)
             columns.append([img if q == p else zero for q in range(len(As))])
     z = _project(columns, start)
     if z is None:
@@ -297,13 +303,15 @@ def project_dual(As: Sequence[Matrix], R_nums: Sequence[np.ndarray], rel_tol: fl
             continue
         start += _face_start(U, R, r)
     for A, U, r in zip(As, faces, ranks):
-        AU = matmul(A, U) if r else U
+        Uq = _q(U)
+        AU = matmul(_q(A), Uq) if r else Uq
         for a, b in _sym_units(r):  # A U E_ab U' + (A U E_ab U')'
-            columns.append([_symmetrised(_unit_image(U, a, b, AU))])
+            columns.append([_symmetrised(_unit_image(Uq, a, b, AU))])
     if s_rank:
         start += _face_start(S_face, S_num, s_rank)
+        Sq = _q(S_face)
         for a, b in _sym_units(s_rank):
-            img = _unit_image(S_face, a, b)
+            img = _unit_image(Sq, a, b)
             columns.append([[[-x for x in row] for row in img]])
     z = _project(columns, start)
     if z is None:
