@@ -13,6 +13,7 @@ returned.  :func:`certify_model` builds the family ``A_plus = A - K_plus C``,
 from __future__ import annotations
 
 import json
+import os
 import time
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
@@ -115,7 +116,14 @@ class CertificationReport:
         return self.verification.holds and bool(kinds & stable)
 
     def write(self, path: str | Path) -> None:
-        Path(path).write_text(json.dumps(self.document, indent=2) + "\n", encoding="utf-8")
+        """Write the certificate; an interrupted write leaves no half-written file (temporary file, then rename)."""
+        target = Path(path)
+        partial = target.with_name(f".{target.name}.partial")
+        try:
+            partial.write_text(json.dumps(self.document, indent=2) + "\n", encoding="utf-8")
+            os.replace(partial, target)
+        finally:
+            partial.unlink(missing_ok=True)
 
     def to_json(self) -> dict[str, Any]:
         return {"verdict": self.verdict.to_json(), "text": self.text, "certified": self.certified,
