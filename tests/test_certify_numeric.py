@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import copy
 import json
+import signal
 import subprocess
 import sys
 from fractions import Fraction
@@ -95,3 +96,24 @@ def test_a_32_state_model_goes_through_design_certify_verify_codegen_compile(tmp
                          str(source), "-o", str(obj)], capture_output=True, text=True)
     assert cc.returncode == 0, cc.stderr
     assert obj.stat().st_size > 0
+
+
+@pytest.mark.slow
+def test_ctrl_c_stops_certify_with_130_and_no_certificate(tmp_path):
+    n = 16
+    data = chain(n)
+    rows = ",\n     ".join("[" + ", ".join(f'"{x}"' for x in row) + "]" for row in data["A"])
+    model = tmp_path / "chain.toml"
+    model.write_text(f'name = "chain-{n}"\nstates = {json.dumps(data["states"])}\noutput = "y"\nA = [{rows}]\n'
+                     f'C = {json.dumps(data["C"])}\ntime_scale = "y"\n', encoding="utf-8")
+    cert = tmp_path / "cert.json"
+    proc = subprocess.Popen([sys.executable, "-m", "switchobs", "certify", str(model), "--spectrum", spectrum(n),
+                             "--out", str(cert)], stderr=subprocess.PIPE, stdout=subprocess.PIPE, text=True)
+    first = proc.stderr.readline()          # the first progress line: the command is at work
+    assert first.startswith("switchobs certify: [")
+    proc.send_signal(signal.SIGINT)
+    _, err = proc.communicate(timeout=120)
+    assert proc.returncode == 130
+    assert err.strip().splitlines()[-1] == "switchobs certify: interrupted"
+    assert "Traceback" not in err
+    assert list(tmp_path.iterdir()) == [model]
