@@ -31,6 +31,7 @@ import subprocess
 import sys
 import tempfile
 import time
+import warnings
 from pathlib import Path
 
 import numpy as np
@@ -78,7 +79,7 @@ def timed(fn) -> tuple[float, float]:
     return time.perf_counter() - t0, time.process_time() - c0
 
 
-def baselines(design: dict) -> dict[str, tuple[float, float]]:
+def baselines(design: dict, failures: set[str]) -> dict[str, tuple[float, float]]:
     import cvxpy as cp
     import scipy.linalg
 
@@ -89,7 +90,16 @@ def baselines(design: dict) -> dict[str, tuple[float, float]]:
     def lmi() -> None:
         P = cp.Variable((n, n), symmetric=True)
         cons = [P >> np.eye(n)] + [-(A.T @ P + P @ A) >> 0 for A in mats]
-        cp.Problem(cp.Minimize(0), cons).solve(solver="CLARABEL")
+        problem = cp.Problem(cp.Minimize(0), cons)
+        try:
+            with warnings.catch_warnings():
+                warnings.simplefilter("ignore", UserWarning)
+                problem.solve(solver="CLARABEL")
+        except cp.SolverError:
+            failures.add("solver error")
+            return
+        if problem.status != cp.OPTIMAL:
+            failures.add(problem.status)
 
     return {"cvxpy": timed(lmi),
             "scipy": timed(lambda: scipy.linalg.solve_continuous_lyapunov(mats[0].T, -C.T @ C))}
@@ -104,13 +114,14 @@ def stats(values: list[float]) -> str:
     return f"{statistics.median(values):.3g} ({min(values):.3g}–{max(values):.3g})"
 
 
-def measure(n: int, tmp: Path) -> dict[str, dict[str, list[float]]]:
+def measure(n: int, tmp: Path) -> dict[str, dict[str, list]]:
     model = tmp / f"chain-{n}.toml"
     model.write_text(chain_model(n), encoding="utf-8")
     cert = tmp / f"chain-{n}.json"
-    rows: dict[str, dict[str, list[float]]] = {k: {"wall": [], "cpu": []}
+    rows: dict[str, dict[str, list]] = {k: {"wall": [], "cpu": []}
                                                for k in ("design", "certify", "verify", "cvxpy", "scipy")}
     design = None
+    failures: set[str] = set()
     for _ in range(REPEATS):
         for name, args in (("design", ["design", str(model), "--spectrum", spectrum(n), "--json"]),
                            ("certify", ["certify", str(model), "--spectrum", spectrum(n), "--no-dwell",
@@ -123,9 +134,10 @@ def measure(n: int, tmp: Path) -> dict[str, dict[str, list[float]]]:
             rows[name]["cpu"].append(cpu)
             if name == "design":
                 design = json.loads(proc.stdout)
-        for name, (wall, cpu) in baselines(design).items():
+        for name, (wall, cpu) in baselines(design, failures).items():
             rows[name]["wall"].append(wall)
             rows[name]["cpu"].append(cpu)
+    rows["cvxpy"]["status"] = sorted(failures)
     return rows
 
 
@@ -162,7 +174,8 @@ def main() -> None:
         r = results[n]
         ratio = statistics.median(r["certify"]["wall"]) / statistics.median(r["cvxpy"]["wall"])
         print(f"{n} | {stats(r['design']['wall'])} | {stats(r['certify']['wall'])} | {stats(r['verify']['wall'])} "
-              f"| {stats(r['cvxpy']['wall'])} | {stats(r['scipy']['wall'])} | {stats(r['certify']['cpu'])} "
+              f"| {stats(r['cvxpy']['wall'])}{' ' + '/'.join(r['cvxpy']['status']) if r['cvxpy']['status'] else ''} "
+              f"| {stats(r['scipy']['wall'])} | {stats(r['certify']['cpu'])} "
               f"| {ratio:.0f}x")
     if os.environ.get("SWITCHOBS_BENCH_PLOT", "1") == "1" and len(sizes) > 1:
         plot(results, ROOT / "docs" / "numeric_scaling.png")

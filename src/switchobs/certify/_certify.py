@@ -13,6 +13,7 @@ returned.  :func:`certify_model` builds the family ``A_plus = A - K_plus C``,
 from __future__ import annotations
 
 import json
+import math
 import os
 import time
 from collections.abc import Mapping, Sequence
@@ -147,7 +148,8 @@ class CertificationReport:
             s.dual is not None and s.dual.certified))))
         h = self.hespanha
         h_res = "certified" if h.certified else ("not found" if not h.feasible else "feasible, not certified")
-        rows.append(("Hespanha non-strict P", h_res, f"{h.margin:.3g}", _solver(h), _exact_col(h.certified)))
+        rows.append(("Hespanha non-strict P", h_res, "-" if math.isnan(h.margin) else f"{h.margin:.3g}", _solver(h),
+                     _exact_col(h.certified)))
         if self.dwell is not None:
             d = self.dwell
             d_res = f"tau_D = {float(d.tau_D):.5g}" if d.certified and d.tau_D is not None else "not certified"
