@@ -26,13 +26,16 @@ __all__ = ["main", "build_parser"]
 COMMANDS: tuple[str, ...] = ("design", "demo", "encoder", "codegen", "simulate", "certify", "verify", "classify", "theory")
 
 
-def build_parser() -> argparse.ArgumentParser:
+def build_parser(only: str | None = None) -> argparse.ArgumentParser:
+    """The ``switchobs`` parser; with ``only``, just that sub-command (its module alone is imported)."""
     parser = argparse.ArgumentParser(
         prog="switchobs",
         description="Design, certify and export switched observers via singular time-rescaling.")
     sub = parser.add_subparsers(dest="command", metavar="COMMAND")
     sub.required = True
     for name in COMMANDS:
+        if only is not None and name != only:
+            continue
         try:
             module = importlib.import_module(f"switchobs.cli._{name}")
         except ImportError as exc:  # a broken casadi/cvxpy must not take every command down
@@ -89,8 +92,11 @@ def stderr_progress(command: str, after_s: float = PROGRESS_AFTER_S) -> Callable
 
 
 def main(argv: Sequence[str] | None = None) -> int:
-    parser = build_parser()
-    args = parser.parse_args(_glue_option_values(sys.argv[1:] if argv is None else argv))
+    argv = _glue_option_values(sys.argv[1:] if argv is None else argv)
+    # Importing every command costs seconds (cvxpy, casadi, scipy.signal); a known command imports only its own.
+    command = next((a for a in argv if not a.startswith("-")), None)
+    parser = build_parser(command if command in COMMANDS else None)
+    args = parser.parse_args(argv)
     try:
         with listening(stderr_progress(args.command)):
             return int(args.func(args) or 0)
