@@ -13,6 +13,8 @@ returned.  :func:`certify_model` builds the family ``A_plus = A - K_plus C``,
 from __future__ import annotations
 
 import json
+import math
+import os
 import time
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
@@ -22,6 +24,7 @@ from typing import Any
 
 import sympy as sp
 
+from .._progress import progress
 from ..design import GainDesign
 from ..exceptions import CertificateError, FreeSymbolError, SpectrumError
 from ..model import Model
@@ -33,6 +36,7 @@ from ._dwell import DwellTimeResult, dwell_time
 from ._lmi import DEFAULT_SOLVERS
 from ._lyapunov import DEFAULT_EPS, LyapunovResult, common_lyapunov, strict_common_lyapunov
 from ._planar import PlanarClassification, classify_planar
+from ._rounding import short_sqrt_lower
 from ._schema import (ANY_DWELL, ArbitrarySwitching, BoxSection, CertificateDocument, CertificateKind,
                       FamilySection, DiscreteSection, ObserverSection, PlanarEntry, Verdict)
 from ._verify import VerificationReport, implied_verdict, verify_certificate
@@ -132,7 +136,14 @@ class CertificationReport:
         return self.verification.holds and bool(kinds & stable)
 
     def write(self, path: str | Path) -> None:
-        Path(path).write_text(json.dumps(self.document, indent=2) + "\n", encoding="utf-8")
+        """Write the certificate; an interrupted write leaves no half-written file (temporary file, then rename)."""
+        target = Path(path)
+        partial = target.with_name(f".{target.name}.partial")
+        try:
+            partial.write_text(json.dumps(self.document, indent=2) + "\n", encoding="utf-8")
+            os.replace(partial, target)
+        finally:
+            partial.unlink(missing_ok=True)
 
     def to_json(self) -> dict[str, Any]:
         return {"verdict": self.verdict.to_json(), "text": self.text, "certified": self.certified,
@@ -158,7 +169,8 @@ class CertificationReport:
             s.dual is not None and s.dual.certified))))
         h = self.hespanha
         h_res = "certified" if h.certified else ("not found" if not h.feasible else "feasible, not certified")
-        rows.append(("Hespanha non-strict P", h_res, f"{h.margin:.3g}", _solver(h), _exact_col(h.certified)))
+        rows.append(("Hespanha non-strict P", h_res, "-" if math.isnan(h.margin) else f"{h.margin:.3g}", _solver(h),
+                     _exact_col(h.certified)))
         if self.dwell is not None:
             d = self.dwell
             d_res = f"tau_D = {float(d.tau_D):.5g}" if d.certified and d.tau_D is not None else "not certified"
@@ -199,7 +211,8 @@ def _exact_col(ok: bool) -> str:
 def certify(family: FamilyLike, *, names: Sequence[str] | None = None, output: Any = None,
             dwell: bool = True, eps: float = DEFAULT_EPS, solvers: Sequence[str] = DEFAULT_SOLVERS,
             observer: ObserverSection | None = None, provenance: Mapping[str, Any] | None = None,
-            discrete: str | None = None, box: BoxCertificate | None = None) -> CertificationReport:
+            discrete: str | None = None, box: BoxCertificate | None = None,
+            candidate: tuple[Any, Sequence[Any]] | None = None) -> CertificationReport:
     """Run every applicable check on a switched family and return the verified certificate.
 
     Parameters
@@ -225,6 +238,9 @@ def certify(family: FamilyLike, *, names: Sequence[str] | None = None, output: A
     box : BoxCertificate, optional
         A certificate over a parameter box (:func:`~switchobs.certify.certify_box`); when it certified a
         box, it becomes the document's ``box`` section, re-checked by ``verify``.
+    candidate : (P, [C_p, ...]), optional
+        An exact Hespanha certificate known beforehand (the design's common P),
+        checked exactly before any LMI (see :func:`common_lyapunov`).
 
     Returns
     -------
@@ -248,16 +264,20 @@ def certify(family: FamilyLike, *, names: Sequence[str] | None = None, output: A
         if output is None or list(fam.names) != ["A_plus", "A_minus"]:
             raise CertificateError("the discrete certificate needs the observer's family [A_plus, A_minus] and "
                                    f"its output C; got {list(fam.names)} and output {output!r}")
+    size = f"n = {fam.n}, {len(fam)} modes"
     timings: dict[str, float] = {}
     t0 = time.perf_counter()
+    progress(f"certify: strict common quadratic Lyapunov LMI and exact re-check ({size})")
     strict = strict_common_lyapunov(fam, eps=eps, solvers=solvers)
     timings["strict"] = time.perf_counter() - t0
     t0 = time.perf_counter()
-    hesp = common_lyapunov(fam, output=output, eps=eps, solvers=solvers, dual=False)
+    progress(f"certify: Hespanha non-strict common Lyapunov LMI and exact re-check ({size})")
+    hesp = common_lyapunov(fam, output=output, eps=eps, solvers=solvers, dual=False, candidate=candidate)
     timings["hespanha"] = time.perf_counter() - t0
     dw = None
     if dwell and not strict.certified:
         t0 = time.perf_counter()
+        progress(f"certify: Geromel-Colaneri dwell time, bisection ({size})")
         dw = dwell_time(fam, eps=eps, solvers=solvers)
         timings["dwell_time"] = time.perf_counter() - t0
     planar = None
@@ -289,6 +309,7 @@ def certify(family: FamilyLike, *, names: Sequence[str] | None = None, output: A
     doc = document.to_json()
     t0 = time.perf_counter()
     if certs:
+        progress(f"certify: independent exact check of the certificate ({size})")
         check = verify_certificate(doc)
     else:
         check = VerificationReport(False, (), verdict, verdict)
@@ -358,15 +379,22 @@ def certify_model(model: Model, *, values: Mapping[str, Any] | None = None, spec
         if not gains.is_numeric:
             gains = gains.at({k: v for k, v in used.items() if k in gains.model.parameters})
     parametric, model = model, model.with_values(dict(values or {})).numeric()
+    design: GainDesign | None = gains
     if gains is not None:
         Kp, Km = gains.K_plus, gains.K_minus
     elif spectrum is not None:
-        d = design_gains(model, spectrum)
-        Kp, Km = d.K_plus, d.K_minus
+        progress(f"certify: gains for the spectrum (n = {model.n})")
+        design = design_gains(model, spectrum)
+        Kp, Km = design.K_plus, design.K_minus
     else:
         Kp = parse_gains(K_plus, model, what="K_plus")
         Km = parse_gains(K_minus, model, what="K_minus") if K_minus is not None else \
             theorem1_K_minus(observer_normal_form(model), Kp)
+        if not (Kp.free_symbols or Km.free_symbols):
+            try:  # gains in the Hoang family come with their exact common P
+                design = design_gains(model, K_plus=Kp, K_minus=None if K_minus is None else Km)
+            except CertificateError:
+                design = None
     A_plus = sp.Matrix(model.A - Kp * model.C)
     A_minus = sp.Matrix(-model.A + Km * model.C)
     free = sorted({str(s) for M in (A_plus, A_minus) for s in M.free_symbols})
@@ -383,4 +411,27 @@ def certify_model(model: Model, *, values: Mapping[str, Any] | None = None, spec
                   "references": dict(model.references)}
     robust = None if box is None else certify_box(parametric, box, Kp, Km, values=values, eps=eps, solvers=solvers)
     return certify([A_plus, A_minus], names=["A_plus", "A_minus"], output=model.C, dwell=dwell, eps=eps,
-                   solvers=solvers, observer=observer, provenance=provenance, discrete=discrete, box=robust)
+                   solvers=solvers, observer=observer, provenance=provenance, discrete=discrete, box=robust,
+                   candidate=_design_candidate(design))
+
+
+def _design_candidate(design: GainDesign | None) -> tuple[Any, list[Any]] | None:
+    """The design's exact common P with rational outputs ``C_p``, as a Hespanha candidate.
+
+    ``A_minus' P + P A_minus = -C_minus' C_minus`` with ``C_minus = sqrt(r) C``; for a
+    Hoang-family gain ``sqrt(r)`` may be irrational, and a rational ``q <= sqrt(r)``
+    keeps the (non-strict) inequality.
+    """
+    if design is None or design.conditional or not design.is_numeric:
+        return None
+    outputs = []
+    for C in (design.C_plus, design.C_minus):
+        scale = sp.sympify(C[0] / design.model.C[0]) if design.model.C[0] != 0 else None
+        if all(sp.sympify(x).is_Rational for x in C):
+            outputs.append([[sp.Rational(x) for x in C]])
+        elif scale is not None and scale.is_positive and (scale**2).is_Rational:
+            q = short_sqrt_lower(Fraction(str(scale**2)))
+            outputs.append([[q * Fraction(str(x)) for x in design.model.C]])
+        else:
+            return None
+    return design.P, outputs

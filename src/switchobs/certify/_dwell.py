@@ -29,6 +29,7 @@ import cvxpy as cp
 import numpy as np
 import scipy.linalg
 
+from .._progress import progress
 from ._exact import Matrix, matrix_strings
 from ._family import Family, FamilyLike, as_family
 from ._lmi import DEFAULT_SOLVERS, SolveInfo, balance, solve
@@ -202,6 +203,8 @@ def dwell_time(family: FamilyLike, *, names: Sequence[str] | None = None, eps: f
         hi = min(2 * hi, limit)
     lo = 0.0
     while hi - lo > rel_tol * hi and hi > 1e-9:
+        progress(f"certify: dwell time in [{lo / bal.sigma:.4g}, {hi / bal.sigma:.4g}] (n = {fam.n}, "
+                 f"LMI solve {iterations + 1})")
         mid = (lo + hi) / 2
         res = gc_margin(mats, mid, solvers=solvers)
         iterations += 1

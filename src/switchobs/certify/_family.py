@@ -7,7 +7,10 @@ from dataclasses import dataclass
 from typing import Any, Union
 
 import numpy as np
+from sympy import QQ
+from sympy.polys.matrices import DomainMatrix
 
+from ..design import routh_first_column
 from ..exceptions import CertificateError, DimensionError, ModelError, NotHurwitzError
 from ._exact import Matrix, fraction_matrix, matrix_strings
 
@@ -56,6 +59,15 @@ def format_spectrum(M: np.ndarray) -> str:
     for z in eig:
         parts.append(f"{z.real:.6g}" if abs(z.imag) <= 1e-6 * max(1.0, abs(z)) else f"{z.real:.6g}{z.imag:+.6g}j")
     return "[" + ", ".join(parts) + "]"
+
+
+def _hurwitz_exact(M: Matrix) -> bool:
+    """Routh array of the exact characteristic polynomial (QQ, flint-backed): floating-point eigenvalues
+    of a large observer's error matrix can land on the wrong side of the axis (seed 004 gains grow fast with n)."""
+    dm = DomainMatrix([[QQ(x.numerator, x.denominator) for x in row] for row in M], (len(M), len(M)), QQ)
+    alpha = [QQ.to_sympy(c) for c in dm.charpoly()[1:]]
+    column = routh_first_column(alpha)
+    return len(column) == len(alpha) + 1 and column[-1] > 0
 
 
 def as_family(matrices: FamilyLike, names: Sequence[str] | None = None, *, hurwitz: bool = True) -> Family:
@@ -112,10 +124,10 @@ def as_family(matrices: FamilyLike, names: Sequence[str] | None = None, *, hurwi
         fam = Family(tuple(str(x) for x in names), tuple(exact),
                      tuple(np.array([[float(x) for x in row] for row in M]) for M in exact))
     if hurwitz:
-        for nm, M in zip(fam.names, fam.numeric):
+        for nm, M, E in zip(fam.names, fam.numeric, fam.exact):
             if not np.all(np.isfinite(M)):
                 raise ModelError(f"{nm} has entries too large for floating point")
-            if np.max(np.linalg.eigvals(M).real) >= 0:
+            if not _hurwitz_exact(E):
                 raise NotHurwitzError(f"{nm} is not Hurwitz: its spectrum is {format_spectrum(M)}; every matrix "
                                       "of the family must have eigenvalues with negative real part "
                                       "(check the gains against the Routh-Hurwitz conditions)")

@@ -7,6 +7,7 @@ reported but never decides anything.
 
 from __future__ import annotations
 
+import math
 import time
 from collections.abc import Sequence
 from dataclasses import dataclass
@@ -15,6 +16,7 @@ from typing import Any
 
 import numpy as np
 
+from .._progress import progress
 from ._exact import Matrix, fraction_matrix, lyapunov_form, matrix_strings
 from ._family import Family, FamilyLike, as_family
 from ._lmi import DEFAULT_SOLVERS, SolveInfo, balance, dual_margin, primal_margin
@@ -151,11 +153,12 @@ class LyapunovResult:
             return None
         kind = CertificateKind(self.kind)
         C = [matrix_strings(C) for C in (self.C or ())] if kind is CertificateKind.HESPANHA else None
-        return LyapunovEntry(kind, matrix_strings(self.P), C, self.margin, self.method, _solver_text(self.solver))
+        return LyapunovEntry(kind, matrix_strings(self.P), C, None if math.isnan(self.margin) else self.margin,
+                             self.method, _solver_text(self.solver))
 
     def to_json(self) -> dict[str, Any]:
         return {"kind": self.kind, "feasible": self.feasible, "certified": self.certified,
-                "margin": self.margin, "eps": self.eps,
+                "margin": None if math.isnan(self.margin) else self.margin, "eps": self.eps,
                 "P": None if self.P is None else matrix_strings(self.P),
                 "C": None if self.C is None else [matrix_strings(C) for C in self.C],
                 "solver": _solver_text(self.solver),
@@ -221,7 +224,7 @@ def _factors(Ws: Sequence[Matrix]) -> list[Matrix] | None:
 
 def common_lyapunov(family: FamilyLike, *, output: Any = None, names: Sequence[str] | None = None,
                     eps: float = DEFAULT_EPS, solvers: Sequence[str] = DEFAULT_SOLVERS,
-                    dual: bool = True) -> LyapunovResult:
+                    dual: bool = True, candidate: tuple[Any, Sequence[Any]] | None = None) -> LyapunovResult:
     """Hespanha's non-strict common Lyapunov condition, solved by LMI and certified exactly.
 
     Find ``P = P' > 0`` and ``C_p`` with ``A_p' P + P A_p <= -C_p' C_p`` and every
@@ -244,6 +247,11 @@ def common_lyapunov(family: FamilyLike, *, output: Any = None, names: Sequence[s
         cvxpy solvers in order of preference (default Clarabel, then SCS).
     dual : bool
         When infeasible, look for an exact certificate of infeasibility.
+    candidate : (P, [C_p, ...]), optional
+        An exact certificate known beforehand, e.g. the common ``P`` of a gain
+        design (seed 004 Theorem 1: ``A_p' P + P A_p = -C' C``).  It is checked
+        exactly first; the LMI runs only if it does not hold.  This is what
+        makes large numeric observers cheap: no LMI, no rounding, no projection.
 
     Returns
     -------
@@ -265,6 +273,13 @@ def common_lyapunov(family: FamilyLike, *, output: Any = None, names: Sequence[s
     True
     """
     fam = as_family(family, names)
+    if candidate is not None:
+        t0 = time.perf_counter()
+        P = fraction_matrix(candidate[0], what="candidate P", rows=fam.n, cols=fam.n)
+        Cs = [fraction_matrix(C, what="candidate C", cols=fam.n) for C in candidate[1]]
+        if _check_hespanha(fam.names, fam.exact, LyapunovEntry(CertificateKind.HESPANHA, P, Cs)).holds:
+            return LyapunovResult("hespanha", fam, True, True, math.nan, eps, P, tuple(Cs), None,
+                                  "exact P of the gain design", time.perf_counter() - t0)
     bal = balance(fam.numeric)
     n, N = fam.n, len(fam)
     stages = [_output_weights(bal.d, output, n, N), [None] * N]
@@ -344,6 +359,8 @@ def strict_common_lyapunov(family: FamilyLike, *, names: Sequence[str] | None = 
                                  what="strict CQLF LMI")
     t0 = time.perf_counter()
     if t <= eps:
+        if dual:
+            progress(f"certify: no strict CQLF numerically; dual (infeasibility) LMI (n = {fam.n})")
         d = infeasibility_certificate(fam, eps=eps, solvers=solvers) if dual else None
         return LyapunovResult("strict-cqlf", fam, False, False, float(t), eps, None, None, info, "",
                               time.perf_counter() - t0, "no strict common P found numerically", d)

@@ -25,10 +25,13 @@ from __future__ import annotations
 import math
 from collections.abc import Sequence
 from fractions import Fraction
+from typing import Any
 
 import numpy as np
+from sympy import QQ
+from sympy.polys.matrices import DomainMatrix
 
-from ._exact import Matrix, definiteness, lyapunov_form, matmul, nullspace, sqrt_lower, transpose
+from ._exact import Matrix, definiteness, matmul, sqrt_lower, transpose
 
 __all__ = ["dyadic", "psd_dyadic", "factor_rows", "ldl_psd", "range_basis", "project_primal", "project_dual",
            "MAX_PROJECTION_UNKNOWNS", "FACE_TOLERANCES", "short_sqrt_lower", "normalise"]
@@ -162,14 +165,35 @@ def _sym_units(r: int) -> list[tuple[int, int]]:
     return [(a, b) for a in range(r) for b in range(a, r)]
 
 
-def _unit_image(U: Matrix, a: int, b: int) -> Matrix:
-    """``U E_ab U'`` for the symmetric unit ``E_ab``."""
+def _unit_image(U: Matrix, a: int, b: int, X: Matrix | None = None) -> Matrix:
+    """``X E_ab U'`` for the symmetric unit ``E_ab`` (``X = U`` by default): ``O(n^2)``, no matrix product."""
+    X = U if X is None else X
     n = len(U)
+    xa = [X[i][a] for i in range(n)]
+    xb = [X[i][b] for i in range(n)]
     ua = [U[i][a] for i in range(n)]
     ub = [U[i][b] for i in range(n)]
     if a == b:
-        return [[ua[i] * ua[j] for j in range(n)] for i in range(n)]
-    return [[ua[i] * ub[j] + ub[i] * ua[j] for j in range(n)] for i in range(n)]
+        return [[xa[i] * ua[j] for j in range(n)] for i in range(n)]
+    return [[xa[i] * ub[j] + xb[i] * ua[j] for j in range(n)] for i in range(n)]
+
+
+def _symmetrised(M: Matrix) -> Matrix:
+    """``M + M'``."""
+    return [[M[i][j] + M[j][i] for j in range(len(M))] for i in range(len(M))]
+
+
+def _q(M: Sequence[Sequence[Any]]) -> list[list[Any]]:
+    """Entries as QQ elements (flint's fmpq when installed): the same Python loops, in C arithmetic."""
+    return [[QQ(int(x.numerator), int(x.denominator)) for x in row] for row in M]
+
+
+def _qq(rows: Sequence[Sequence[Any]], cols: int) -> DomainMatrix:
+    return DomainMatrix(_q(rows), (len(rows), cols), QQ).to_dense()
+
+
+def _fraction(x: Any) -> Fraction:
+    return Fraction(int(x.numerator), int(x.denominator))
 
 
 def _vech_coords(X: np.ndarray, r: int) -> list[float]:
@@ -198,19 +222,16 @@ def _project(columns: list[list[Matrix]], start: Sequence[Fraction]) -> list[Fra
         for i in range(n):
             for j in range(i, n):
                 rows.append([columns[m][e][i][j] for m in range(k)])
-    N = nullspace(rows, k)
-    if not N:
+    # Exact linear algebra over QQ (flint-backed DomainMatrix): the producer's side may be fast;
+    # the independent checker re-decides the result with the standard library only.
+    N = _qq(rows, k).nullspace()
+    if N.shape[0] == 0:
         return None
-    # z = N (N'N)^-1 N' start
-    G = [[sum((u * v for u, v in zip(N[a], N[b])), Fraction(0)) for b in range(len(N))] for a in range(len(N))]
-    rhs = [sum((u * v for u, v in zip(N[a], start)), Fraction(0)) for a in range(len(N))]
-    aug = [G[a] + [rhs[a]] for a in range(len(N))]
-    sol = nullspace(aug, len(N) + 1)
-    # the augmented system [G | rhs] (y, -1) = 0 has exactly one solution with last coordinate -1
-    y = next(([-x / v[-1] for x in v[:-1]] for v in sol if v[-1] != 0), None)
-    if y is None:
-        return None
-    return [sum((y[a] * N[a][m] for a in range(len(N))), Fraction(0)) for m in range(k)]
+    # z = N' (N N')^-1 N start  (the rows of N span the solution space)
+    z0 = _qq([[x] for x in start], 1)
+    y = (N * N.transpose()).lu_solve(N * z0)
+    z = N.transpose() * y
+    return [_fraction(z[m, 0].element) for m in range(k)]
 
 
 def project_primal(As: Sequence[Matrix], P_num: np.ndarray, rel_tol: float
@@ -231,16 +252,18 @@ def project_primal(As: Sequence[Matrix], P_num: np.ndarray, rel_tol: float
         return None
     zero = [[Fraction(0)] * n for _ in range(n)]
     columns: list[list[Matrix]] = []
-    for a, b in p_units:
-        E = _unit_image([[Fraction(int(i == j)) for j in range(n)] for i in range(n)], a, b)
-        columns.append([lyapunov_form(A, E) for A in As])
+    eye = _q([[Fraction(int(i == j)) for j in range(n)] for i in range(n)])
+    As_t = [transpose(_q(A)) for A in As]
+    for a, b in p_units:  # A' E_ab + E_ab A
+        columns.append([_symmetrised(_unit_image(eye, a, b, At)) for At in As_t])
     start = [Fraction(float(P_num[a, b])) for a, b in p_units]
     for p, (U, r) in enumerate(zip(faces, ranks)):
         if r == 0:
             continue
         start += _face_start(U, W_nums[p], r)
+        Uq = _q(U)
         for a, b in _sym_units(r):
-            img = _unit_image(U, a, b)
+            img = _unit_image(Uq, a, b)
             columns.append([img if q == p else zero for q in range(len(As))])
     z = _project(columns, start)
     if z is None:
@@ -280,14 +303,15 @@ def project_dual(As: Sequence[Matrix], R_nums: Sequence[np.ndarray], rel_tol: fl
             continue
         start += _face_start(U, R, r)
     for A, U, r in zip(As, faces, ranks):
-        for a, b in _sym_units(r):
-            img = _unit_image(U, a, b)
-            AR = matmul(A, img)
-            columns.append([[[AR[i][j] + AR[j][i] for j in range(n)] for i in range(n)]])
+        Uq = _q(U)
+        AU = matmul(_q(A), Uq) if r else Uq
+        for a, b in _sym_units(r):  # A U E_ab U' + (A U E_ab U')'
+            columns.append([_symmetrised(_unit_image(Uq, a, b, AU))])
     if s_rank:
         start += _face_start(S_face, S_num, s_rank)
+        Sq = _q(S_face)
         for a, b in _sym_units(s_rank):
-            img = _unit_image(S_face, a, b)
+            img = _unit_image(Sq, a, b)
             columns.append([[[-x for x in row] for row in img]])
     z = _project(columns, start)
     if z is None:

@@ -45,6 +45,7 @@ from fractions import Fraction
 from pathlib import Path
 from typing import Any
 
+from .._progress import progress
 from ..exceptions import CertificateError
 from ._exact import (Matrix, add, definiteness, expm_enclosure, fraction_matrix, inf_norm,
                      integer_form, is_zero, lyapunov_form, matmul, observable, scale, sqrt_upper,
@@ -266,7 +267,8 @@ def _jump_condition(A: Matrix, T: Fraction, Pq: Matrix, Pp: Matrix) -> tuple[boo
                          strict=True)
         if r.holds:
             return True, ""
-        reason = (f"the nominal inequality holds but the enclosure of exp(A tau_D) (error {float(err):.2e}) "
+        reason = (f"the nominal inequality holds but the enclosure of exp(A tau_D) (error about "
+                  f"2^{err.numerator.bit_length() - err.denominator.bit_length()}) "
                   f"is too wide to decide it ({r.reason})")
     return False, reason
 
@@ -375,6 +377,7 @@ def verify_certificate(doc: Mapping[str, Any] | str | Path) -> VerificationRepor
     planar: str | None = None
     for cert in document.certificates:
         kind = cert.kind
+        progress(f"verify: {kind.value} certificate (n = {len(As[0])}, {len(As)} modes)")
         if kind is CertificateKind.STRICT_CQLF:
             c = _check_strict(names, As, cert)
         elif kind is CertificateKind.HESPANHA:

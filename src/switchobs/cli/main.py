@@ -14,8 +14,10 @@ import argparse
 import importlib
 import os
 import sys
-from collections.abc import Sequence
+import time
+from collections.abc import Callable, Sequence
 
+from .._progress import listening
 from ..exceptions import FreeSymbolError, PrerequisiteError, SwitchobsError
 
 __all__ = ["main", "build_parser"]
@@ -25,13 +27,16 @@ COMMANDS: tuple[str, ...] = ("design", "demo", "encoder", "codegen", "simulate",
                             "classify", "theory", "reproduce")
 
 
-def build_parser() -> argparse.ArgumentParser:
+def build_parser(only: str | None = None) -> argparse.ArgumentParser:
+    """The ``switchobs`` parser; with ``only``, just that sub-command (its module alone is imported)."""
     parser = argparse.ArgumentParser(
         prog="switchobs",
         description="Design, certify and export switched observers via singular time-rescaling.")
     sub = parser.add_subparsers(dest="command", metavar="COMMAND")
     sub.required = True
     for name in COMMANDS:
+        if only is not None and name != only:
+            continue
         try:
             module = importlib.import_module(f"switchobs.cli._{name}")
         except ImportError as exc:  # a broken casadi/cvxpy must not take every command down
@@ -71,11 +76,31 @@ def _glue_option_values(argv: Sequence[str]) -> list[str]:
     return out
 
 
+#: Progress notes of the library are shown once a command has run this long (quick runs stay quiet).
+PROGRESS_AFTER_S = 1.0
+
+
+def stderr_progress(command: str, after_s: float = PROGRESS_AFTER_S) -> Callable[[str], None]:
+    """A progress listener printing ``switchobs CMD: [elapsed] stage (size)`` on stderr after ``after_s``."""
+    start = time.perf_counter()
+
+    def show(text: str) -> None:
+        elapsed = time.perf_counter() - start
+        if elapsed >= after_s:
+            print(f"switchobs {command}: [{elapsed:6.1f} s] {text}", file=sys.stderr, flush=True)
+
+    return show
+
+
 def main(argv: Sequence[str] | None = None) -> int:
-    parser = build_parser()
-    args = parser.parse_args(_glue_option_values(sys.argv[1:] if argv is None else argv))
+    argv = _glue_option_values(sys.argv[1:] if argv is None else argv)
+    # Importing every command costs seconds (cvxpy, casadi, scipy.signal); a known command imports only its own.
+    command = next((a for a in argv if not a.startswith("-")), None)
+    parser = build_parser(command if command in COMMANDS else None)
+    args = parser.parse_args(argv)
     try:
-        return int(args.func(args) or 0)
+        with listening(stderr_progress(args.command)):
+            return int(args.func(args) or 0)
     except SwitchobsError as exc:
         # The library names what has no value; only here is the way to give it a command-line flag.
         hint = "; give values with --param NAME=VALUE" if isinstance(exc, FreeSymbolError) else ""

@@ -7,6 +7,7 @@ observer_normal_form    -- T, a_i and observability conditions of (A, C)
 theorem1_K_minus        -- the unique K_minus of Theorem 1 (seed 004)
 hoang_family_constraints-- coupling constraints of the Hoang family (seed 000 eq. (17))
 hurwitz_conditions      -- Routh–Hurwitz / Liénard–Chipart conditions
+routh_first_column      -- numeric Routh array of a rational characteristic polynomial
 observer_form_gramian   -- structured exact solution of the observer-form Lyapunov equation
 parse_spectrum          -- validated target spectrum
 """
@@ -15,12 +16,12 @@ from ._design import (GainDesign, design, design_gains, hoang_family_constraints
                       plus_coefficients, theorem1_K_minus)
 from ._lyapunov import naive_lyapunov, observer_form_gramian
 from ._normal_form import ObserverNormalForm, normal_form_matrix, observer_normal_form
-from ._routh import hurwitz_conditions, hurwitz_determinants, is_hurwitz_exact, readable_condition
+from ._routh import hurwitz_conditions, hurwitz_determinants, is_hurwitz_exact, readable_condition, routh_first_column
 from ._spectrum import LAPLACE, parse_spectrum, polynomial_coefficients, spectrum_coefficients
 
 __all__ = [
     "GainDesign", "design", "design_gains", "hoang_family_constraints", "minus_coefficients", "parse_gains", "plus_coefficients",
     "theorem1_K_minus", "naive_lyapunov", "observer_form_gramian", "ObserverNormalForm", "normal_form_matrix",
     "observer_normal_form", "hurwitz_conditions", "hurwitz_determinants", "is_hurwitz_exact",
-    "readable_condition", "LAPLACE", "parse_spectrum", "polynomial_coefficients", "spectrum_coefficients",
+    "readable_condition", "routh_first_column", "LAPLACE", "parse_spectrum", "polynomial_coefficients", "spectrum_coefficients",
 ]

@@ -27,14 +27,16 @@ from typing import Any
 
 import numpy as np
 import sympy as sp
+from sympy.polys.matrices import DomainMatrix
 
 from ..exceptions import (CertificateError, DimensionError, ExpressionError, ModelError, NotHurwitzError,
                           NotObservableError, SpectrumError)
 from ..model import Model, free_names, make_symbol, numeric, parse_expression, rational_value
 from ._lyapunov import _generic_solution, observer_form_gramian
-from ._normal_form import ObserverNormalForm, observer_normal_form
+from .._progress import progress
+from ._normal_form import ObserverNormalForm, is_rational, observer_normal_form, rational_matrix
 from ._recheck import lyapunov_by_substitution, lyapunov_residual_is_zero
-from ._routh import hurwitz_conditions, readable_condition
+from ._routh import hurwitz_conditions, readable_condition, routh_first_column
 from ._spectrum import LAPLACE, parse_spectrum, polynomial_coefficients, spectrum_coefficients
 
 __all__ = ["GainDesign", "design_gains", "design", "theorem1_K_minus", "hoang_family_constraints", "minus_coefficients",
@@ -56,6 +58,26 @@ def _matrix_json(M: sp.MatrixBase) -> list:
     return [[str(x) for x in M.row(i)] for i in range(M.rows)]
 
 
+def _product(X: sp.MatrixBase, Y: sp.MatrixBase) -> sp.ImmutableMatrix | None:
+    """``X Y`` over QQ when both are rational (exact, no expressions); ``None`` otherwise."""
+    if not (is_rational(X) and is_rational(Y)):
+        return None
+    return sp.ImmutableMatrix((rational_matrix(sp.Matrix(X)) * rational_matrix(sp.Matrix(Y))).to_Matrix())
+
+
+def _to_model(nf: ObserverNormalForm, k_nf: sp.MatrixBase) -> sp.ImmutableMatrix:
+    """``T^-1 k_nf``: a normal-form gain in the model's coordinates."""
+    if nf.is_identity:
+        return sp.ImmutableMatrix(k_nf)
+    rational = _product(nf.T_inv, k_nf)
+    return rational if rational is not None else sp.ImmutableMatrix((nf.T_inv * k_nf).applyfunc(sp.cancel))
+
+
+def _to_normal_form(nf: ObserverNormalForm, K: sp.MatrixBase) -> sp.MatrixBase:
+    rational = _product(nf.T, K)
+    return rational if rational is not None else nf.T * sp.Matrix(K)
+
+
 def _sign(i: int) -> int:
     """(-1)^i for the 1-based index i."""
     return -1 if i % 2 else 1
@@ -63,13 +85,13 @@ def _sign(i: int) -> int:
 
 def plus_coefficients(nf: ObserverNormalForm, K_plus: sp.MatrixBase) -> tuple[sp.Expr, ...]:
     """``alpha_plus_i = (T K_plus)_i - a_i``: characteristic coefficients of ``A_plus``."""
-    k_nf = nf.T * sp.Matrix(K_plus)
+    k_nf = _to_normal_form(nf, K_plus)
     return tuple(sp.expand(k_nf[i] - nf.a[i]) for i in range(len(nf.a)))
 
 
 def minus_coefficients(nf: ObserverNormalForm, K_minus: sp.MatrixBase) -> tuple[sp.Expr, ...]:
     """``alpha_minus_i = (-1)^i ((T K_minus)_i - a_i)``: characteristic coefficients of ``A_minus``."""
-    k_nf = nf.T * sp.Matrix(K_minus)
+    k_nf = _to_normal_form(nf, K_minus)
     return tuple(sp.expand(_sign(i + 1) * (k_nf[i] - nf.a[i])) for i in range(len(nf.a)))
 
 
@@ -79,12 +101,10 @@ def theorem1_K_minus(nf: ObserverNormalForm, K_plus: sp.MatrixBase) -> sp.Immuta
     In normal form ``k_i^- = (-1)^i k_i^+ + (1 - (-1)^i) a_i``; then
     ``K_minus = T^-1 K_nf_minus``.
     """
-    k_nf = nf.T * sp.Matrix(K_plus)
+    k_nf = _to_normal_form(nf, K_plus)
     n = len(nf.a)
     k_nf_minus = sp.Matrix([_sign(i) * k_nf[i - 1] + (1 - _sign(i)) * nf.a[i - 1] for i in range(1, n + 1)])
-    if nf.is_identity:
-        return sp.ImmutableMatrix(k_nf_minus)
-    return sp.ImmutableMatrix((nf.T_inv * k_nf_minus).applyfunc(sp.cancel))
+    return _to_model(nf, k_nf_minus)
 
 
 def hoang_family_constraints(alpha_plus: Sequence[sp.Expr], alpha_minus: Sequence[sp.Expr]) -> list[sp.Expr]:
@@ -122,6 +142,9 @@ def parse_gains(gains: str | Sequence, model: Model, *, what: str) -> sp.Immutab
         if isinstance(g, sp.Basic):
             out.append(g)
             continue
+        if isinstance(g, (float, np.floating)):  # its exact binary value, as everywhere (rational_value)
+            out.append(rational_value(g, what=f"{what} entry {i + 1}"))
+            continue
         text = str(g).strip()
         for name in free_names(text):
             if name in forbidden:
@@ -139,7 +162,14 @@ def _gain_symbols(K: sp.MatrixBase, model: Model) -> list[sp.Symbol]:
     return sorted(syms, key=lambda s: order[s])
 
 
+def _all_rational(values: Sequence[sp.Expr]) -> bool:
+    return all(sp.sympify(x).is_Rational for x in values)
+
+
 def _readable(alpha: Sequence[sp.Expr], unknowns: Sequence[sp.Symbol]) -> tuple[sp.Basic, ...]:
+    if _all_rational(alpha):  # decided by the numeric Routh array: nothing is left open, or it fails
+        column = routh_first_column(alpha)
+        return () if len(column) == len(alpha) + 1 and column[-1] > 0 else (sp.false,)
     out = []
     for g in hurwitz_conditions(alpha):
         cond = readable_condition(g, unknowns)
@@ -241,15 +271,18 @@ class GainDesign:
         def residual_zero(A: sp.MatrixBase, C: sp.MatrixBase) -> bool:
             return generic if generic is not None else lyapunov_residual_is_zero(A, self.P, sp.Matrix(C).T * C)
 
-        s = LAPLACE
-        cp_plus = self.A_plus.charpoly(s).as_expr() - self.characteristic_polynomial("plus")
-        cp_minus = self.A_minus.charpoly(s).as_expr() - self.characteristic_polynomial("minus")
+        def charpoly_is(A: sp.MatrixBase, alpha: Sequence[sp.Expr]) -> bool:
+            # Coefficient by coefficient, from the matrix's own domain (QQ for numbers): no degree-n expression.
+            dm = DomainMatrix.from_Matrix(sp.Matrix(A))
+            coeffs = [dm.domain.to_sympy(c) for c in dm.charpoly()]
+            return coeffs[0] == 1 and all(sp.cancel(c - a) == 0 for c, a in zip(coeffs[1:], alpha))
+
         subs = dict(zip(self.family_symbols, self.K_minus))
         checks = {
             "lyapunov_plus": residual_zero(self.A_plus, self.C_plus),
-            "charpoly_plus": sp.cancel(cp_plus) == 0,
-            "charpoly_minus": sp.cancel(cp_minus) == 0,
-            "P_symmetric": all(sp.cancel(x) == 0 for x in self.P - self.P.T),
+            "charpoly_plus": charpoly_is(self.A_plus, self.alpha_plus),
+            "charpoly_minus": charpoly_is(self.A_minus, self.alpha_minus),
+            "P_symmetric": self.P == self.P.T or all(sp.cancel(x) == 0 for x in self.P - self.P.T),
         }
         if not self.conditional:
             checks["lyapunov_minus"] = residual_zero(self.A_minus, self.C_minus)
@@ -439,7 +472,7 @@ class GainDesign:
 def design_gains(model: Model, spectrum: str | Sequence | None = None, *,
            characteristic_polynomial: str | sp.Expr | Sequence | None = None,
            K_plus: str | Sequence | sp.MatrixBase | None = None,
-           K_minus: str | Sequence | sp.MatrixBase | None = None) -> GainDesign:
+           K_minus: str | Sequence | sp.MatrixBase | None = None, coupling: bool | None = None) -> GainDesign:
     """Design the switched gain pair and its common Lyapunov certificate, exactly.
 
     Give exactly one of ``spectrum``, ``characteristic_polynomial`` or ``K_plus``.
@@ -457,6 +490,14 @@ def design_gains(model: Model, spectrum: str | Sequence | None = None, *,
     K_minus : optional
         Gains for ``s < 0``.  Omitted: the Theorem 1 choice.  Given: must
         satisfy the Hoang-family coupling constraints (seed 000 eq. (17)).
+    coupling : bool, optional
+        Compute the coupling constraints on a generic ``K_minus``
+        (``gain_constraints``).  Default: when symbols are left in the
+        characteristic coefficients (they are conditions worth reading), not
+        for numbers.  A numeric ``K_minus`` is then checked directly: ``P`` of
+        both sides proportional, in exact rational arithmetic.  Asking for them
+        on a numeric design of large dimension is costly (a generic solve in
+        ``n`` symbols).
 
     Returns
     -------
@@ -465,6 +506,14 @@ def design_gains(model: Model, spectrum: str | Sequence | None = None, *,
     Raises
     ------
     SpectrumError, NotObservableError, NotHurwitzError, DimensionError, CertificateError
+
+    Notes
+    -----
+    Numbers stay numbers: when the model, the target and the gains are
+    rational, the normal form, ``K_plus``, ``K_minus``, the Routh array and ``P``
+    are computed by exact matrix arithmetic over QQ (sympy's DomainMatrix,
+    flint-backed), with no expression and no symbolic determinant; only
+    remaining symbols go through the symbolic path.
 
     References
     ----------
@@ -482,9 +531,11 @@ def design_gains(model: Model, spectrum: str | Sequence | None = None, *,
     if sum(given) != 1:
         raise SpectrumError("give exactly one of spectrum, characteristic_polynomial or K_plus "
                             f"(got {sum(given)})")
+    progress(f"design: observer normal form (n = {model.n})")
     nf = observer_normal_form(model)
     a = list(nf.a)
     poles = None
+    progress(f"design: K_plus and Routh–Hurwitz conditions (n = {model.n})")
     if K_plus is not None:
         Kp = parse_gains(K_plus, model, what="K_plus")
         alpha_plus = plus_coefficients(nf, Kp)
@@ -494,19 +545,16 @@ def design_gains(model: Model, spectrum: str | Sequence | None = None, *,
             alpha_plus = spectrum_coefficients(poles)
         else:
             alpha_plus = polynomial_coefficients(characteristic_polynomial, model)
-        k_nf = sp.Matrix([a[i] + alpha_plus[i] for i in range(model.n)])
-        Kp = sp.ImmutableMatrix(k_nf if nf.is_identity else (nf.T_inv * k_nf).applyfunc(sp.cancel))
+        Kp = _to_model(nf, sp.Matrix([a[i] + alpha_plus[i] for i in range(model.n)]))
     hurwitz_plus = _readable(alpha_plus, _gain_symbols(Kp, model))
     if any(c is sp.false for c in hurwitz_plus):
         _raise_not_hurwitz("A_plus", model.A - Kp * model.C)
 
-    family = tuple(make_symbol(f"k{i}_minus") for i in range(1, model.n + 1))
-    alpha_family = minus_coefficients(nf, sp.Matrix(family))
-    constraints = tuple(sp.Eq(c, 0, evaluate=False) for c in hoang_family_constraints(alpha_plus, alpha_family))
-
+    progress(f"design: common Lyapunov matrix P (n = {model.n})")
     P_nf, nums, den = observer_form_gramian(alpha_plus)
-    P = P_nf if nf.is_identity else sp.ImmutableMatrix((nf.T.T * P_nf * nf.T).applyfunc(sp.cancel))
+    P = P_nf if nf.is_identity else _congruence(nf.T, P_nf)
     C = model.C
+    family = tuple(make_symbol(f"k{i}_minus") for i in range(1, model.n + 1))
     if K_minus is None:
         choice = "theorem1"
         conditional = False
@@ -517,15 +565,28 @@ def design_gains(model: Model, spectrum: str | Sequence | None = None, *,
         choice = "hoang-family"
         Km = parse_gains(K_minus, model, what="K_minus")
         alpha_minus = minus_coefficients(nf, Km)
-        subs = dict(zip(family, Km))
-        broken = [c for c in constraints if sp.cancel(c.lhs.xreplace(subs)) != 0]
-        conditional = bool(Km.free_symbols - set(model.parameter_symbols) - Kp.free_symbols)
-        if broken and not conditional:
-            raise CertificateError(
-                f"K_minus = {list(Km)} admits no common P with K_plus = {list(Kp)}: the coupling constraint "
-                f"{sp.sstr(broken[0])} evaluates to {sp.factor(broken[0].lhs.xreplace(subs))} instead of 0; "
-                "omit K_minus for the Theorem 1 choice or use `switchobs certify` for a dwell-time verdict")
+    if coupling is None:
+        coupling = not (_all_rational(alpha_plus) and _all_rational(alpha_minus))
+    constraints: tuple[sp.Basic, ...] = ()
+    if coupling:
+        progress(f"design: Hoang-family coupling constraints (n = {model.n})")
+        alpha_family = minus_coefficients(nf, sp.Matrix(family))
+        constraints = tuple(sp.Eq(c, 0, evaluate=False) for c in hoang_family_constraints(alpha_plus, alpha_family))
+    if K_minus is not None:
         _, nums_minus, den_minus = observer_form_gramian(alpha_minus)
+        conditional = bool(Km.free_symbols - set(model.parameter_symbols) - Kp.free_symbols)
+        if constraints:
+            subs = dict(zip(family, Km))
+            broken = [c for c in constraints if sp.cancel(c.lhs.xreplace(subs)) != 0]
+            if broken and not conditional:
+                _raise_not_coupled(Kp, Km, f"the coupling constraint {sp.sstr(broken[0])} evaluates to "
+                                           f"{sp.factor(broken[0].lhs.xreplace(subs))} instead of 0")
+        else:  # rational u_m on both sides: P(alpha_plus) and P(alpha_minus) must be proportional
+            m = next((m for m in range(1, model.n) if nums[m] * nums_minus[0] != nums[0] * nums_minus[m]), None)
+            if m is not None:
+                _raise_not_coupled(Kp, Km, f"P(alpha_plus) and P(alpha_minus) are not proportional "
+                                           f"(u_{m + 1}/u_1 is {nums[m] / nums[0]} on the plus side and "
+                                           f"{nums_minus[m] / nums_minus[0]} on the minus side)")
         ratio = sp.cancel((nums[0] / den) / (nums_minus[0] / den_minus))
         C_minus = sp.ImmutableMatrix(sp.sqrt(ratio) * C)
     # Theorem 1 gives A_minus the characteristic polynomial of A_plus: same conditions.
@@ -545,6 +606,20 @@ def design_gains(model: Model, spectrum: str | Sequence | None = None, *,
 #: At the top level only ``switchobs.design_gains`` is exported, so that ``switchobs.design`` is always
 #: the sub-package, whatever was imported first.
 design = design_gains
+
+
+def _congruence(T: sp.MatrixBase, P_nf: sp.MatrixBase) -> sp.ImmutableMatrix:
+    """``T' P_nf T``: the normal-form Lyapunov matrix in the model's coordinates."""
+    if is_rational(T) and is_rational(P_nf):
+        Tq = rational_matrix(sp.Matrix(T))
+        return sp.ImmutableMatrix((Tq.transpose() * rational_matrix(sp.Matrix(P_nf)) * Tq).to_Matrix())
+    return sp.ImmutableMatrix((T.T * P_nf * T).applyfunc(sp.cancel))
+
+
+def _raise_not_coupled(Kp: sp.MatrixBase, Km: sp.MatrixBase, why: str) -> None:
+    raise CertificateError(
+        f"K_minus = {list(Km)} admits no common P with K_plus = {list(Kp)}: {why}; "
+        "omit K_minus for the Theorem 1 choice or use `switchobs certify` for a dwell-time verdict")
 
 
 def _raise_not_hurwitz(name: str, M: sp.MatrixBase) -> None:

@@ -17,8 +17,10 @@ from __future__ import annotations
 
 from collections.abc import Sequence
 from functools import lru_cache
+from typing import Any
 
 import sympy as sp
+from sympy import QQ
 from sympy.polys.matrices import DomainMatrix
 
 __all__ = ["observer_form_gramian", "checkerboard_from_u", "naive_lyapunov"]
@@ -37,14 +39,9 @@ def checkerboard_from_u(u: Sequence[sp.Expr]) -> sp.ImmutableMatrix:
     return sp.ImmutableMatrix(n, n, entry)
 
 
-@lru_cache(maxsize=32)
-def _generic_solution(n: int) -> tuple[tuple[sp.Symbol, ...], tuple[sp.Expr, ...], sp.Expr]:
-    """Numerators ``N_m`` and common denominator ``D`` of ``u_m`` for symbolic ``alpha``.
-
-    Solved once per dimension over ``ZZ[alpha_1..alpha_n]`` fraction-free and
-    cached; callers substitute their own coefficients.
-    """
-    alpha = sp.symbols(f"alpha_1:{n + 1}")
+def _first_row_system(alpha: Sequence[Any]) -> tuple[list[list[Any]], list[Any]]:
+    """The ``n x n`` system in ``u_1..u_n``: the first row of ``F'P + PF + e1 e1' = 0`` (checkerboard P)."""
+    n = len(alpha)
     rows, rhs = [], []
     for j in range(n):  # equation (1, j+1) of F'P + PF + e1 e1' = 0
         row = [sp.Integer(0)] * n
@@ -57,6 +54,18 @@ def _generic_solution(n: int) -> tuple[tuple[sp.Symbol, ...], tuple[sp.Expr, ...
             row[(j - 1) // 2] += sign
         rows.append(row)
         rhs.append(sp.Integer(-1) if j == 0 else sp.Integer(0))
+    return rows, rhs
+
+
+@lru_cache(maxsize=32)
+def _generic_solution(n: int) -> tuple[tuple[sp.Symbol, ...], tuple[sp.Expr, ...], sp.Expr]:
+    """Numerators ``N_m`` and common denominator ``D`` of ``u_m`` for symbolic ``alpha``.
+
+    Solved once per dimension over ``ZZ[alpha_1..alpha_n]`` fraction-free and
+    cached; callers substitute their own coefficients.
+    """
+    alpha = sp.symbols(f"alpha_1:{n + 1}")
+    rows, rhs = _first_row_system(alpha)
     M = DomainMatrix.from_list_sympy(n, n, rows)
     b = DomainMatrix.from_list_sympy(n, 1, [[r] for r in rhs])
     M, b = M.unify(b)
@@ -67,6 +76,16 @@ def _generic_solution(n: int) -> tuple[tuple[sp.Symbol, ...], tuple[sp.Expr, ...
     num, den = Mr.solve_den(br)
     to = Mr.domain.to_sympy
     return alpha, tuple(to(num[m, 0].element) for m in range(n)), to(den)
+
+
+def _rational_solution(alpha: Sequence[sp.Rational]) -> tuple[sp.Rational, ...]:
+    """``u_1..u_n`` for rational ``alpha``: the same system solved directly over QQ (no generic solve)."""
+    rows, rhs = _first_row_system([QQ.from_sympy(sp.sympify(a)) for a in alpha])
+    n = len(alpha)
+    M = DomainMatrix([[QQ.convert(x) for x in row] for row in rows], (n, n), QQ)
+    b = DomainMatrix([[QQ.convert(r)] for r in rhs], (n, 1), QQ)
+    u = M.lu_solve(b)
+    return tuple(QQ.to_sympy(u[m, 0].element) for m in range(n))
 
 
 def observer_form_gramian(alpha: Sequence[sp.Expr]) -> tuple[sp.ImmutableMatrix, tuple[sp.Expr, ...], sp.Expr]:
@@ -85,8 +104,12 @@ def observer_form_gramian(alpha: Sequence[sp.Expr]) -> tuple[sp.ImmutableMatrix,
         ``N_1..N_n`` with ``u_m = N_m / D``.
     denominator : sympy.Expr
         ``D``, a multiple of the Hurwitz determinant ``Delta_(n-1)`` (non-zero
-        when ``F`` is Hurwitz).
+        when ``F`` is Hurwitz).  For rational ``alpha`` the system is solved
+        directly over QQ: then ``N_m = u_m`` and ``D = 1``.
     """
+    if all(sp.sympify(a).is_Rational for a in alpha):
+        u = _rational_solution(alpha)
+        return checkerboard_from_u(u), u, sp.Integer(1)
     n = len(alpha)
     generic, nums, den = _generic_solution(n)
     subs = dict(zip(generic, alpha))

@@ -11,11 +11,13 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import sympy as sp
+from sympy import QQ
+from sympy.polys.matrices import DomainMatrix
 
 from ..exceptions import NotObservableError
 from ..model import Model
 
-__all__ = ["ObserverNormalForm", "observer_normal_form", "normal_form_matrix"]
+__all__ = ["ObserverNormalForm", "observer_normal_form", "normal_form_matrix", "is_rational", "rational_matrix"]
 
 
 def normal_form_matrix(a: sp.MatrixBase | list) -> sp.ImmutableMatrix:
@@ -36,6 +38,52 @@ def _is_normal_form(A: sp.MatrixBase, C: sp.MatrixBase) -> bool:
     if list(C) != [1] + [0] * (n - 1):
         return False
     return all(A[i, j] == (1 if j == i + 1 else 0) for i in range(n) for j in range(1, n))
+
+
+def is_rational(M: sp.MatrixBase) -> bool:
+    """Every entry is a rational number (no symbol, no irrational constant)."""
+    return all(sp.sympify(x).is_Rational for x in M)
+
+
+def rational_matrix(M: sp.MatrixBase) -> DomainMatrix:
+    """A rational sympy matrix as a DomainMatrix over QQ (flint-backed when python-flint is installed)."""
+    return DomainMatrix([[QQ.from_sympy(x) for x in M.row(i)] for i in range(M.rows)], M.shape, QQ)
+
+
+def _rational_observability(A: DomainMatrix, C: DomainMatrix) -> DomainMatrix:
+    rows = [C]
+    for _ in range(A.shape[0] - 1):
+        rows.append(rows[-1] * A)
+    return DomainMatrix.vstack(*rows)
+
+
+def _unobservable(model: Model, direction: list) -> NotObservableError:
+    pretty = "[" + ", ".join(str(x) for x in direction) + "]"
+    return NotObservableError(
+        f"the pair (A, C) of model {model.name!r} is not observable: the direction v = {pretty} "
+        f"(in states {list(model.states)}) is unobservable (C A^k v = 0 for all k); "
+        "change C or A so that every state shows up in the output")
+
+
+def _rational_normal_form(model: Model) -> ObserverNormalForm:
+    """The normal form of a numeric pair, in exact rational matrix arithmetic over QQ (no expressions)."""
+    n = model.n
+    O = _rational_observability(rational_matrix(sp.Matrix(model.A)), rational_matrix(sp.Matrix(model.C)))
+    det = O.det()
+    if det == 0:
+        raise _unobservable(model, [QQ.to_sympy(x) for x in O.nullspace().to_Matrix().row(0)])
+    a = [-c for c in rational_matrix(sp.Matrix(model.A)).charpoly()[1:]]
+    a_sym = sp.ImmutableMatrix([QQ.to_sympy(x) for x in a])
+    O_sym = sp.ImmutableMatrix(O.to_Matrix())
+    if _is_normal_form(sp.Matrix(model.A), sp.Matrix(model.C)):
+        eye = sp.ImmutableMatrix.eye(n)
+        return ObserverNormalForm(a_sym, eye, eye, O_sym, QQ.to_sympy(det), ())
+    O_nf = _rational_observability(rational_matrix(normal_form_matrix(list(a_sym))),
+                                   rational_matrix(sp.Matrix([[1] + [0] * (n - 1)])))
+    T = O_nf.lu_solve(O)
+    T_inv = O.lu_solve(O_nf)
+    return ObserverNormalForm(a_sym, sp.ImmutableMatrix(T.to_Matrix()), sp.ImmutableMatrix(T_inv.to_Matrix()), O_sym,
+                              QQ.to_sympy(det), ())
 
 
 @dataclass(frozen=True)
@@ -117,16 +165,13 @@ def observer_normal_form(model: Model) -> ObserverNormalForm:
     (Ne(a, 0),)
     """
     A, C = sp.Matrix(model.A), sp.Matrix(model.C)
+    if is_rational(A) and is_rational(C):
+        return _rational_normal_form(model)
     n = model.n
     O = _observability_matrix(A, C)
     det = sp.factor(O.det(method="berkowitz"))
     if det == 0:
-        direction = O.nullspace(simplify=True)[0]
-        pretty = "[" + ", ".join(str(sp.simplify(x)) for x in direction) + "]"
-        raise NotObservableError(
-            f"the pair (A, C) of model {model.name!r} is not observable: the direction v = {pretty} "
-            f"(in states {list(model.states)}) is unobservable (C A^k v = 0 for all k); "
-            "change C or A so that every state shows up in the output")
+        raise _unobservable(model, [sp.simplify(x) for x in O.nullspace(simplify=True)[0]])
     _, factors = sp.factor_list(det)
     conditions = tuple(sp.Ne(f, 0, evaluate=False) for f, _ in factors if f.free_symbols)
     s = sp.Dummy("s")

@@ -14,9 +14,11 @@ from collections.abc import Sequence
 from functools import lru_cache
 
 import sympy as sp
+from sympy import QQ
 from sympy.polys.matrices import DomainMatrix
 
-__all__ = ["hurwitz_determinants", "hurwitz_conditions", "readable_condition", "is_hurwitz_exact"]
+__all__ = ["hurwitz_determinants", "hurwitz_conditions", "readable_condition", "is_hurwitz_exact",
+           "routh_first_column"]
 
 
 def _hurwitz_matrix(alpha: Sequence[sp.Expr]) -> list[list[sp.Expr]]:
@@ -65,8 +67,47 @@ def hurwitz_conditions(alpha: Sequence[sp.Expr]) -> list[sp.Expr]:
     return [g.xreplace(subs) for g in conditions]
 
 
+def routh_first_column(alpha: Sequence[sp.Rational]) -> list[sp.Rational]:
+    """First column of the Routh array of ``s^n + alpha_1 s^(n-1) + ... + alpha_n`` (rational ``alpha``).
+
+    Exact rational arithmetic, ``O(n^2)`` operations and no determinant: the
+    polynomial is Hurwitz iff all ``n + 1`` entries are positive (Routh).  The
+    array stops at the first entry that is not positive (a zero there is the
+    degenerate case in which the polynomial has roots on or to the right of
+    the imaginary axis), so a shorter list means "not Hurwitz".
+
+    Examples
+    --------
+    >>> routh_first_column([6, 11, 6])          # (s+1)(s+2)(s+3)
+    [1, 6, 10, 6]
+    >>> routh_first_column([1, 1, 2])           # not Hurwitz: Delta_2 = 1 - 2 < 0
+    [1, 1, -1]
+    """
+    n = len(alpha)
+    coeff = [QQ(1), *(QQ.from_sympy(sp.sympify(a)) for a in alpha)]
+    width = n // 2 + 2
+    prev = (coeff[0::2] + [QQ(0)] * width)[:width]
+    cur = (coeff[1::2] + [QQ(0)] * width)[:width]
+    column = [QQ(1)]
+    for _ in range(n):
+        pivot = cur[0]
+        column.append(pivot)
+        if pivot <= 0:
+            break
+        nxt = [(pivot * prev[j + 1] - prev[0] * cur[j + 1]) / pivot for j in range(width - 1)] + [QQ(0)]
+        prev, cur = cur, nxt
+    return [QQ.to_sympy(x) for x in column]
+
+
 def is_hurwitz_exact(alpha: Sequence[sp.Expr]) -> bool | None:
-    """Decide the Hurwitz property exactly; ``None`` when symbols leave it open."""
+    """Decide the Hurwitz property exactly; ``None`` when symbols leave it open.
+
+    Rational coefficients go through the numeric Routh array
+    (:func:`routh_first_column`); symbolic ones through the Hurwitz determinants.
+    """
+    if all(sp.sympify(a).is_Rational for a in alpha):
+        column = routh_first_column(alpha)
+        return len(column) == len(alpha) + 1 and all(x > 0 for x in column)
     verdicts = [sp.sympify(g).is_positive for g in hurwitz_conditions(alpha)]
     if all(v is True for v in verdicts):
         return True

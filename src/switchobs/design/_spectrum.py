@@ -3,11 +3,13 @@
 from __future__ import annotations
 
 from collections.abc import Sequence
+from typing import Any
 
 import sympy as sp
+from sympy import QQ_I
 
 from ..exceptions import SpectrumError
-from ..model import Model, free_names, make_symbol, parse_expression
+from ..model import Model, free_names, make_symbol, parse_expression, rational_value
 from ._routh import is_hurwitz_exact
 
 __all__ = ["parse_spectrum", "spectrum_coefficients", "polynomial_coefficients", "LAPLACE"]
@@ -61,8 +63,10 @@ def parse_spectrum(spectrum: str | Sequence, model: Model) -> tuple[sp.Expr, ...
     for i, p in enumerate(items):
         if isinstance(p, sp.Basic):
             poles.append(p)
-        elif isinstance(p, complex):
-            poles.append(sp.nsimplify(p.real, rational=True) + sp.I * sp.nsimplify(p.imag, rational=True))
+        elif isinstance(p, (float, complex)):  # exact binary values, as everywhere (rational_value)
+            z = complex(p)
+            poles.append(rational_value(z.real, what=f"spectrum pole {i + 1}")
+                         + sp.I * rational_value(z.imag, what=f"spectrum pole {i + 1}"))
         else:
             if isinstance(p, str) and not p.strip():
                 raise SpectrumError(f"pole {i + 1} of the spectrum {spectrum!r} is empty")
@@ -80,14 +84,32 @@ def parse_spectrum(spectrum: str | Sequence, model: Model) -> tuple[sp.Expr, ...
         raise SpectrumError(f"cannot decide the sign of the real part of pole {p}; write it with positive "
                             "design symbols (e.g. -beta1) or give the parameter values")
     coeffs = spectrum_coefficients(poles)
-    if any(sp.simplify(sp.im(c)) != 0 for c in coeffs):
+    if any((sp.im(c) if c.is_number else sp.simplify(sp.im(c))) != 0 for c in coeffs):
         raise SpectrumError(f"the poles {[str(p) for p in poles]} are not closed under complex conjugation, "
                             "so no real gain places them")
     return tuple(poles)
 
 
+def _gaussian(p: sp.Expr) -> Any:
+    """``p`` as an element of QQ<I> (Gaussian rationals), or None if it is not one."""
+    if not p.is_number:
+        return None
+    re, im = p.as_real_imag()
+    return QQ_I.from_sympy(re + sp.I * im) if re.is_Rational and im.is_Rational else None
+
+
 def spectrum_coefficients(poles: Sequence[sp.Expr]) -> tuple[sp.Expr, ...]:
-    """``alpha_1..alpha_n`` of ``prod (s - p) = s^n + alpha_1 s^(n-1) + ... + alpha_n``."""
+    """``alpha_1..alpha_n`` of ``prod (s - p) = s^n + alpha_1 s^(n-1) + ... + alpha_n``.
+
+    Numeric poles (Gaussian rationals) are multiplied out as coefficient lists
+    over QQ<I>, exactly and without building an expression.
+    """
+    numbers = [_gaussian(sp.sympify(p)) for p in poles]
+    if all(x is not None for x in numbers):
+        coeffs = [QQ_I(1)]
+        for x in numbers:  # (s - x) * sum c_k s^(m-k)
+            coeffs = [c - x * prev for c, prev in zip(coeffs + [QQ_I(0)], [QQ_I(0)] + coeffs)]
+        return tuple(QQ_I.to_sympy(c) for c in coeffs[1:])
     coeffs = sp.Poly(sp.Mul(*[(LAPLACE - p) for p in poles]), LAPLACE).all_coeffs()
     return tuple(sp.expand(c) for c in coeffs[1:])
 

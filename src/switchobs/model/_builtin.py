@@ -59,7 +59,7 @@ def builtin_model(name: str) -> Model:
         return _normal_form(n)
     if name in _FILES:
         text = resources.files("switchobs.model").joinpath("builtin", f"{name}.toml").read_text("utf-8")
-        return Model.from_dict(tomllib.loads(text), source=f"built-in {name}")
+        return Model.from_dict(tomllib.loads(text, parse_float=str), source=f"built-in {name}")
     raise ModelError(f"unknown model {name!r}: give a built-in name ({', '.join(builtin_names())}) "
                      "or the path of a TOML file")
 

@@ -48,8 +48,9 @@ def parse_expression(text: str | int | float, names: Mapping[str, sp.Symbol], *,
     Parameters
     ----------
     text : str or number
-        The expression, e.g. ``"-a*y/vx"`` or ``"c2^2"``.  Decimal numbers are
-        converted exactly (``"187.5"`` becomes ``375/2``).
+        The expression, e.g. ``"-a*y/vx"`` or ``"c2^2"``.  Decimal numbers in
+        text are converted exactly (``"187.5"`` becomes ``375/2``); a float
+        object is its exact binary value.
     names : mapping of str to Symbol
         The only names the expression may use (besides the functions in
         :data:`FUNCTIONS` and ``pi``, ``E``, ``I``).
@@ -64,7 +65,11 @@ def parse_expression(text: str | int | float, names: Mapping[str, sp.Symbol], *,
     """
     if isinstance(text, bool):
         raise ExpressionError(f"{what}: expected an expression, got the boolean {text!r}")
-    if isinstance(text, (int, float)):
+    if isinstance(text, float):  # a float object is its exact binary value (as in rational_value)
+        if text != text or text in (float("inf"), float("-inf")):
+            raise ExpressionError(f"{what}: {text!r} is not a finite number")
+        return sp.Rational(*text.as_integer_ratio())
+    if isinstance(text, int):
         text = repr(text)
     if not isinstance(text, str):
         raise ExpressionError(f"{what}: expected an expression string, got {type(text).__name__} {text!r}")

@@ -200,7 +200,7 @@ class Model:
         except OSError as exc:
             raise ModelError(f"cannot read model file {str(path)!r}: {exc.strerror}") from None
         try:
-            data = tomllib.loads(text)
+            data = tomllib.loads(text, parse_float=str)  # a number written in a file is text: its decimal value
         except tomllib.TOMLDecodeError as exc:
             raise ModelError(f"model file {str(path)!r} is not valid TOML: {exc}") from None
         return cls.from_dict(data, source=str(path))
@@ -277,14 +277,20 @@ class Model:
 
 
 def rational_value(value: Any, *, what: str) -> sp.Rational:
-    """Convert a user number (int, float, decimal or fraction string) to an exact rational."""
+    """Convert a user number (int, float, decimal or fraction string) to an exact rational.
+
+    One rule for every stage: text (a string, a TOML file, the command line)
+    is the exact decimal it spells (``"0.1"`` is ``1/10``); a Python float is
+    its exact binary value (``0.1`` is ``3602879701896397/36028797018963968``),
+    the number the computer actually holds, as the certificate checker reads it.
+    """
     if isinstance(value, bool):
         raise ModelError(f"{what}: expected a number, got {value!r}")
     try:
-        if isinstance(value, float):
+        if isinstance(value, (float, np.floating)):
             if not np.isfinite(value):
                 raise ValueError
-            return sp.Rational(repr(value))
+            return sp.Rational(*float(value).as_integer_ratio())
         return sp.Rational(str(value).strip())
     except (ValueError, TypeError, SyntaxError, sp.SympifyError):
         raise ModelError(f"{what}: {value!r} is not a finite number (write e.g. 187.5 or 375/2)") from None
