@@ -151,3 +151,14 @@ def test_cli_progress_lines_name_the_command(monkeypatch):
     monkeypatch.setattr("sys.stderr", err)
     stderr_progress("certify", after_s=0.0)("certify: strict LMI (n = 64, 2 modes)")
     assert err.getvalue().startswith("switchobs certify: [") and "(n = 64, 2 modes)" in err.getvalue()
+
+
+def test_cli_progress_is_throttled_and_silent_where_the_command_has_its_own_stages(monkeypatch):
+    err = io.StringIO()
+    monkeypatch.setattr("sys.stderr", err)
+    show = stderr_progress("certify", after_s=0.0)
+    for k in range(20):  # a bisection announcing every solve: not twenty lines
+        show(f"certify: dwell time (LMI solve {k})")
+    assert err.getvalue().count("\n") == 1
+    stderr_progress("demo", after_s=0.0)("design: coupling constraints (n = 4)")
+    assert err.getvalue().count("\n") == 1
