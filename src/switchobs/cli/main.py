@@ -80,18 +80,20 @@ def _glue_option_values(argv: Sequence[str]) -> list[str]:
 #: Progress notes of the library are shown once a command has run this long (quick runs stay quiet), and at
 #: most one a second (a bisection announces every solve).
 PROGRESS_AFTER_S = 1.0
+PROGRESS_EVERY_S = 1.0
 #: Commands that print their own stage lines (the library notes would repeat them).
 OWN_PROGRESS = frozenset({"demo"})
 
 
-def stderr_progress(command: str, after_s: float = PROGRESS_AFTER_S) -> Callable[[str], None]:
+def stderr_progress(command: str, after_s: float = PROGRESS_AFTER_S,
+                    every_s: float = PROGRESS_EVERY_S) -> Callable[[str], None]:
     """A progress listener printing ``switchobs CMD: [elapsed] stage (size)`` on stderr after ``after_s``."""
     start = time.perf_counter()
     last = [-math.inf]
 
     def show(text: str) -> None:
         now = time.perf_counter()
-        if now - start >= after_s and now - last[0] >= after_s and command not in OWN_PROGRESS:
+        if now - start >= after_s and now - last[0] >= every_s and command not in OWN_PROGRESS:
             last[0] = now
             print(f"switchobs {command}: [{now - start:6.1f} s] {text}", file=sys.stderr, flush=True)
 
