@@ -65,6 +65,16 @@ def test_certify_verify_round_trip_and_tampering_at_size(n):
     assert not verify_certificate(bad).holds
 
 
+def chain_file(n: int, folder: Path) -> Path:
+    """The chain model of size n as a TOML model file, as a user would write it."""
+    data = chain(n)
+    rows = ",\n     ".join("[" + ", ".join(f'"{x}"' for x in row) + "]" for row in data["A"])
+    model = folder / "chain.toml"
+    model.write_text(f'name = "chain-{n}"\nstates = {json.dumps(data["states"])}\noutput = "y"\nA = [{rows}]\n'
+                     f'C = {json.dumps(data["C"])}\ntime_scale = "y"\n', encoding="utf-8")
+    return model
+
+
 def _cli(*args: str, cwd: Path) -> subprocess.CompletedProcess:
     return subprocess.run([sys.executable, "-m", "switchobs", *args], capture_output=True, text=True, cwd=str(cwd),
                           timeout=900)
@@ -73,11 +83,7 @@ def _cli(*args: str, cwd: Path) -> subprocess.CompletedProcess:
 @pytest.mark.slow
 def test_a_32_state_model_goes_through_design_certify_verify_codegen_compile(tmp_path):
     n = 32
-    data = chain(n)
-    rows = ",\n     ".join("[" + ", ".join(f'"{x}"' for x in row) + "]" for row in data["A"])
-    model = tmp_path / "chain.toml"
-    model.write_text(f'name = "chain-{n}"\nstates = {json.dumps(data["states"])}\noutput = "y"\nA = [{rows}]\n'
-                     f'C = {json.dumps(data["C"])}\ntime_scale = "y"\n', encoding="utf-8")
+    model = chain_file(n, tmp_path)
     design = _cli("design", str(model), "--spectrum", spectrum(n), "--json", cwd=tmp_path)
     assert design.returncode == 0, design.stderr
     assert all(json.loads(design.stdout)["verified"].values())
@@ -101,11 +107,7 @@ def test_a_32_state_model_goes_through_design_certify_verify_codegen_compile(tmp
 @pytest.mark.slow
 def test_ctrl_c_stops_certify_with_130_and_no_certificate(tmp_path):
     n = 16
-    data = chain(n)
-    rows = ",\n     ".join("[" + ", ".join(f'"{x}"' for x in row) + "]" for row in data["A"])
-    model = tmp_path / "chain.toml"
-    model.write_text(f'name = "chain-{n}"\nstates = {json.dumps(data["states"])}\noutput = "y"\nA = [{rows}]\n'
-                     f'C = {json.dumps(data["C"])}\ntime_scale = "y"\n', encoding="utf-8")
+    model = chain_file(n, tmp_path)
     cert = tmp_path / "cert.json"
     proc = subprocess.Popen([sys.executable, "-m", "switchobs", "certify", str(model), "--spectrum", spectrum(n),
                              "--out", str(cert)], stderr=subprocess.PIPE, stdout=subprocess.PIPE, text=True)
