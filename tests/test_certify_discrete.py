@@ -7,7 +7,8 @@ import pytest
 import sympy as sp
 
 from switchobs.certify._discrete import (STEP_METHODS, DiscreteVerdict, check_discrete, decrease_polynomial,
-                                         discrete_certificate, speed_table)
+                                         discrete_certificate)
+from switchobs.report import speed_table
 from switchobs.design import design_gains as design
 from switchobs.exceptions import CertificateError
 from switchobs.model import Model, builtin_model

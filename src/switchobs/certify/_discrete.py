@@ -38,7 +38,6 @@ uses only :mod:`switchobs.certify._exact` (standard-library rationals).
 
 from __future__ import annotations
 
-import math
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 from enum import Enum
@@ -47,8 +46,8 @@ from typing import Any
 
 from ..exceptions import CertificateError, DimensionError
 from ..spec import STEP_METHODS, StepMethod
-from ._exact import (Matrix, definiteness, fraction_matrix, identity, inf_norm, is_zero, lyapunov_form, matmul,
-                     matrix_strings, nullspace, observable, solve, to_fraction, transpose, zeros)
+from ._exact import (Matrix, add, definiteness, fraction_matrix, identity, is_zero, lyapunov_form, matmul,
+                     matrix_strings, nullspace, observable, scale, solve, sub, to_fraction, transpose, zeros)
 
 __all__ = ["StepMethod", "STEP_METHODS", "DiscreteVerdict", "DiscreteCertificate", "discrete_certificate",
            "check_discrete", "stability_function"]
@@ -78,14 +77,6 @@ class DiscreteVerdict(str, Enum):
 MatPoly = list[Matrix]  # coefficient matrices of h^0, h^1, ...
 
 
-def _madd(A: Matrix, B: Matrix) -> Matrix:
-    return [[a + b for a, b in zip(ra, rb)] for ra, rb in zip(A, B)]
-
-
-def _mscale(c: Fraction, A: Matrix) -> Matrix:
-    return [[c * a for a in row] for row in A]
-
-
 def _powers(A: Matrix, k: int) -> list[Matrix]:
     out = [identity(len(A))]
     for _ in range(k):
@@ -95,7 +86,7 @@ def _powers(A: Matrix, k: int) -> list[Matrix]:
 
 def _poly_of_A(coeffs: Sequence[Fraction], powers: Sequence[Matrix]) -> MatPoly:
     """``sum_j c_j (h A)^j`` as coefficient matrices of ``h^j``."""
-    return [_mscale(c, powers[j]) for j, c in enumerate(coeffs)]
+    return [scale(c, powers[j]) for j, c in enumerate(coeffs)]
 
 
 def _congruence(L: MatPoly, S: Matrix) -> MatPoly:
@@ -106,15 +97,16 @@ def _congruence(L: MatPoly, S: Matrix) -> MatPoly:
     for j, Lj in enumerate(L):
         Ljt = transpose(Lj)
         for k, SLk in enumerate(SL):
-            out[j + k] = _madd(out[j + k], matmul(Ljt, SLk))
+            out[j + k] = add(out[j + k], matmul(Ljt, SLk))
     return out
 
 
-def _psub(A: MatPoly, B: MatPoly) -> MatPoly:
+def _pcombine(op: Any, A: MatPoly, B: MatPoly) -> MatPoly:
+    """``op`` (``add`` or ``sub``) coefficient by coefficient, the shorter polynomial padded with zeros."""
     n = len(A[0]) if A else len(B[0])
     size = max(len(A), len(B))
     pad = lambda X: X + [zeros(n, n)] * (size - len(X))  # noqa: E731
-    return [[[a - b for a, b in zip(ra, rb)] for ra, rb in zip(X, Y)] for X, Y in zip(pad(A), pad(B))]
+    return [op(X, Y) for X, Y in zip(pad(A), pad(B))]
 
 
 def _trim(W: MatPoly) -> MatPoly:
@@ -127,16 +119,8 @@ def decrease_polynomial(A: Matrix, P: Matrix, method: StepMethod) -> MatPoly:
     """``W(h) = D(hA)' P D(hA) - N(hA)' P N(hA)``: ``V(e) - V(e+) = (D^-1 e)' W (D^-1 e)``."""
     deg = max(len(method.numerator), len(method.denominator)) - 1
     powers = _powers(A, deg)
-    return _trim(_psub(_congruence(_poly_of_A(method.denominator, powers), P),
-                       _congruence(_poly_of_A(method.numerator, powers), P)))
-
-
-def _peval(W: MatPoly, h: Fraction) -> Matrix:
-    n = len(W[0])
-    out = zeros(n, n)
-    for k in reversed(range(len(W))):
-        out = _madd(_mscale(h, out), W[k])
-    return out
+    return _trim(_pcombine(sub, _congruence(_poly_of_A(method.denominator, powers), P),
+                           _congruence(_poly_of_A(method.numerator, powers), P)))
 
 
 # ------------------------------------------------------------------- the SOS proof
@@ -172,9 +156,9 @@ def _sos_terms(A: Matrix, P: Matrix, Q: Matrix, method: StepMethod) -> tuple[Sos
         return (SosTerm(1, (I,), Q),)
     if method.name == "radau3":
         A2 = matmul(A, A)
-        return (SosTerm(1, (I, _mscale(Fraction(-1, 6), A)), Q),
-                SosTerm(3, (A,), _mscale(Fraction(1, 12), Q)),
-                SosTerm(4, (A2,), _mscale(Fraction(1, 36), P)))
+        return (SosTerm(1, (I, scale(Fraction(-1, 6), A)), Q),
+                SosTerm(3, (A,), scale(Fraction(1, 12), Q)),
+                SosTerm(4, (A2,), scale(Fraction(1, 36), P)))
     return None
 
 
@@ -182,7 +166,7 @@ def _sos_expand(terms: Sequence[SosTerm], n: int) -> MatPoly:
     total: MatPoly = [zeros(n, n)]
     for t in terms:
         part = [zeros(n, n)] * t.power + _congruence(list(t.factor), t.middle)
-        total = _psub(total, [_mscale(Fraction(-1), X) for X in part])
+        total = _pcombine(add, total, part)
     return _trim(total)
 
 
@@ -373,7 +357,7 @@ def _uniqueness(A_plus: Matrix, A_minus: Matrix, C: Matrix) -> str | None:
     if len(C) != 1:
         return f"the uniqueness lemma needs one output, the model has {len(C)}"
     kernel = nullspace(C, len(A_plus))
-    S = _madd(A_plus, A_minus)
+    S = add(A_plus, A_minus)
     if kernel and not is_zero(matmul(S, transpose(kernel))):
         return "A_plus + A_minus does not vanish on ker C"
     for name, A in (("A_plus", A_plus), ("A_minus", A_minus)):
@@ -436,7 +420,7 @@ def check_discrete(A_plus: Any, A_minus: Any, C: Any, P: Any, method: str, data:
             for t in terms:
                 if not definiteness(t.middle, strict=False).holds:
                     raise CertificateError(f"{name}: an SOS middle matrix (power {t.power}) is not >= 0")
-            if not all(is_zero(X) for X in _psub(_sos_expand(terms, n), W)):
+            if not all(is_zero(X) for X in _pcombine(sub, _sos_expand(terms, n), W)):
                 raise CertificateError(f"{name}: the SOS terms do not add up to D'P_dD - N'P_dN for method "
                                        f"{m.name}")
             # one term h^k L' S L with S > 0 and L constant and invertible makes W(h) > 0 for every h > 0
@@ -533,17 +517,3 @@ def discrete_certificate(A_plus: Any, A_minus: Any, C: Any, P: Any, *, method: s
     """
     return check_discrete(A_plus, A_minus, C, P, method)
 
-
-def speed_table(h_bound: float | None, *, accel_max: float, rate_hz: float, speed_min: float) -> tuple[float, float]:
-    """ABS units: ``(lowest speed certified at rate_hz for |x2| <= accel_max, rate needed down to speed_min)``.
-
-    With ``s = x2 / vx`` the step length is ``h = |x2| dt / vx``; ``h <= h_bound``
-    holds for ``vx >= accel_max / (rate_hz h_bound)`` and, at ``speed_min``,
-    for ``rate >= accel_max / (speed_min h_bound)``.  ``h_bound = None``
-    (every step) gives ``(0, 0)``.
-    """
-    if h_bound is None:
-        return 0.0, 0.0
-    if not math.isfinite(h_bound) or h_bound <= 0:
-        raise DimensionError(f"h_bound must be a positive number, got {h_bound!r}")
-    return accel_max / (rate_hz * h_bound), accel_max / (speed_min * h_bound)

@@ -297,7 +297,6 @@ def synthesize_gains(A: Any, C: Any, *, decay_rate: Any, noise_weight: float = 0
     if len(A_ex[0]) != n:
         raise DimensionError(f"A must be square, got {n}x{len(A_ex[0])}")
     C_ex = fraction_matrix(C, what="C", cols=n)
-    k = len(C_ex)
     rate = to_fraction(decay_rate, what="decay_rate")
     if rate <= 0:
         raise ModelError(f"decay_rate must be positive, got {rate}")

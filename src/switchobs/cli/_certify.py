@@ -6,7 +6,7 @@ import argparse
 import math
 
 from ..certify import certify_model
-from ..certify._discrete import STEP_METHODS
+from ..spec import STEP_METHODS
 from ..exceptions import SpectrumError
 from ..model import load_model
 from ._common import add_model_arguments, emit_json, parse_params

@@ -5,7 +5,6 @@ from __future__ import annotations
 import argparse
 import shlex
 import sys
-from fractions import Fraction
 from typing import Any
 
 import sympy as sp

@@ -11,7 +11,7 @@ reproduction_pages, write_reproductions, stale_pages, ReproductionPage, GENERATE
                        pages generated from runs (``switchobs reproduce``)
 demo_figures, mark_road_changes -- figures of the demo (matplotlib Figure objects)
 Progress, Stage, check_prerequisites -- stage lines with elapsed times; prerequisites of a pipeline
-sampled_lines, sampled_observer_table -- the sampled observer's certificate in sample rate and vehicle speed
+sampled_lines, sampled_observer_table, speed_table -- the sampled observer's certificate in sample rate and vehicle speed
 """
 
 from ._demo import DEMO_BETAS, DEMO_MODELS, STAGES, DemoReport, ModelResult, run_demo
@@ -19,10 +19,10 @@ from ._plots import demo_figures, mark_road_changes
 from ._progress import Progress, Stage, check_prerequisites
 from ._reproductions import (GENERATED_SECTIONS, ReproductionPage, reproduction_pages, stale_pages,
                              write_reproductions)
-from ._sampled import sampled_lines, sampled_observer_table
+from ._sampled import sampled_lines, sampled_observer_table, speed_table
 from ._theory import THEORY_MODELS, TheoryDocument, theory_document, theory_documents, write_theory
 
 __all__ = ["DEMO_BETAS", "DEMO_MODELS", "STAGES", "DemoReport", "ModelResult", "run_demo", "mark_road_changes",
            "demo_figures", "Progress", "Stage", "check_prerequisites", "THEORY_MODELS", "TheoryDocument",
-           "theory_document", "theory_documents", "write_theory", "sampled_lines", "sampled_observer_table",
+           "theory_document", "theory_documents", "write_theory", "sampled_lines", "sampled_observer_table", "speed_table",
            "GENERATED_SECTIONS", "ReproductionPage", "reproduction_pages", "stale_pages", "write_reproductions"]

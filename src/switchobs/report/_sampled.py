@@ -9,12 +9,15 @@ With the time scaling ``s = y / vx`` (the XBS models of seed 000 (7), seed
 
 from __future__ import annotations
 
+import math
 from collections.abc import Sequence
 from typing import Any
 
 import sympy as sp
 
-__all__ = ["speed_signal", "sampled_lines", "sampled_observer_table", "ABS_ACCEL_MAX", "ABS_RATE_HZ",
+from ..exceptions import DimensionError
+
+__all__ = ["speed_signal", "speed_table", "sampled_lines", "sampled_observer_table", "ABS_ACCEL_MAX", "ABS_RATE_HZ",
            "ABS_SPEED_MIN"]
 
 #: The ABS operating envelope the issue names: |x2| <= 150 m/s^2, a 1 kHz observer, speeds down to 1 m/s.
@@ -32,6 +35,21 @@ def speed_signal(model: Any) -> str | None:
     return None
 
 
+def speed_table(h_bound: float | None, *, accel_max: float, rate_hz: float, speed_min: float) -> tuple[float, float]:
+    """ABS units: ``(lowest speed certified at rate_hz for |x2| <= accel_max, rate needed down to speed_min)``.
+
+    With ``s = x2 / vx`` the step length is ``h = |x2| dt / vx``; ``h <= h_bound``
+    holds for ``vx >= accel_max / (rate_hz h_bound)`` and, at ``speed_min``,
+    for ``rate >= accel_max / (speed_min h_bound)``.  ``h_bound = None``
+    (every step) gives ``(0, 0)``.
+    """
+    if h_bound is None:
+        return 0.0, 0.0
+    if not math.isfinite(h_bound) or h_bound <= 0:
+        raise DimensionError(f"h_bound must be a positive number, got {h_bound!r}")
+    return accel_max / (rate_hz * h_bound), accel_max / (speed_min * h_bound)
+
+
 def _bound(cert: Any) -> tuple[float | None, bool]:
     """``(h bound, certified)``: the certified ``h_max`` (None = every step) or, if not certified, ``h_rho``."""
     if cert.certified:
@@ -42,8 +60,6 @@ def _bound(cert: Any) -> tuple[float | None, bool]:
 def sampled_lines(model: Any, cert: Any, *, rate_hz: float = ABS_RATE_HZ, accel_max: float = ABS_ACCEL_MAX,
                   speed_min: float = ABS_SPEED_MIN) -> list[str]:
     """What the discrete certificate means at ``rate_hz``, and in vehicle speed for an ABS model."""
-    from ..certify._discrete import speed_table
-
     h, certified = _bound(cert)
     lines = []
     if certified and h is None:
@@ -70,7 +86,7 @@ def sampled_observer_table(models: Sequence[tuple[str, str]], *, beta: int = 100
     (the demo's designs), evaluated at ``beta1 = beta2 = beta``.
     """
     from ..certify import certify_model
-    from ..certify._discrete import discrete_certificate, speed_table
+    from ..certify import discrete_certificate
     from ..design import design_gains
     from ..model import builtin_model
 
@@ -92,11 +108,11 @@ def sampled_observer_table(models: Sequence[tuple[str, str]], *, beta: int = 100
             if certified and h is None:
                 speed, rate, hmax = "any > 0", "any", "∞ (every step)"
             else:
-                hmax = "none" if not certified else f"{h:.4g}"
-                low, need = speed_table(cert.h_rho, accel_max=ABS_ACCEL_MAX, rate_hz=ABS_RATE_HZ,
-                                        speed_min=ABS_SPEED_MIN)
-                speed = f"none certified (per mode: {low:.2f} m/s)"
-                rate = f"none certified (per mode: {need / 1000:.2f} kHz)"
+                low, need = speed_table(h, accel_max=ABS_ACCEL_MAX, rate_hz=ABS_RATE_HZ, speed_min=ABS_SPEED_MIN)
+                speed, rate = f"{low:.2f} m/s", f"{need / 1000:.2f} kHz"
+                hmax = f"{h:.4g}" if certified else "none"
+                if not certified:  # h is the per-mode bound h_rho: stability of each mode alone
+                    speed, rate = f"none certified (per mode: {speed})", f"none certified (per mode: {rate})"
             verdict = cert.verdict.value + (" (strict)" if cert.strict else "")
             rows.append(f"| {name} | {method} | {verdict} | {hmax} | {rho} | {speed} | {rate} |")
     return "\n".join(rows)
