@@ -408,12 +408,16 @@ def check_discrete(A_plus: Any, A_minus: Any, C: Any, P: Any, method: str, data:
     for name, A in (("A_plus", Ap), ("A_minus", Am)):
         W = decrease_polynomial(A, Pm, m)
         Q = [[-x for x in row] for row in lyapunov_form(A, Pm)]
-        rho = spectral_bound(A, m)
+        claim = stored.get(name, {}) if data is not None else {}
+        # h_rho is orientation, not part of the proof: the re-check keeps the stored value (no floating point)
+        stored_rho = claim.get("h_rho")
+        rho = spectral_bound(A, m) if data is None else (
+            float(stored_rho) if isinstance(stored_rho, (int, float)) and not isinstance(stored_rho, bool) else None)
         if not definiteness(Q, strict=False).holds:
             raise CertificateError(f"P_d is not a continuous Lyapunov matrix of {name}: "
                                    f"-({name}' P_d + P_d {name}) is not >= 0")
-        if data is not None and name in stored and "sos" in stored[name]:
-            terms = tuple(SosTerm.from_json(t, n) for t in stored[name]["sos"])
+        if "sos" in claim:
+            terms = tuple(SosTerm.from_json(t, n) for t in claim["sos"])
         else:
             terms = _sos_terms(A, Pm, Q, m) or ()
         if terms:
@@ -431,9 +435,9 @@ def check_discrete(A_plus: Any, A_minus: Any, C: Any, P: Any, method: str, data:
             verdicts.append(DiscreteVerdict.CERTIFIED)
             continue
         Mw = _scaled(A, Cm, W)
-        if data is not None and name in stored and "witness" in stored[name]:
+        if "witness" in claim:
             try:
-                u = [to_fraction(x, what="witness entry") for x in stored[name]["witness"]["u"]]
+                u = [to_fraction(x, what="witness entry") for x in claim["witness"]["u"]]
             except (KeyError, TypeError) as exc:
                 raise CertificateError(f"{name}: malformed witness ({exc})") from None
             if len(u) != n:
@@ -445,7 +449,7 @@ def check_discrete(A_plus: Any, A_minus: Any, C: Any, P: Any, method: str, data:
             modes.append(ModeProof(name, rho, witness=tuple(u), witness_power=lead[0], witness_value=lead[1]))
             verdicts.append(DiscreteVerdict.IMPOSSIBLE)
         else:
-            if data is not None and name in stored and "witness" in stored[name]:
+            if "witness" in claim:
                 raise CertificateError(f"{name}: the stored witness does not make V increase for small h")
             modes.append(ModeProof(name, rho))
             verdicts.append(DiscreteVerdict.INCONCLUSIVE)
@@ -464,7 +468,7 @@ def check_discrete(A_plus: Any, A_minus: Any, C: Any, P: Any, method: str, data:
         verdict = DiscreteVerdict.CERTIFIED
     else:
         verdict = DiscreteVerdict.INCONCLUSIVE
-    h_max = None
+    h_max = None  # the proofs here are for every step length; a finite bound would need an interval proof
     cert = DiscreteCertificate(m.name, verdict, h_max, verdict is DiscreteVerdict.CERTIFIED and strict_all, Pm,
                                tuple(modes), _statement(m, verdict, h_max, strict_all), tuple(reasons), Cm)
     if data is not None:
