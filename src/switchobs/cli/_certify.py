@@ -7,7 +7,7 @@ import math
 
 from ..certify import certify_model
 from ..spec import STEP_METHODS
-from ..exceptions import SpectrumError
+from ..exceptions import CertificateError, SpectrumError
 from ..model import load_model
 from ._common import add_model_arguments, emit_json, parse_params
 
@@ -53,7 +53,7 @@ def run(args: argparse.Namespace) -> int:
     if (args.spectrum is None) == (args.gains_plus is None):
         raise SpectrumError("give either a spectrum (--spectrum) or the gains (--gains-plus [--gains-minus])")
     if not (math.isfinite(args.rate_hz) and args.rate_hz > 0):
-        raise SpectrumError(f"--rate-hz must be a positive number of samples per second, got {args.rate_hz!r}")
+        raise CertificateError(f"--rate-hz must be a positive number of samples per second, got {args.rate_hz!r}")
     model = load_model(args.model)
     solvers = (args.solver,) if args.solver else ("CLARABEL", "SCS")
     report = certify_model(model, values=parse_params(args.param), spectrum=args.spectrum,
