@@ -39,6 +39,7 @@ Certificate kinds and what they prove (``W_p(P) = A_p' P + P A_p``):
 from __future__ import annotations
 
 import json
+import sys
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 from fractions import Fraction
@@ -89,23 +90,25 @@ class VerificationReport:
 
 
 def load_certificate(path: str | Path) -> dict[str, Any]:
-    """Read a certificate JSON file.
+    """Read a certificate JSON file; ``"-"`` reads standard input.
 
     Raises
     ------
     CertificateError
         If the file cannot be read or is not JSON.
     """
+    stdin = str(path) == "-"
+    where = "<stdin>" if stdin else str(path)
     try:
-        text = Path(path).read_text(encoding="utf-8")
+        text = sys.stdin.read() if stdin else Path(path).read_text(encoding="utf-8")
     except OSError as exc:
-        raise CertificateError(f"cannot read certificate {str(path)!r}: {exc.strerror}") from None
+        raise CertificateError(f"cannot read certificate {where!r}: {exc.strerror}") from None
     try:
         doc = json.loads(text)
     except json.JSONDecodeError as exc:
-        raise CertificateError(f"certificate {str(path)!r} is not valid JSON: {exc}") from None
+        raise CertificateError(f"certificate {where!r} is not valid JSON: {exc}") from None
     if not isinstance(doc, dict):
-        raise CertificateError(f"certificate {str(path)!r} must be a JSON object, got {type(doc).__name__}")
+        raise CertificateError(f"certificate {where!r} must be a JSON object, got {type(doc).__name__}")
     return doc
 
 

@@ -9,14 +9,14 @@ from ..certify import certify_model
 from ..spec import STEP_METHODS
 from ..exceptions import CertificateError, SpectrumError
 from ..model import load_model
-from ._common import add_model_arguments, emit_json, parse_params
+from ._common import STDIO, add_model_arguments, emit_json, parse_params, summary_stream, write_certificate
 
 __all__ = ["register"]
 
 
 def register(sub: argparse._SubParsersAction) -> None:
     p = sub.add_parser(
-        "certify", help="certify the switched error dynamics (LMIs, dwell time, planar case) exactly",
+        "certify",
         description="Build A_plus = A - K_plus C and A_minus = -A + K_minus C for MODEL with numeric values, "
                     "run the strict and Hespanha common-Lyapunov LMIs, the Geromel-Colaneri dwell time and "
                     "(n = 2) the Balde-Boscain-Mason classification, re-check every certificate in exact "
@@ -43,7 +43,8 @@ def register(sub: argparse._SubParsersAction) -> None:
                    help="uncertain parameter range, e.g. a=150:230 (repeatable): adds a 'box' section, valid for "
                         "every value in the box, even varying in time")
     p.add_argument("--json", action="store_true", help="print the full report as JSON")
-    p.add_argument("--out", metavar="CERT.json", help="write the certificate (checkable with switchobs verify)")
+    p.add_argument("--out", metavar="CERT.json", help="write the certificate (checkable with switchobs verify); "
+                   "- writes it to standard output and the summary to stderr")
     p.set_defaults(func=run)
 
 
@@ -54,29 +55,31 @@ def run(args: argparse.Namespace) -> int:
         raise SpectrumError("give either a spectrum (--spectrum) or the gains (--gains-plus [--gains-minus])")
     if not (math.isfinite(args.rate_hz) and args.rate_hz > 0):
         raise CertificateError(f"--rate-hz must be a positive number of samples per second, got {args.rate_hz!r}")
+    if args.out == STDIO and args.json:
+        raise CertificateError("--out - writes the certificate to standard output; give --json or --out -, not both")
     model = load_model(args.model)
     solvers = (args.solver,) if args.solver else ("CLARABEL", "SCS")
     report = certify_model(model, values=parse_params(args.param), spectrum=args.spectrum,
                            K_plus=args.gains_plus, K_minus=args.gains_minus, dwell=not args.no_dwell,
                            solvers=solvers, discrete=args.discrete, box=args.box)
     if args.out:
-        report.write(args.out)
+        write_certificate(report, args.out)
     if args.json:
         emit_json(report.to_json())
-    else:
+    elif (stream := summary_stream(args)) is not None:
         prov = report.document.get("provenance", {})
         obs = report.document.get("observer", {})
         values = ", ".join(f"{k} = {v}" for k, v in prov.get("parameters", {}).items())
-        print(f"switchobs certify: model {prov.get('model')}{' (' + values + ')' if values else ''}")
-        print(f"  K_plus  = [{', '.join(obs.get('K_plus', []))}]")
-        print(f"  K_minus = [{', '.join(obs.get('K_minus', []))}]")
-        print(report)
+        print(f"switchobs certify: model {prov.get('model')}{' (' + values + ')' if values else ''}", file=stream)
+        print(f"  K_plus  = [{', '.join(obs.get('K_plus', []))}]", file=stream)
+        print(f"  K_minus = [{', '.join(obs.get('K_minus', []))}]", file=stream)
+        print(report, file=stream)
         if report.discrete is not None:
             from ..report import sampled_lines
 
             for line in sampled_lines(model, report.discrete, rate_hz=args.rate_hz):
-                print(line)
-        if args.out:
-            print(f"certificate written to {args.out}")
+                print(line, file=stream)
+        if args.out and args.out != STDIO:
+            print(f"certificate written to {args.out}", file=stream)
     box_ok = report.box is None or report.box.certified
     return 0 if report.certified and report.discrete_certified is not False and box_ok else 1

@@ -23,7 +23,7 @@ SUPER_TWISTING = "super-twisting"
 
 
 def register(sub: argparse._SubParsersAction) -> None:
-    p = sub.add_parser("codegen", help="generate the observer as strict C99 (casadi): <prefix>.c/.h and a README",
+    p = sub.add_parser("codegen",
                        description="Generate C for the switched observer of MODEL (built-in or TOML), the "
                                    "adaptive observer of seed 001 (3.4) with --unknown, or the super-twisting "
                                    f"observer of seed 003 with MODEL = {SUPER_TWISTING}.")

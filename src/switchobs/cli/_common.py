@@ -1,4 +1,4 @@
-"""Helpers shared by the sub-commands: model loading with --param, JSON output, generated files."""
+"""Helpers shared by the sub-commands: model loading with --param, JSON output, ``-`` for stdout, generated files."""
 
 from __future__ import annotations
 
@@ -7,18 +7,24 @@ import json
 import sys
 from collections.abc import Callable, Iterable
 from pathlib import Path
-from typing import Any
+from typing import Any, TextIO
 
 from ..exceptions import ModelError
 from ..model import Model, load_model
+from .main import QUIET
 
-__all__ = ["add_model_arguments", "model_from_args", "parse_params", "emit_json", "write_or_check"]
+__all__ = ["add_model_arguments", "model_from_args", "parse_params", "emit_json", "write_or_check", "STDIO",
+           "summary_stream", "write_certificate"]
+
+#: The file name that means standard input (a model, a certificate) or standard output (``--out -``).
+STDIO = "-"
 
 
 def add_model_arguments(parser: argparse.ArgumentParser) -> None:
     """MODEL positional and repeatable ``--param NAME=VALUE``."""
     parser.add_argument("model", metavar="MODEL",
-                        help="built-in model (abs-xbs3, abs-xbs4, abs-adaptive2, normal-form-N) or a TOML file")
+                        help="built-in model (abs-xbs3, abs-xbs4, abs-adaptive2, normal-form-N), a TOML file, "
+                             "or - for a TOML model on standard input")
     parser.add_argument("--param", action="append", default=[], metavar="NAME=VALUE",
                         help="substitute a parameter value (repeatable), e.g. --param a=187.5")
 
@@ -44,6 +50,22 @@ def model_from_args(args: argparse.Namespace) -> Model:
 def emit_json(data: Any) -> None:
     json.dump(data, sys.stdout, indent=2)
     sys.stdout.write("\n")
+
+
+def summary_stream(args: argparse.Namespace) -> TextIO | None:
+    """Where a command writing a certificate prints its summary: stdout, or stderr when the certificate goes
+    to stdout (``--out -``), or nowhere then with ``--quiet``."""
+    if getattr(args, "out", None) != STDIO:
+        return sys.stdout
+    return None if args.verbosity == QUIET else sys.stderr
+
+
+def write_certificate(report: Any, out: str) -> None:
+    """``--out``: the certificate into a file (``report.write``), or as JSON on standard output for ``-``."""
+    if out == STDIO:
+        emit_json(report.document)
+    else:
+        report.write(out)
 
 
 def write_or_check(check: bool, stale: Callable[[], Iterable[Path]], write: Callable[[], Iterable[Path]],

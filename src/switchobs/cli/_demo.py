@@ -4,19 +4,20 @@ from __future__ import annotations
 
 import argparse
 
-from ..report import run_demo
+from ..report import STAGES, Progress, run_demo
+from .main import QUIET
 
 __all__ = ["register"]
 
 
 def register(sub: argparse._SubParsersAction) -> None:
     p = sub.add_parser(
-        "demo", help="run the main job end to end (design, certify, C, braking with the C observer, report)",
+        "demo",
         description="On abs-xbs3 and abs-xbs4 with the TU Delft rig of seed 000: symbolic design of K+/K-, "
                     "exact and numeric certification (the certificate re-verified from its file), C generation "
                     "and compilation, an emergency braking dry -> wet -> snow with the generated C observer in "
                     "the loop fed by a 60-ppr encoder with three-stage compensation, and a report with figures. "
-                    "Stage lines go to stderr. Exit status 0 when every check holds, 1 when a check fails, "
+                    "Stage lines go to stderr (none with --quiet). Exit status 0 when every check holds, 1 when a check fails, "
                     "2 when a stage cannot run (the message names it).")
     p.add_argument("--fast", action="store_true", help="shorter braking and timing (for CI, well under a minute)")
     p.add_argument("--out", default="out/demo", metavar="DIR", help="output directory (default: out/demo)")
@@ -24,6 +25,7 @@ def register(sub: argparse._SubParsersAction) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    report = run_demo(args.out, fast=args.fast)
+    quiet = Progress(len(STAGES), stream=None) if args.verbosity == QUIET else None
+    report = run_demo(args.out, fast=args.fast, progress=quiet)
     print(report)
     return 0 if report.ok else 1

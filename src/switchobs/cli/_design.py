@@ -9,12 +9,13 @@ from ..design import design_gains
 from ..exceptions import SpectrumError
 from ..report import Progress
 from ._common import add_model_arguments, emit_json, model_from_args
+from .main import QUIET
 
 __all__ = ["register"]
 
 
 def register(sub: argparse._SubParsersAction) -> None:
-    p = sub.add_parser("design", help="design K_plus/K_minus, Routh conditions and the common P (sympy, exact)",
+    p = sub.add_parser("design",
                        description="Design the switched observer gains of MODEL and their exact certificate.")
     add_model_arguments(p)
     target = p.add_mutually_exclusive_group()
@@ -37,7 +38,8 @@ def run(args: argparse.Namespace) -> int:
         raise SpectrumError("give the target with --spectrum, --charpoly or --gains-plus")
     model = model_from_args(args)
     # progress on stderr for the symbolic stages that take seconds from n = 5 on
-    progress = Progress(1 if args.no_verify else 2, stream=None if model.n <= 4 else sys.stderr)
+    quiet = model.n <= 4 or args.verbosity == QUIET
+    progress = Progress(1 if args.no_verify else 2, stream=None if quiet else sys.stderr)
     what = f"gains, Routh–Hurwitz conditions and the common P of {model.name} (n = {model.n})"
     with progress.stage("design", what):
         result = design_gains(model, args.spectrum, characteristic_polynomial=args.charpoly,

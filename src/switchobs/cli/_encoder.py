@@ -17,7 +17,7 @@ PROFILES = ("constant", "varying", "braking")
 
 def register(sub: argparse._SubParsersAction) -> None:
     p = sub.add_parser(
-        "encoder", help="wheel-encoder chain: TSA, notch, three-stage and super-twisting RMS errors",
+        "encoder",
         description="Simulate a wheel encoder with transition noise and eccentricity, estimate the wheel "
                     "speed and acceleration at the controller rate and print the RMS errors against the "
                     "exact trajectory (seed 001 Table 6.1 layout).")

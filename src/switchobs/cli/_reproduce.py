@@ -13,7 +13,7 @@ __all__ = ["register"]
 
 def register(sub: argparse._SubParsersAction) -> None:
     p = sub.add_parser(
-        "reproduce", help="regenerate docs/reproductions.md and the Table 4.1 / 6.1 sections from runs",
+        "reproduce",
         description="Run the seed reproductions (Table 4.1, Table 6.1, the seeds' scenarios, Appendix C, the "
                     "Poincaré map, the super-twisting orders) and write docs/reproductions.md and the generated "
                     f"sections of {', '.join(sorted({path for path, _ in GENERATED_SECTIONS}))}. About a minute. With --check, write nothing and "

@@ -28,7 +28,7 @@ CONTROLLERS = ("five-phase", "two-phase", "continuous")
 
 
 def register(sub: argparse._SubParsersAction) -> None:
-    p = sub.add_parser("simulate", help="ABS braking simulation (quarter car, five/two-phase ABS, XBS observers)",
+    p = sub.add_parser("simulate",
                        description="Simulate an emergency braking of the quarter car of seed 001 (2.1) with a "
                                    "hybrid ABS and an XBS observer; print the metrics or JSON, draw the plots.")
     p.add_argument("scenario", nargs="?", metavar="SCENARIO",

@@ -8,14 +8,14 @@ import math
 from ..certify import certify_model, synthesize
 from ..exceptions import ModelError
 from ..model import load_model
-from ._common import add_model_arguments, emit_json, parse_params
+from ._common import STDIO, add_model_arguments, emit_json, parse_params, summary_stream, write_certificate
 
 __all__ = ["register"]
 
 
 def register(sub: argparse._SubParsersAction) -> None:
     p = sub.add_parser(
-        "synthesize", help="synthesise a gain pair by LMIs (decay rate, noise gain) and certify it",
+        "synthesize",
         description="Find K_plus, K_minus by LMIs (Y = X K): every mode decays at RATE in the rescaled time and the "
                     "H2 gain from measurement noise (weight W against a unit process disturbance) to the error of "
                     "the chosen states is minimised. With one output a strict common Lyapunov function is "
@@ -33,13 +33,16 @@ def register(sub: argparse._SubParsersAction) -> None:
                    help="also certify the synthesised gains for every value of this parameter range (repeatable)")
     p.add_argument("--solver", choices=("CLARABEL", "SCS"), help="use only this cvxpy solver")
     p.add_argument("--json", action="store_true", help="print the synthesis and the certificate report as JSON")
-    p.add_argument("--out", metavar="CERT.json", help="write the certificate of the synthesised pair")
+    p.add_argument("--out", metavar="CERT.json", help="write the certificate of the synthesised pair; - writes it "
+                   "to standard output and the summary to stderr")
     p.set_defaults(func=run)
 
 
 def run(args: argparse.Namespace) -> int:
     if not (math.isfinite(args.noise_weight) and args.noise_weight >= 0):
         raise ModelError(f"--noise-weight must be a finite number >= 0, got {args.noise_weight!r}")
+    if args.out == STDIO and args.json:
+        raise ModelError("--out - writes the certificate to standard output; give --json or --out -, not both")
     model = load_model(args.model)
     values = parse_params(args.param)
     solvers = (args.solver,) if args.solver else ("CLARABEL", "SCS")
@@ -50,14 +53,14 @@ def run(args: argparse.Namespace) -> int:
         K_plus, K_minus = result.gains()
         report = certify_model(model, values=values, K_plus=K_plus, K_minus=K_minus, solvers=solvers, box=args.box)
         if args.out:
-            report.write(args.out)
+            write_certificate(report, args.out)
     if args.json:
         emit_json({"synthesis": result.to_json(), "certification": None if report is None else report.to_json()})
-    else:
-        print(result)
+    elif (stream := summary_stream(args)) is not None:
+        print(result, file=stream)
         if report is not None:
-            print(report)
-            if args.out:
-                print(f"certificate written to {args.out}")
+            print(report, file=stream)
+            if args.out and args.out != STDIO:
+                print(f"certificate written to {args.out}", file=stream)
     ok = report is not None and report.certified and (report.box is None or report.box.certified)
     return 0 if ok else 1

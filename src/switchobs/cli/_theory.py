@@ -13,7 +13,7 @@ __all__ = ["register"]
 
 def register(sub: argparse._SubParsersAction) -> None:
     p = sub.add_parser(
-        "theory", help="write theory/*.md (model, normal form, gains, Routh, P, coupling) from the symbolic core",
+        "theory",
         description="Generate the theory documents of the built-in models (abs-xbs3, abs-xbs4, abs-adaptive2) and "
                     "of the generic normal form (N = 3) from switchobs.design, as Markdown with LaTeX math. "
                     "The output is deterministic. With --check, write nothing and exit 1 if a file in DIR "

@@ -1,4 +1,4 @@
-"""``switchobs verify CERT.json``: independent exact check of a certificate."""
+"""``switchobs verify CERT.json``: independent exact check of a certificate (``-``: from standard input)."""
 
 from __future__ import annotations
 
@@ -11,12 +11,13 @@ __all__ = ["register"]
 
 
 def register(sub: argparse._SubParsersAction) -> None:
-    p = sub.add_parser("verify", help="re-check a certificate exactly (exit 0 iff it holds)",
+    p = sub.add_parser("verify",
                        description="Re-check every inequality of a switchobs certificate in exact rational "
                                    "arithmetic, from its matrices alone, and compare the claimed verdict with "
                                    "the one they imply. Exit status 0 iff everything holds, 1 otherwise, "
                                    "2 for a malformed file.")
-    p.add_argument("certificate", metavar="CERT.json", help="certificate written by switchobs certify --out")
+    p.add_argument("certificate", metavar="CERT.json",
+                   help="certificate written by switchobs certify --out, or - to read it from standard input")
     p.add_argument("--json", action="store_true", help="print the report as JSON")
     p.set_defaults(func=run)
 

@@ -2,10 +2,19 @@
 
 Each sub-command lives in its own module ``switchobs.cli._<name>`` exposing
 ``register(subparsers)``, which adds its parser and sets ``func`` to a
-callable ``func(args) -> int``.  Errors raised on purpose by switchobs (all
-subclasses of :class:`switchobs.exceptions.SwitchobsError`) become one line on
-stderr and exit status 2; nothing else is caught, so a real bug still shows
-its traceback.
+callable ``func(args) -> int``.  Only the module of the command being run is
+imported: ``switchobs --help`` lists the commands from :data:`COMMANDS`
+without importing any (cvxpy, casadi and scipy.signal take seconds).  Errors
+raised on purpose by switchobs (all subclasses of
+:class:`switchobs.exceptions.SwitchobsError`) become one line on stderr and
+exit status 2; nothing else is caught, so a real bug still shows its traceback.
+
+Global options (before or after the command): ``--version``, ``-q/--quiet``
+(nothing on stderr but errors), ``-v/--verbose`` (every progress note as a
+timestamped line).  Progress: by default a live status line on a terminal
+(:class:`switchobs.cli._status.StatusLine`), nothing when stderr is a pipe or
+a file; the stage lines of ``design`` (n > 4) and ``demo`` are the commands'
+own output and are printed unless ``--quiet``.
 """
 
 from __future__ import annotations
@@ -16,27 +25,64 @@ import math
 import os
 import sys
 import time
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Iterator, Sequence
+from contextlib import contextmanager
 
+from .. import __version__
 from .._progress import listening
 from ..exceptions import FreeSymbolError, PrerequisiteError, SwitchobsError
+from ._status import StatusLine, is_terminal
 
 __all__ = ["main", "build_parser"]
 
-#: Sub-command modules, in the order of ``switchobs --help``.
-COMMANDS: tuple[str, ...] = ("design", "demo", "encoder", "codegen", "simulate", "certify", "synthesize", "verify",
-                            "classify", "theory", "reproduce")
+#: Sub-commands in the order of ``switchobs --help``: name -> the one-line help listed there.
+COMMANDS: dict[str, str] = {
+    "design": "design K_plus/K_minus, Routh conditions and the common P (sympy, exact)",
+    "demo": "run the main job end to end (design, certify, C, braking with the C observer, report)",
+    "encoder": "wheel-encoder chain: TSA, notch, three-stage and super-twisting RMS errors",
+    "codegen": "generate the observer as strict C99 (casadi): <prefix>.c/.h and a README",
+    "simulate": "ABS braking simulation (quarter car, five/two-phase ABS, XBS observers)",
+    "certify": "certify the switched error dynamics (LMIs, dwell time, planar case) exactly",
+    "synthesize": "synthesise a gain pair by LMIs (decay rate, noise gain) and certify it",
+    "verify": "re-check a certificate exactly (exit 0 iff it holds)",
+    "classify": "Balde-Boscain-Mason case (i)-(iv) of two Hurwitz 2x2 matrices",
+    "theory": "write theory/*.md (model, normal form, gains, Routh, P, coupling) from the symbolic core",
+    "reproduce": "regenerate docs/reproductions.md and the Table 4.1 / 6.1 sections from runs",
+}
+
+#: Verbosity levels (``args.verbosity``).
+QUIET, NORMAL, VERBOSE = 0, 1, 2
+
+#: Optional third-party modules -> the extra that installs them.
+EXTRAS: dict[str, str] = {"casadi": "codegen", "matplotlib": "plots"}
+
+
+def _add_verbosity(parser: argparse.ArgumentParser, default: object) -> None:
+    group = parser.add_mutually_exclusive_group()
+    group.add_argument("-q", "--quiet", dest="verbosity", action="store_const", const=QUIET, default=default,
+                       help="print nothing on stderr but errors (no progress, no stage lines)")
+    group.add_argument("-v", "--verbose", dest="verbosity", action="store_const", const=VERBOSE, default=default,
+                       help="print every progress note as a line with its elapsed time (also into a pipe or file)")
 
 
 def build_parser(only: str | None = None) -> argparse.ArgumentParser:
-    """The ``switchobs`` parser; with ``only``, just that sub-command (its module alone is imported)."""
+    """The ``switchobs`` parser; with ``only``, the parser of that sub-command (its module alone is imported).
+
+    Without ``only`` the sub-commands are listed from :data:`COMMANDS` and none is importable: this parser
+    answers ``--help``, ``--version`` and an unknown command.
+    """
     parser = argparse.ArgumentParser(
         prog="switchobs",
         description="Design, certify and export switched observers via singular time-rescaling.")
+    parser.add_argument("--version", action="version", version=f"switchobs {__version__}")
+    _add_verbosity(parser, NORMAL)
     sub = parser.add_subparsers(dest="command", metavar="COMMAND")
     sub.required = True
-    for name in COMMANDS:
-        if only is not None and name != only:
+    for name, text in COMMANDS.items():
+        if only is None:
+            sub.add_parser(name, help=text, add_help=False)
+            continue
+        if name != only:
             continue
         try:
             module = importlib.import_module(f"switchobs.cli._{name}")
@@ -44,13 +90,21 @@ def build_parser(only: str | None = None) -> argparse.ArgumentParser:
             _register_unavailable(sub, name, exc)
         else:
             module.register(sub)
+        # after the command too ("switchobs certify ... -q"); SUPPRESS keeps a value given before it
+        _add_verbosity(sub.choices[name], argparse.SUPPRESS)
     return parser
+
+
+def _install_hint(module: str | None) -> str:
+    extra = EXTRAS.get((module or "").split(".")[0])
+    if extra is not None:
+        return f'install it with pip install "switchobs[{extra}]" (or `make install`)'
+    return "reinstall with `make install` (or pip install -e .)"
 
 
 def _register_unavailable(sub: argparse._SubParsersAction, name: str, exc: ImportError) -> None:
     what = f"importing {exc.name} failed" if exc.name else "a dependency failed to import"
-    message = (f"command {name!r} cannot run: {what} ({exc}); "
-               "reinstall with `make install` (or pip install -e .)")
+    message = f"command {name!r} cannot run: {what} ({exc}); {_install_hint(exc.name)}"
 
     def unavailable(args: argparse.Namespace) -> int:
         raise PrerequisiteError(message)
@@ -77,11 +131,10 @@ def _glue_option_values(argv: Sequence[str]) -> list[str]:
     return out
 
 
-#: Progress notes of the library are shown once a command has run this long (quick runs stay quiet), and at
-#: most one a second (a bisection announces every solve).
-PROGRESS_AFTER_S = 1.0
+#: With --verbose, progress notes are printed at most one a second (a bisection announces every solve).
+PROGRESS_AFTER_S = 0.0
 PROGRESS_EVERY_S = 1.0
-#: Commands that print their own stage lines (the library notes would repeat them).
+#: Commands that print their own stage lines (the library notes, as lines, would repeat them).
 OWN_PROGRESS = frozenset({"demo"})
 
 
@@ -100,6 +153,19 @@ def stderr_progress(command: str, after_s: float = PROGRESS_AFTER_S,
     return show
 
 
+@contextmanager
+def progress_display(command: str, verbosity: int) -> Iterator[None]:
+    """Where the library's progress notes go while ``command`` runs (see the module docstring)."""
+    if verbosity == VERBOSE:
+        with listening(stderr_progress(command)):
+            yield
+    elif verbosity == NORMAL and is_terminal(sys.stderr):
+        with StatusLine(command, sys.stderr) as status, listening(status):
+            yield
+    else:
+        yield
+
+
 def main(argv: Sequence[str] | None = None) -> int:
     argv = _glue_option_values(sys.argv[1:] if argv is None else argv)
     # Importing every command costs seconds (cvxpy, casadi, scipy.signal); a known command imports only its own.
@@ -107,12 +173,18 @@ def main(argv: Sequence[str] | None = None) -> int:
     parser = build_parser(command if command in COMMANDS else None)
     args = parser.parse_args(argv)
     try:
-        with listening(stderr_progress(args.command)):
+        with progress_display(args.command, args.verbosity):
             return int(args.func(args) or 0)
     except SwitchobsError as exc:
         # The library names what has no value; only here is the way to give it a command-line flag.
         hint = "; give values with --param NAME=VALUE" if isinstance(exc, FreeSymbolError) else ""
         print(f"switchobs {args.command}: error: {exc}{hint}", file=sys.stderr)
+        return 2
+    except ModuleNotFoundError as exc:
+        if (exc.name or "").split(".")[0] not in EXTRAS:
+            raise
+        print(f"switchobs {args.command}: error: this needs {exc.name}, which is not installed; "
+              f"{_install_hint(exc.name)}", file=sys.stderr)
         return 2
     except BrokenPipeError:  # output piped into `head`: not an error of ours
         sys.stdout = open(os.devnull, "w")

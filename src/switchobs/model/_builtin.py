@@ -65,8 +65,8 @@ def builtin_model(name: str) -> Model:
 
 
 def load_model(spec: str | Path) -> Model:
-    """A built-in name or the path of a TOML model file."""
+    """A built-in name, the path of a TOML model file, or ``"-"``: a TOML model on standard input."""
     spec_str = str(spec)
-    if spec_str.endswith(".toml") or Path(spec_str).exists():
+    if spec_str == "-" or spec_str.endswith(".toml") or Path(spec_str).exists():
         return Model.from_toml(spec_str)
     return builtin_model(spec_str)

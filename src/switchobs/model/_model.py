@@ -8,6 +8,7 @@
 from __future__ import annotations
 
 import re
+import sys
 import tomllib
 from collections.abc import Mapping
 from dataclasses import dataclass, field
@@ -193,17 +194,18 @@ class Model:
 
     @classmethod
     def from_toml(cls, path: str | Path) -> "Model":
-        """Read a model from a TOML file (keys as in :meth:`from_dict`)."""
-        path = Path(path)
+        """Read a model from a TOML file (keys as in :meth:`from_dict`); ``"-"`` reads standard input."""
+        stdin = str(path) == "-"
+        where = "<stdin>" if stdin else str(path)
         try:
-            text = path.read_text(encoding="utf-8")
+            text = sys.stdin.read() if stdin else Path(path).read_text(encoding="utf-8")
         except OSError as exc:
-            raise ModelError(f"cannot read model file {str(path)!r}: {exc.strerror}") from None
+            raise ModelError(f"cannot read model file {where!r}: {exc.strerror}") from None
         try:
             data = tomllib.loads(text, parse_float=str)  # a number written in a file is text: its decimal value
         except tomllib.TOMLDecodeError as exc:
-            raise ModelError(f"model file {str(path)!r} is not valid TOML: {exc}") from None
-        return cls.from_dict(data, source=str(path))
+            raise ModelError(f"model file {where!r} is not valid TOML: {exc}") from None
+        return cls.from_dict(data, source=where)
 
     # -------------------------------------------------------------- queries
     @property
