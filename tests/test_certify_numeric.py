@@ -109,8 +109,10 @@ def test_ctrl_c_stops_certify_with_130_and_no_certificate(tmp_path):
     n = 16
     model = chain_file(n, tmp_path)
     cert = tmp_path / "cert.json"
-    proc = subprocess.Popen([sys.executable, "-m", "switchobs", "certify", str(model), "--spectrum", spectrum(n),
-                             "--out", str(cert)], stderr=subprocess.PIPE, stdout=subprocess.PIPE, text=True)
+    # --verbose: into a pipe, the progress notes are lines only when asked for
+    proc = subprocess.Popen([sys.executable, "-m", "switchobs", "--verbose", "certify", str(model), "--spectrum",
+                             spectrum(n), "--out", str(cert)], stderr=subprocess.PIPE, stdout=subprocess.PIPE,
+                            text=True)
     first = proc.stderr.readline()          # the first progress line: the command is at work
     assert first.startswith("switchobs certify: [")
     proc.send_signal(signal.SIGINT)

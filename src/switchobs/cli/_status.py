@@ -2,9 +2,10 @@
 
 The library announces its stages with :func:`switchobs._progress.progress`
 (``"certify: dwell time, bisection (n = 3, 2 modes)"``); a note that counts its
-steps carries ``[k/N]`` (``"simulate: Table 4.1 [3/30] ..."``) and gets a bar.
-:class:`StatusLine` shows the latest note behind a spinner and the elapsed
-time, ten times a second, so a long LMI solve that announces nothing still
+steps carries ``[k/N]`` (``"simulate: Table 4.1 [3/30] ..."``) and gets a bar,
+which stays while the notes of the step itself (a design inside a theory
+document) follow it.  :class:`StatusLine` shows them behind a spinner and the
+elapsed time, ten times a second, so a long LMI solve that announces nothing still
 shows that the command is alive.  Whatever the command prints meanwhile (its
 result on stdout, its own stage lines on stderr) first erases the status line,
 which comes back once the output has ended its line; when the command ends the
@@ -76,7 +77,8 @@ class StatusLine:
         self.command = command
         self._stream = stream
         self._after_s, self._refresh_s = after_s, refresh_s
-        self._text = ""
+        self._counted = ""   # the latest note with [k/N]
+        self._text = ""      # the latest note after it
         self._start = time.perf_counter()
         self._lock = threading.Lock()
         self._stop = threading.Event()
@@ -86,18 +88,21 @@ class StatusLine:
         self._saved: tuple[TextIO, TextIO] | None = None
 
     def __call__(self, text: str) -> None:
-        self._text = text
+        if COUNT.search(text):
+            self._counted, self._text = text, ""
+        else:
+            self._text = text
 
     def render(self, elapsed_s: float, columns: int) -> str:
         """The status line after ``elapsed_s`` seconds, cut to ``columns - 1`` characters."""
         frame = SPINNER[int(elapsed_s / self._refresh_s) % len(SPINNER)]
-        bar = ""
-        count = COUNT.search(self._text)
+        notes = [note for note in (self._counted, self._text) if note]
+        count = COUNT.search(self._counted)
         if count is not None and int(count.group(2)) > 0:
             done = min(int(count.group(1)), int(count.group(2))) / int(count.group(2))
             filled = round(BAR_WIDTH * done)
-            bar = f"[{'#' * filled}{'.' * (BAR_WIDTH - filled)}] "
-        line = f"{frame} switchobs {self.command} {elapsed_s:6.1f} s  {bar}{self._text}".rstrip()
+            notes[0] = f"[{'#' * filled}{'.' * (BAR_WIDTH - filled)}] {notes[0]}"
+        line = f"{frame} switchobs {self.command} {elapsed_s:6.1f} s  {' · '.join(notes)}".rstrip()
         return line[:max(columns - 1, 0)]
 
     # ------------------------------------------------------------ drawing

@@ -16,6 +16,7 @@ from collections.abc import Callable, Sequence
 from dataclasses import dataclass, replace
 from typing import Any
 
+from .._progress import progress
 from ..exceptions import SimulationError
 from ._controllers import FivePhaseABS, TwoPhaseABS
 from ._estimator import XbsEstimator
@@ -258,12 +259,15 @@ def table41(*, roads: Sequence[str] = TABLE41_ROADS, speeds_kmh: Sequence[float]
     two_phase = two_phase or (TwoPhaseABS() if estimator_factory is not None else TwoPhaseABS(start_decel_m_s2=None))
     t0 = time.perf_counter()
     rows = []
+    runs, run = 2 * len(speeds_kmh) * len(roads), 0
     for v in speeds_kmh:
         if not (isinstance(v, (int, float)) and math.isfinite(v) and v > 0):
             raise SimulationError(f"Table 4.1 speeds must be positive numbers in km/h, got {v!r}")
         for name in roads:
             out: list[BrakingResult] = []
             for ctrl in (five_phase, two_phase):
+                run += 1
+                progress(f"simulate: Table 4.1 [{run}/{runs}] {ctrl.name}, {name}, {v:g} km/h")
                 sc = BrakingScenario(name, speed_m_s=v / 3.6, controller=ctrl, dt_s=dt_s,
                                      name=f"table41-{name}-{v:g}")
                 est = estimator_factory(sc) if (estimator_factory is not None and ctrl.uses_xbs) else None

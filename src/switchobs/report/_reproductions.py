@@ -18,6 +18,7 @@ from pathlib import Path
 
 import numpy as np
 
+from .._progress import progress
 from ..exceptions import PrerequisiteError
 from ..loop import EstimatorSpec, xbs_estimator
 from ..plants import (GRAVITY, TABLE41_SEED, BrakingResult, BrakingScenario, FivePhaseABS, PoincareMap, Table41Result,
@@ -617,8 +618,10 @@ def reproduction_pages(root: str | Path = ".") -> tuple[ReproductionPage, ...]:
     """
     texts = _read_pages(Path(root))
     runs = _Runs()
-    for name, (path, section) in _SECTIONS.items():
+    for k, (name, (path, section)) in enumerate(_SECTIONS.items(), 1):
+        progress(f"reproduce: [{k}/{len(_SECTIONS) + 1}] {name} section of {path}")
         texts[path] = _splice(texts[path], name, section(runs))
+    progress(f"reproduce: [{len(_SECTIONS) + 1}/{len(_SECTIONS) + 1}] docs/reproductions.md")
     return (ReproductionPage("docs/reproductions.md", _reproductions_md(runs)),
             *(ReproductionPage(path, text) for path, text in texts.items()))
 

@@ -16,6 +16,7 @@ from pathlib import Path
 
 import sympy as sp
 
+from .._progress import progress
 from ..design import GainDesign, design
 from ..model import Model, builtin_model
 
@@ -249,7 +250,10 @@ def _index(docs: Sequence[TheoryDocument]) -> TheoryDocument:
 def theory_documents() -> tuple[TheoryDocument, ...]:
     """The documents of every built-in model and of the generic normal form (N = 3), then the index
     ``README``, in a fixed order."""
-    docs = tuple(theory_document(builtin_model(name), spectrum, source) for name, spectrum, source in THEORY_MODELS)
+    docs = []
+    for k, (name, spectrum, source) in enumerate(THEORY_MODELS, 1):
+        progress(f"theory: [{k}/{len(THEORY_MODELS)}] {name}")
+        docs.append(theory_document(builtin_model(name), spectrum, source))
     return (*docs, _index(docs))
 
 

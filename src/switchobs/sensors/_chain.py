@@ -17,6 +17,7 @@ from typing import Any
 import numpy as np
 import numpy.typing as npt
 
+from .._progress import progress
 from ..exceptions import SimulationError
 from ._encoder import Encoder, EncoderEvents
 from ._series import SpeedEstimate, estimate_lag, rms_error
@@ -312,11 +313,14 @@ def compare_estimators(
     """Run several estimators on the same encoder events (seed 001 Table 6.1 layout)."""
     for name in estimators:
         _check_estimator(name)
+    progress(f"encoder: edges of the {trajectory.name} trajectory")
     events = encoder.events(trajectory)
     ts = controller_times(trajectory.t_start, trajectory.t_end, settings.rate_hz)
-    results = tuple(_score(trajectory, _estimate(events, ts, name, settings), len(events), settings)
-                    for name in estimators)
-    return EstimatorComparison(trajectory=trajectory.name, encoder=encoder, results=results)
+    results = []
+    for k, name in enumerate(estimators, 1):
+        progress(f"encoder: [{k}/{len(estimators)}] {name} estimator ({len(events)} edges)")
+        results.append(_score(trajectory, _estimate(events, ts, name, settings), len(events), settings))
+    return EstimatorComparison(trajectory=trajectory.name, encoder=encoder, results=tuple(results))
 
 
 #: Seed 001 Table 6.1: RMS (velocity [rad/s], acceleration [rad/s^2]) per profile and estimator.
