@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import importlib
 import os
 import re
 import shlex
@@ -30,18 +31,80 @@ def _nav_pages(nav) -> list[str]:
     return pages
 
 
-@pytest.mark.slow
-def test_mkdocs_builds_in_strict_mode(tmp_path):
-    env = {**os.environ, "NO_MKDOCS_2_WARNING": "1"}
-    proc = subprocess.run([sys.executable, "-m", "mkdocs", "build", "--strict", "--site-dir", str(tmp_path / "site")],
+#: Loaded first by the docs build (PYTHONPATH): any network connection fails, as on an offline machine.
+NO_NETWORK = """
+import socket
+
+def _offline(*args, **kwargs):
+    raise OSError("the docs test builds offline: no network connection allowed")
+
+socket.socket.connect = socket.socket.connect_ex = _offline
+socket.create_connection = socket.getaddrinfo = _offline
+"""
+REMOTE = re.compile(r"<(?:script|link)\b[^>]*\b(?:src|href)=\"((?:https?:)?//[^\"]+)\"")
+LAYERS = ("model", "design", "certify", "codegen", "spec", "observers", "plants", "sensors", "loop", "report",
+          "exceptions")
+
+
+@pytest.fixture(scope="module")
+def site(tmp_path_factory) -> Path:
+    """The site built once, strict, with the network cut off."""
+    tmp = tmp_path_factory.mktemp("docs")
+    (tmp / "sitecustomize.py").write_text(NO_NETWORK, encoding="utf-8")
+    env = {**os.environ, "NO_MKDOCS_2_WARNING": "1",
+           "PYTHONPATH": os.pathsep.join(filter(None, [str(tmp), os.environ.get("PYTHONPATH")]))}
+    proc = subprocess.run([sys.executable, "-m", "mkdocs", "build", "--strict", "--site-dir", str(tmp / "site")],
                           cwd=str(ROOT), capture_output=True, text=True, env=env, timeout=300)
     assert proc.returncode == 0, proc.stdout + proc.stderr
     assert "WARNING" not in proc.stderr
+    return tmp / "site"
+
+
+def test_the_docs_build_cannot_reach_the_network(tmp_path):
+    (tmp_path / "sitecustomize.py").write_text(NO_NETWORK, encoding="utf-8")
+    probe = "import urllib.request; urllib.request.urlopen('http://127.0.0.1:9/', timeout=2)"
+    proc = subprocess.run([sys.executable, "-c", probe], capture_output=True, text=True,
+                          env={**os.environ, "PYTHONPATH": str(tmp_path)}, timeout=60)
+    assert proc.returncode != 0 and "no network connection allowed" in proc.stderr
+
+
+@pytest.mark.slow
+def test_mkdocs_builds_in_strict_mode(site):
     for page in ("index.html", "guide/index.html", "model-format/index.html", "reproductions/index.html",
-                 "benchmarks/index.html", "theory/abs-xbs3/index.html", "theory/normal-form-3/index.html"):
-        assert (tmp_path / "site" / page).is_file(), page
+                 "benchmarks/index.html", "theory/abs-xbs3/index.html", "theory/normal-form-3/index.html",
+                 "api/index.html"):
+        assert (site / page).is_file(), page
     # the generated theory reaches the site with its math for MathJax
-    assert "arithmatex" in (tmp_path / "site" / "theory" / "abs-xbs4" / "index.html").read_text("utf-8")
+    assert "arithmatex" in (site / "theory" / "abs-xbs4" / "index.html").read_text("utf-8")
+
+
+@pytest.mark.slow
+def test_the_site_loads_no_script_or_style_from_outside_and_serves_mathjax_itself(site):
+    pages = sorted(site.rglob("*.html"))
+    assert len(pages) > 15
+    for page in pages:
+        remote = REMOTE.findall(page.read_text("utf-8"))
+        assert not remote, f"{page.relative_to(site)} loads {remote}"
+    theory = (site / "theory" / "abs-xbs4" / "index.html").read_text("utf-8")
+    assert '<script src="../../javascripts/mathjax/tex-svg.js"></script>' in theory
+    mathjax = site / "javascripts" / "mathjax" / "tex-svg.js"
+    assert mathjax.stat().st_size > 1_000_000 and b'VERSION="3.' in mathjax.read_bytes()  # MathJax 3
+    assert "Apache License" in (site / "javascripts" / "mathjax" / "LICENSE").read_text("utf-8")
+
+
+@pytest.mark.slow
+def test_the_api_reference_documents_every_public_name_from_its_docstring(site):
+    html = (site / "api" / "index.html").read_text("utf-8")
+    ids = set(re.findall(r'id="(switchobs\.[\w.]+)"', html))
+    for layer in LAYERS:
+        names = importlib.import_module(f"switchobs.{layer}").__all__
+        missing = [name for name in names if f"switchobs.{layer}.{name}" not in ids]
+        assert not missing, f"the API reference lacks switchobs.{layer}: {missing}"
+    # rendered from the numpydoc sections, not pasted as text
+    from switchobs.design import design_gains
+
+    assert design_gains.__doc__.split("\n")[0].strip() in html
+    assert "Parameters:" in html and "Raises:" in html
 
 
 def test_every_page_is_in_the_navigation_and_every_nav_entry_exists():
