@@ -19,7 +19,12 @@ _LISTENER: ContextVar[Callable[[str], None] | None] = ContextVar("switchobs_prog
 
 
 def progress(text: str) -> None:
-    """Report that a stage starts (``"certify: strict CQLF LMI (n = 64, 2 modes)"``)."""
+    """Report that a stage starts (``"certify: strict CQLF LMI (n = 64, 2 modes)"``).
+
+    A loop that knows its length writes ``[k/N]`` in the note of step ``k``
+    (``"simulate: Table 4.1 [3/30] two-phase, wet-asphalt, 120 km/h"``); the
+    command line draws a bar from it.
+    """
     listener = _LISTENER.get()
     if listener is not None:
         listener(text)
