@@ -17,8 +17,8 @@ def register(sub: argparse._SubParsersAction) -> None:
                     "exact and numeric certification (the certificate re-verified from its file), C generation "
                     "and compilation, an emergency braking dry -> wet -> snow with the generated C observer in "
                     "the loop fed by a 60-ppr encoder with three-stage compensation, and a report with figures. "
-                    "Stage lines go to stderr (none with --quiet). Exit status 0 when every check holds, 1 when a check fails, "
-                    "2 when a stage cannot run (the message names it).")
+                    "Stage lines go to stderr (none with --quiet). Exit status 0 when every check holds, 1 when a "
+                    "check fails, 2 when a stage cannot run (the message names it).")
     p.add_argument("--fast", action="store_true", help="shorter braking and timing (for CI, well under a minute)")
     p.add_argument("--out", default="out/demo", metavar="DIR", help="output directory (default: out/demo)")
     p.set_defaults(func=run)
