@@ -109,7 +109,7 @@ def _register_unavailable(sub: argparse._SubParsersAction, name: str, exc: Impor
     def unavailable(args: argparse.Namespace) -> int:
         raise PrerequisiteError(message)
 
-    p = sub.add_parser(name, help=f"(unavailable: {exc})", add_help=False)
+    p = sub.add_parser(name, add_help=False)
     p.add_argument("rest", nargs=argparse.REMAINDER)
     p.set_defaults(func=unavailable)
 
