@@ -220,8 +220,9 @@ class _Derivation:
                   "A z collects the terms linear in z2..zn; the first column of A is zero (terms in y alone are "
                   "in d(y)).")
         u = sp.Matrix([sp.Symbol(f"_u{i}") for i in range(system.g.shape[1])])
-        left = J * (system.f + system.g * u)
-        right = s_x * (A * sp.Matrix(phi) + d.subs(y, system.h)) + b.subs(y, system.h) * u
+        left, right = J * system.f, s_x * (A * sp.Matrix(phi) + d.subs(y, system.h))
+        if u:
+            left, right = left + J * system.g * u, right + b.subs(y, system.h) * u
         residual = (left - right).applyfunc(simp)
         if residual != sp.zeros(n, 1):  # only a bug in the extraction could get here
             raise _Fails(f"substituting back leaves {list(residual)}")
