@@ -179,24 +179,8 @@ def test_an_input_that_is_not_output_dependent_is_named():
     assert not result.exists and "[ad^0 tau~, g_1]" in result.failing
 
 
-def poly_system(n):
-    """Observer form dz/dt = (1 + y^2)(A z + (0, .., k y^(n+1))) moved by x_k = z_k + q z_{k-1}^2."""
-    z = sp.symbols(f"z1:{n + 1}", real=True)
-    x = sp.symbols(f"x1:{n + 1}", real=True)
-    k, q = sp.symbols("k q", real=True)
-    s = 1 + z[0] ** 2
-    rhs = sp.Matrix([s * (z[i + 1] if i < n - 1 else k * z[0] ** (n + 1)) for i in range(n)])
-    psi = sp.Matrix([z[0]] + [z[i] + q * z[i - 1] ** 2 for i in range(1, n)])
-    inverse = {z[0]: x[0]}
-    for i in range(1, n):
-        inverse[z[i]] = sp.expand(x[i] - q * inverse[z[i - 1]] ** 2)
-    f = (psi.jacobian(z) * rhs).subs(inverse, simultaneous=True).applyfunc(sp.expand)
-    return System.from_dict({"name": f"poly{n}", "states": [str(v) for v in x], "f": [str(e) for e in f],
-                             "h": "x1", "parameters": ["k", "q"]})
-
-
 def test_a_polynomial_system_of_dimension_three_with_parameters(tmp_path):
-    sys_ = poly_system(3)
+    sys_ = system("poly3")
     result = search_transformation(sys_)
     assert sp.expand(result.time_scale - (1 + sys_.output_symbol ** 2)) == 0
     assert_normal_form(sys_, result, tmp_path)
