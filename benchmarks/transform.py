@@ -46,7 +46,7 @@ def main() -> None:
         rows.append(f"| {name} | {system.n} | {len(system.parameters)} | {what} | `{results[-1].time_scale}` | "
                     f"{stats.show()} |")
     publish("transform", "Search mode (`search_transformation`, Lie derivatives to the substitution check) on "
-            f"each system, cold, {repeats} run(s); CPU seconds, median [min–max].", [rows],
+            f"each system, cold, {repeats} run(s); CPU time in seconds (`time.process_time`), median [min–max].", [rows],
             ["Every run ends with the exact substitution check of the normal form it returns."], write=not args.quick)
 
 

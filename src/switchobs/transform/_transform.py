@@ -12,6 +12,7 @@ every positive one is re-checked by substituting the coordinates back.
 from __future__ import annotations
 
 import json
+import re
 from collections.abc import Sequence
 from dataclasses import dataclass
 from typing import Any
@@ -81,7 +82,7 @@ class Transformation:
             out.update({"time_scale": str(self.time_scale), "phi": [str(e) for e in self.phi or ()],
                         "jacobian": str(self.jacobian), "s_zeros": [str(e) for e in self.s_zeros],
                         "model": self.model.to_dict()})
-        out["steps"] = [{"title": s.title, "items": {label: str(v) for label, v in s.items}, "note": s.note}
+        out["steps"] = [{"title": s.title, "items": {label: _text(v) for label, v in s.items}, "note": s.note}
                         for s in self.steps]
         return out
 
@@ -91,7 +92,7 @@ class Transformation:
             lines.append(f"{i}. {step.title}")
             if step.note:
                 lines.append(f"   {step.note}")
-            lines += [f"   {label} = {value}" for label, value in step.items]
+            lines += [f"   {label}{_separator(label)}{_text(value)}" for label, value in step.items]
         lines.append("verdict: " + ("the normal form exists (checked by substitution)" if self.exists
                                     else f"no transformation: {self.failing}"))
         return "\n".join(lines)
@@ -110,8 +111,10 @@ class Transformation:
             if step.note:
                 lines += [step.note, ""]
             for label, value in step.items:
-                body = sp.latex(value) if isinstance(value, (sp.Basic, sp.MatrixBase)) else str(value)
-                lines.append(f"- ${_latex_label(label)} = {body}$")
+                if isinstance(value, (sp.Basic, sp.MatrixBase)):
+                    lines.append(f"- ${_latex_label(label)} = {sp.latex(value)}$")
+                else:
+                    lines.append(f"- {label}{_separator(label)}`{value}`")
             lines.append("")
         lines += ["## Verdict", ""]
         lines.append("The normal form exists; substituting $z = \\varphi(x)$ back gives "
@@ -141,14 +144,37 @@ class Transformation:
         return "\n".join(lines) + "\n"
 
 
+def _text(value: Any) -> str:
+    """A vector as ``(a, b)``, a matrix as ``[[a, b], [c, d]]``, anything else as sympy prints it."""
+    if isinstance(value, sp.MatrixBase):
+        if value.rows == 1 or value.cols == 1:
+            return "(" + ", ".join(str(e) for e in value) + ")"
+        return "[" + ", ".join("[" + ", ".join(str(e) for e in value.row(i)) + "]" for i in range(value.rows)) + "]"
+    return str(value)
+
+
 def _toml_value(value: Any) -> str:
     if isinstance(value, list):
         return "[" + ", ".join(_toml_value(v) for v in value) + "]"
     return json.dumps(str(value))  # a JSON string is a TOML basic string
 
 
+def _separator(label: str) -> str:
+    return " " if label.endswith(":") else " = "
+
+
+_LATEX_WORDS = {"tau~": r"\tilde\tau", "tau": r"\tau", "phi": r"\varphi", "kappa": r"\kappa", "ad": r"\mathrm{ad}",
+                "det": r"\det", "dphi": r"d\varphi"}
+
+
 def _latex_label(label: str) -> str:
-    return label.replace("phi", "\\varphi").replace("tau", "\\tau").replace("ad_", "\\mathrm{ad}_")
+    """``[ad^0 tau~, g_1] along tau`` -> ``[\\mathrm{ad}^0 \\tilde\\tau, g_1] \\text{ along } \\tau``."""
+    def word(m: re.Match) -> str:
+        token = m.group(0)
+        if token in _LATEX_WORDS:
+            return _LATEX_WORDS[token]
+        return rf"\text{{ {token} }}" if len(token) > 2 else token
+    return re.sub(r"[A-Za-z]+~?", word, label)
 
 
 class _Fails(Exception):
@@ -228,10 +254,12 @@ class _Derivation:
             raise _Fails(f"substituting back leaves {list(residual)}")
         zeros = tuple(sp.solve(s_y, y)) if s_y.has(y) else ()
         self.step("Diffeomorphism and singular set",
-                  [("det dphi/dx", det), ("s(y) = 0 at y", list(zeros) if zeros else "nowhere")],
+                  [("det dphi/dx", det),
+                   ("s(y) = 0 at:", ", ".join(f"{y} = {e}" for e in zeros) if zeros else "no y")],
                   "phi is a local diffeomorphism where det dphi/dx != 0; the observer is singular where s "
                   "vanishes (seed 004).")
-        self.step("Substitution check", [("dphi/dx (f + g u) - (s(y)(A phi + d(y)) + b(y) u)", list(residual))])
+        self.step("Substitution check", [("dphi/dx (f + g u) - (s(y)(A phi + d(y)) + b(y) u)",
+                                          sp.ImmutableMatrix(residual))])
         model = self.model(A, d, b, s_y, zs)
         return Transformation(system, self.mode, True, None, tuple(self.steps), s_y, tuple(phi), det, zeros, model)
 
@@ -336,14 +364,19 @@ def search_transformation(system: System) -> Transformation:
         top = bracket(frame[n - 2], frame[n - 1], xs)
         coefficient = simp(sp.Matrix.hstack(*frame).LUsolve(top)[n - 2])
         ratio = simp(coefficient / kappa(n))
-        log_derivative = der.in_output(ratio, "s'(y)/s(y)", external_ok=True)
+        equation = [(f"[ad^{n - 2} tau, ad^{n - 1} tau] along ad^{n - 2} tau", coefficient), ("kappa_n", kappa(n)),
+                    ("s'/s = coefficient / kappa_n", ratio)]
+        note = (f"In the normal form this coefficient is kappa_n s'(y)/s(y) (kappa_{n} = {kappa(n)}), so it must be a "
+                "function of y alone; s is fixed up to a constant factor"
+                + (", chosen to take the external signals out of f/s." if der.ws else "."))
+        try:
+            log_derivative = der.in_output(ratio, "s'(y)/s(y)", external_ok=True)
+        except _Fails:
+            der.step("Time scale", equation, note)
+            raise
         s0 = sp.exp(sp.integrate(log_derivative, y)) if log_derivative != 0 else sp.Integer(1)
         s_y = simp(s0 * _external_factor((f / s0.subs(y, h)).applyfunc(simp), der.ws))
-        zeros = tuple(sp.solve(s_y, y)) if s_y.has(y) else ()
-        der.step("Time scale", [(f"[ad^{n - 2} tau, ad^{n - 1} tau] along ad^{n - 2} tau", coefficient),
-                                ("kappa_n", kappa(n)), ("s'(y)/s(y)", log_derivative), ("s(y)", s_y)],
-                 f"In the normal form this coefficient is kappa_n s'(y)/s(y) (kappa_{n} = {kappa(n)}); s is fixed "
-                 "up to a constant factor, chosen to take the external signals out of f/s.")
+        der.step("Time scale", [*equation, ("s'(y)/s(y)", log_derivative), ("s(y)", s_y)], note)
         scaled = (f / s_y.subs(y, h)).applyfunc(simp)
         progress(f"transform: commutativity of the time-scaled frame (n = {n})")
         tframe = [(tau * s_y.subs(y, h) ** (n - 1)).applyfunc(simp)]
