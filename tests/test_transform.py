@@ -1,4 +1,4 @@
-"""switchobs transform: the normal form dz/dt = s(y)(Az + d(y)) + b(y)u found or checked from f, g, h (seed 004 Part III).
+"""switchobs transform: dz/dt = s(y)(Az + d(y)) + b(y)u found or checked from f, g, h (seed 004 Part III).
 
 Every positive verdict is re-checked here independently: the model the result writes is read back with
 Model.from_toml and dphi/dx (f + g u) = s(h)(A phi + d(h)) + b(h) u is simplified to zero in the states.
@@ -7,6 +7,8 @@ Model.from_toml and dphi/dx (f + g u) = s(h)(A phi + d(h)) + b(h) u is simplifie
 import ast
 import json
 import pathlib
+import re
+import shlex
 import subprocess
 
 import pytest
@@ -21,7 +23,7 @@ from switchobs.transform import System, check_transformation, search_transformat
 from switchobs.transform._lie import kappa
 
 SYSTEMS = pathlib.Path(__file__).resolve().parents[1] / "examples" / "systems"
-SEED000_PHI = ["x2", "c1*c2*exp(-c2*x1) - x3", "-c2*x3"]          # seed 000 Sec. III-B: z1 = x2, z2 = mu'(x1), z3 = -c2 c3
+SEED000_PHI = ["x2", "c1*c2*exp(-c2*x1) - x3", "-c2*x3"]  # seed 000 Sec. III-B: z1 = x2, z2 = mu'(x1), z3 = -c2 c3
 
 
 def system(name):
@@ -42,7 +44,8 @@ def assert_normal_form(sys_, result, tmp_path):
     phi = sp.Matrix(result.phi)
     J = phi.jacobian(x)
     by_name = {**{str(s): s for s in sys_.symbols.values()}}
-    to_sys = {s: by_name.get(str(s), s) for e in (*model.A, *model.d, *model.b, model.time_scale) for s in e.free_symbols}
+    to_sys = {s: by_name.get(str(s), s)
+              for e in (*model.A, *model.d, *model.b, model.time_scale) for s in e.free_symbols}
     y = model.symbol(model.output)
     at_x = {**to_sys, y: sys_.h}
     s_x = model.time_scale.subs(at_x)
@@ -97,7 +100,9 @@ def test_seed000_check_mode_gives_eq7_and_the_sec3e_gains(tmp_path):
     mine = design_gains(model.numeric(), "-10,-20,-20")
     theirs = design_gains(seed.numeric(), "-10,-20,-20")
     assert mine.K_plus == theirs.K_plus and mine.K_minus == theirs.K_minus
-    assert list(theirs.K_plus) == [34 + 10 + 40, -(400 + 400 + 34 * 84) / sp.Rational(375, 2), -4000 / sp.Rational(375, 2)]
+    a, c, k1p, k1m = sp.Rational(375, 2), 34, 34 + 10 + 40, 34 - 10 - 40        # beta1 = 10, beta2 = 20, Sec. III-E
+    assert list(mine.K_plus) == [k1p, -(400 + 400 + c * k1p) / a, -4000 / a]
+    assert list(mine.K_minus) == [k1m, -(400 + 400 + c * k1m) / a, 4000 / a]
 
 
 def test_seed000_a_wrong_candidate_names_the_failing_condition():
@@ -126,14 +131,16 @@ def test_seed001_xbs_model_2_6_from_the_wheel_dynamics(tmp_path):
 
 def test_seed001_adaptive_model_3_2_in_w_coordinates(tmp_path):
     sys_ = system("xbs-aguado")
-    checked = check_transformation(sys_, "y/vx", ["x2", "c1*c2*exp(-c2*x1) - c3 - (c2/a)*x2"])   # w2 = z2 + (c/a) z1
+    w2 = "c1*c2*exp(-c2*x1) - c3 - (c2/a)*x2"                    # w2 = z2 + (c/a) z1, seed 001 below (3.1)
+    checked = check_transformation(sys_, "y/vx", ["x2", w2])
     model = assert_normal_form(sys_, checked, tmp_path)
     seed = builtin_model("abs-adaptive2")
     c2, c3 = model.symbol("c2"), model.symbol("c3")
     to_seed = {c2: -seed.symbol("c"), c3: seed.symbol("d") / seed.symbol("c"),
                model.symbol("a"): seed.symbol("a"), model.symbol("b"): seed.symbol("b")}
     assert model.A.subs(to_seed) == seed.A
-    assert (model.d.subs(to_seed) - seed.d.subs(seed.symbol("y"), model.symbol("y"))).applyfunc(sp.simplify) == sp.zeros(2, 1)
+    d_seed = seed.d.subs(seed.symbol("y"), model.symbol("y"))
+    assert (model.d.subs(to_seed) - d_seed).applyfunc(sp.simplify) == sp.zeros(2, 1)
     assert (model.b.subs(to_seed) - seed.b).applyfunc(sp.simplify) == sp.zeros(2, 1)
 
 
@@ -151,6 +158,8 @@ def test_a_system_that_needs_a_nontrivial_time_scale(tmp_path):
     result = search_transformation(sys_)
     assert result.time_scale == sys_.output_symbol and result.s_zeros == (0,)
     assert_normal_form(sys_, result, tmp_path)
+    z1, z2 = sp.symbols("z1 z2", real=True)
+    assert result.phi_inverse == (z1, z1**2 + z2)                     # x = phi^-1(z), explicit
 
 
 def test_no_time_scale_exists_for_rayleighs_oscillator():
@@ -259,3 +268,25 @@ def test_cli_bad_input_is_one_line_and_exit_2(argv, match, capsys):
     assert main(["transform", str(SYSTEMS / "wheel-burckhardt.toml"), *argv]) == 2
     err = capsys.readouterr().err
     assert match in err and len(err.strip().splitlines()) == 1 and "Traceback" not in err
+
+
+@pytest.mark.parametrize("command", [
+    'switchobs transform examples/systems/wheel-burckhardt.toml --s y/vx --phi "x2, c1*c2*exp(-c2*x1) - x3, -c2*x3"',
+    "switchobs transform examples/systems/time-scaled.toml",
+    "switchobs transform examples/systems/no-normal-form.toml",
+])
+def test_the_derivations_shown_in_the_docs_are_what_the_command_prints(command, capsys, monkeypatch):
+    root = SYSTEMS.parents[1]
+    page = (root / "docs" / "transform.md").read_text("utf-8")
+    block = re.search(r"^\$ " + re.escape(command) + r"\n```text\n(.*?)\n```", page, re.S | re.M)
+    assert block, f"docs/transform.md shows no output of `{command}`"
+    monkeypatch.chdir(root)
+    main(shlex.split(command)[1:])
+    assert capsys.readouterr().out.rstrip("\n") == block.group(1)
+
+
+def test_states_named_like_the_normal_form_coordinates_do_not_clash(tmp_path):
+    sys_ = System.from_dict({"name": "z-named", "states": ["z1", "z2"], "f": ["z2 + z1^2", "-z1"], "h": "z1"})
+    result = search_transformation(sys_)
+    model = assert_normal_form(sys_, result, tmp_path)
+    assert model.states == ("w1", "w2") and list(model.d) == [model.symbol("y") ** 2, -model.symbol("y")]
