@@ -49,7 +49,10 @@ def as_output_function(q: sp.Expr, h: sp.Expr, y: sp.Symbol, xs: Sequence[sp.Sym
     if h in xs:
         value = q.subs(h, y)
     else:
-        solutions = sp.solve(sp.Eq(h, y), candidates[0], dict=True)
+        try:
+            solutions = sp.solve(sp.Eq(h, y), candidates[0], dict=True)
+        except NotImplementedError:
+            return None
         if not solutions:
             return None
         value = q.subs(solutions[0])

@@ -261,10 +261,11 @@ class _Derivation:
         residual = (left - right).applyfunc(simp)
         if residual != sp.zeros(n, 1):  # only a bug in the extraction could get here
             raise _Fails(f"substituting back leaves {list(residual)}")
-        zeros = tuple(sp.solve(s_y, y)) if s_y.has(y) else ()
+        zeros = _solve(s_y, y) if s_y.has(y) else ()
         self.step("Diffeomorphism and singular set",
                   [("det dphi/dx", det),
-                   ("s(y) = 0 at:", ", ".join(f"{y} = {e}" for e in zeros) if zeros else "no y")],
+                   ("s(y) = 0 at:", "not solved in closed form" if zeros is None else
+                    ", ".join(f"{y} = {e}" for e in zeros) if zeros else "no y")],
                   "phi is a local diffeomorphism where det dphi/dx != 0; the observer is singular where s "
                   "vanishes (seed 004).")
         self.step("Substitution check", [("dphi/dx (f + g u) - (s(y)(A phi + d(y)) + b(y) u)",
@@ -273,14 +274,14 @@ class _Derivation:
         self.step("Inverse coordinates", [(str(x), e) for x, e in zip(xs, inverse)] if inverse else
                   [("x = phi^-1(z):", "no unique closed form found")])
         model = self.model(A, d, b, s_y, zs)
-        return Transformation(system, self.mode, True, None, tuple(self.steps), s_y, tuple(phi), det, zeros, model,
-                              inverse)
+        return Transformation(system, self.mode, True, None, tuple(self.steps), s_y, tuple(phi), det, zeros or (),
+                              model, inverse)
 
     def inverse(self, phi: Sequence[sp.Expr], zs: Sequence[sp.Symbol]) -> tuple[sp.Expr, ...] | None:
         """``x = phi^{-1}(z)`` when sympy solves ``phi(x) = z`` with a single solution, checked by substitution."""
         progress(f"transform: inverse coordinates (n = {self.system.n})")
-        solutions = sp.solve([p - z for p, z in zip(phi, zs)], self.xs, dict=True)
-        if len(solutions) != 1 or set(solutions[0]) != set(self.xs):
+        solutions = _solve([p - z for p, z in zip(phi, zs)], self.xs)
+        if solutions is None or len(solutions) != 1 or set(solutions[0]) != set(self.xs):
             return None
         inverse = tuple(simp(solutions[0][x]) for x in self.xs)
         back = {x: e for x, e in zip(self.xs, inverse)}
@@ -400,6 +401,9 @@ def search_transformation(system: System) -> Transformation:
             der.step("Time scale", equation, note)
             raise
         s0 = sp.exp(sp.integrate(log_derivative, y)) if log_derivative != 0 else sp.Integer(1)
+        if s0.has(sp.Integral):
+            der.step("Time scale", [*equation, ("s'(y)/s(y)", log_derivative)], note)
+            raise _Fails(f"s'(y)/s(y) = {log_derivative} has no closed-form integral (sympy); give s in check mode")
         s_y = simp(s0 * _external_factor((f / s0.subs(y, h)).applyfunc(simp), der.ws))
         der.step("Time scale", [*equation, ("s'(y)/s(y)", log_derivative), ("s(y)", s_y)], note)
         scaled = (f / s_y.subs(y, h)).applyfunc(simp)
@@ -431,8 +435,10 @@ def search_transformation(system: System) -> Transformation:
         phi = [h]
         for k in range(1, n):
             potential = integrate_exact(list(coframe.row(k)), xs)
-            if potential is None:  # commuting frames have closed coframes: only sympy's simplification can get here
-                raise _Fails(f"the 1-form dz_{k + 1} = {list(coframe.row(k))} could not be integrated exactly")
+            # commuting frames have closed coframes: only sympy's simplification or integration can fail here
+            if potential is None or potential.has(sp.Integral):
+                raise _Fails(f"the 1-form dz_{k + 1} = {list(coframe.row(k))} has no closed-form integral (sympy); "
+                             "give phi in check mode")
             phi.append(potential)
         der.step("Coordinates", [(f"z{k + 1}", e) for k, e in enumerate(phi)],
                  "dz_k is the coframe dual to d/dz_k = (-1)^(n-k) ad^(n-k) tau~ (integration constants zero).")
@@ -443,6 +449,16 @@ def search_transformation(system: System) -> Transformation:
         return der.normal_form(phi, s_y)
     except _Fails as exc:
         return der.fail(str(exc))
+
+
+def _solve(equations: Any, unknowns: Any) -> list | None:
+    """sympy's solutions (dicts for a system, values for one equation), or None when it cannot solve."""
+    try:
+        if isinstance(equations, list):
+            return sp.solve(equations, unknowns, dict=True)
+        return sp.solve(equations, unknowns)
+    except NotImplementedError:
+        return None
 
 
 def _external_factor(field: sp.Matrix, ws: set[sp.Symbol]) -> sp.Expr:
