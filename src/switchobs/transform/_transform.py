@@ -248,7 +248,8 @@ class _Derivation:
         for k in range(n):
             for i in range(inputs.shape[1]):
                 b[k, i] = self.in_output(inputs[k, i], f"b_{k + 1}" + (f",{i + 1}" if inputs.shape[1] > 1 else ""))
-        letter = next(c for c in ("z", "w", "zeta", "xi") if not {f"{c}{k + 1}" for k in range(n)} & set(system.symbols))
+        taken = set(system.symbols)
+        letter = next(c for c in ("z", "w", "zeta", "xi") if not {f"{c}{k + 1}" for k in range(n)} & taken)
         zs = [sp.Symbol(f"{letter}{k + 1}", real=True) for k in range(n)]
         self.step("Normal form", [("A", sp.ImmutableMatrix(A)), ("C", sp.ImmutableMatrix([[1] + [0] * (n - 1)])),
                                   ("d(y)", sp.ImmutableMatrix(d)), ("b(y)", sp.ImmutableMatrix(b))],
@@ -274,8 +275,8 @@ class _Derivation:
         self.step("Inverse coordinates", [(str(x), e) for x, e in zip(xs, inverse)] if inverse else
                   [("x = phi^-1(z):", "no unique closed form found")])
         model = self.model(A, d, b, s_y, zs)
-        return Transformation(system, self.mode, True, None, tuple(self.steps), s_y, tuple(phi), det, zeros or (),
-                              model, inverse)
+        return Transformation(system, self.mode, True, None, tuple(self.steps), s_y, tuple(phi), det,
+                              tuple(zeros or ()), model, inverse)
 
     def inverse(self, phi: Sequence[sp.Expr], zs: Sequence[sp.Symbol]) -> tuple[sp.Expr, ...] | None:
         """``x = phi^{-1}(z)`` when sympy solves ``phi(x) = z`` with a single solution, checked by substitution."""
