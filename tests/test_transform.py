@@ -263,6 +263,7 @@ def test_cli_check_mode_json_and_negative_verdict(tmp_path, capsys):
     (["--s", "y/vx", "--phi", "x2,x1"], "phi has 2 component"),
     (["--s", "y/vx", "--phi", "x2,x1,nope"], "unknown name 'nope'"),
     (["--out", "/nonexistent/dir/m.toml"], "does not exist"),
+    (["--phi", "x2"], "needs both --s and --phi"),
 ])
 def test_cli_bad_input_is_one_line_and_exit_2(argv, match, capsys):
     assert main(["transform", str(SYSTEMS / "wheel-burckhardt.toml"), *argv]) == 2
@@ -290,3 +291,8 @@ def test_states_named_like_the_normal_form_coordinates_do_not_clash(tmp_path):
     result = search_transformation(sys_)
     model = assert_normal_form(sys_, result, tmp_path)
     assert model.states == ("w1", "w2") and list(model.d) == [model.symbol("y") ** 2, -model.symbol("y")]
+
+
+def test_cli_a_missing_system_file_is_exit_2(tmp_path, capsys):
+    assert main(["transform", str(tmp_path / "nope.toml")]) == 2
+    assert "cannot read system file" in capsys.readouterr().err
