@@ -24,6 +24,7 @@ __all__ = [
     "ObserverInputError",
     "CodegenError",
     "PrerequisiteError",
+    "TransformError",
 ]
 
 
@@ -94,3 +95,7 @@ class CodegenError(SwitchobsError, RuntimeError):
 
 class PrerequisiteError(SwitchobsError, RuntimeError):
     """A pipeline stage cannot start: a package does not import or a tool (C compiler) is missing."""
+
+
+class TransformError(SwitchobsError, ValueError):
+    """A candidate time scale or change of coordinates that cannot be checked (wrong length, unknown name)."""
