@@ -157,11 +157,16 @@ class ObserverXbsEstimator:
         The loop then does what :meth:`reset` and :meth:`update` do, with the generated
         ``<prefix>_step`` (:class:`switchobs.codegen.CObserver` calls the same function).
         """
+        from ..codegen import CObserver
+
         obs = self.observer
-        generated = getattr(obs, "generated", None)
-        code = getattr(obs, "readout_code", None)
+        # exact behaviour: a subclass of either class may step differently from the function the loop calls
+        if type(obs) is not CObserver or type(self) is not ObserverXbsEstimator:
+            return None
+        generated = obs.generated
+        code = obs.readout_code
         readout = c_readout(code) if code is not None else None
-        if generated is None or readout is None or generated.real != "double" or generated.ns != 3:
+        if readout is None or generated.real != "double" or generated.ns != 3:
             return None
         measured_first = tuple(obs.state_names)[0] not in self._initial
         initial = initial_xbs_state(obs, 0.0, self._initial)

@@ -143,8 +143,9 @@ def _library(obs: CompiledObserver | None) -> Any:
 def compiled_support(plant: _QuarterCar) -> tuple[CompiledObserver | None, str | None]:
     """The estimator's C step and ``None``, or ``None`` and why the compiled loop cannot run ``plant``."""
     sc = plant.sc
-    if not isinstance(sc.controller, (FivePhaseABS, TwoPhaseABS)):
-        return None, f"the {sc.controller.name} controller runs in the Python loop only"
+    # exact types: a subclass may change the runtime the C code ports
+    if type(sc.controller) not in (FivePhaseABS, TwoPhaseABS):
+        return None, f"the controller {type(sc.controller).__name__} runs in the Python loop only"
     if sc.actuator.delay_s > 0.0:
         return None, "an actuator delay runs in the Python loop only"
     est = plant.estimator
