@@ -38,7 +38,7 @@ from ..exceptions import CodegenError, SimulationError
 from ._controllers import ContinuousXbsControl, Controller, FivePhaseABS, TwoPhaseABS
 from ._compiled import compiled_support, compiler_missing, run_compiled
 from ._estimator import TrueXbs, XbsEstimator
-from ._hybrid import Crossing, HybridPlant, integrate
+from ._hybrid import Crossing, HybridPlant, HybridRun, integrate
 from ._metrics import BrakingMetrics, braking_metrics
 from ._road import RoadSchedule, _RoadState
 from ._tyre import Burckhardt
@@ -181,6 +181,8 @@ class BrakingResult:
         Whether the controller used the estimate (otherwise the true XBS).
     wall_time_s, observer_time_s, steps : float, float, int
         Cost of the run (measured, for the benchmark).
+    compiled : bool
+        Whether the loop ran compiled to C (``simulate(compiled=...)``); the results are the same.
     """
 
     scenario: BrakingScenario
@@ -194,6 +196,7 @@ class BrakingResult:
     wall_time_s: float
     observer_time_s: float
     steps: int
+    compiled: bool = False
 
     def to_json(self, *, include_series: bool = False) -> dict[str, Any]:
         out: dict[str, Any] = {
@@ -396,7 +399,7 @@ class _QuarterCar(HybridPlant):
 
     def run(self, compiled: bool | None) -> BrakingResult:
         sc = self.sc
-        run = None
+        run: HybridRun | None = None
         if compiled is not False:
             obs, reason = compiled_support(self)
             if reason is not None and compiled:
@@ -407,6 +410,7 @@ class _QuarterCar(HybridPlant):
                 except CodegenError as exc:
                     if compiled or not compiler_missing(exc):
                         raise
+        ran_compiled = run is not None
         if run is None:
             run = integrate(self, sc.duration_s, name=sc.name)
         est = self.estimator
@@ -415,7 +419,8 @@ class _QuarterCar(HybridPlant):
         observer = "none" if est is None else (est.describe() if hasattr(est, "describe") else type(est).__name__)
         return BrakingResult(scenario=sc, status=run.status, message=run.message, series=run.series,
                              events=run.events, metrics=metrics, observer=observer, observer_in_loop=self.use_hat,
-                             wall_time_s=run.wall_time_s, observer_time_s=self.observer_time_s, steps=run.steps)
+                             wall_time_s=run.wall_time_s, observer_time_s=self.observer_time_s, steps=run.steps,
+                             compiled=ran_compiled)
 
 
 def simulate(scenario: BrakingScenario, *, estimator: XbsEstimator | str | None = None,
