@@ -72,6 +72,8 @@ def c_readout(code: str) -> str | None:
     >>> c_readout("numpy.exp(x0)") is None
     True
     """
+    if "**" in code or "//" in code:
+        return None                        # powers and floor divisions, which C spells otherwise
     out, pos = [], 0
     code = code.rstrip()
     while pos < len(code):
