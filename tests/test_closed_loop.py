@@ -113,3 +113,15 @@ def test_run_braking_refuses_an_unknown_controller_and_a_bad_speed():
                                             ("numpy.sqrt(x0)", None), ("x0**2", None), ("x0//2", None)])
 def test_readouts_are_translated_to_c_only_when_c_evaluates_them_as_python(code, expected):
     assert c_readout(code) == expected
+
+
+def test_a_run_longer_than_its_first_buffers_is_rerun_with_more_room(monkeypatch):
+    import switchobs.plants._compiled as compiled_loop
+
+    sc = replace(scenario("aguado-sec34"), duration_s=1.5)
+    (ref, _), _ = both(sc)
+    monkeypatch.setattr(compiled_loop, "_FIRST_ROWS", 7)
+    monkeypatch.setattr(compiled_loop, "_FIRST_EVENTS", 1)
+    fast = simulate(sc, compiled=True)
+    assert len(ref.events) > 8 and ref.steps > 4 * 4 * 4 * 7
+    assert_same(ref, fast)

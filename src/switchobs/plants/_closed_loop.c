@@ -266,13 +266,13 @@ static int record_event(Record *rec, double t, int kind, double a, double b) {
     return 1;
 }
 
+#if OBS_NX > 0
 static double seconds(void) {
     struct timespec ts;
     clock_gettime(CLOCK_MONOTONIC, &ts);
     return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
 }
 
-#if OBS_NX > 0
 /* ObserverXbsEstimator.update: one step with the mean of the bounding samples; 0 or the step's status. */
 static int32_t observer_update(Loop *L, double *xo, const double *params, double y, double vx, double u, double dt,
                                double *fail) {
@@ -415,6 +415,7 @@ int32_t switchobs_braking_run(const double *p, const double *ch, int32_t n_ch, d
         /* after_step: the estimator advances over the step */
         u_mean = (y[3] - p_prev) / h;
         p_prev = y[3];
+        (void)u_mean;                      /* read by the observer only */
         if (L->est == 1) {
             L->xbs_hat = L->o_xbs;
         } else if (L->est == 2) {

@@ -50,6 +50,9 @@ _EVENTS = ("PHASE", "TIMEOUT", "ROAD_TIME", "ROAD_POSITION")
 _EV_COLS = 4
 _N_SIG = 3
 _ENTRY = "switchobs_braking_run"
+#: Largest first allocation of recorded rows and of events (a run that needs more is rerun with more room).
+_FIRST_ROWS = 1 << 21
+_FIRST_EVENTS = 4096
 
 
 @dataclass(frozen=True)
@@ -220,10 +223,10 @@ def run_compiled(plant: _QuarterCar, obs: CompiledObserver | None) -> HybridRun:
     x = np.array(obs.initial if obs is not None else (0.0,), dtype=float)
     op = np.array(obs.params if obs is not None else (0.0,), dtype=float)
     out = np.zeros(len(_OUT) - 2 + _N_SIG + max(nx, 1))
-    # the step shrinks below low_speed_m_s (module notes of _simulate): room for 8x the nominal steps,
-    # grown and rerun (deterministic) if a run needs more
-    cap = int(8 * sc.duration_s / sc.dt_s) + 1024
-    events_cap = 4096
+    # room for twice the nominal steps (the step shrinks below low_speed_m_s, events split steps), at most
+    # 2^21 rows (256 MB) at first; a run that needs more is rerun (deterministic) with 4 times the room
+    cap = min(int(2 * sc.duration_s / sc.dt_s) + 1024, _FIRST_ROWS)
+    events_cap = _FIRST_EVENTS
     while True:
         rows = np.empty((cap, 16))
         events = np.empty((events_cap, _EV_COLS))
