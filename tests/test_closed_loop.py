@@ -125,3 +125,14 @@ def test_a_run_longer_than_its_first_buffers_is_rerun_with_more_room(monkeypatch
     fast = simulate(sc, compiled=True)
     assert len(ref.events) > 8 and ref.steps > 4 * 4 * 4 * 7
     assert_same(ref, fast)
+
+
+def test_without_a_c_compiler_the_default_runs_the_python_loop_and_compiled_true_says_so(monkeypatch):
+    from switchobs.exceptions import CodegenError
+
+    monkeypatch.delenv("CC", raising=False)
+    monkeypatch.setenv("PATH", "")
+    sc = BrakingScenario("dry-asphalt", speed_m_s=20.0, duration_s=0.2)
+    assert not simulate(sc).compiled
+    with pytest.raises(CodegenError, match="no C compiler found"):
+        simulate(sc, compiled=True)

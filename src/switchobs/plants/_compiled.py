@@ -35,7 +35,7 @@ from ._hybrid import MAX_CASCADE, HybridRun
 if TYPE_CHECKING:
     from ._simulate import _QuarterCar
 
-__all__ = ["CompiledObserver", "CompiledEstimator", "compiled_support", "run_compiled"]
+__all__ = ["CompiledObserver", "CompiledEstimator", "compiled_support", "compiler_available", "run_compiled"]
 
 #: Layout of the parameter vector, of a road change's row, of the output vector and of an event's row.
 _P = ("R", "J", "FZ", "GB", "M", "DECEL", "PRESCRIBED", "MAX_RATE", "P_MAX", "DT", "V_LOW", "V_STOP", "T_END",
@@ -269,7 +269,12 @@ def run_compiled(plant: _QuarterCar, obs: CompiledObserver | None) -> HybridRun:
                      steps=int(out[idx["STEPS"]]), wall_time_s=time.perf_counter() - wall0)
 
 
-def compiler_missing(exc: CodegenError) -> bool:
-    """Whether ``exc`` says that no C compiler is installed (the automatic choice then runs the Python loop)."""
-    return str(exc).startswith("no C compiler found")
+def compiler_available() -> bool:
+    """Whether a C compiler is installed (without one, the automatic choice runs the Python loop)."""
+    from ..codegen import find_compiler
 
+    try:
+        find_compiler()
+    except CodegenError:
+        return False
+    return True

@@ -34,9 +34,9 @@ from typing import Any
 import numpy as np
 import numpy.typing as npt
 
-from ..exceptions import CodegenError, SimulationError
+from ..exceptions import SimulationError
 from ._controllers import ContinuousXbsControl, Controller, FivePhaseABS, TwoPhaseABS
-from ._compiled import compiled_support, compiler_missing, run_compiled
+from ._compiled import compiled_support, compiler_available, run_compiled
 from ._estimator import TrueXbs, XbsEstimator
 from ._hybrid import Crossing, HybridPlant, HybridRun, integrate
 from ._metrics import BrakingMetrics, braking_metrics
@@ -404,12 +404,8 @@ class _QuarterCar(HybridPlant):
             obs, reason = compiled_support(self)
             if reason is not None and compiled:
                 raise SimulationError(f"scenario {sc.name!r} cannot run in the compiled loop: {reason}")
-            if reason is None:
-                try:
-                    run = run_compiled(self, obs)
-                except CodegenError as exc:
-                    if compiled or not compiler_missing(exc):
-                        raise
+            if reason is None and (compiled or compiler_available()):
+                run = run_compiled(self, obs)
         ran_compiled = run is not None
         if run is None:
             run = integrate(self, sc.duration_s, name=sc.name)
