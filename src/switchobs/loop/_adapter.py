@@ -14,7 +14,7 @@ from typing import Any, Protocol
 
 import numpy as np
 
-from ..exceptions import DimensionError, ModelError, ObserverInputError
+from ..exceptions import DimensionError, ModelError, ObserverInputError, SimulationError
 from ..plants import CompiledObserver
 
 __all__ = ["ObserverXbsEstimator", "SteppingObserver", "initial_xbs_state", "c_readout"]
@@ -173,9 +173,14 @@ class ObserverXbsEstimator:
         measured_first = tuple(obs.state_names)[0] not in self._initial
         initial = initial_xbs_state(obs, 0.0, self._initial)
 
-        def refusal(code: int, x: np.ndarray, sig: np.ndarray, dt: float) -> str:
-            exc: ObserverInputError = obs._fail(code, x, sig, dt)
-            return str(exc)
+        def refusal(x: np.ndarray, sig: np.ndarray, dt: float) -> str:
+            # the same step through the binding raises what the Python loop reports
+            try:
+                obs.step(x, sig, dt)
+            except ObserverInputError as exc:
+                return str(exc)
+            raise SimulationError(f"the observer step from {x.tolist()} with signals {sig.tolist()} and dt = {dt!r} "
+                                  "failed in the compiled loop but not through its binding")
 
         def finish(x: np.ndarray, estimate: float, y: float, vx: float) -> None:
             self._state, self._estimate, self._y, self._vx = x.copy(), estimate, y, vx

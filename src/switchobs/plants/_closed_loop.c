@@ -283,7 +283,7 @@ static int32_t observer_update(Loop *L, double *xo, const double *params, double
         memcpy(x, xo, sizeof x);
         code = OBS_STEP(x, sig, params, dt);
         if (code != 0) {
-            memcpy(fail + OUT_FAIL_X, x, sizeof x);
+            memcpy(fail + OUT_FAIL_X, xo, sizeof x);     /* the state the refused step started from */
             memcpy(fail + OUT_FAIL_SIG, sig, sizeof sig);
             fail[OUT_FAIL_DT] = dt;
             return code;
@@ -424,7 +424,6 @@ int32_t switchobs_braking_run(const double *p, const double *ch, int32_t n_ch, d
             int32_t code = observer_update(L, xo, op, L->o_x2, y[1], u_mean, h, out);
             obs_time += seconds() - t_obs;
             if (code != 0) {
-                out[OUT_FAIL_CODE] = (double)code;
                 if (!record_row(L, rec, t, y)) { status = ST_ROWS_FULL; goto done; }
                 status = ST_OBSERVER_FAILED;
                 goto done;

@@ -43,7 +43,7 @@ _P = ("R", "J", "FZ", "GB", "M", "DECEL", "PRESCRIBED", "MAX_RATE", "P_MAX", "DT
       "TIMEOUT", "U1", "U3", "U4", "EPS0", "EPS1", "EPS2", "EPS3", "EPS4", "EPS5", "Z_REF", "KP", "CHI_A", "CHI_B",
       "HAS_START", "START_DECEL", "EST", "USE_HAT", "LOCATABLE", "OBS_MEASURED_FIRST")
 _CH = ("AT_TIME", "WHERE", "DURATION", "C1", "C2", "C3")
-_OUT = ("T", "STEPS", "ROWS", "EVENTS", "OBSERVER_TIME", "ESTIMATE", "EST_Y", "EST_VX", "FAIL_CODE", "FAIL_DT",
+_OUT = ("T", "STEPS", "ROWS", "EVENTS", "OBSERVER_TIME", "ESTIMATE", "EST_Y", "EST_VX", "FAIL_DT",
         "CASCADE_INDEX", "CASCADE_PHASE", "FAIL_SIG", "FAIL_X")
 _STATUS = ("duration", "stopped", "observer-failed", "cascade", "rows-full", "events-full")
 _EVENTS = ("PHASE", "TIMEOUT", "ROAD_TIME", "ROAD_POSITION")
@@ -77,8 +77,9 @@ class CompiledObserver:
     measured_first : bool
         Whether the first state starts at the first measurement.
     refusal : callable
-        ``refusal(code, x, signals, dt) -> str``: the message of a refused step (the run stops with
-        status ``observer-failed`` and this message, as the Python loop does).
+        ``refusal(x, signals, dt) -> str``: the message of the step from ``x`` that the C step
+        refused (the run stops with status ``observer-failed`` and this message, as the Python loop
+        does).
     finish : callable
         ``finish(x, estimate, y, vx)``: hands the final state back to the estimator.
     """
@@ -89,7 +90,7 @@ class CompiledObserver:
     params: tuple[float, ...]
     initial: tuple[float, ...]
     measured_first: bool
-    refusal: Callable[[int, np.ndarray, np.ndarray, float], str]
+    refusal: Callable[[np.ndarray, np.ndarray, float], str]
     finish: Callable[[np.ndarray, float, float, float], None]
 
 
@@ -260,8 +261,8 @@ def run_compiled(plant: _QuarterCar, obs: CompiledObserver | None) -> HybridRun:
         message = f"vx reached {sc.stop_speed_m_s:.3f} m/s"
     else:
         base = len(_OUT) - 2
-        message = obs.refusal(int(out[idx["FAIL_CODE"]]), out[base + _N_SIG:base + _N_SIG + nx].copy(),
-                              out[base:base + _N_SIG].copy(), float(out[idx["FAIL_DT"]]))
+        message = obs.refusal(out[base + _N_SIG:base + _N_SIG + nx].copy(), out[base:base + _N_SIG].copy(),
+                              float(out[idx["FAIL_DT"]]))
     if obs is not None:
         obs.finish(x, float(out[idx["ESTIMATE"]]), float(out[idx["EST_Y"]]), float(out[idx["EST_VX"]]))
     series = {col: data[:, i].copy() for i, col in enumerate(plant.series)}
