@@ -136,3 +136,16 @@ def test_without_a_c_compiler_the_default_runs_the_python_loop_and_compiled_true
     assert not simulate(sc).compiled
     with pytest.raises(CodegenError, match="no C compiler found"):
         simulate(sc, compiled=True)
+
+
+def test_contradictory_thresholds_raise_the_same_cascade_error_in_both_loops():
+    ctrl = FivePhaseABS()
+    # every guard of every phase positive: the validation refuses such thresholds, set them past it
+    object.__setattr__(ctrl, "eps", (-1e9, -1e9, -1e9, 1e9, -1e9, -1e9))
+    sc = BrakingScenario("dry-asphalt", speed_m_s=20.0, controller=ctrl, duration_s=0.2)
+    messages = []
+    for compiled in (False, True):
+        with pytest.raises(SimulationError, match="changed phase 8 times at t = ") as info:
+            simulate(sc, compiled=compiled)
+        messages.append(str(info.value))
+    assert messages[0] == messages[1]

@@ -101,7 +101,7 @@ class CompiledEstimator(Protocol):
     def compiled(self) -> CompiledObserver | None: ...
 
 
-def _defines(obs: CompiledObserver | None) -> str:
+def _defines(obs: CompiledObserver | None, n_series: int) -> str:
     # clock_gettime under -std=c99
     lines = ["#define _POSIX_C_SOURCE 199309L"] + [f"#define P_{name} {i}" for i, name in enumerate(_P)]
     lines += [f"#define CH_{name} {i}" for i, name in enumerate(_CH)]
@@ -110,7 +110,8 @@ def _defines(obs: CompiledObserver | None) -> str:
     lines += [f"#define OUT_FAIL_SIG {len(_OUT) - 2}", f"#define OUT_FAIL_X {len(_OUT) - 2 + _N_SIG}"]
     lines += [f"#define ST_{name.upper().replace('-', '_')} {i}" for i, name in enumerate(_STATUS)]
     lines += [f"#define EV_{name} {i}" for i, name in enumerate(_EVENTS)]
-    lines += [f"#define EV_COLS {_EV_COLS}", "#define N_SERIES 16"]
+    # a recorded row holds the columns of SERIES in order (record_row)
+    lines += [f"#define EV_COLS {_EV_COLS}", f"#define N_SERIES {n_series}"]
     if obs is None:
         lines += ["#define OBS_NX 0", "#define OBS_NS 0"]
     else:
@@ -122,11 +123,11 @@ def _defines(obs: CompiledObserver | None) -> str:
 _LOADED: dict[Path, Any] = {}
 
 
-def _library(obs: CompiledObserver | None) -> Any:
+def _library(obs: CompiledObserver | None, n_series: int) -> Any:
     from ..codegen import compile_sources
 
     source = resources.files(__package__).joinpath("_closed_loop.c").read_text(encoding="utf-8")
-    files = {"switchobs_braking.c": _defines(obs) + source}
+    files = {"switchobs_braking.c": _defines(obs, n_series) + source}
     sources = ["switchobs_braking.c"]
     if obs is not None:
         for ext in ("h", "c"):
@@ -214,7 +215,7 @@ def run_compiled(plant: _QuarterCar, obs: CompiledObserver | None) -> HybridRun:
     """
     wall0 = time.perf_counter()
     sc = plant.sc
-    fn = _library(obs)
+    fn = _library(obs, len(plant.series))
     params = _parameters(plant, obs)
     changes = sc.roads.changes
     ch = np.array([[1.0 if c.at_time_s is not None else 0.0,
@@ -229,7 +230,7 @@ def run_compiled(plant: _QuarterCar, obs: CompiledObserver | None) -> HybridRun:
     cap = min(int(2 * sc.duration_s / sc.dt_s) + 1024, _FIRST_ROWS)
     events_cap = _FIRST_EVENTS
     while True:
-        rows = np.empty((cap, 16))
+        rows = np.empty((cap, len(plant.series)))
         events = np.empty((events_cap, _EV_COLS))
         if obs is not None:
             x = np.array(obs.initial, dtype=float)
