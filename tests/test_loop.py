@@ -176,7 +176,8 @@ def test_library_code_never_selects_a_matplotlib_backend():
     assert offenders == []
 
 
-@pytest.mark.parametrize("module", ["switchobs.loop", "switchobs.loop._factory", "switchobs.loop._adapter"])
+@pytest.mark.parametrize("module", ["switchobs.loop", "switchobs.loop._factory", "switchobs.loop._adapter",
+                                    "switchobs.loop._braking"])
 def test_loop_docstring_examples(module):
     import doctest
     import importlib

@@ -124,30 +124,35 @@ def zero_crossings(t: Any, y: Any, tau: Any | None = None) -> tuple[ZeroCrossing
     tau_arr = np.zeros_like(tt) if tau is None else _signal(tt, tau, "tau")
     out: list[ZeroCrossing] = []
     sign = np.sign(yy)
-    k = 0
     n = len(tt)
-    while k < n - 1:
-        if sign[k] != 0 and sign[k + 1] != 0 and sign[k] != sign[k + 1]:
+    # a scan over the samples in which only sign changes and zeros act: visit those indices alone
+    crossing = (sign[:-1] != 0) & (sign[1:] != 0) & (sign[:-1] != sign[1:])
+    zero = sign[1:] == 0
+    zero[-1:] = False                      # a zero at the last sample ends the record, not a run
+    k = 0
+    for active in np.flatnonzero(crossing | zero).tolist():
+        if active < k:
+            continue                       # inside a run of zeros already handled
+        k = active
+        if crossing[k]:
             frac = yy[k] / (yy[k] - yy[k + 1])
             tc = tt[k] + frac * (tt[k + 1] - tt[k])
             slope = (yy[k + 1] - yy[k]) / (tt[k + 1] - tt[k])
             out.append(ZeroCrossing(float(tc), float(slope), float(tau_arr[k] + frac * (tau_arr[k + 1] - tau_arr[k]))))
             k += 1
             continue
-        if sign[k + 1] == 0 and k + 1 < n - 1:
-            j = k + 1
-            while j < n - 1 and sign[j] == 0:
-                j += 1
-            before, after = sign[k], sign[j]
-            if before != 0 and after != 0 and before != after and j == k + 2:
-                slope = (yy[j] - yy[k]) / (tt[j] - tt[k])
-            else:
-                slope = 0.0
-            if before != 0 or after != 0:
-                out.append(ZeroCrossing(float(tt[k + 1]), float(slope), float(tau_arr[k + 1])))
-            k = j
-            continue
-        k += 1
+        # a run of zeros after k: a crossing through zero or a tangency
+        j = k + 1
+        while j < n - 1 and sign[j] == 0:
+            j += 1
+        before, after = sign[k], sign[j]
+        if before != 0 and after != 0 and before != after and j == k + 2:
+            slope = (yy[j] - yy[k]) / (tt[j] - tt[k])
+        else:
+            slope = 0.0
+        if before != 0 or after != 0:
+            out.append(ZeroCrossing(float(tt[k + 1]), float(slope), float(tau_arr[k + 1])))
+        k = j
     return tuple(out)
 
 

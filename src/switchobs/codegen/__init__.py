@@ -8,14 +8,15 @@ generate_super_twisting -- the super-twisting observer of seed 003 (8)-(9), Eule
 GeneratedObserver   -- the generated files and what they mean (names, defaults, checks, stack)
 compile_observer    -- compile with the system C compiler (cached) and bind with ctypes
 CObserver           -- the compiled observer: ``step`` / ``run`` like the Python reference observers
+compile_sources     -- compile C files into one cached shared library (the observers' and the braking loop's)
 StepStatus          -- status codes of ``<prefix>_step`` / ``<prefix>_run``
 default_prefix      -- ``switchobs_<model>`` with non-identifier characters as ``_``
 """
 
 from ..spec import METHODS, STATUS_TEXT, Guard, StepStatus, domain_guards
-from ._build import CObserver, cache_directory, compile_observer, find_compiler
+from ._build import CObserver, cache_directory, compile_observer, compile_sources, find_compiler
 from ._generate import REALS, GeneratedObserver, default_prefix, generate_observer, generate_super_twisting
 
 __all__ = ["CObserver", "GeneratedObserver", "Guard", "METHODS", "REALS", "STATUS_TEXT", "StepStatus",
-           "cache_directory", "compile_observer", "find_compiler", "default_prefix", "domain_guards", "generate_observer",
+           "cache_directory", "compile_observer", "compile_sources", "find_compiler", "default_prefix", "domain_guards", "generate_observer",
            "generate_super_twisting"]

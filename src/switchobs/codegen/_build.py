@@ -27,7 +27,7 @@ from ..exceptions import CodegenError, DimensionError, ModelError, ObserverInput
 from ._generate import GeneratedObserver, generate_observer
 from ..spec import STATUS_TEXT, StepStatus
 
-__all__ = ["CObserver", "compile_observer", "compile_shared", "cache_directory", "find_compiler", "BUILD_FLAGS"]
+__all__ = ["CObserver", "compile_observer", "compile_shared", "compile_sources", "cache_directory", "find_compiler", "BUILD_FLAGS"]
 
 #: Flags of the shared library the binding loads (the strict warning set is exercised by the tests).
 BUILD_FLAGS: tuple[str, ...] = ("-std=c99", "-O2", "-fPIC", "-shared")
@@ -69,23 +69,40 @@ def compile_shared(gen: GeneratedObserver, *, compiler: str | None = None,
     CodegenError
         If the compiler fails; the message holds its first error lines.
     """
+    return compile_sources(gen.files, (f"{gen.prefix}.c",), gen.prefix, compiler=compiler, flags=flags,
+                           cache_dir=cache_dir)
+
+
+def compile_sources(files: Mapping[str, str], sources: Sequence[str], stem: str, *, compiler: str | None = None,
+                    flags: Sequence[str] = BUILD_FLAGS, cache_dir: str | Path | None = None) -> Path:
+    """Compile the C ``sources`` among ``files`` (name -> text) into one cached shared library ``<stem>-<key>.so``.
+
+    The key is the SHA-256 of the files, the compiler and the flags; the
+    library is written atomically, so parallel processes can share the cache.
+
+    Raises
+    ------
+    CodegenError
+        If the compiler fails; the message holds its first error lines.
+    """
     cc = find_compiler(compiler)
-    key = hashlib.sha256("\0".join([gen.source, gen.header, cc, *flags]).encode()).hexdigest()[:20]
+    material = [f"{name}\0{files[name]}" for name in sorted(files)]
+    key = hashlib.sha256("\0".join([*material, *sources, cc, *flags]).encode()).hexdigest()[:20]
     root = Path(cache_dir) if cache_dir is not None else cache_directory()
-    target = root / f"{gen.prefix}-{key}.so"
+    target = root / f"{stem}-{key}.so"
     if target.exists():
         return target
     try:
         root.mkdir(parents=True, exist_ok=True)
         with tempfile.TemporaryDirectory(dir=root) as tmp:
-            for name, text in gen.files.items():
+            for name, text in files.items():
                 (Path(tmp) / name).write_text(text, encoding="utf-8")
             out = Path(tmp) / "lib.so"
-            proc = subprocess.run([cc, *flags, "-o", str(out), str(Path(tmp) / f"{gen.prefix}.c"), "-lm"],
+            proc = subprocess.run([cc, *flags, "-o", str(out), *(str(Path(tmp) / name) for name in sources), "-lm"],
                                   capture_output=True, text=True, check=False)
             if proc.returncode != 0:
                 lines = (proc.stderr or proc.stdout).strip().splitlines()
-                raise CodegenError(f"{cc} failed on the generated {gen.prefix}.c: " + " | ".join(lines[:4]))
+                raise CodegenError(f"{cc} failed on the generated {', '.join(sources)}: " + " | ".join(lines[:4]))
             os.replace(out, target)
     except OSError as exc:
         raise CodegenError(f"cannot build in the cache directory {str(root)!r}: {exc.strerror}; "
@@ -328,6 +345,11 @@ class CObserver:
             raise ModelError("this C observer has no readout; build it with CObserver.like(reference) or "
                              "readout=callable")
         return self._readout(xhat)
+
+    @property
+    def readout_code(self) -> str | None:
+        """The readout of the reference observer as its printed expression in ``x0, x1, ...`` (None if unknown)."""
+        return getattr(getattr(self._readout, "__self__", None), "readout_code", None)
 
     # ------------------------------------------------------------------ output
     def to_json(self) -> dict[str, Any]:

@@ -8,14 +8,19 @@ Python reference observers and the compiled C observers alike) into one.
 
 from __future__ import annotations
 
+import re
 from collections.abc import Mapping
 from typing import Any, Protocol
 
 import numpy as np
 
-from ..exceptions import DimensionError, ModelError
+from ..exceptions import DimensionError, ModelError, ObserverInputError, SimulationError
+from ..plants import CompiledObserver
 
-__all__ = ["ObserverXbsEstimator", "SteppingObserver", "initial_xbs_state"]
+__all__ = ["ObserverXbsEstimator", "SteppingObserver", "initial_xbs_state", "c_readout"]
+
+#: Tokens of a readout that C evaluates as Python does: state names, number literals, + - * / and parentheses.
+_TOKEN = re.compile(r"\s*(?:(?P<state>x\d+)|(?P<number>\d+\.?\d*(?:[eE][+-]?\d+)?)|(?P<op>[-+*/()]))")
 
 
 class SteppingObserver(Protocol):
@@ -50,6 +55,40 @@ def initial_xbs_state(observer: SteppingObserver, y0: float, initial_state: Mapp
     for k, v in initial_state.items():
         x[names.index(k)] = v
     return x
+
+
+def c_readout(code: str) -> str | None:
+    """A readout printed in ``x0, x1, ...`` (:attr:`SwitchedObserver.readout_code`) as a C expression in ``x[i]``.
+
+    Only arithmetic that C evaluates as Python does is translated (``+ - * /``, parentheses, number
+    literals, made ``double`` so that no division is an integer one); ``None`` for anything else.
+
+    Examples
+    --------
+    >>> c_readout("-0.25*x2*x0 + x1")
+    '-0.25*x[2]*x[0]+x[1]'
+    >>> c_readout("1/2*x0")
+    '1.0/2.0*x[0]'
+    >>> c_readout("numpy.exp(x0)") is None
+    True
+    """
+    if "**" in code or "//" in code:
+        return None                        # powers and floor divisions, which C spells otherwise
+    out, pos = [], 0
+    code = code.rstrip()
+    while pos < len(code):
+        m = _TOKEN.match(code, pos)
+        if m is None or m.end() == pos:
+            return None
+        pos = m.end()
+        if m.group("state"):
+            out.append(f"x[{m.group('state')[1:]}]")
+        elif m.group("number"):
+            num = m.group("number")
+            out.append(num if any(c in num for c in ".eE") else f"{num}.0")
+        else:
+            out.append(m.group("op"))
+    return "".join(out)
 
 
 class ObserverXbsEstimator:
@@ -113,6 +152,42 @@ class ObserverXbsEstimator:
         self._state = x
         self._y, self._vx = float(y0), float(vx0)
         self._estimate = float(self.observer.readout(x))
+
+    def compiled(self) -> CompiledObserver | None:
+        """The C step of a compiled double-precision observer for the compiled braking loop; else ``None``.
+
+        The loop then does what :meth:`reset` and :meth:`update` do, with the generated
+        ``<prefix>_step`` (:class:`switchobs.codegen.CObserver` calls the same function).
+        """
+        from ..codegen import CObserver
+
+        obs = self.observer
+        # exact behaviour: a subclass of either class may step differently from the function the loop calls
+        if type(obs) is not CObserver or type(self) is not ObserverXbsEstimator:
+            return None
+        generated = obs.generated
+        code = obs.readout_code
+        readout = c_readout(code) if code is not None else None
+        if readout is None or generated.real != "double" or generated.ns != 3:
+            return None
+        measured_first = tuple(obs.state_names)[0] not in self._initial
+        initial = initial_xbs_state(obs, 0.0, self._initial)
+
+        def refusal(x: np.ndarray, sig: np.ndarray, dt: float) -> str:
+            # the same step through the binding raises what the Python loop reports
+            try:
+                obs.step(x, sig, dt)
+            except ObserverInputError as exc:
+                return str(exc)
+            raise SimulationError(f"the observer step from {x.tolist()} with signals {sig.tolist()} and dt = {dt!r} "
+                                  "failed in the compiled loop but not through its binding")
+
+        def finish(x: np.ndarray, estimate: float, y: float, vx: float) -> None:
+            self._state, self._estimate, self._y, self._vx = x.copy(), estimate, y, vx
+
+        return CompiledObserver(prefix=generated.prefix, files=generated.files, readout=readout,
+                                params=tuple(float(v) for v in obs.params), initial=tuple(initial.tolist()),
+                                measured_first=measured_first, refusal=refusal, finish=finish)
 
     def update(self, t: float, y: float, vx: float, u: float, dt: float) -> float:  # noqa: ARG002
         """Advance over ``[t - dt, t]`` and return the XBS estimate; a step of length 0 changes nothing.

@@ -210,11 +210,16 @@ class _Observer:
         expr = parse_expression(text, names, what="readout").xreplace(
             {self.model.symbols[k]: v for k, v in values.items()})
         check_free(expr, set(states.values()), "readout", self.model)
-        code = _ArrayPrinter().doprint(expr)
+        self._readout_code = _ArrayPrinter().doprint(expr)
         args = ", ".join(f"x{i}" for i in range(self.size))
         namespace: dict = {"numpy": np}
-        exec(f"def readout({args}):\n    return {code}\n", namespace)
+        exec(f"def readout({args}):\n    return {self._readout_code}\n", namespace)
         return namespace["readout"]
+
+    @property
+    def readout_code(self) -> str | None:
+        """The readout as the printed expression it evaluates, in ``x0, x1, ...`` (the states in order), if any."""
+        return self._readout_code if self._readout_fn is not None else None
 
     @property
     def readout_expression(self) -> str | None:

@@ -10,7 +10,8 @@ Controllers
     :class:`FivePhaseABS`, :class:`TwoPhaseABS`, :class:`ContinuousXbsControl`
 Observer port
     :class:`XbsEstimator` (the protocol the simulations call; observers are wired to it
-    by :mod:`switchobs.loop`), :class:`TrueXbs` (oracle)
+    by :mod:`switchobs.loop`), :class:`TrueXbs` (oracle), :class:`CompiledEstimator` and
+    :class:`CompiledObserver` (an estimator's C step, run by the compiled braking loop)
 Hybrid integrator (every simulated plant: quarter car, two-axle vehicle, the wheel of :mod:`switchobs.sensors`)
     :func:`integrate`, :class:`HybridPlant` (protocol), :class:`HybridRun`, :class:`Crossing`,
     :data:`MAX_CASCADE`
@@ -27,6 +28,7 @@ Limit cycle of the two-phase ABS
     :class:`PoincareMap` (seed 001 eqs. (4.13)-(4.14)), :func:`simulate_return_map`
 """
 
+from ._compiled import CompiledEstimator, CompiledObserver
 from ._controllers import ContinuousXbsControl, FivePhaseABS, TwoPhaseABS
 from ._estimator import TrueXbs, XbsEstimator
 from ._hybrid import MAX_CASCADE, Crossing, HybridPlant, HybridRun, integrate
@@ -47,7 +49,7 @@ __all__ = [
     "D1_HOANG", "D2_HOANG", "RoadChange", "RoadSchedule",
     "QuarterCar", "BrakeActuator", "PrescribedSpeed", "GRAVITY",
     "FivePhaseABS", "TwoPhaseABS", "ContinuousXbsControl",
-    "XbsEstimator", "TrueXbs", "integrate", "HybridPlant", "HybridRun", "Crossing", "MAX_CASCADE",
+    "XbsEstimator", "TrueXbs", "CompiledEstimator", "CompiledObserver", "integrate", "HybridPlant", "HybridRun", "Crossing", "MAX_CASCADE",
     "BrakingScenario", "BrakingResult", "simulate", "SERIES",
     "BrakingMetrics", "Assumption1Status", "Reconvergence", "assumption1",
     "scenario", "scenario_names", "scenario_observer", "scenario_description", "table41", "Table41Result",

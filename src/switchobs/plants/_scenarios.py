@@ -231,7 +231,7 @@ class Table41Result:
 def table41(*, roads: Sequence[str] = TABLE41_ROADS, speeds_kmh: Sequence[float] = TABLE41_SPEEDS_KMH,
             five_phase: FivePhaseABS | None = None, two_phase: TwoPhaseABS | None = None, dt_s: float = 1e-3,
             estimator_factory: Callable[[BrakingScenario], XbsEstimator] | None = None,
-            observer: str = "none") -> Table41Result:
+            observer: str = "none", compiled: bool | None = None) -> Table41Result:
     """Run the Table 4.1 campaign: each road and speed with both ABS algorithms, free quarter car to 2.5 km/h.
 
     Parameters
@@ -248,6 +248,8 @@ def table41(*, roads: Sequence[str] = TABLE41_ROADS, speeds_kmh: Sequence[float]
         (output feedback); default: the true XBS (state feedback).
     observer : str
         Label of the estimator for the report.
+    compiled : bool or None
+        As :func:`simulate`: the loop compiled to C when possible (default), required, or not.
 
     Returns
     -------
@@ -271,7 +273,7 @@ def table41(*, roads: Sequence[str] = TABLE41_ROADS, speeds_kmh: Sequence[float]
                 sc = BrakingScenario(name, speed_m_s=v / 3.6, controller=ctrl, dt_s=dt_s,
                                      name=f"table41-{name}-{v:g}")
                 est = estimator_factory(sc) if (estimator_factory is not None and ctrl.uses_xbs) else None
-                out.append(simulate(sc, estimator=est))
+                out.append(simulate(sc, estimator=est, compiled=compiled))
             seed = TABLE41_SEED.get((float(v), name))
             rows.append(Table41Row(speed_kmh=float(v), road=name,
                                    five_phase_m=out[0].metrics.braking_distance_m or math.nan,
