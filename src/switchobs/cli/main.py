@@ -25,7 +25,7 @@ __all__ = ["main", "build_parser"]
 
 #: Sub-command modules, in the order of ``switchobs --help``.
 COMMANDS: tuple[str, ...] = ("design", "demo", "encoder", "codegen", "simulate", "certify", "synthesize", "verify",
-                            "classify", "theory", "reproduce")
+                            "classify", "theory", "reproduce", "sweep")
 
 
 def build_parser(only: str | None = None) -> argparse.ArgumentParser:

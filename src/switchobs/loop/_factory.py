@@ -47,40 +47,50 @@ class EstimatorSpec:
     impl : str
         ``python`` (reference observer) or ``c`` (the generated C twin, compiled
         with the system compiler, :meth:`switchobs.codegen.CObserver.like`).
+    beta2 : float, optional
+        xbs3 and xbs4 only: the second rate (spectra ``{-beta1, -beta2, -beta2}`` and
+        ``{-beta1, -beta1, -beta2, -beta2}``, seed 000 Secs. III-E, IV-D) with ``beta1 = beta``;
+        default ``beta`` (the adaptive observer has one rate and refuses it).
 
     Raises
     ------
     SimulationError
-        For an unknown kind or implementation (the gains are checked by the
+        For an unknown kind or implementation, or a ``beta2`` for the adaptive observer (the gains are checked by the
         observer constructors, e.g. :func:`switchobs.observers.xbs4_observer`).
 
     Examples
     --------
     >>> EstimatorSpec("xbs4")
-    EstimatorSpec(kind='xbs4', beta=None, gamma=None, impl='python')
+    EstimatorSpec(kind='xbs4', beta=None, gamma=None, impl='python', beta2=None)
     >>> str(EstimatorSpec("adaptive", beta=80))
     'adaptive observer, beta 80, gamma 10000 (python)'
+    >>> str(EstimatorSpec("xbs4", beta=80, beta2=120))
+    'xbs4 observer, beta 80/120 (python)'
     """
 
     kind: str
     beta: float | None = None
     gamma: float | None = None
     impl: str = "python"
+    beta2: float | None = None
 
     def __post_init__(self) -> None:
         if self.kind not in OBSERVER_KINDS:
             raise SimulationError(f"unknown observer {self.kind!r}; choose one of {', '.join(OBSERVER_KINDS)}")
         if self.impl not in IMPLEMENTATIONS:
             raise SimulationError(f"unknown observer implementation {self.impl!r}; choose python or c")
+        if self.beta2 is not None and self.kind == "adaptive":
+            raise SimulationError(f"the adaptive observer has one rate beta (seed 001 (3.20)); drop beta2 = "
+                                  f"{self.beta2!r}")
 
     def to_json(self) -> dict[str, Any]:
-        return {"kind": self.kind, "beta": self.beta, "gamma": self.gamma, "impl": self.impl}
+        return {"kind": self.kind, "beta": self.beta, "beta2": self.beta2, "gamma": self.gamma, "impl": self.impl}
 
     def __str__(self) -> str:
         if self.kind == "none":
             return "no observer"
         beta = DEFAULT_BETA[self.kind] if self.beta is None else self.beta
-        text = f"{self.kind} observer, beta {beta:g}"
+        text = f"{self.kind} observer, beta {beta:g}" + ("" if self.beta2 is None else f"/{self.beta2:g}")
         if self.kind == "adaptive":
             text += f", gamma {DEFAULT_GAMMA if self.gamma is None else self.gamma:g}"
         return f"{text} ({self.impl})"
@@ -125,10 +135,11 @@ def xbs_estimator(spec: EstimatorSpec | str, vehicle: QuarterCar, initial_road: 
     from ..observers import adaptive_xbs_observer, xbs3_observer, xbs4_observer
 
     beta = DEFAULT_BETA[spec.kind] if spec.beta is None else spec.beta
+    beta2 = beta if spec.beta2 is None else spec.beta2
     if spec.kind == "xbs3":
-        obs = xbs3_observer(beta, beta, params={"a": vehicle.a, "b": -vehicle.b, "c": road(initial_road).c})
+        obs = xbs3_observer(beta, beta2, params={"a": vehicle.a, "b": -vehicle.b, "c": road(initial_road).c})
     elif spec.kind == "xbs4":
-        obs = xbs4_observer(beta, beta, params={"a": vehicle.a, "b": -vehicle.b})
+        obs = xbs4_observer(beta, beta2, params={"a": vehicle.a, "b": -vehicle.b})
     else:
         g = DEFAULT_GAMMA if spec.gamma is None else spec.gamma
         obs = adaptive_xbs_observer(beta, [g, g], params={"a": vehicle.a, "b": vehicle.b})
