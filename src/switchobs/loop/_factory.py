@@ -51,6 +51,10 @@ class EstimatorSpec:
         xbs3 and xbs4 only: the second rate (spectra ``{-beta1, -beta2, -beta2}`` and
         ``{-beta1, -beta1, -beta2, -beta2}``, seed 000 Secs. III-E, IV-D) with ``beta1 = beta``;
         default ``beta`` (the adaptive observer has one rate and refuses it).
+    method : str
+        Step method of the observer (``rk4``, ``euler``, ``midpoint``, ``radau3``; the adaptive observer
+        takes the explicit ones): ``radau3`` and ``midpoint`` are certified for every step length
+        (``switchobs certify --discrete``), which one step per encoder measurement needs.
 
     Raises
     ------
@@ -61,7 +65,7 @@ class EstimatorSpec:
     Examples
     --------
     >>> EstimatorSpec("xbs4")
-    EstimatorSpec(kind='xbs4', beta=None, gamma=None, impl='python', beta2=None)
+    EstimatorSpec(kind='xbs4', beta=None, gamma=None, impl='python', beta2=None, method='rk4')
     >>> str(EstimatorSpec("adaptive", beta=80))
     'adaptive observer, beta 80, gamma 10000 (python)'
     >>> str(EstimatorSpec("xbs4", beta=80, beta2=120))
@@ -73,6 +77,7 @@ class EstimatorSpec:
     gamma: float | None = None
     impl: str = "python"
     beta2: float | None = None
+    method: str = "rk4"
 
     def __post_init__(self) -> None:
         if self.kind not in OBSERVER_KINDS:
@@ -84,7 +89,8 @@ class EstimatorSpec:
                                   f"{self.beta2!r}")
 
     def to_json(self) -> dict[str, Any]:
-        return {"kind": self.kind, "beta": self.beta, "beta2": self.beta2, "gamma": self.gamma, "impl": self.impl}
+        return {"kind": self.kind, "beta": self.beta, "beta2": self.beta2, "gamma": self.gamma, "impl": self.impl,
+                "method": self.method}
 
     def __str__(self) -> str:
         if self.kind == "none":
@@ -93,7 +99,7 @@ class EstimatorSpec:
         text = f"{self.kind} observer, beta {beta:g}" + ("" if self.beta2 is None else f"/{self.beta2:g}")
         if self.kind == "adaptive":
             text += f", gamma {DEFAULT_GAMMA if self.gamma is None else self.gamma:g}"
-        return f"{text} ({self.impl})"
+        return f"{text} ({self.impl}{'' if self.method == 'rk4' else ', ' + self.method})"
 
 
 def xbs_estimator(spec: EstimatorSpec | str, vehicle: QuarterCar, initial_road: Burckhardt | str
@@ -137,12 +143,13 @@ def xbs_estimator(spec: EstimatorSpec | str, vehicle: QuarterCar, initial_road: 
     beta = DEFAULT_BETA[spec.kind] if spec.beta is None else spec.beta
     beta2 = beta if spec.beta2 is None else spec.beta2
     if spec.kind == "xbs3":
-        obs = xbs3_observer(beta, beta2, params={"a": vehicle.a, "b": -vehicle.b, "c": road(initial_road).c})
+        obs = xbs3_observer(beta, beta2, params={"a": vehicle.a, "b": -vehicle.b, "c": road(initial_road).c},
+                            method=spec.method)
     elif spec.kind == "xbs4":
-        obs = xbs4_observer(beta, beta2, params={"a": vehicle.a, "b": -vehicle.b})
+        obs = xbs4_observer(beta, beta2, params={"a": vehicle.a, "b": -vehicle.b}, method=spec.method)
     else:
         g = DEFAULT_GAMMA if spec.gamma is None else spec.gamma
-        obs = adaptive_xbs_observer(beta, [g, g], params={"a": vehicle.a, "b": vehicle.b})
+        obs = adaptive_xbs_observer(beta, [g, g], params={"a": vehicle.a, "b": vehicle.b}, method=spec.method)
     if spec.impl == "c":
         from ..codegen import CObserver
 

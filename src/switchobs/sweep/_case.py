@@ -17,6 +17,7 @@ from typing import Any, ClassVar
 from ..exceptions import SimulationError
 from ..loop import OBSERVER_KINDS
 from ..model import builtin_names
+from ..observers import METHODS
 from ..plants import road_names
 
 __all__ = ["BrakingCase", "CertifyCase", "Case", "CONTROLLERS", "case_from_json"]
@@ -24,7 +25,6 @@ __all__ = ["BrakingCase", "CertifyCase", "Case", "CONTROLLERS", "case_from_json"
 #: Brake controllers of a braking case (``five-phase-tracking``: wheel-acceleration tracking (21)-(22) of seed 000).
 CONTROLLERS = ("five-phase", "five-phase-tracking", "two-phase", "continuous")
 _IMPLS = ("python", "c")
-_DISCRETE = ("rk4", "euler", "midpoint", "radau3")
 
 
 def _number(owner: str, key: str, value: Any, *, positive: bool = False, allow_none: bool = False,
@@ -94,6 +94,9 @@ class BrakingCase(_CaseBase):
         Observer rates (``beta2``: xbs3/xbs4 only) and adaptation gain; defaults those of the factory.
     impl : str
         ``python`` (reference observer) or ``c`` (the generated C, compiled once per process through the cache).
+    method : str
+        The observer's step method (:data:`switchobs.observers.METHODS`); an encoder feeds it one step per
+        measurement, which ``radau3`` and ``midpoint`` take at any length (``switchobs certify --discrete``).
     in_loop : bool
         Controllers that need an XBS read the estimate (otherwise the true XBS; the observer runs beside).
     encoder_ppr : int
@@ -129,6 +132,7 @@ class BrakingCase(_CaseBase):
     beta2: float | None = None
     gamma: float | None = None
     impl: str = "python"
+    method: str = "rk4"
     in_loop: bool = True
     encoder_ppr: int = 0
     encoder_dnl: float = 0.01
@@ -159,6 +163,7 @@ class BrakingCase(_CaseBase):
         _choice(owner, "controller", self.controller, CONTROLLERS)
         _choice(owner, "observer", self.observer, OBSERVER_KINDS)
         _choice(owner, "impl", self.impl, _IMPLS)
+        _choice(owner, "step method", self.method, tuple(METHODS))
         if not isinstance(self.in_loop, bool):
             raise SimulationError(f"{owner}: in_loop must be true or false, got {self.in_loop!r}")
         for key in ("beta1", "beta2", "gamma"):
@@ -181,7 +186,7 @@ class BrakingCase(_CaseBase):
         if self.beta1 is not None:
             obs += f", beta {self.beta1:g}" + ("" if self.beta2 is None else f"/{self.beta2:g}")
         if self.observer != "none":
-            obs += f" ({self.impl})"
+            obs += f" ({self.impl}{'' if self.method == 'rk4' else ', ' + self.method})"
         if self.encoder_ppr:
             obs += f", {self.encoder_ppr}-ppr encoder (seed {self.encoder_seed})"
         return f"braking {roads}, {self.speed_kmh:g} km/h, {self.controller}, {obs}"
@@ -252,7 +257,7 @@ class CertifyCase(_CaseBase):
             box.append((item[0], lo, hi))
         set_(self, "box", tuple(box))
         if self.discrete is not None:
-            _choice(owner, "discrete step method", self.discrete, _DISCRETE)
+            _choice(owner, "discrete step method", self.discrete, tuple(METHODS))
         if not isinstance(self.dwell, bool):
             raise SimulationError(f"{owner}: dwell must be true or false, got {self.dwell!r}")
 

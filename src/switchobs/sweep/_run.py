@@ -114,7 +114,7 @@ def run_case(case: Case, *, series: bool = False) -> CaseResult:
     --------
     >>> res = run_case(BrakingCase(road="dry-asphalt", speed_kmh=60.0))
     >>> res.status, round(res.metrics["braking_distance_m"], 2)
-    ('stopped', 12.11)
+    ('stopped', 12.64)
     """
     t0 = time.perf_counter()
     try:
@@ -157,7 +157,8 @@ def _braking(case: BrakingCase, series: bool) -> tuple[str, dict[str, Any], dict
                          speed_profile=None if case.decel_m_s2 is None else PrescribedSpeed(case.decel_m_s2),
                          duration_s=case.duration_s, stop_speed_m_s=case.stop_kmh / 3.6, dt_s=case.dt_s,
                          name=f"sweep-{case.case_id}")
-    spec = EstimatorSpec(case.observer, beta=case.beta1, beta2=case.beta2, gamma=case.gamma, impl=case.impl)
+    spec = EstimatorSpec(case.observer, beta=case.beta1, beta2=case.beta2, gamma=case.gamma, impl=case.impl,
+                         method=case.method)
     est = xbs_estimator(spec, vehicle, roads.initial)
     if est is not None and case.encoder_ppr:
         encoder = Encoder(ppr=case.encoder_ppr, dnl_cycles=case.encoder_dnl, eccentricity=case.encoder_eccentricity,
@@ -183,10 +184,46 @@ def _braking(case: BrakingCase, series: bool) -> tuple[str, dict[str, Any], dict
         # a road change never re-converged from makes the worst case infinite, which JSON writes as null
         out["reconvergence_max_s"] = max((math.inf if r.time_s is None else r.time_s for r in after),
                                          default=None)
+        recover = [_recovery(t, s["xbs_hat"] - s["xbs"], s["xbs"], c.at_time_s + c.duration_s, end)
+                   for c, end in zip(roads.changes, [c.at_time_s for c in roads.changes[1:]] + [float(t[-1])])
+                   if c.at_time_s < float(t[-1])]
+        out["recovery_s"] = recover
+        out["recovery_max_s"] = max((math.inf if r is None else r for r in recover), default=None)
     kept = None
     if series:
         kept = {k: [None if not np.isfinite(v) else float(v) for v in s[k]] for k in SERIES_COLUMNS}
     return res.status, out, kept
+
+
+#: Window of the running RMS of the XBS error in the recovery time [s].
+RECOVERY_WINDOW_S = 0.1
+
+
+def _recovery(t: Any, err: Any, truth: Any, start: float, stop: float) -> float | None:
+    """Time after ``start`` when the running RMS of ``err`` (:data:`RECOVERY_WINDOW_S`) first falls to its noise
+    floor: twice the segment's settled RMS (after :data:`switchobs.loop.SETTLE_S`), or the 10 % band of the
+    re-convergence time (:class:`switchobs.plants.Reconvergence`) if wider; None if it never does.
+
+    With a noisy measurement (an encoder) the error never stays in the 10 % band; this is the
+    re-convergence time that noise leaves measurable.
+    """
+    import numpy as np
+
+    from ..loop import SETTLE_S
+
+    sel = (t >= start) & (t <= stop) & np.isfinite(err)
+    ts, e2 = t[sel], err[sel] ** 2
+    settled = ts >= start + SETTLE_S
+    if ts.size < 2 or not np.any(settled):
+        return None
+    floor = max(2.0 * float(np.sqrt(np.mean(e2[settled]))), 0.1 * float(np.ptp(truth[sel])))
+    energy = np.concatenate([[0.0], np.cumsum(0.5 * (e2[1:] + e2[:-1]) * np.diff(ts))])
+    back = np.searchsorted(ts, ts - RECOVERY_WINDOW_S)
+    span = ts - ts[back]
+    with np.errstate(invalid="ignore", divide="ignore"):
+        running = np.sqrt((energy - energy[back]) / span)
+    hit = np.nonzero((span >= 0.5 * RECOVERY_WINDOW_S) & (running <= floor))[0]
+    return float(ts[hit[0]] - start) if hit.size else None
 
 
 def _certify(case: CertifyCase) -> tuple[str, dict[str, Any]]:
