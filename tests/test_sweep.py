@@ -16,6 +16,7 @@ from pathlib import Path
 
 import pytest
 
+from switchobs import _progress
 from switchobs.cli.main import main
 from switchobs.exceptions import PrerequisiteError, SimulationError
 from switchobs.plants import table41
@@ -29,7 +30,7 @@ ROOT = Path(__file__).resolve().parents[1]
 QUICK = grid(BrakingCase(speed_kmh=30.0), road=["dry-asphalt", "wet-asphalt"], controller=["five-phase", "two-phase"])
 
 
-@pytest.mark.parametrize("module", [_case, _grid, _analysis, _run, _engine])
+@pytest.mark.parametrize("module", [_case, _grid, _analysis, _run, _engine, _progress])
 def test_doctests_of_the_sweep_modules(module):
     result = doctest.testmod(module, optionflags=doctest.ELLIPSIS)
     assert result.attempted > 0 and result.failed == 0
@@ -224,7 +225,7 @@ def client():
     distributed = pytest.importorskip("distributed")
     import logging
 
-    with distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=True, dashboard_address=None,
+    with distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=True, dashboard_address=":0",
                                   silence_logs=logging.ERROR) as cluster, distributed.Client(cluster) as c:
         yield c
 

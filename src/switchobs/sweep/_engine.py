@@ -21,7 +21,7 @@ import math
 import os
 import time
 from collections.abc import Iterable, Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from pathlib import Path
 from typing import Any
 
@@ -144,7 +144,7 @@ def dask_client(scheduler: Any = SCHEDULER_LOCAL, *, workers: int | None = None)
 
         n = workers or os.cpu_count() or 1
         cluster = distributed.LocalCluster(n_workers=n, threads_per_worker=1, processes=True,
-                                           dashboard_address=None, silence_logs=logging.ERROR)
+                                           dashboard_address=":0", silence_logs=logging.ERROR)
         client = distributed.Client(cluster)
 
         def close() -> None:
@@ -257,17 +257,11 @@ def run_sweep(cases: Iterable[Case], *, path: str | Path | None = None, resume: 
         if sink is not None:
             sink.close()
     results = tuple(CaseResult.from_json(done[k]) for k in order)
-    results = tuple(r if k not in walls else _with_wall(r, walls[k]) for k, r in zip(order, results))
+    results = tuple(replace(r, wall_time_s=walls.get(k, 0.0)) for k, r in zip(order, results))
     if file is not None:
         _canonical(file, [done[k] for k in order], {k: done[k] for k in done if k not in unique})
     return SweepResult(results=results, path=file, engine=engine, resumed=resumed,
                        wall_time_s=time.perf_counter() - t0)
-
-
-def _with_wall(result: CaseResult, wall: float) -> CaseResult:
-    from dataclasses import replace
-
-    return replace(result, wall_time_s=wall)
 
 
 def _canonical(file: Path, rows: list[dict[str, Any]], foreign: dict[str, dict[str, Any]]) -> None:
