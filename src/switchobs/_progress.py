@@ -9,11 +9,12 @@ never changes global state and concurrent callers do not see each other's notes.
 
 from __future__ import annotations
 
+import time
 from collections.abc import Callable, Iterator
 from contextlib import contextmanager
 from contextvars import ContextVar
 
-__all__ = ["progress", "listening"]
+__all__ = ["progress", "listening", "CountedProgress"]
 
 _LISTENER: ContextVar[Callable[[str], None] | None] = ContextVar("switchobs_progress", default=None)
 
@@ -48,3 +49,43 @@ def listening(listener: Callable[[str], None]) -> Iterator[None]:
         yield
     finally:
         _LISTENER.reset(token)
+
+
+class CountedProgress:
+    """Counted work with its rate and the estimated time left, announced through :func:`progress`.
+
+    ``done`` may start above 0 (work found finished, e.g. a resumed sweep): the rate counts only what
+    is done from now on.
+
+    Examples
+    --------
+    >>> notes = []
+    >>> with listening(notes.append):
+    ...     counter = CountedProgress("sweep", total=4, done=1, unit="cases")
+    ...     counter.add(3)
+    >>> notes[-1].startswith("sweep: 4/4 cases (100 %)")
+    True
+    """
+
+    def __init__(self, label: str, *, total: int, done: int = 0, unit: str = "items"):
+        self.label, self.total, self.done, self.unit = label, int(total), int(done), unit
+        self._start_done = self.done
+        self._start = time.perf_counter()
+
+    @property
+    def rate(self) -> float:
+        """Items per second since the start (0 before the first)."""
+        elapsed = time.perf_counter() - self._start
+        return (self.done - self._start_done) / elapsed if elapsed > 0 else 0.0
+
+    def text(self) -> str:
+        rate = self.rate
+        left = self.total - self.done
+        eta = f"{left / rate:.0f} s left" if rate > 0 else "time left unknown"
+        share = 100.0 * self.done / self.total if self.total else 100.0
+        return f"{self.label}: {self.done}/{self.total} {self.unit} ({share:.0f} %), {rate:.3g}/s, {eta}"
+
+    def add(self, count: int = 1) -> None:
+        """Count ``count`` more items done and announce the new state."""
+        self.done += count
+        progress(self.text())

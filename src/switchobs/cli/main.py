@@ -48,6 +48,7 @@ COMMANDS: dict[str, str] = {
     "classify": "Balde-Boscain-Mason case (i)-(iv) of two Hurwitz 2x2 matrices",
     "theory": "write theory/*.md (model, normal form, gains, Routh, P, coupling) from the symbolic core",
     "reproduce": "regenerate docs/reproductions.md and the Table 4.1 / 6.1 sections from runs",
+    "sweep": "design-space and robustness sweeps on Dask (tables, heatmaps, gain tuning)",
     "transform": "find (or check) s(y) and z = phi(x) putting dx/dt = f + g u, y = h into the normal form",
 }
 

@@ -48,43 +48,59 @@ class EstimatorSpec:
     impl : str
         ``python`` (reference observer) or ``c`` (the generated C twin, compiled
         with the system compiler, :meth:`switchobs.codegen.CObserver.like`).
+    beta2 : float, optional
+        xbs3 and xbs4 only: the second rate (spectra ``{-beta1, -beta2, -beta2}`` and
+        ``{-beta1, -beta1, -beta2, -beta2}``, seed 000 Secs. III-E, IV-D) with ``beta1 = beta``;
+        default ``beta`` (the adaptive observer has one rate and refuses it).
+    method : str
+        Step method of the observer (``rk4``, ``euler``, ``midpoint``, ``radau3``; the adaptive observer
+        takes the explicit ones): ``radau3`` and ``midpoint`` are certified for every step length
+        (``switchobs certify --discrete``), which one step per encoder measurement needs.
 
     Raises
     ------
     SimulationError
-        For an unknown kind or implementation (the gains are checked by the
+        For an unknown kind or implementation, or a ``beta2`` for the adaptive observer (the gains are checked by the
         observer constructors, e.g. :func:`switchobs.observers.xbs4_observer`).
 
     Examples
     --------
     >>> EstimatorSpec("xbs4")
-    EstimatorSpec(kind='xbs4', beta=None, gamma=None, impl='python')
+    EstimatorSpec(kind='xbs4', beta=None, gamma=None, impl='python', beta2=None, method='rk4')
     >>> str(EstimatorSpec("adaptive", beta=80))
     'adaptive observer, beta 80, gamma 10000 (python)'
+    >>> str(EstimatorSpec("xbs4", beta=80, beta2=120))
+    'xbs4 observer, beta 80/120 (python)'
     """
 
     kind: str
     beta: float | None = None
     gamma: float | None = None
     impl: str = "python"
+    beta2: float | None = None
+    method: str = "rk4"
 
     def __post_init__(self) -> None:
         if self.kind not in OBSERVER_KINDS:
             raise SimulationError(f"unknown observer {self.kind!r}; choose one of {', '.join(OBSERVER_KINDS)}")
         if self.impl not in IMPLEMENTATIONS:
             raise SimulationError(f"unknown observer implementation {self.impl!r}; choose python or c")
+        if self.beta2 is not None and self.kind == "adaptive":
+            raise SimulationError(f"the adaptive observer has one rate beta (seed 001 (3.20)); drop beta2 = "
+                                  f"{self.beta2!r}")
 
     def to_json(self) -> dict[str, Any]:
-        return {"kind": self.kind, "beta": self.beta, "gamma": self.gamma, "impl": self.impl}
+        return {"kind": self.kind, "beta": self.beta, "beta2": self.beta2, "gamma": self.gamma, "impl": self.impl,
+                "method": self.method}
 
     def __str__(self) -> str:
         if self.kind == "none":
             return "no observer"
         beta = DEFAULT_BETA[self.kind] if self.beta is None else self.beta
-        text = f"{self.kind} observer, beta {beta:g}"
+        text = f"{self.kind} observer, beta {beta:g}" + ("" if self.beta2 is None else f"/{self.beta2:g}")
         if self.kind == "adaptive":
             text += f", gamma {DEFAULT_GAMMA if self.gamma is None else self.gamma:g}"
-        return f"{text} ({self.impl})"
+        return f"{text} ({self.impl}{'' if self.method == 'rk4' else ', ' + self.method})"
 
 
 def xbs_estimator(spec: EstimatorSpec | str, vehicle: QuarterCar, initial_road: Burckhardt | str
@@ -124,25 +140,27 @@ def xbs_estimator(spec: EstimatorSpec | str, vehicle: QuarterCar, initial_road: 
     if spec.kind == "none":
         return None
     beta = DEFAULT_BETA[spec.kind] if spec.beta is None else spec.beta
+    beta2 = beta if spec.beta2 is None else spec.beta2
     gamma = (DEFAULT_GAMMA if spec.gamma is None else spec.gamma) if spec.kind == "adaptive" else None
     c = road(initial_road).c if spec.kind == "xbs3" else None
-    obs = _observer(spec.kind, beta, gamma, spec.impl, vehicle.a, vehicle.b, c)
+    obs = _observer(spec.kind, beta, beta2, gamma, spec.impl, spec.method, vehicle.a, vehicle.b, c)
     return ObserverXbsEstimator(obs, initial_state=INITIAL_STATE[spec.kind])
 
 
 @functools.lru_cache(maxsize=64)
-def _observer(kind: str, beta: float, gamma: float | None, impl: str, a: float, b: float, c: float | None) -> Any:
+def _observer(kind: str, beta: float, beta2: float, gamma: float | None, impl: str, method: str, a: float, b: float,
+              c: float | None) -> Any:
     """The observer of :func:`xbs_estimator`, built once per setting: the symbolic set-up and the C
     generation take 0.05-0.7 s, a braking run in the compiled loop 0.02 s; an observer holds no
     run state (the estimator does), so runs can share it."""
     from ..observers import adaptive_xbs_observer, xbs3_observer, xbs4_observer
 
     if kind == "xbs3":
-        obs = xbs3_observer(beta, beta, params={"a": a, "b": -b, "c": c})
+        obs = xbs3_observer(beta, beta2, params={"a": a, "b": -b, "c": c}, method=method)
     elif kind == "xbs4":
-        obs = xbs4_observer(beta, beta, params={"a": a, "b": -b})
+        obs = xbs4_observer(beta, beta2, params={"a": a, "b": -b}, method=method)
     else:
-        obs = adaptive_xbs_observer(beta, [gamma, gamma], params={"a": a, "b": b})
+        obs = adaptive_xbs_observer(beta, [gamma, gamma], params={"a": a, "b": b}, method=method)
     if impl == "c":
         from ..codegen import CObserver
 

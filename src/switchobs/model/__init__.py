@@ -3,7 +3,7 @@
 from ._builtin import builtin_model, builtin_names, load_model
 from ._expr import FUNCTIONS as EXPRESSION_FUNCTIONS
 from ._expr import free_names, parse_expression
-from ._model import Model, make_symbol, numeric, rational_value
+from ._model import Model, make_symbol, numeric, rational_value, read_toml
 
 __all__ = ["EXPRESSION_FUNCTIONS", "Model", "free_names", "builtin_model", "builtin_names", "load_model", "make_symbol", "numeric",
-           "parse_expression", "rational_value"]
+           "parse_expression", "rational_value", "read_toml"]

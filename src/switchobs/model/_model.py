@@ -195,17 +195,9 @@ class Model:
     @classmethod
     def from_toml(cls, path: str | Path) -> "Model":
         """Read a model from a TOML file (keys as in :meth:`from_dict`); ``"-"`` reads standard input."""
-        stdin = str(path) == "-"
-        where = "<stdin>" if stdin else str(path)
-        try:
-            text = sys.stdin.read() if stdin else Path(path).read_text(encoding="utf-8")
-        except OSError as exc:
-            raise ModelError(f"cannot read model file {where!r}: {exc.strerror}") from None
-        try:
-            data = tomllib.loads(text, parse_float=str)  # a number written in a file is text: its decimal value
-        except tomllib.TOMLDecodeError as exc:
-            raise ModelError(f"model file {where!r} is not valid TOML: {exc}") from None
-        return cls.from_dict(data, source=where)
+        # a number written in a file is text: its decimal value
+        data = read_toml(path, parse_float=str)
+        return cls.from_dict(data, source="<stdin>" if str(path) == "-" else str(path))
 
     # -------------------------------------------------------------- queries
     @property
@@ -276,6 +268,27 @@ class Model:
 
     def __str__(self) -> str:
         return f"Model {self.name!r}: n={self.n}, states={list(self.states)}, s={self.time_scale}"
+
+
+def read_toml(path: str | Path, *, what: str = "model file", parse_float: Any = float) -> dict[str, Any]:
+    """The tables of a TOML file (data only: TOML cannot run code; ``"-"`` is standard input), with one-line
+    errors naming the file.
+
+    Raises
+    ------
+    ModelError
+        The file cannot be read or is not valid TOML.
+    """
+    stdin = str(path) == "-"
+    where = "<stdin>" if stdin else str(path)
+    try:
+        text = sys.stdin.read() if stdin else Path(path).read_text(encoding="utf-8")
+    except OSError as exc:
+        raise ModelError(f"cannot read {what} {where!r}: {exc.strerror}") from None
+    try:
+        return tomllib.loads(text, parse_float=parse_float)
+    except tomllib.TOMLDecodeError as exc:
+        raise ModelError(f"{what} {where!r} is not valid TOML: {exc}") from None
 
 
 def rational_value(value: Any, *, what: str) -> sp.Rational:

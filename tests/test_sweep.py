@@ -1,0 +1,280 @@
+"""Sweeps: case specs, the pure run_case, grids and Monte-Carlo draws, the engine (in-process and on a Dask
+LocalCluster), resumable results, Table 4.1 through the engine, tables, gain tuning and the CLI."""
+
+from __future__ import annotations
+
+import doctest
+import json
+import math
+import os
+import pickle
+import signal
+import sys
+import threading
+import time
+from pathlib import Path
+
+import pytest
+
+from switchobs import _progress
+from switchobs.cli.main import main
+from switchobs.exceptions import PrerequisiteError, SimulationError
+from switchobs.plants import table41
+from switchobs.sweep import (BrakingCase, CaseResult, CertifyCase, Choice, Integers, RoadChanges, Uniform, _analysis, _engine, _run,
+                             _case, _grid, case_from_json, certify_grid, grid, load_sweep_spec, monte_carlo,
+                             monte_carlo_case, pareto_front, read_results, run_case, run_sweep, summary_table,
+                             tune_betas)
+
+ROOT = Path(__file__).resolve().parents[1]
+#: Short brakings (about 0.5 s simulated each) for the engine tests.
+QUICK = grid(BrakingCase(speed_kmh=30.0), road=["dry-asphalt", "wet-asphalt"], controller=["five-phase", "two-phase"])
+
+
+@pytest.mark.parametrize("module", [_case, _grid, _analysis, _run, _engine, _progress])
+def test_doctests_of_the_sweep_modules(module):
+    result = doctest.testmod(module, optionflags=doctest.ELLIPSIS)
+    assert result.attempted > 0 and result.failed == 0
+
+
+def test_case_specs_are_hashable_picklable_and_keyed_by_their_content():
+    case = BrakingCase(road="snow", speed_kmh=90, changes=[["ice", 1]], observer="xbs4", beta1=80, beta2=120)
+    same = BrakingCase(road="snow", speed_kmh=90.0, changes=(("ice", 1.0),), observer="xbs4", beta1=80.0,
+                       beta2=120.0)
+    assert case == same and hash(case) == hash(same) and case.case_id == same.case_id
+    assert pickle.loads(pickle.dumps(case)) == case
+    assert case_from_json(json.loads(json.dumps(case.to_json()))) == case
+    assert BrakingCase(road="snow", speed_kmh=91.0).case_id != BrakingCase(road="snow", speed_kmh=90.0).case_id
+    cert = CertifyCase(betas=[("beta1", 100), ("beta2", 150)], box=[("a", 150, 250)], discrete="rk4")
+    assert case_from_json(cert.to_json()) == cert and cert.case_id != case.case_id
+
+
+@pytest.mark.parametrize("kwargs, match", [
+    ({"road": "mud"}, r"unknown road 'mud'"),
+    ({"speed_kmh": -5.0}, r"speed_kmh must be > 0, got -5"),
+    ({"changes": (("snow", 2.0), ("ice", 1.0))}, r"road change times must increase"),
+    ({"observer": "adaptive", "beta2": 3.0}, r"adaptive observer has one rate"),
+    ({"encoder_ppr": 1}, r"encoder_ppr must be 0 \(exact signals\) or >= 2"),
+    ({"controller": "six-phase"}, r"unknown controller 'six-phase'"),
+])
+def test_bad_braking_cases_are_refused_with_the_offending_value(kwargs, match):
+    with pytest.raises(SimulationError, match=match):
+        BrakingCase(**kwargs)
+
+
+def test_grid_and_monte_carlo_cases_rebuild_alone_with_their_seeds():
+    cases = grid(BrakingCase(), road=["snow", "ice"], speed_kmh=[60.0, 90.0, 120.0])
+    assert [(c.road, c.speed_kmh) for c in cases[:4]] == [("snow", 60.0), ("snow", 90.0), ("snow", 120.0),
+                                                          ("ice", 60.0)]
+    draws = {"road": Choice(("snow", "ice", "dry-asphalt")), "speed_kmh": Uniform(30.0, 200.0),
+             "encoder_seed": Integers(0, 10**6),
+             "changes": RoadChanges(("wet-asphalt", "snow"), 0, 2, (0.5, 2.0))}
+    study = monte_carlo(BrakingCase(observer="xbs4", encoder_ppr=60), 50, draws=draws, root_seed=11)
+    assert len({c.case_id for c in study}) == 50
+    assert study[37] == monte_carlo_case(BrakingCase(observer="xbs4", encoder_ppr=60), 37, draws=draws,
+                                         root_seed=11)
+    assert study != monte_carlo(BrakingCase(observer="xbs4", encoder_ppr=60), 50, draws=draws, root_seed=12)
+    assert {len(c.changes) for c in study} == {0, 1, 2} and all(30 <= c.speed_kmh < 200 for c in study)
+    with pytest.raises(SimulationError, match=r"no field\(s\) \['speed'\]"):
+        grid(BrakingCase(), speed=[1.0])
+
+
+def test_a_case_that_raises_is_a_row_with_its_error():
+    res = run_case(BrakingCase(speed_kmh=2.0))  # below the 2.5 km/h stop speed
+    assert res.status == "error" and not res.ok
+    assert res.error.startswith("SimulationError: ") and "stop speed" in res.error
+    assert CaseResult.from_json(json.loads(json.dumps(res.to_json()))).to_json() == res.to_json()
+
+
+def test_braking_case_metrics_with_an_observer_and_a_road_change():
+    res = run_case(BrakingCase(road="dry-asphalt", speed_kmh=60.0, changes=(("wet-asphalt", 0.6),),
+                               observer="xbs4", beta1=100.0, beta2=150.0), series=True)
+    m = res.metrics
+    assert res.status == "stopped" and m["stopping_distance_m"] > 0 and m["abs_cycles"] > 0
+    assert [s["segment"] for s in m["segments"]] == ["dry-asphalt", "wet-asphalt", "whole run"]
+    assert [r["label"] for r in m["reconvergence"]] == ["initial", "-> wet-asphalt"]
+    assert m["xbs_rms"] > 0 and m["xbs_rms_settled"] <= m["segments"][-1]["rms"]
+    assert len(res.series["t"]) == m["steps"] + 1 and "series" in res.to_json()
+
+
+def test_certification_case_reports_verdict_dwell_time_and_discrete_bound():
+    cases = certify_grid(CertifyCase(model="abs-xbs4", discrete="radau3"), beta1=[100.0], beta2=[150.0])
+    res = run_case(cases[0])
+    assert res.status == "certified" and res.metrics["certified"] is True
+    assert res.metrics["spectrum"] == ["-100", "-100", "-150", "-150"]
+    assert res.metrics["dwell_time"] == "any" and res.metrics["discrete_certified"] is True
+    assert res.metrics["h_max"] == "inf"  # radau3 is certified for every step length
+
+
+def test_serial_sweep_streams_rows_and_refuses_to_overwrite(tmp_path):
+    path = tmp_path / "rows.jsonl"
+    sweep = run_sweep([*QUICK, QUICK[0]], path=path, scheduler="none")
+    assert len(sweep.results) == 4 and sweep.resumed == 0 and not sweep.failed
+    rows = [json.loads(line) for line in path.read_text().splitlines()]
+    assert [r["case_id"] for r in rows] == [c.case_id for c in QUICK]
+    assert [r.to_json() for r in read_results(path)] == rows
+    with pytest.raises(SimulationError, match="exists; resume it"):
+        run_sweep(QUICK, path=path, scheduler="none")
+
+
+def test_a_resumed_sweep_gives_the_same_file_as_an_uninterrupted_one(tmp_path):
+    whole = tmp_path / "whole.jsonl"
+    run_sweep(QUICK, path=whole, scheduler="none")
+    killed = tmp_path / "killed.jsonl"
+    run_sweep([QUICK[2], QUICK[0]], path=killed, scheduler="none")
+    with open(killed, "a", encoding="utf-8") as fh:  # a kill in the middle of a write
+        fh.write(json.dumps(json.loads(whole.read_text().splitlines()[1]))[:40])
+    resumed = run_sweep(QUICK, path=killed, resume=True, scheduler="none")
+    assert resumed.resumed == 2
+    assert killed.read_bytes() == whole.read_bytes()
+
+
+def test_pareto_front_and_tuning_pick_a_non_dominated_pair():
+    assert pareto_front([(1.0, 5.0), (2.0, 2.0), (3.0, 3.0), (math.inf, 0.1)]) == [0, 1]
+
+    def row(b1, b2, rec, noise):
+        return CaseResult(BrakingCase(observer="xbs4", beta1=b1, beta2=b2), "stopped",
+                          {"recovery_max_s": rec, "xbs_rms_settled": noise})
+    results = [row(25, 25, 1.0, 0.1), row(50, 50, 0.5, 0.2), row(100, 100, 0.2, 1.0), row(100, 50, 0.6, 0.3),
+               row(200, 200, None, 0.05)]
+    tuned = tune_betas(results)
+    assert (tuned.beta1, tuned.beta2) == (50.0, 50.0)
+    assert [tuned.pairs[i][:2] for i in tuned.front] == [(100.0, 100.0), (50.0, 50.0), (25.0, 25.0)]
+    assert tuned.command.startswith("switchobs design abs-xbs4 --spectrum=-50,-50,-50,-50")
+    table = summary_table(results, rows=["beta1"], column="observer", metric="xbs_rms_settled")
+    assert table.cells[2] == (pytest.approx(0.65),) and table.counts[2] == (2,)
+
+
+def test_the_example_spec_files_load():
+    t41 = load_sweep_spec(ROOT / "examples" / "sweep_table41.toml")
+    assert len(t41.cases) == 30 and t41.tables[0].column == "controller"
+    mc = load_sweep_spec(ROOT / "examples" / "sweep_robustness.toml")
+    assert len(mc.cases) == 1000 and len({c.case_id for c in mc.cases}) == 1000
+    tune = load_sweep_spec(ROOT / "examples" / "sweep_tune_xbs4.toml")
+    assert tune.tune and len(tune.cases) == 32
+    cert = load_sweep_spec(ROOT / "examples" / "sweep_certify_load.toml")
+    assert cert.kind == "certify" and cert.cases[0].box[0][0] == "a"
+
+
+def _write_spec(tmp_path, text):
+    path = tmp_path / "spec.toml"
+    path.write_text(text, encoding="utf-8")
+    return path
+
+
+def test_cli_sweep_runs_in_process_prints_tables_and_tunes(tmp_path, capsys, monkeypatch):
+    monkeypatch.chdir(tmp_path)
+    spec = _write_spec(tmp_path, """
+name = "tiny"
+[base]
+observer = "xbs4"
+speed_kmh = 40.0
+changes = [["wet-asphalt", 0.4]]
+[grid]
+beta1 = [60.0, 120.0]
+[[table]]
+rows = ["beta1"]
+column = "road"
+metric = "xbs_rms_settled"
+[[heatmap]]
+x = "beta1"
+y = "road"
+metric = "stopping_distance_m"
+[tune]
+""")
+    assert main(["sweep", str(spec), "--scheduler", "none", "--plots", str(tmp_path)]) == 0
+    out = capsys.readouterr().out
+    assert "sweep 'tiny': 2 braking cases" in out and "mean xbs_rms_settled" in out
+    assert "switchobs design abs-xbs4 --spectrum=" in out and "<- chosen" in out
+    assert (tmp_path / "tiny.jsonl").is_file() and (tmp_path / "pareto.png").is_file()
+    assert (tmp_path / "heatmap-stopping_distance_m-road-beta1.png").is_file()
+    assert main(["sweep", str(spec), "--scheduler", "none"]) == 2
+    assert "exists; resume it (--resume)" in capsys.readouterr().err
+    assert main(["sweep", str(spec), "--scheduler", "none", "--resume", "--json"]) == 0
+    data = json.loads(capsys.readouterr().out)
+    assert data["sweep"]["resumed"] == 2 and data["tuned"]["beta1"] in (60.0, 120.0)
+
+
+@pytest.mark.parametrize("text, match", [
+    ('kind = "simulate"', "kind must be 'braking' or 'certify'"),
+    ('[base]\nroad = "mud"', "unknown road 'mud'"),
+    ('[grid]\nspeed_kmh = {start = 10}', r"grid.speed_kmh: an axis is a non-empty list"),
+    ('[monte_carlo]\ncount = 2\n[monte_carlo.draw]\nspeed_kmh = {normal = [1, 2]}', "not an admissible draw"),
+    ('colour = "red"', r"unknown key\(s\) \['colour'\]"),
+    ('name = ', "is not valid TOML"),
+])
+def test_cli_sweep_refuses_bad_spec_files_in_one_line(tmp_path, capsys, text, match):
+    spec = _write_spec(tmp_path, text)
+    assert main(["sweep", str(spec), "--scheduler", "none", "--out", str(tmp_path / "x.jsonl")]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "Traceback" not in err
+    assert __import__("re").search(match, err), err
+    assert not (tmp_path / "x.jsonl").exists()
+
+
+def test_missing_dask_is_a_prerequisite_error_and_serial_runs_still_work(monkeypatch, tmp_path, capsys):
+    monkeypatch.setitem(sys.modules, "distributed", None)
+    with pytest.raises(PrerequisiteError, match=r"pip install -e '.\[sweep\]'.*--scheduler none"):
+        run_sweep(QUICK[:1], scheduler="local")
+    assert run_sweep(QUICK[:1], scheduler="none").results[0].ok
+
+
+# ----------------------------------------------------------------------------- on a Dask LocalCluster
+
+@pytest.fixture(scope="module")
+def client():
+    distributed = pytest.importorskip("distributed")
+    import logging
+
+    with distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=True, dashboard_address=":0",
+                                  silence_logs=logging.ERROR) as cluster, distributed.Client(cluster) as c:
+        yield c
+
+
+@pytest.mark.slow
+def test_a_case_on_a_dask_worker_gives_bit_identical_metrics(client):
+    cases = [BrakingCase(road="dry-asphalt", speed_kmh=50.0, changes=(("snow", 0.5),), observer="xbs4",
+                         beta1=100.0, beta2=150.0, encoder_ppr=60, encoder_seed=5, duration_s=1.2),
+             BrakingCase(road="wet-asphalt", speed_kmh=40.0, observer="adaptive", controller="two-phase")]
+    remote = run_sweep(cases, scheduler=client, batch_size=1)
+    assert remote.engine.startswith("Dask client")
+    local = [run_case(c) for c in cases]
+    assert [r.to_json() for r in remote.results] == [r.to_json() for r in local]
+    assert remote.results[0].metrics["xbs_rms"] == local[0].metrics["xbs_rms"]  # the same float, not close
+
+
+@pytest.mark.slow
+def test_table41_through_the_sweep_engine_equals_table41(client):
+    spec = load_sweep_spec(ROOT / "examples" / "sweep_table41.toml")
+    cases = [c for c in spec.cases if c.speed_kmh in (60.0, 120.0) and c.road in ("dry-asphalt", "wet-cobblestones")]
+    sweep = run_sweep(cases, scheduler=client)
+    by = {(r.case.speed_kmh, r.case.road, r.case.controller): r for r in sweep.results}
+    reference = table41(roads=("dry-asphalt", "wet-cobblestones"), speeds_kmh=(60.0, 120.0))
+    assert len(reference.rows) == 4 and len(by) == 8
+    for row in reference.rows:
+        five, two = by[(row.speed_kmh, row.road, "five-phase")], by[(row.speed_kmh, row.road, "two-phase")]
+        assert (five.metrics["braking_distance_m"], two.metrics["braking_distance_m"]) == \
+            (row.five_phase_m, row.two_phase_m)
+        assert (five.metrics["stopping_distance_m"], two.metrics["stopping_distance_m"]) == \
+            (row.five_phase_stopping_m, row.two_phase_stopping_m)
+        assert (five.status, two.status) == (row.five_phase_status, row.two_phase_status)
+
+
+@pytest.mark.slow
+def test_a_killed_worker_does_not_lose_the_sweep(client, tmp_path):
+    cases = grid(BrakingCase(speed_kmh=120.0), road=["dry-asphalt", "wet-asphalt", "dry-concrete", "snow"],
+                 controller=["five-phase", "two-phase"])
+    pids = client.run(os.getpid)
+    out: dict = {}
+    runner = threading.Thread(target=lambda: out.setdefault("sweep", run_sweep(
+        cases, path=tmp_path / "rows.jsonl", scheduler=client, batch_size=1)))
+    runner.start()
+    deadline = time.monotonic() + 120
+    while not any(client.processing().values()) and runner.is_alive() and time.monotonic() < deadline:
+        time.sleep(0.02)
+    victim = next((w for w, tasks in client.processing().items() if tasks), None)
+    assert victim is not None, "no task was seen running: the sweep ended before a worker could be killed"
+    os.kill(pids[victim], signal.SIGKILL)  # the nanny restarts it; the scheduler re-runs its task elsewhere
+    runner.join(timeout=600)
+    sweep = out["sweep"]
+    assert [r.status for r in sweep.results] == ["stopped"] * len(cases)
+    assert [r.to_json() for r in sweep.results] == [r.to_json() for r in read_results(tmp_path / "rows.jsonl")]
