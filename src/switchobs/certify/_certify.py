@@ -30,7 +30,7 @@ from ..exceptions import CertificateError, FreeSymbolError, SpectrumError
 from ..model import Model
 from ._box import BoxCertificate, certify_box
 from ._exact import fraction_matrix, matrix_strings
-from ._family import Family, FamilyLike, as_family, format_spectrum
+from ._family import Family, FamilyLike, as_family, format_spectrum, user_matrix
 from ._discrete import DiscreteCertificate, discrete_certificate, stability_function
 from ._dwell import DwellTimeResult, dwell_time
 from ._lmi import DEFAULT_SOLVERS
@@ -295,7 +295,7 @@ def certify(family: FamilyLike, *, names: Sequence[str] | None = None, output: A
     common = hesp if hesp.certified else strict if strict.certified else None
     if discrete is not None and common is not None:
         t0 = time.perf_counter()
-        disc = discrete_certificate(fam.exact[0], fam.exact[1], fraction_matrix(output, what="output C"), common.P,
+        disc = discrete_certificate(fam.exact[0], fam.exact[1], user_matrix(output, what="output C", part="C"), common.P,
                                     method=discrete)
         sections[DiscreteSection.KEY] = DiscreteSection(disc.to_json())
         timings["discrete"] = time.perf_counter() - t0

@@ -31,7 +31,7 @@ from sympy.polys.matrices import DomainMatrix
 
 from ..exceptions import (CertificateError, DimensionError, ExpressionError, ModelError, NotHurwitzError,
                           NotObservableError, SpectrumError)
-from ..model import Model, free_names, make_symbol, numeric, parse_expression, rational_value
+from ..model import Model, entries, free_names, make_symbol, numeric, parse_expression, rational_value
 from ._lyapunov import _generic_solution, observer_form_gramian
 from .._progress import progress
 from ._normal_form import ObserverNormalForm, is_rational, observer_normal_form, rational_matrix
@@ -129,10 +129,13 @@ def hoang_family_constraints(alpha_plus: Sequence[sp.Expr], alpha_minus: Sequenc
 
 
 def parse_gains(gains: str | Sequence, model: Model, *, what: str) -> sp.ImmutableMatrix:
-    """Gains as a column: numbers, expressions in the parameters, or new (real) gain symbols."""
+    """Gains as a column: numbers, expressions in the parameters, or new (real) gain symbols.
+
+    ``gains`` is a comma-separated string, a sequence, a NumPy vector or a sympy
+    column; numbers follow the one float rule (:func:`~switchobs.model.exact_number`).
+    """
+    gains = entries(gains, name=what)
     items = gains.split(",") if isinstance(gains, str) else list(gains)
-    if isinstance(gains, sp.MatrixBase):
-        items = list(gains)
     if len(items) != model.n:
         raise DimensionError(f"{what} has {len(items)} entries but model {model.name!r} has dimension {model.n}")
     names = {p: model.symbols[p] for p in model.parameters}
@@ -141,9 +144,6 @@ def parse_gains(gains: str | Sequence, model: Model, *, what: str) -> sp.Immutab
     for i, g in enumerate(items):
         if isinstance(g, sp.Basic):
             out.append(g)
-            continue
-        if isinstance(g, (float, np.floating)):  # its exact binary value, as everywhere (rational_value)
-            out.append(rational_value(g, what=f"{what} entry {i + 1}"))
             continue
         text = str(g).strip()
         for name in free_names(text):
@@ -378,6 +378,43 @@ class GainDesign:
         out["K_plus"] = out["K_plus"].reshape(-1)
         out["K_minus"] = out["K_minus"].reshape(-1)
         return out
+
+    def to_numpy(self, values: Mapping[str, Any] | None = None) -> dict[str, np.ndarray]:
+        """The same as :meth:`numeric`: every gain and matrix as a float array, in one call."""
+        return self.numeric(values)
+
+    def to_statespace(self, sign: str = "plus", values: Mapping[str, Any] | None = None) -> Any:
+        """The error system of one mode as a python-control ``StateSpace``, in the rescaled time ``tau``.
+
+        ``de/dtau = A_sign e + B v``, ``y_e = C e``: the input ``v`` is the
+        measurement noise (``y = C z + v``), which enters as ``B = -K_plus`` for
+        ``s > 0`` and ``B = K_minus`` for ``s < 0`` (the observer injects
+        ``s K (y - C z_hat)`` and ``dtau = |s| dt``; seed 000 eq. (13)), and the
+        output is the output error ``C e``.
+
+        Parameters
+        ----------
+        sign : {"plus", "minus"} (also ``"+"``, ``"-"``, ``1``, ``-1``)
+        values : mapping, optional
+            Parameter and design-symbol values, as in :meth:`numeric`.
+
+        Raises
+        ------
+        SpectrumError
+            An unknown ``sign``.
+        FreeSymbolError
+            A parameter or design symbol has no value.
+        """
+        import control
+
+        side = {"plus": "plus", "+": "plus", 1: "plus", "minus": "minus", "-": "minus", -1: "minus"}.get(sign)
+        if side is None:
+            raise SpectrumError(f"sign = {sign!r}: give 'plus' (A_plus, s > 0) or 'minus' (A_minus, s < 0)")
+        num = self.numeric(values)
+        B = (-num["K_plus"] if side == "plus" else num["K_minus"]).reshape(-1, 1)
+        C = numeric(self.model.C, {**self.model.values, **dict(values or {})}, what="C")
+        return control.ss(num[f"A_{side}"], B, C, np.zeros((1, 1)), name=f"{self.model.name} error, A_{side}",
+                          inputs=["v"], outputs=["Ce"], states=[f"e_{z}" for z in self.model.states])
 
     # ----------------------------------------------------------- output
     def to_json(self) -> dict[str, Any]:
