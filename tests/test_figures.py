@@ -68,3 +68,15 @@ def test_save_figure_is_atomic(tmp_path):
     with pytest.raises(SimulationError, match="cannot write"):
         save_figure(fig, tmp_path / "x.unknownformat")
     assert list(tmp_path.iterdir()) == []
+
+
+def test_braking_figure_title_fits_and_legend_sits_above_the_xbs_data():
+    from switchobs.plants import BrakingScenario, plot_braking, simulate
+
+    res = simulate(BrakingScenario("dry-asphalt", speed_m_s=15.0, duration_s=0.5))
+    fig = plot_braking(res)
+    assert all(len(line) <= 110 for line in fig._suptitle.get_text().splitlines())
+    xbs = fig.axes[4]
+    true = res.series["xbs"]
+    top = np.percentile(true[np.isfinite(true)], 99)
+    assert xbs.get_ylim()[1] > top + 0.4 * (top - np.percentile(true[np.isfinite(true)], 1))  # legend headroom
