@@ -194,7 +194,8 @@ class Model:
 
     @classmethod
     def from_statespace(cls, sys: Any, *, time_scale: str | Any, name: str = "statespace",
-                        states: list[str] | None = None, output: str = "y", description: str = "") -> "Model":
+                        states: list[str] | None = None, output: str = "y", external: list[str] | None = None,
+                        description: str = "") -> "Model":
         """A model ``dz/dt = s(y, t)(A z) + B u, y = C z`` from a python-control ``StateSpace``.
 
         ``A`` and ``C`` are taken from ``sys`` (floats at their exact binary
@@ -207,11 +208,14 @@ class Model:
         sys : control.StateSpace
             Continuous-time, one output, ``D = 0``.
         time_scale : str or sympy expression
-            ``s(y, t)``, the singular time scaling (seed 004 eq. (1)); in ``y`` and ``t``.
+            ``s(y, t)``, the singular time scaling (seed 004 eq. (1)); in ``y``, the ``external``
+            signals and ``t``.
         name, description : str
         states : list of str, optional
             State names (default: ``sys.state_labels`` if they are names, else ``z1 .. zn``).
         output : str
+        external : list of str, optional
+            Measured signals ``s`` may use besides ``y`` (the observers need them rather than ``t``).
 
         Raises
         ------
@@ -242,7 +246,8 @@ class Model:
 
         data = {"name": name, "description": description, "A": A, "C": C, "output": output,
                 "states": states if states is not None else labels(getattr(sys, "state_labels", None), "z", n),
-                "inputs": labels(getattr(sys, "input_labels", None), "u", m), "time_scale": time_scale}
+                "inputs": labels(getattr(sys, "input_labels", None), "u", m), "time_scale": time_scale,
+                "external": list(external or [])}
         if m:
             data["b"] = B
         return cls.from_dict(data, source="StateSpace")
