@@ -52,6 +52,10 @@ def _column(values: Sequence[sp.Expr]) -> sp.ImmutableMatrix:
     return sp.ImmutableMatrix(len(values), 1, list(values))
 
 
+def _flat(rows: Any) -> list:
+    return [x for r in rows for x in (r if isinstance(r, list) else [r])]
+
+
 def _matrix_json(M: sp.MatrixBase) -> list:
     if M.cols == 1:
         return [str(x) for x in M]
@@ -444,10 +448,68 @@ class GainDesign:
             "family_symbols": [str(s) for s in self.family_symbols],
             "normal_form": self.normal_form.to_json(),
             "references": dict(self.model.references),
+            "model_definition": self.model.to_json(),
         }
+
+    @classmethod
+    def from_json(cls, data: Mapping[str, Any]) -> "GainDesign":
+        """The design of :meth:`to_json`, recomputed from its model and inputs and checked against the file.
+
+        The model (``model_definition``), the spectrum or ``K_plus`` (and, for the Hoang family,
+        ``K_minus``) are read back and the design is run again, exactly; the stored gains and ``P``
+        must be what it gives, so a tampered or foreign file is refused rather than trusted.
+
+        Raises
+        ------
+        ModelError
+            A file without ``model_definition`` (written before it existed), or whose stored gains or
+            ``P`` differ from the recomputed ones.
+        """
+        if not isinstance(data, Mapping) or "model_definition" not in data:
+            raise ModelError("a gain design JSON needs its 'model_definition' (GainDesign.to_json writes it); "
+                             "design again from the model")
+        model = Model.from_json(data["model_definition"])
+        spectrum = data.get("spectrum")
+        minus = data["K_minus"] if data.get("choice") == "hoang-family" else None
+        design = design_gains(model, spectrum, K_plus=None if spectrum is not None else data["K_plus"],
+                              K_minus=minus, coupling=bool(data.get("gain_constraints")))
+        stored = design.to_json()
+        for key in ("K_plus", "K_minus", "P", "C_minus"):
+            if [sp.sympify(x) for x in _flat(stored[key])] != [sp.sympify(x) for x in _flat(data[key])]:
+                raise ModelError(f"the stored {key} = {data[key]} is not what the design of model "
+                                 f"{model.name!r} gives ({stored[key]}); the file was changed or is from another version")
+        return design
 
     def to_json_string(self, indent: int = 2) -> str:
         return json.dumps(self.to_json(), indent=indent)
+
+    def __repr__(self) -> str:
+        target = ", ".join(map(str, self.spectrum)) if self.spectrum is not None else "given K_plus"
+        target = target if len(target) <= 60 else target[:57] + "..."
+        return (f"<GainDesign for model {self.model.name!r}: n={self.n}, {self.choice}, spectrum [{target}]"
+                f"{', conditional' if self.conditional else ''}>")
+
+    def _repr_markdown_(self) -> str:
+        """The design in a notebook: gains, error matrices and P in LaTeX (gains only past PRETTY_MAX_N)."""
+        nf = self.normal_form
+        target = (", ".join(f"${sp.latex(p)}$" for p in self.spectrum) if self.spectrum is not None
+                  else "from the given $K^+$")
+        rows = [f"**Switched observer design** for model `{self.model.name}` (n = {self.n}, {self.choice}"
+                f"{', conditional on the coupling constraints' if self.conditional else ''})", "",
+                f"spectrum of $A^+$: {target}; observable iff: "
+                + (", ".join(f"${sp.latex(c)}$" for c in nf.observability_conditions) or "always"), "",
+                f"$$K^+ = {sp.latex(self.K_plus.T)}^\\top,\\quad K^- = {sp.latex(self.K_minus.T)}^\\top$$"]
+        if self.n <= PRETTY_MAX_N:
+            rows += ["", f"$$A^+ = A - K^+ C = {sp.latex(self.A_plus)},\\quad "
+                         f"A^- = -A + K^- C = {sp.latex(self.A_minus)}$$",
+                     "", f"common Lyapunov matrix ($A^{{\\pm\\top}} P + P A^\\pm = -C_\\pm^\\top C_\\pm$): "
+                         f"$$P = {sp.latex(self.P)}$$"]
+        else:
+            rows += ["", "(matrices past n = 4: `str(design)`, `design.to_json()` or `design.to_numpy()`)"]
+        open_conditions = [*self.hurwitz_plus, *([] if self.choice == "theorem1" else self.hurwitz_minus)]
+        rows += ["", "Routh–Hurwitz conditions left: " + (", ".join(f"${sp.latex(c)}$" for c in open_conditions)
+                                                        or "none (Hurwitz by construction)")]
+        return "\n".join(rows)
 
     def __str__(self) -> str:
         return self.describe(full=self.n <= PRETTY_MAX_N)

@@ -7,6 +7,7 @@
 
 from __future__ import annotations
 
+import dataclasses
 import re
 import tomllib
 from collections.abc import Mapping
@@ -333,8 +334,61 @@ class Model:
             "values": {k: str(v) for k, v in self.values.items()},
         }
 
+    def to_json(self) -> dict[str, Any]:
+        """Every key of :meth:`from_dict` (:meth:`to_dict` with the sign declarations, description and
+        references): ``Model.from_json(m.to_json()) == m``."""
+        signed = [*self.parameters, *self.external]
+        declared = {*self.states, self.output, *signed, *self.inputs, "t"}
+        return {**self.to_dict(),
+                "positive": [k for k in signed if self.symbols[k].is_positive],
+                "negative": [k for k in signed if self.symbols[k].is_negative],
+                "description": self.description, "references": dict(self.references),
+                # parameters replaced by numbers (with_values) keep their symbols, for the design's map back
+                "substituted": {k: _sign_name(s) for k, s in self.symbols.items() if k not in declared}}
+
+    @classmethod
+    def from_json(cls, data: Mapping[str, Any]) -> "Model":
+        """The model of :meth:`to_json` (validated as :meth:`from_dict` validates)."""
+        if not isinstance(data, Mapping):
+            raise ModelError(f"model JSON: expected an object, got {type(data).__name__}")
+        data = dict(data)
+        substituted = data.pop("substituted", {}) or {}
+        model = cls.from_dict(data, source="model JSON")
+        if not substituted:
+            return model
+        symbols = {**model.symbols, **{k: make_symbol(k, positive=v == "positive", negative=v == "negative")
+                                        for k, v in dict(substituted).items()}}
+        return dataclasses.replace(model, symbols=symbols)
+
     def __str__(self) -> str:
         return f"Model {self.name!r}: n={self.n}, states={list(self.states)}, s={self.time_scale}"
+
+    def __repr__(self) -> str:
+        params = f", parameters={list(self.parameters)}" if self.parameters else ""
+        return f"<Model {self.name!r}: n={self.n}, output {self.output!r}, s = {self.time_scale}{params}>"
+
+    def _repr_markdown_(self) -> str:
+        """The model in a notebook: its equation and matrices in LaTeX."""
+        rows = [f"**Model `{self.name}`** (n = {self.n}){': ' + self.description if self.description else ''}",
+                "",
+                r"$$\dot z = s(y, t)\,\big(A z + d(y)\big) + b(y)\,u,\qquad y = C z,\qquad "
+                f"s = {sp.latex(self.time_scale)}$$",
+                "",
+                rf"$$A = {sp.latex(self.A)},\quad C = {sp.latex(self.C)}"
+                + (rf",\quad d = {sp.latex(self.d)}" if any(e != 0 for e in self.d) else "")
+                + (rf",\quad b = {sp.latex(self.b)}" if self.inputs else "") + "$$",
+                "",
+                f"states: {', '.join(f'`{z}`' for z in self.states)}; signals: "
+                f"{', '.join(f'`{x}`' for x in self.signals)}"]
+        if self.parameters:
+            vals = ", ".join(f"${sp.latex(self.symbols[k])} = {sp.latex(self.values[k])}$" if k in self.values
+                             else f"${sp.latex(self.symbols[k])}$" for k in self.parameters)
+            rows[-1] += f"; parameters: {vals}"
+        return "\n".join(rows)
+
+
+def _sign_name(symbol: sp.Symbol) -> str:
+    return "positive" if symbol.is_positive else "negative" if symbol.is_negative else "real"
 
 
 def rational_value(value: Any, *, what: str) -> sp.Rational:
