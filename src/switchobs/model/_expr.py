@@ -67,7 +67,7 @@ def exact_number(value: Any, *, what: str = "number") -> Any:
         raise ExpressionError(f"{what}: expected a number, got the boolean {value!r}")
     if isinstance(value, (float, np.floating)):
         if not math.isfinite(value):
-            raise ExpressionError(f"{what}: {value!r} is not a finite number")
+            raise ExpressionError(f"{what}: {value!r} is not finite; give a finite number")
         return sp.Rational(*value.as_integer_ratio())
     if isinstance(value, Integral):
         return sp.Integer(int(value))
