@@ -104,7 +104,7 @@ def _worst_path(mats: Sequence[np.ndarray], x0: np.ndarray, sign: int, half_turn
             rot = sign * (x[0] * v[1] - x[1] * v[0])
             if rot > 0 and (best is None or x @ v / rot > best[0]):
                 best = (float(x @ v / rot), k)
-        if best is None or len(path) > 200_000:
+        if best is None or len(path) > 200_000:  # no mode turns that way, or one barely turns: no worst path
             return None
         new = Es[best[1]] @ x
         angle += sign * float(np.arctan2(x[0] * new[1] - x[1] * new[0], x @ new))  # signed angle of the step
