@@ -74,7 +74,8 @@ def save_figure(fig: Any, path: str | Path, *, dpi: int = 110) -> Path:
         fig.savefig(partial, dpi=dpi, format=path.suffix.lstrip(".").lower() or None)
         os.replace(partial, path)
     except (OSError, ValueError) as exc:
-        raise SimulationError(f"cannot write the plot {str(path)!r}: {exc}") from None
+        detail = exc.strerror if isinstance(exc, OSError) and exc.strerror else exc  # not the temporary name
+        raise SimulationError(f"cannot write the plot {str(path)!r}: {detail}") from None
     finally:
         partial.unlink(missing_ok=True)
     return path
