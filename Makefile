@@ -5,7 +5,7 @@ PY := $(VENV)/bin/python
 STAMP := $(VENV)/.installed
 DEMO_ARGS ?=
 
-.PHONY: demo test bench docs install clean cc-tools
+.PHONY: demo test bench docs install clean cc-tools figures
 
 $(STAMP): pyproject.toml
 	$(PYTHON) -m venv $(VENV)
@@ -44,6 +44,11 @@ bench: $(STAMP)
 
 docs: $(STAMP)
 	NO_MKDOCS_2_WARNING=1 $(VENV)/bin/mkdocs build --strict --site-dir site
+
+# The figures of the docs drawn by commands (tests/test_figures.py runs these lines into a temporary directory).
+figures: $(STAMP)
+	$(VENV)/bin/switchobs certify abs-adaptive2 --gains-plus 8,-2/25 --gains-minus -3,-1/25 --plot docs/figures/certify_abs_adaptive2.png
+	$(VENV)/bin/switchobs classify "[[-0.1,-1],[2,-0.1]]" "[[-0.1,-2],[1,-0.1]]" --plot docs/figures/classify_case_iv.png
 
 clean:
 	rm -rf $(VENV) site out build *.egg-info src/*.egg-info

@@ -21,6 +21,7 @@ EXPECTED = {
     "aguado_table61.py": ["aguado_table61.png"],
     "poincare_two_phase.py": ["poincare_two_phase.png"],
     "noise_decay_front.py": ["noise_decay_front.png"],
+    "python_control_notebook.py": ["python_control_notebook.png"],
     "c_observer.py": ["c_observer.png", "c_observer/observer_demo", "c_observer/switchobs_abs_xbs4.h"],
 }
 

@@ -153,3 +153,16 @@ def test_cli_encoder_bad_input_is_one_line_exit_2(capsys, argv, match):
     assert main(["encoder", *argv]) == 2
     err = capsys.readouterr().err
     assert match in err and err.count("\n") == 1 and "Traceback" not in err
+
+
+def test_comparison_plot_draws_estimation_errors(braking_comparison):
+    """`encoder --plot` shows estimate - truth per estimator (issue 16), not estimates over a hidden truth."""
+    from switchobs.sensors import plot_comparison
+
+    fig = plot_comparison(braking_comparison)
+    speed, accel = fig.axes
+    assert speed.get_ylabel() == "speed error [rad/s]" and accel.get_ylabel() == "acceleration error [rad/s^2]"
+    r = braking_comparison.results[0]
+    drawn = next(line for line in speed.lines if line.get_label() == r.estimator).get_ydata()
+    shown = (r.t >= r.t[0] + r.settings.warmup_s) & (r.t <= r.t[0] + r.settings.warmup_s + 1.0)
+    np.testing.assert_allclose(drawn, (r.omega - r.omega_true)[shown])

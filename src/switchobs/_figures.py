@@ -10,6 +10,7 @@ Axes to draw on (a sequence of them for a figure with several panels) or
 
 from __future__ import annotations
 
+import os
 from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
@@ -59,14 +60,22 @@ def panels(ax: Any, count: int, *, figsize: tuple[float, float], owner: str, **s
 def save_figure(fig: Any, path: str | Path, *, dpi: int = 110) -> Path:
     """Write ``fig`` to ``path`` (format from the suffix); the path.
 
+    The figure is written to a temporary file next to ``path`` and renamed, so
+    that an interrupted or failed write leaves no half-written image.
+
     Raises
     ------
     SimulationError
         If the file cannot be written (missing directory, unknown format).
     """
     path = Path(path)
+    partial = path.with_name(f".{path.name}.partial")
     try:
-        fig.savefig(path, dpi=dpi)
+        fig.savefig(partial, dpi=dpi, format=path.suffix.lstrip(".").lower() or None)
+        os.replace(partial, path)
     except (OSError, ValueError) as exc:
-        raise SimulationError(f"cannot write the plot {str(path)!r}: {exc}") from None
+        detail = exc.strerror if isinstance(exc, OSError) and exc.strerror else exc  # not the temporary name
+        raise SimulationError(f"cannot write the plot {str(path)!r}: {detail}") from None
+    finally:
+        partial.unlink(missing_ok=True)
     return path

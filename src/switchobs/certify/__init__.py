@@ -34,6 +34,9 @@ zero_crossings            -- sign changes of y with their slopes
 regressor_excitation      -- eigenvalues of windowed ∫ Psi'Psi (seed 001 Fig. 3.1)
 admissible_constants      -- alpha (and dwell-time bounds for a beta) of Theorem 3, seed 004
 as_family                 -- the validation gate for a family of matrices
+plot_certification, plot_spectra, plot_dwell_margin, plot_planar
+                          -- figures: spectra of the modes, dwell-time margin against T, planar level sets and
+                             the worst-case trajectory (matplotlib Figures, ``ax=``)
 
 Results: CertificationReport, LyapunovResult, DualCertificate, DwellTimeResult,
 PlanarClassification, VerificationReport, TrajectoryReport, AdmissibleConstants, DiscreteCertificate,
@@ -54,6 +57,7 @@ from ._family import Family, as_family
 from ._lyapunov import (DEFAULT_EPS, DualCertificate, LyapunovResult, common_lyapunov,
                         infeasibility_certificate, strict_common_lyapunov)
 from ._planar import PlanarClassification, classify_planar
+from ._plot import plot_certification, plot_dwell_margin, plot_planar, plot_spectra
 from ._synthesis import FrontPoint, GainSynthesis, noise_decay_front, noise_gain, synthesize, synthesize_gains
 from ._schema import (ArbitrarySwitching, BoxSection, CertificateDocument, CertificateKind, DualEntry, DwellTimeEntry, Existence,
                       FamilySection, LyapunovEntry, ObserverSection, PlanarEntry, Verdict, document_section)
@@ -72,6 +76,7 @@ __all__ = [
     "DEFAULT_EPS", "DualCertificate", "LyapunovResult", "common_lyapunov", "infeasibility_certificate",
     "strict_common_lyapunov",
     "PlanarClassification", "classify_planar",
+    "plot_certification", "plot_dwell_margin", "plot_planar", "plot_spectra",
     "ArbitrarySwitching", "CertificateDocument", "CertificateKind", "DualEntry", "DwellTimeEntry", "Existence",
     "FamilySection", "LyapunovEntry", "ObserverSection", "PlanarEntry", "Verdict", "document_section",
     "AdmissibleConstants", "TrajectoryReport", "ZeroCrossing", "admissible_constants", "pe_level",

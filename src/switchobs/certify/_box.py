@@ -41,7 +41,7 @@ import numpy as np
 import sympy as sp
 
 from ..exceptions import CertificateError, FreeSymbolError, ModelError
-from ..model import Model
+from ..model import Model, matrix_rows
 from ._box_check import Interval, check_dwell, check_strict, vertex_matrices
 from ._exact import Matrix, fraction_matrix, matrix_strings, to_fraction
 from ._lmi import DEFAULT_SOLVERS, SolveInfo, balance, primal_margin, solve
@@ -455,7 +455,7 @@ def certify_box(model: Model, box: ParameterBox | Sequence[str] | Mapping[str, A
 
 
 def _column_gain(K: Any, n: int, what: str) -> Matrix:
-    rows = K.tolist() if hasattr(K, "tolist") else list(K)
+    rows = matrix_rows(K, name=what)
     if rows and not isinstance(rows[0], (list, tuple)):
         rows = [[x] for x in rows]
     return fraction_matrix(rows, what=what, rows=n)

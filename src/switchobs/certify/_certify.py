@@ -22,6 +22,7 @@ from fractions import Fraction
 from pathlib import Path
 from typing import Any
 
+import numpy as np
 import sympy as sp
 
 from .._progress import progress
@@ -30,7 +31,7 @@ from ..exceptions import CertificateError, FreeSymbolError, SpectrumError
 from ..model import Model
 from ._box import BoxCertificate, certify_box
 from ._exact import fraction_matrix, matrix_strings
-from ._family import Family, FamilyLike, as_family, format_spectrum
+from ._family import Family, FamilyLike, as_family, format_spectrum, user_matrix
 from ._discrete import DiscreteCertificate, discrete_certificate, stability_function
 from ._dwell import DwellTimeResult, dwell_time
 from ._lmi import DEFAULT_SOLVERS
@@ -156,7 +157,36 @@ class CertificationReport:
                 "spectra": {nm: format_spectrum(M) for nm, M in zip(self.family.names, self.family.numeric)},
                 "certificate": self.document}
 
-    def __str__(self) -> str:
+    def __repr__(self) -> str:
+        return (f"<CertificationReport: {self.family}, certified={self.certified}, "
+                f"verification {'holds' if self.verification.holds else 'FAILS'}>")
+
+    def _repr_markdown_(self) -> str:
+        """The report in a notebook: spectra, the table of checks and the verdict."""
+        rows = self._rows()
+        table = ["| " + " | ".join(rows[0]) + " |", "|" + "---|" * len(rows[0])]
+        table += ["| " + " | ".join(r) + " |" for r in rows[1:]]
+        spectra = "; ".join(f"${nm.replace('_plus', '^+').replace('_minus', '^-')}$: {format_spectrum(M)}"
+                            for nm, M in zip(self.family.names, self.family.numeric))
+        tail = [f"**verdict**: {self.text}",
+                f"independent exact check of the certificate: **{'holds' if self.verification.holds else 'FAILS'}**"]
+        if self.discrete is not None:
+            tail.insert(1, f"sampled observer: {self.discrete}")
+        if self.box is not None:
+            tail.insert(1, str(self.box))
+        return "\n".join([f"**Certification** of the {self.family} (spectra: {spectra})", "", *table, "",
+                          *[t + "\n" for t in tail]])
+
+    def to_numpy(self) -> dict[str, np.ndarray]:
+        """The family's matrices by name and the certified common ``P`` (if any) as float arrays."""
+        out = dict(zip(self.family.names, self.family.numeric))
+        common = self.hespanha if self.hespanha.certified else self.strict if self.strict.certified else None
+        if common is not None:
+            out["P"] = common.P_float
+        return out
+
+    def _rows(self) -> list[tuple[str, ...]]:
+        """The table of checks: (check, result, margin, solver, exact), header first."""
         rows = [("check", "result", "margin", "solver", "exact")]
         s = self.strict
         if s.certified:
@@ -180,6 +210,10 @@ class CertificationReport:
             p = self.planar
             rows.append(("planar (Balde-Boscain-Mason)", f"case {p.case}: {p.stability}",
                          "-" if p.R is None else f"R={p.R:.4g}", "-", "exact" if p.case != "iv" else "R numeric"))
+        return rows
+
+    def __str__(self) -> str:
+        rows = self._rows()
         widths = [max(len(r[i]) for r in rows) for i in range(5)]
         lines = ["  ".join(c.ljust(w) for c, w in zip(r, widths)).rstrip() for r in rows]
         lines.insert(1, "  ".join("-" * w for w in widths))
@@ -295,7 +329,7 @@ def certify(family: FamilyLike, *, names: Sequence[str] | None = None, output: A
     common = hesp if hesp.certified else strict if strict.certified else None
     if discrete is not None and common is not None:
         t0 = time.perf_counter()
-        disc = discrete_certificate(fam.exact[0], fam.exact[1], fraction_matrix(output, what="output C"), common.P,
+        disc = discrete_certificate(fam.exact[0], fam.exact[1], user_matrix(output, what="output C", part="C"), common.P,
                                     method=discrete)
         sections[DiscreteSection.KEY] = DiscreteSection(disc.to_json())
         timings["discrete"] = time.perf_counter() - t0

@@ -519,5 +519,8 @@ def discrete_certificate(A_plus: Any, A_minus: Any, C: Any, P: Any, *, method: s
     >>> cert.verdict.value, cert.h_max, cert.strict
     ('certified', None, True)
     """
-    return check_discrete(A_plus, A_minus, C, P, method)
+    from ._family import user_matrix  # the user's boundary (NumPy, sympy); the checker itself stays stdlib-only
+
+    return check_discrete(*(user_matrix(M, what=nm, part=part) for M, nm, part in
+                            ((A_plus, "A_plus", "A"), (A_minus, "A_minus", "A"), (C, "C", "C"), (P, "P", "A"))), method)
 

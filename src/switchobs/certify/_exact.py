@@ -67,6 +67,8 @@ def to_fraction(value: Any, *, what: str = "entry") -> Fraction:
                                "cannot be certified exactly; substitute numbers first)") from None
     if not math.isfinite(f):
         raise CertificateError(f"{what}: {value!r} is not finite")
+    if getattr(value, "is_Float", False) and value == f:
+        return Fraction(f)  # a sympy Float holding a double: its exact binary value, like a float
     if hasattr(value, "is_Number") and not getattr(value, "is_Rational", True):
         raise CertificateError(f"{what}: {value!r} is irrational; give a rational approximation")
     return Fraction(f)

@@ -12,9 +12,10 @@ from sympy.polys.matrices import DomainMatrix
 
 from ..design import routh_first_column
 from ..exceptions import CertificateError, DimensionError, ModelError, NotHurwitzError
+from ..model import matrix_rows
 from ._exact import Matrix, fraction_matrix, matrix_strings
 
-__all__ = ["Family", "as_family", "format_spectrum", "FamilyLike"]
+__all__ = ["Family", "as_family", "user_matrix", "format_spectrum", "FamilyLike"]
 
 
 @dataclass(frozen=True)
@@ -41,6 +42,13 @@ class Family:
 
     def __len__(self) -> int:
         return len(self.exact)
+
+    def to_numpy(self) -> np.ndarray:
+        """The matrices stacked as one float array of shape ``(len(family), n, n)``."""
+        return np.stack(self.numeric)
+
+    def __array__(self, dtype: Any = None, copy: Any = None) -> np.ndarray:
+        return self.to_numpy() if dtype is None else self.to_numpy().astype(dtype)
 
     def to_json(self) -> dict[str, Any]:
         return {"names": list(self.names), "matrices": [matrix_strings(M) for M in self.exact]}
@@ -70,13 +78,26 @@ def _hurwitz_exact(M: Matrix) -> bool:
     return len(column) == len(alpha) + 1 and column[-1] > 0
 
 
+def user_matrix(value: Any, *, what: str, part: str = "A", rows: int | None = None,
+                cols: int | None = None) -> Matrix:
+    """A user's matrix (list of rows, NumPy, sympy, ``control.StateSpace`` for ``part``) as exact rationals.
+
+    The certify layer's boundary: :func:`switchobs.model.matrix_rows` reads the
+    container and the numbers (a float is its exact binary value), then the
+    exact layer checks the shape.  A flat sequence is one row.
+    """
+    return fraction_matrix(matrix_rows(value, name=what, part=part), what=what, rows=rows, cols=cols)
+
+
 def as_family(matrices: FamilyLike, names: Sequence[str] | None = None, *, hurwitz: bool = True) -> Family:
     """Validate a finite family of square matrices of one size.
 
     Parameters
     ----------
-    matrices : Family, sequence of array-likes, or mapping name -> array-like
-        Entries may be ints, floats, fraction/decimal strings or sympy Rationals.
+    matrices : Family, sequence of matrices, or mapping name -> matrix
+        A matrix is a list of rows, a NumPy array, a sympy matrix or a
+        ``control.StateSpace`` (its ``A``); entries may be ints, floats (their
+        exact binary value), fraction/decimal strings or sympy numbers.
     names : sequence of str, optional
         Names used in messages and certificates (default ``A_1, A_2, ...``).
     hurwitz : bool
@@ -106,7 +127,7 @@ def as_family(matrices: FamilyLike, names: Sequence[str] | None = None, *, hurwi
             raise DimensionError(f"{len(names)} names for {len(items)} matrices")
         exact = []
         for nm, M in zip(names, items):
-            rows = M.tolist() if hasattr(M, "tolist") else M
+            rows = matrix_rows(M, name=nm)
             if not isinstance(rows, (list, tuple)) or not rows or not all(isinstance(r, (list, tuple)) for r in rows):
                 raise DimensionError(f"{nm} must be a matrix given as a list of rows, got {M!r}")
             try:

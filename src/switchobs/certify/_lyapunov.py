@@ -18,7 +18,7 @@ import numpy as np
 
 from .._progress import progress
 from ._exact import Matrix, fraction_matrix, lyapunov_form, matrix_strings
-from ._family import Family, FamilyLike, as_family
+from ._family import Family, FamilyLike, as_family, user_matrix
 from ._lmi import DEFAULT_SOLVERS, SolveInfo, balance, dual_margin, primal_margin
 from ._rounding import (FACE_TOLERANCES, dyadic, factor_rows, normalise, project_dual, project_primal, psd_dyadic,
                         short_sqrt_lower)
@@ -193,7 +193,7 @@ def _output_weights(bal_d: np.ndarray, output: Any, n: int, count: int) -> list[
     """``H = C' C`` in balanced coordinates (identity without an output), normalised to unit norm."""
     if output is None:
         return [np.eye(n)] * count
-    Cf = np.array([[float(x) for x in row] for row in fraction_matrix(output, what="output C", cols=n)])
+    Cf = np.array([[float(x) for x in row] for row in user_matrix(output, what="output C", part="C", cols=n)])
     Cb = Cf * bal_d[None, :]
     H = Cb.T @ Cb
     return [H / (np.linalg.norm(H, 2) or 1.0)] * count

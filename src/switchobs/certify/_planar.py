@@ -37,7 +37,7 @@ tests).  ``R`` is computed with mpmath at 40 digits; ``R = 1`` is declared when
 
 from __future__ import annotations
 
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 from fractions import Fraction
 from typing import Any
@@ -45,7 +45,7 @@ from typing import Any
 import mpmath
 import numpy as np
 
-from ..exceptions import DimensionError, NotHurwitzError
+from ..exceptions import CertificateError, DimensionError, NotHurwitzError
 from ._exact import Matrix, matmul
 from ._family import as_family, format_spectrum
 
@@ -116,6 +116,18 @@ class PlanarClassification:
                 "tr_A1A2": str(self.trace_product), "sqrt_det_product": self.delta,
                 "R": self.R, "worst_switching": [[nm, dt] for nm, dt in self.worst_switching],
                 "names": list(self.names)}
+
+    @classmethod
+    def from_json(cls, data: Mapping[str, Any]) -> "PlanarClassification":
+        """The classification of :meth:`to_json` (exact fields read back as fractions)."""
+        try:
+            return cls(data["case"], data["verdict"], data["stability"], Fraction(data["Gamma"]),
+                       Fraction(data["det1"]), Fraction(data["det2"]), Fraction(data["tr_A1A2"]),
+                       float(data["sqrt_det_product"]), None if data["R"] is None else float(data["R"]),
+                       tuple((str(nm), float(dt)) for nm, dt in data["worst_switching"]),
+                       (str(data["names"][0]), str(data["names"][1])))
+        except (KeyError, TypeError, ValueError, IndexError) as exc:
+            raise CertificateError(f"not a planar classification JSON ({type(exc).__name__}: {exc})") from None
 
     def __str__(self) -> str:
         a, b = self.names

@@ -83,6 +83,12 @@ class Check:
     def to_json(self) -> dict[str, Any]:
         return {"name": self.name, "holds": self.holds, "detail": self.detail}
 
+    @classmethod
+    def from_json(cls, data: Any) -> "Check":
+        if not isinstance(data, Mapping) or not isinstance(data.get("holds"), bool):
+            raise CertificateError(f"a check must be an object with 'name', 'holds' (true/false), 'detail'; got {data!r}")
+        return cls(str(data["name"]), data["holds"], str(data.get("detail", "")))
+
     def __str__(self) -> str:
         return f"{self.name}: {'holds' if self.holds else 'FAILS'}{(' - ' + self.detail) if self.detail else ''}"
 

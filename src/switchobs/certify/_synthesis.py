@@ -57,6 +57,7 @@ from sympy.polys.matrices import DomainMatrix
 
 from ..exceptions import CertificateError, DimensionError, ModelError
 from ..model import Model
+from ._family import user_matrix
 from ._exact import (Matrix, add, definiteness, fraction_matrix, identity, lyapunov_form, matmul, matrix_strings,
                      rank, scale, sub, to_fraction, transpose)
 from ._lmi import DEFAULT_SOLVERS, SolveInfo, solve
@@ -292,11 +293,11 @@ def synthesize_gains(A: Any, C: Any, *, decay_rate: Any, noise_weight: float = 0
     Boyd, El Ghaoui, Feron, Balakrishnan (1994), Sec. 5.2 and 7.2 (observer LMIs with Y = P K);
     seed 004, Theorem 1 and the Hespanha argument.
     """
-    A_ex = fraction_matrix(A, what="A")
+    A_ex = user_matrix(A, what="A")
     n = len(A_ex)
     if len(A_ex[0]) != n:
         raise DimensionError(f"A must be square, got {n}x{len(A_ex[0])}")
-    C_ex = fraction_matrix(C, what="C", cols=n)
+    C_ex = user_matrix(C, what="C", part="C", cols=n)
     rate = to_fraction(decay_rate, what="decay_rate")
     if rate <= 0:
         raise ModelError(f"decay_rate must be positive, got {rate}")

@@ -82,6 +82,14 @@ class VerificationReport:
         return {"holds": self.holds, "checks": [c.to_json() for c in self.checks],
                 "implied": self.implied.to_json(), "claimed": self.claimed.to_json()}
 
+    @classmethod
+    def from_json(cls, data: Mapping[str, Any]) -> "VerificationReport":
+        """The report of :meth:`to_json`."""
+        if not isinstance(data, Mapping) or not isinstance(data.get("holds"), bool):
+            raise CertificateError(f"not a verification report: {data!r}")
+        return cls(data["holds"], tuple(Check.from_json(c) for c in data.get("checks", [])),
+                   Verdict.from_json(data.get("implied")), Verdict.from_json(data.get("claimed")))
+
     def __str__(self) -> str:
         head = "certificate holds exactly" if self.holds else "certificate does NOT hold"
         lines = [head] + [f"  {c}" for c in self.checks]

@@ -45,6 +45,8 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--json", action="store_true", help="print the full report as JSON")
     p.add_argument("--out", metavar="CERT.json", help="write the certificate (checkable with switchobs verify); "
                    "- writes it to standard output and the summary to stderr")
+    p.add_argument("--plot", metavar="PATH", help="write a figure: the spectra of A_plus and A_minus and, when the "
+                   "verdict rests on a dwell time, the Geromel-Colaneri LMI margin against T with tau_D marked")
     p.set_defaults(func=run)
 
 
@@ -64,6 +66,11 @@ def run(args: argparse.Namespace) -> int:
                            solvers=solvers, discrete=args.discrete, box=args.box)
     if args.out:
         write_certificate(report, args.out)
+    if args.plot:
+        from .._figures import save_figure
+        from ..certify import plot_certification
+
+        save_figure(plot_certification(report), args.plot)
     if args.json:
         emit_json(report.to_json())
     elif (stream := summary_stream(args)) is not None:
@@ -81,5 +88,7 @@ def run(args: argparse.Namespace) -> int:
                 print(line, file=stream)
         if args.out and args.out != STDIO:
             print(f"certificate written to {args.out}", file=stream)
+        if args.plot:
+            print(f"figure written to {args.plot}", file=stream)
     box_ok = report.box is None or report.box.certified
     return 0 if report.certified and report.discrete_certified is not False and box_ok else 1

@@ -39,13 +39,23 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("A1", help='first matrix, e.g. "[[-1,2],[-3,-4]]"')
     p.add_argument("A2", help="second matrix")
     p.add_argument("--json", action="store_true", help='JSON with fields "case" (i, ii, iii, iv) and "verdict"')
+    p.add_argument("--plot", metavar="PATH", help="write a figure: level sets of each mode's Lyapunov function and "
+                   "the worst-case trajectory")
     p.set_defaults(func=run)
 
 
 def run(args: argparse.Namespace) -> int:
-    res = classify_planar(parse_matrix(args.A1, name="A1"), parse_matrix(args.A2, name="A2"))
+    A1, A2 = parse_matrix(args.A1, name="A1"), parse_matrix(args.A2, name="A2")
+    res = classify_planar(A1, A2)
+    if args.plot:
+        from .._figures import save_figure
+        from ..certify import plot_planar
+
+        save_figure(plot_planar(res, A1, A2), args.plot)
     if args.json:
         emit_json(res.to_json())
     else:
         print(res)
+        if args.plot:
+            print(f"figure written to {args.plot}")
     return 0

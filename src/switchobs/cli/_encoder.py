@@ -39,7 +39,7 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--seed", type=int, default=1, help="seed of the per-tooth transition errors (default 1)")
     p.add_argument("--warmup", type=float, default=1.0, help="seconds left out of the statistics (default 1)")
     p.add_argument("--json", action="store_true", help="print the results as JSON")
-    p.add_argument("--plot", metavar="PNG", help="save speed and acceleration estimates against the truth")
+    p.add_argument("--plot", metavar="PNG", help="save the speed and acceleration estimation errors of every estimator")
     p.set_defaults(func=run)
 
 

@@ -31,7 +31,7 @@ from sympy.polys.matrices import DomainMatrix
 
 from ..exceptions import (CertificateError, DimensionError, ExpressionError, ModelError, NotHurwitzError,
                           NotObservableError, SpectrumError)
-from ..model import Model, free_names, make_symbol, numeric, parse_expression, rational_value
+from ..model import Model, entries, free_names, make_symbol, numeric, parse_expression, rational_value
 from ._lyapunov import _generic_solution, observer_form_gramian
 from .._progress import progress
 from ._normal_form import ObserverNormalForm, is_rational, observer_normal_form, rational_matrix
@@ -50,6 +50,10 @@ PRETTY_MAX_N = 4  # up to this dimension str() shows full pretty-printed matrice
 
 def _column(values: Sequence[sp.Expr]) -> sp.ImmutableMatrix:
     return sp.ImmutableMatrix(len(values), 1, list(values))
+
+
+def _flat(rows: Any) -> list:
+    return [x for r in rows for x in (r if isinstance(r, list) else [r])]
 
 
 def _matrix_json(M: sp.MatrixBase) -> list:
@@ -129,10 +133,13 @@ def hoang_family_constraints(alpha_plus: Sequence[sp.Expr], alpha_minus: Sequenc
 
 
 def parse_gains(gains: str | Sequence, model: Model, *, what: str) -> sp.ImmutableMatrix:
-    """Gains as a column: numbers, expressions in the parameters, or new (real) gain symbols."""
+    """Gains as a column: numbers, expressions in the parameters, or new (real) gain symbols.
+
+    ``gains`` is a comma-separated string, a sequence, a NumPy vector or a sympy
+    column; numbers follow the one float rule (:func:`~switchobs.model.exact_number`).
+    """
+    gains = entries(gains, name=what)
     items = gains.split(",") if isinstance(gains, str) else list(gains)
-    if isinstance(gains, sp.MatrixBase):
-        items = list(gains)
     if len(items) != model.n:
         raise DimensionError(f"{what} has {len(items)} entries but model {model.name!r} has dimension {model.n}")
     names = {p: model.symbols[p] for p in model.parameters}
@@ -141,9 +148,6 @@ def parse_gains(gains: str | Sequence, model: Model, *, what: str) -> sp.Immutab
     for i, g in enumerate(items):
         if isinstance(g, sp.Basic):
             out.append(g)
-            continue
-        if isinstance(g, (float, np.floating)):  # its exact binary value, as everywhere (rational_value)
-            out.append(rational_value(g, what=f"{what} entry {i + 1}"))
             continue
         text = str(g).strip()
         for name in free_names(text):
@@ -379,6 +383,43 @@ class GainDesign:
         out["K_minus"] = out["K_minus"].reshape(-1)
         return out
 
+    def to_numpy(self, values: Mapping[str, Any] | None = None) -> dict[str, np.ndarray]:
+        """The same as :meth:`numeric`: every gain and matrix as a float array, in one call."""
+        return self.numeric(values)
+
+    def to_statespace(self, sign: str = "plus", values: Mapping[str, Any] | None = None) -> Any:
+        """The error system of one mode as a python-control ``StateSpace``, in the rescaled time ``tau``.
+
+        ``de/dtau = A_sign e + B v``, ``y_e = C e``: the input ``v`` is the
+        measurement noise (``y = C z + v``), which enters as ``B = -K_plus`` for
+        ``s > 0`` and ``B = K_minus`` for ``s < 0`` (the observer injects
+        ``s K (y - C z_hat)`` and ``dtau = |s| dt``; seed 000 eq. (13)), and the
+        output is the output error ``C e``.
+
+        Parameters
+        ----------
+        sign : {"plus", "minus"} (also ``"+"``, ``"-"``, ``1``, ``-1``)
+        values : mapping, optional
+            Parameter and design-symbol values, as in :meth:`numeric`.
+
+        Raises
+        ------
+        SpectrumError
+            An unknown ``sign``.
+        FreeSymbolError
+            A parameter or design symbol has no value.
+        """
+        import control
+
+        side = {"plus": "plus", "+": "plus", 1: "plus", "minus": "minus", "-": "minus", -1: "minus"}.get(sign)
+        if side is None:
+            raise SpectrumError(f"sign = {sign!r}: give 'plus' (A_plus, s > 0) or 'minus' (A_minus, s < 0)")
+        num = self.numeric(values)
+        B = (-num["K_plus"] if side == "plus" else num["K_minus"]).reshape(-1, 1)
+        C = numeric(self.model.C, {**self.model.values, **dict(values or {})}, what="C")
+        return control.ss(num[f"A_{side}"], B, C, np.zeros((1, 1)), name=f"{self.model.name} error, A_{side}",
+                          inputs=["v"], outputs=["Ce"], states=[f"e_{z}" for z in self.model.states])
+
     # ----------------------------------------------------------- output
     def to_json(self) -> dict[str, Any]:
         """Plain-JSON view; every expression is a string ``sympy.sympify`` parses back."""
@@ -407,10 +448,68 @@ class GainDesign:
             "family_symbols": [str(s) for s in self.family_symbols],
             "normal_form": self.normal_form.to_json(),
             "references": dict(self.model.references),
+            "model_definition": self.model.to_json(),
         }
+
+    @classmethod
+    def from_json(cls, data: Mapping[str, Any]) -> "GainDesign":
+        """The design of :meth:`to_json`, recomputed from its model and inputs and checked against the file.
+
+        The model (``model_definition``), the spectrum or ``K_plus`` (and, for the Hoang family,
+        ``K_minus``) are read back and the design is run again, exactly; the stored gains and ``P``
+        must be what it gives, so a tampered or foreign file is refused rather than trusted.
+
+        Raises
+        ------
+        ModelError
+            A file without ``model_definition`` (written before it existed), or whose stored gains or
+            ``P`` differ from the recomputed ones.
+        """
+        if not isinstance(data, Mapping) or "model_definition" not in data:
+            raise ModelError("a gain design JSON needs its 'model_definition' (GainDesign.to_json writes it); "
+                             "design again from the model")
+        model = Model.from_json(data["model_definition"])
+        spectrum = data.get("spectrum")
+        minus = data["K_minus"] if data.get("choice") == "hoang-family" else None
+        design = design_gains(model, spectrum, K_plus=None if spectrum is not None else data["K_plus"],
+                              K_minus=minus, coupling=bool(data.get("gain_constraints")))
+        stored = design.to_json()
+        for key in ("K_plus", "K_minus", "P", "C_minus"):
+            if [sp.sympify(x) for x in _flat(stored[key])] != [sp.sympify(x) for x in _flat(data[key])]:
+                raise ModelError(f"the stored {key} = {data[key]} is not what the design of model "
+                                 f"{model.name!r} gives ({stored[key]}); the file was changed or is from another version")
+        return design
 
     def to_json_string(self, indent: int = 2) -> str:
         return json.dumps(self.to_json(), indent=indent)
+
+    def __repr__(self) -> str:
+        target = ", ".join(map(str, self.spectrum)) if self.spectrum is not None else "given K_plus"
+        target = target if len(target) <= 60 else target[:57] + "..."
+        return (f"<GainDesign for model {self.model.name!r}: n={self.n}, {self.choice}, spectrum [{target}]"
+                f"{', conditional' if self.conditional else ''}>")
+
+    def _repr_markdown_(self) -> str:
+        """The design in a notebook: gains, error matrices and P in LaTeX (gains only past PRETTY_MAX_N)."""
+        nf = self.normal_form
+        target = (", ".join(f"${sp.latex(p)}$" for p in self.spectrum) if self.spectrum is not None
+                  else "from the given $K^+$")
+        rows = [f"**Switched observer design** for model `{self.model.name}` (n = {self.n}, {self.choice}"
+                f"{', conditional on the coupling constraints' if self.conditional else ''})", "",
+                f"spectrum of $A^+$: {target}; observable iff: "
+                + (", ".join(f"${sp.latex(c)}$" for c in nf.observability_conditions) or "always"), "",
+                f"$$K^+ = {sp.latex(self.K_plus.T)}^\\top,\\quad K^- = {sp.latex(self.K_minus.T)}^\\top$$"]
+        if self.n <= PRETTY_MAX_N:
+            rows += ["", f"$$A^+ = A - K^+ C = {sp.latex(self.A_plus)},\\quad "
+                         f"A^- = -A + K^- C = {sp.latex(self.A_minus)}$$",
+                     "", f"common Lyapunov matrix ($A^{{\\pm\\top}} P + P A^\\pm = -C_\\pm^\\top C_\\pm$): "
+                         f"$$P = {sp.latex(self.P)}$$"]
+        else:
+            rows += ["", "(matrices past n = 4: `str(design)`, `design.to_json()` or `design.to_numpy()`)"]
+        open_conditions = [*self.hurwitz_plus, *([] if self.choice == "theorem1" else self.hurwitz_minus)]
+        rows += ["", "Routh–Hurwitz conditions left: " + (", ".join(f"${sp.latex(c)}$" for c in open_conditions)
+                                                        or "none (Hurwitz by construction)")]
+        return "\n".join(rows)
 
     def __str__(self) -> str:
         return self.describe(full=self.n <= PRETTY_MAX_N)

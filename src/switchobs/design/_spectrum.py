@@ -9,7 +9,7 @@ import sympy as sp
 from sympy import QQ_I
 
 from ..exceptions import SpectrumError
-from ..model import Model, free_names, make_symbol, parse_expression, rational_value
+from ..model import Model, entries, free_names, make_symbol, parse_expression
 from ._routh import is_hurwitz_exact
 
 __all__ = ["parse_spectrum", "spectrum_coefficients", "polynomial_coefficients", "LAPLACE"]
@@ -56,17 +56,14 @@ def parse_spectrum(spectrum: str | Sequence, model: Model) -> tuple[sp.Expr, ...
         Wrong length, a pole whose real part is non-negative or undecidable,
         or a set of poles not closed under conjugation.
     """
+    spectrum = entries(spectrum, name="the spectrum")
     items = [p for p in spectrum.split(",")] if isinstance(spectrum, str) else list(spectrum)
     texts = [str(p) for p in items if not isinstance(p, sp.Basic)]
     names = _names_for(model, texts)
     poles = []
     for i, p in enumerate(items):
-        if isinstance(p, sp.Basic):
+        if isinstance(p, sp.Basic):  # numbers were made exact by entries() (the one float rule)
             poles.append(p)
-        elif isinstance(p, (float, complex)):  # exact binary values, as everywhere (rational_value)
-            z = complex(p)
-            poles.append(rational_value(z.real, what=f"spectrum pole {i + 1}")
-                         + sp.I * rational_value(z.imag, what=f"spectrum pole {i + 1}"))
         else:
             if isinstance(p, str) and not p.strip():
                 raise SpectrumError(f"pole {i + 1} of the spectrum {spectrum!r} is empty")
@@ -118,7 +115,7 @@ def polynomial_coefficients(poly: str | sp.Expr | Sequence, model: Model) -> tup
     """Coefficients of a target characteristic polynomial, normalised to be monic.
 
     ``poly`` is an expression in ``s`` (``"s^3 + 6*s^2 + 11*s + 6"``) or the
-    list of its coefficients, highest degree first.
+    list (NumPy vector, sympy matrix) of its coefficients, highest degree first.
 
     Raises
     ------
@@ -126,6 +123,8 @@ def polynomial_coefficients(poly: str | sp.Expr | Sequence, model: Model) -> tup
         Wrong degree, zero leading coefficient, or a polynomial that is
         provably not Hurwitz.
     """
+    if not isinstance(poly, (str, sp.Basic)):
+        poly = entries(poly, name="the characteristic polynomial")
     if isinstance(poly, (list, tuple)):
         texts = [str(c) for c in poly]
         names = _names_for(model, texts)

@@ -9,13 +9,18 @@ accepted, so a model file cannot run code.
 from __future__ import annotations
 
 import ast
+import math
 from collections.abc import Mapping
+from fractions import Fraction
+from numbers import Integral
+from typing import Any
 
+import numpy as np
 import sympy as sp
 
 from ..exceptions import ExpressionError
 
-__all__ = ["parse_expression", "free_names", "FUNCTIONS"]
+__all__ = ["parse_expression", "free_names", "exact_number", "FUNCTIONS"]
 
 #: Functions an expression string may call, by name.
 FUNCTIONS: Mapping[str, sp.Basic] = {
@@ -42,6 +47,42 @@ _BINOPS = {
 }
 
 
+def exact_number(value: Any, *, what: str = "number") -> Any:
+    """The one float rule: a number object as an exact sympy number; any other value unchanged.
+
+    A binary float (Python, NumPy of any width, a sympy ``Float``, also inside a
+    sympy expression) is its exact binary value: ``0.1`` is
+    ``3602879701896397/36028797018963968``, the number the computer holds, as the
+    certificate checker reads it.  Integers (also NumPy's) and fractions are
+    exact anyway, complex numbers take the rule per part.  Text is left alone:
+    it is the decimal it spells, read by :func:`parse_expression`.  NumPy
+    scalars never pass through their ``repr`` (``np.float64(-40)`` in NumPy 2).
+
+    Raises
+    ------
+    ExpressionError
+        For a boolean, NaN or an infinity.
+    """
+    if isinstance(value, (bool, np.bool_)):
+        raise ExpressionError(f"{what}: expected a number, got the boolean {value!r}")
+    if isinstance(value, (float, np.floating)):
+        if not math.isfinite(value):
+            raise ExpressionError(f"{what}: {value!r} is not finite; give a finite number")
+        return sp.Rational(*value.as_integer_ratio())
+    if isinstance(value, Integral):
+        return sp.Integer(int(value))
+    if isinstance(value, Fraction):
+        return sp.Rational(value.numerator, value.denominator)
+    if isinstance(value, (complex, np.complexfloating)):
+        return exact_number(value.real, what=what) + sp.I * exact_number(value.imag, what=what)
+    if isinstance(value, sp.Basic) and not isinstance(value, sp.Rational):
+        floats = value.atoms(sp.Float)
+        if any(not f.is_finite for f in floats):
+            raise ExpressionError(f"{what}: {value!r} is not finite")
+        return value.xreplace({f: sp.Rational(f) for f in floats}) if floats else value
+    return value
+
+
 def parse_expression(text: str | int | float, names: Mapping[str, sp.Symbol], *, what: str = "expression") -> sp.Expr:
     """Parse ``text`` into a sympy expression using only the symbols in ``names``.
 
@@ -63,14 +104,9 @@ def parse_expression(text: str | int | float, names: Mapping[str, sp.Symbol], *,
         On a syntax error, an unknown name, or any construct other than
         arithmetic and whitelisted function calls.
     """
-    if isinstance(text, bool):
-        raise ExpressionError(f"{what}: expected an expression, got the boolean {text!r}")
-    if isinstance(text, float):  # a float object is its exact binary value (as in rational_value)
-        if text != text or text in (float("inf"), float("-inf")):
-            raise ExpressionError(f"{what}: {text!r} is not a finite number")
-        return sp.Rational(*text.as_integer_ratio())
-    if isinstance(text, int):
-        text = repr(text)
+    text = exact_number(text, what=what)
+    if isinstance(text, sp.Basic):
+        return _rename(text, names, what)
     if not isinstance(text, str):
         raise ExpressionError(f"{what}: expected an expression string, got {type(text).__name__} {text!r}")
     try:
@@ -80,6 +116,15 @@ def parse_expression(text: str | int | float, names: Mapping[str, sp.Symbol], *,
     except SyntaxError as exc:
         raise ExpressionError(f"{what}: cannot parse {text!r} ({exc.msg})") from None
     return _Translator(names, what, text).visit(tree.body)
+
+
+def _rename(expr: sp.Basic, names: Mapping[str, sp.Symbol], what: str) -> sp.Expr:
+    """A sympy expression over ``names``: its symbols matched by name (a user's ``Symbol("a")`` is the model's ``a``)."""
+    unknown = sorted(s.name for s in expr.free_symbols if s.name not in names)
+    if unknown:
+        known = ", ".join(sorted(names)) or "none"
+        raise ExpressionError(f"{what}: unknown name(s) {unknown} in {expr} (known names: {known})")
+    return expr.xreplace({s: names[s.name] for s in expr.free_symbols})
 
 
 def free_names(text: str) -> list[str]:

@@ -7,6 +7,7 @@
 
 from __future__ import annotations
 
+import dataclasses
 import re
 import sys
 import tomllib
@@ -18,8 +19,9 @@ from typing import Any
 import numpy as np
 import sympy as sp
 
-from ..exceptions import DimensionError, FreeSymbolError, ModelError, NotRealError
-from ._expr import parse_expression
+from ..exceptions import DimensionError, ExpressionError, FreeSymbolError, ModelError, NotRealError
+from ._expr import exact_number, parse_expression
+from ._interop import matrix_rows, statespace_matrices
 
 __all__ = ["Model", "numeric", "make_symbol"]
 
@@ -156,8 +158,8 @@ class Model:
         y_par = {**par, output: symbols[output]}
         s_names = {**y_par, **{k: symbols[k] for k in external}, "t": symbols["t"]}
 
-        A = _matrix(data["A"], par, rows=n, cols=n, name="A")
-        C_raw = data["C"]
+        A = _matrix(matrix_rows(data["A"], name="A"), par, rows=n, cols=n, name="A")
+        C_raw = matrix_rows(data["C"], name="C", part="C")
         if isinstance(C_raw, list) and C_raw and all(isinstance(r, list) for r in C_raw):
             if len(C_raw) != 1:
                 raise DimensionError(f"'C' must be one row (one measured output); got {len(C_raw)} rows")
@@ -165,9 +167,9 @@ class Model:
         if not isinstance(C_raw, list):
             raise DimensionError(f"'C' must be a row (a list of {n} expressions), got {C_raw!r}")
         C = _matrix([C_raw], par, rows=1, cols=n, name="C")
-        d = _vector(data.get("d", [0] * n), y_par, n, "d")
+        d = _vector(matrix_rows(data.get("d", [0] * n), name="d"), y_par, n, "d")
         m = len(inputs)
-        b_raw = data.get("b", [[0] * m for _ in range(n)] if m != 1 else [0] * n)
+        b_raw = matrix_rows(data.get("b", [[0] * m for _ in range(n)] if m != 1 else [0] * n), name="b")
         if m == 1 and isinstance(b_raw, list) and all(not isinstance(e, list) for e in b_raw):
             b = _vector(b_raw, y_par, n, "b")
         else:
@@ -191,6 +193,66 @@ class Model:
                    time_scale=time_scale, parameters=parameters, external=external, inputs=inputs,
                    values=values, symbols=symbols, description=str(data.get("description", "")),
                    references=dict(refs))
+
+    @classmethod
+    def from_statespace(cls, sys: Any, *, time_scale: str | Any, name: str = "statespace",
+                        states: list[str] | None = None, output: str = "y", external: list[str] | None = None,
+                        description: str = "") -> "Model":
+        """A model ``dz/dt = s(y, t)(A z) + B u, y = C z`` from a python-control ``StateSpace``.
+
+        ``A`` and ``C`` are taken from ``sys`` (floats at their exact binary
+        value); a non-zero ``B`` becomes the input matrix ``b`` with inputs
+        named after ``sys.input_labels`` (``u1, u2, ...`` when those are not
+        names, as python-control's ``u[0]``).
+
+        Parameters
+        ----------
+        sys : control.StateSpace
+            Continuous-time, one output, ``D = 0``.
+        time_scale : str or sympy expression
+            ``s(y, t)``, the singular time scaling (seed 004 eq. (1)); in ``y``, the ``external``
+            signals and ``t``.
+        name, description : str
+        states : list of str, optional
+            State names (default: ``sys.state_labels`` if they are names, else ``z1 .. zn``).
+        output : str
+        external : list of str, optional
+            Measured signals ``s`` may use besides ``y`` (the observers need them rather than ``t``).
+
+        Raises
+        ------
+        DimensionError
+            Several outputs.
+        ModelError
+            Discrete time, or a non-zero ``D`` (the model measures ``y = C z``).
+
+        Examples
+        --------
+        >>> import control
+        >>> m = Model.from_statespace(control.ss([[0, 1], [-2, -3]], [[0], [1]], [[1, 0]], 0), time_scale="y")
+        >>> m.A, m.inputs
+        (Matrix([
+        [ 0,  1],
+        [-2, -3]]), ('u1',))
+        """
+        A, B, C, D = statespace_matrices(sys, what="the StateSpace")
+        if np.any(D != 0):
+            raise ModelError(f"the StateSpace has D = {D.tolist()}, but a switchobs model measures y = C z; "
+                             "give a system with D = 0 (the direct feedthrough is known and can be subtracted)")
+        n, m = A.shape[0], B.shape[1] if np.any(B != 0) else 0
+
+        def labels(given: Any, prefix: str, k: int) -> list[str]:
+            given = list(given or [])
+            ok = len(given) == k and all(_IDENT.match(x) and x not in _RESERVED for x in given)
+            return given if ok else [f"{prefix}{i + 1}" for i in range(k)]
+
+        data = {"name": name, "description": description, "A": A, "C": C, "output": output,
+                "states": states if states is not None else labels(getattr(sys, "state_labels", None), "z", n),
+                "inputs": labels(getattr(sys, "input_labels", None), "u", m), "time_scale": time_scale,
+                "external": list(external or [])}
+        if m:
+            data["b"] = B
+        return cls.from_dict(data, source="StateSpace")
 
     @classmethod
     def from_toml(cls, path: str | Path) -> "Model":
@@ -266,8 +328,61 @@ class Model:
             "values": {k: str(v) for k, v in self.values.items()},
         }
 
+    def to_json(self) -> dict[str, Any]:
+        """Every key of :meth:`from_dict` (:meth:`to_dict` with the sign declarations, description and
+        references): ``Model.from_json(m.to_json()) == m``."""
+        signed = [*self.parameters, *self.external]
+        declared = {*self.states, self.output, *signed, *self.inputs, "t"}
+        return {**self.to_dict(),
+                "positive": [k for k in signed if self.symbols[k].is_positive],
+                "negative": [k for k in signed if self.symbols[k].is_negative],
+                "description": self.description, "references": dict(self.references),
+                # parameters replaced by numbers (with_values) keep their symbols, for the design's map back
+                "substituted": {k: _sign_name(s) for k, s in self.symbols.items() if k not in declared}}
+
+    @classmethod
+    def from_json(cls, data: Mapping[str, Any]) -> "Model":
+        """The model of :meth:`to_json` (validated as :meth:`from_dict` validates)."""
+        if not isinstance(data, Mapping):
+            raise ModelError(f"model JSON: expected an object, got {type(data).__name__}")
+        data = dict(data)
+        substituted = data.pop("substituted", {}) or {}
+        model = cls.from_dict(data, source="model JSON")
+        if not substituted:
+            return model
+        symbols = {**model.symbols, **{k: make_symbol(k, positive=v == "positive", negative=v == "negative")
+                                        for k, v in dict(substituted).items()}}
+        return dataclasses.replace(model, symbols=symbols)
+
     def __str__(self) -> str:
         return f"Model {self.name!r}: n={self.n}, states={list(self.states)}, s={self.time_scale}"
+
+    def __repr__(self) -> str:
+        params = f", parameters={list(self.parameters)}" if self.parameters else ""
+        return f"<Model {self.name!r}: n={self.n}, output {self.output!r}, s = {self.time_scale}{params}>"
+
+    def _repr_markdown_(self) -> str:
+        """The model in a notebook: its equation and matrices in LaTeX."""
+        rows = [f"**Model `{self.name}`** (n = {self.n}){': ' + self.description if self.description else ''}",
+                "",
+                r"$$\dot z = s(y, t)\,\big(A z + d(y)\big) + b(y)\,u,\qquad y = C z,\qquad "
+                f"s = {sp.latex(self.time_scale)}$$",
+                "",
+                rf"$$A = {sp.latex(self.A)},\quad C = {sp.latex(self.C)}"
+                + (rf",\quad d = {sp.latex(self.d)}" if any(e != 0 for e in self.d) else "")
+                + (rf",\quad b = {sp.latex(self.b)}" if self.inputs else "") + "$$",
+                "",
+                f"states: {', '.join(f'`{z}`' for z in self.states)}; signals: "
+                f"{', '.join(f'`{x}`' for x in self.signals)}"]
+        if self.parameters:
+            vals = ", ".join(f"${sp.latex(self.symbols[k])} = {sp.latex(self.values[k])}$" if k in self.values
+                             else f"${sp.latex(self.symbols[k])}$" for k in self.parameters)
+            rows[-1] += f"; parameters: {vals}"
+        return "\n".join(rows)
+
+
+def _sign_name(symbol: sp.Symbol) -> str:
+    return "positive" if symbol.is_positive else "negative" if symbol.is_negative else "real"
 
 
 def read_toml(path: str | Path, *, what: str = "model file", parse_float: Any = float) -> dict[str, Any]:
@@ -295,17 +410,18 @@ def rational_value(value: Any, *, what: str) -> sp.Rational:
     """Convert a user number (int, float, decimal or fraction string) to an exact rational.
 
     One rule for every stage: text (a string, a TOML file, the command line)
-    is the exact decimal it spells (``"0.1"`` is ``1/10``); a Python float is
-    its exact binary value (``0.1`` is ``3602879701896397/36028797018963968``),
-    the number the computer actually holds, as the certificate checker reads it.
+    is the exact decimal it spells (``"0.1"`` is ``1/10``); a float (Python,
+    NumPy or sympy) is its exact binary value (``0.1`` is
+    ``3602879701896397/36028797018963968``), the number the computer actually
+    holds, as the certificate checker reads it (:func:`exact_number`).
     """
-    if isinstance(value, bool):
-        raise ModelError(f"{what}: expected a number, got {value!r}")
     try:
-        if isinstance(value, (float, np.floating)):
-            if not np.isfinite(value):
-                raise ValueError
-            return sp.Rational(*float(value).as_integer_ratio())
+        number = exact_number(value, what=what)
+    except ExpressionError as exc:
+        raise ModelError(str(exc)) from None
+    if isinstance(number, sp.Rational):
+        return number
+    try:
         return sp.Rational(str(value).strip())
     except (ValueError, TypeError, SyntaxError, sp.SympifyError):
         raise ModelError(f"{what}: {value!r} is not a finite number (write e.g. 187.5 or 375/2)") from None

@@ -7,6 +7,7 @@ Each function returns the Figure and takes ``ax=``: the Axes to draw on, or
 
 from __future__ import annotations
 
+import textwrap
 from typing import Any
 
 import numpy as np
@@ -65,14 +66,17 @@ def plot_braking(result: BrakingResult, *, ax: Any = None) -> Any:
     axes[3].plot(t, s["P_b"])
     axes[3].set_ylabel("P_b [bar]")
     axes[4].plot(t, s["xbs"], label="μ' (true)")
-    if not np.all(np.isnan(s["xbs_hat"])):
+    has_estimate = not np.all(np.isnan(s["xbs_hat"]))
+    if has_estimate:
         axes[4].plot(t, s["xbs_hat"], "--", label="μ' estimate")
-    both = np.r_[s["xbs"], s["xbs_hat"]]
-    lo, hi = np.percentile(both[np.isfinite(both)], [1, 97])
-    axes[4].set_ylim(lo - 0.5, hi + 0.5)
+    # the limits hold the true XBS but its first-instant spike (the 1-99 percentiles; the estimate's transients
+    # after a road change may leave them), with headroom above for the legend so that it covers no data
+    lo, hi = (float(v) for v in np.percentile(s["xbs"][np.isfinite(s["xbs"])], [1, 99]))
+    pad = 0.08 * (hi - lo or 1.0)
+    axes[4].set_ylim(lo - pad, hi + pad + 0.45 * (hi - lo or 1.0))
     axes[4].set_ylabel("XBS")
     axes[4].set_xlabel("t [s]")
-    axes[4].legend(loc="upper right")
+    axes[4].legend(loc="upper right", ncols=2, fontsize=8)
     for when, what in result.events:
         if what.startswith("road"):
             for a in axes:
@@ -82,17 +86,26 @@ def plot_braking(result: BrakingResult, *, ax: Any = None) -> Any:
     p1.set_xlabel("slip λ")
     p1.set_ylabel("x2 [m/s²]")
     p1.set_title("(λ, x2) plane")
-    p2.plot(s["x2"][active], s["xbs"][active], lw=0.6, label="true")
-    if not np.all(np.isnan(s["xbs_hat"])):
-        p2.plot(s["x2"][active], s["xbs_hat"][active], lw=0.6, alpha=0.7, label="estimate")
-        p2.legend(loc="upper right")
-    p2.set_ylim(lo - 0.5, hi + 0.5)
+    p2.plot(s["x2"][active], s["xbs"][active], lw=0.8, label="true", zorder=3)
+    z1 = s["x2"][active]
+    z1 = z1[np.isfinite(z1)]
+    if has_estimate:
+        # the plane is the true trajectory's; estimate samples off it (transients after a road change) are left
+        # out rather than drawn as lines running off the axes
+        hat = np.where((s["xbs_hat"] >= lo - pad) & (s["xbs_hat"] <= hi + pad), s["xbs_hat"], np.nan)
+        p2.plot(s["x2"][active], hat[active], lw=0.6, alpha=0.6, label="estimate (inside the plane)")
+        p2.legend(loc="upper right", fontsize=8)
+    z_pad = 0.05 * (float(z1.max() - z1.min()) or 1.0) if z1.size else 1.0
+    if z1.size:
+        p2.set_xlim(float(z1.min()) - z_pad, float(z1.max()) + z_pad)
+    p2.set_ylim(lo - pad, hi + pad + 0.25 * (hi - lo or 1.0))
     p2.set_xlabel("z1 = x2 [m/s²]")
     p2.set_ylabel("z2 = μ'")
     p2.set_title("(z1, z2) plane")
-    fig.suptitle(f"{result.scenario.name}: {result.scenario.roads}, {result.scenario.speed_kmh:.0f} km/h, "
-                 f"{result.scenario.controller.name}, observer {result.observer}", fontsize=10)
-    fig.tight_layout()
+    title = (f"{result.scenario.name}: {result.scenario.roads}, {result.scenario.speed_kmh:.0f} km/h, "
+             f"{result.scenario.controller.name}, observer {result.observer}")
+    fig.suptitle("\n".join(textwrap.wrap(title, 110)), fontsize=10)  # wrapped: never wider than the figure
+    fig.set_layout_engine("constrained")
     return fig
 
 

@@ -212,6 +212,30 @@ class BrakingResult:
                              for k, arr in self.series.items()}
         return out
 
+    def __repr__(self) -> str:
+        return (f"<BrakingResult {self.scenario.name!r}: {self.status}, {self.steps} steps to "
+                f"t = {float(self.series['t'][-1]):.3g} s, observer {self.observer}>")
+
+    def _repr_markdown_(self) -> str:
+        """The run in a notebook: scenario, status, metrics and the series available as NumPy arrays."""
+        m = self.metrics.to_json()
+        numbers = [(k, v) for k, v in m.items() if isinstance(v, (int, float)) and not isinstance(v, bool)]
+        table = ["| metric | value |", "|---|---|"] + [f"| `{k}` | {v:.6g} |" for k, v in numbers]
+        return "\n".join([f"**Braking** `{self.scenario.name}`: {self.scenario}", "",
+                          f"status: **{self.status}**{' (' + self.message + ')' if self.message else ''}; "
+                          f"observer: {self.observer}{' (in the loop)' if self.observer_in_loop else ''}", "",
+                          *table, "",
+                          f"series (NumPy, `result.series[...]` or `result.to_numpy()`): "
+                          f"{', '.join(f'`{k}`' for k in self.series)}"])
+
+    def to_numpy(self) -> np.ndarray:
+        """The series as one structured array (a field per column of :data:`SERIES`, a row per step)."""
+        names = list(self.series)
+        out = np.empty(len(self.series["t"]), dtype=[(k, float) for k in names])
+        for k in names:
+            out[k] = self.series[k]
+        return out
+
     def __str__(self) -> str:
         lines = [str(self.scenario), f"  status: {self.status}" + (f" ({self.message})" if self.message else ""),
                  f"  observer: {self.observer}" + (" (in the loop)" if self.observer_in_loop and

@@ -10,7 +10,7 @@ reference encoder (Table 6.1).
 from __future__ import annotations
 
 import math
-from collections.abc import Callable
+from collections.abc import Callable, Mapping
 from dataclasses import asdict, dataclass
 from typing import Any
 
@@ -100,6 +100,11 @@ class ChainSettings:
     def to_json(self) -> dict[str, Any]:
         return asdict(self)
 
+    @classmethod
+    def from_json(cls, data: Mapping[str, Any]) -> "ChainSettings":
+        """The settings of :meth:`to_json` (validated again)."""
+        return cls(**data)
+
 
 def _ms(seconds: float) -> str:
     return "-" if math.isnan(seconds) else f"{1e3 * seconds:.0f}"
@@ -165,6 +170,31 @@ class ChainResult:
                        omega_true=self.omega_true.tolist(), alpha_true=self.alpha_true.tolist(),
                        x2=_clean(self.x2), x2_true=_clean(self.x2_true))
         return out
+
+    @classmethod
+    def from_json(cls, data: Mapping[str, Any]) -> "ChainResult":
+        """The result of ``to_json(arrays=True)`` (``None`` in the arrays and figures is NaN again).
+
+        Raises
+        ------
+        SimulationError
+            A summary written without the arrays.
+        """
+        if "t" not in data:
+            raise SimulationError("this chain result was written without its arrays; write it with "
+                                  "to_json(arrays=True) to read it back")
+
+        def arr(x: Any) -> Array | None:
+            return None if x is None else np.array([math.nan if v is None else v for v in x], dtype=float)
+
+        def num(x: Any) -> float:
+            return math.nan if x is None else float(x)
+
+        return cls(str(data["estimator"]), arr(data["t"]), arr(data["omega"]), arr(data["alpha"]),
+                   arr(data["omega_true"]), arr(data["alpha_true"]), arr(data["x2"]), arr(data["x2_true"]),
+                   int(data["events"]), num(data["rms_omega_rad_s"]), num(data["rms_alpha_rad_s2"]),
+                   num(data["rms_x2_m_s2"]), num(data["lag_omega_s"]), num(data["lag_alpha_s"]),
+                   ChainSettings.from_json(data["settings"]))
 
     def __str__(self) -> str:
         x2 = "" if math.isnan(self.rms_x2) else f", x2 {self.rms_x2:.4g} m/s^2"

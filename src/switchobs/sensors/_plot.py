@@ -11,13 +11,16 @@ __all__ = ["plot_comparison"]
 
 
 def plot_comparison(comparison: EstimatorComparison, *, ax: Any = None) -> Any:
-    """Speed and acceleration of every estimator against the truth over one second after the warm-up.
+    """Estimation errors of every estimator (speed and acceleration) over one second after the warm-up.
+
+    The errors ``estimate - truth`` are drawn, not the estimates over the truth: the estimators differ
+    by far less than the signal, so only the errors show which one is better.
 
     Parameters
     ----------
     comparison : EstimatorComparison
     ax : 2 Axes, optional
-        Speed and acceleration panels; default a new Figure.
+        Speed-error and acceleration-error panels; default a new Figure.
 
     Returns
     -------
@@ -27,15 +30,15 @@ def plot_comparison(comparison: EstimatorComparison, *, ax: Any = None) -> Any:
     t0 = first.t[0] + first.settings.warmup_s
     show = (first.t >= t0) & (first.t <= t0 + 1.0)
     fig, axes = panels(ax, 2, figsize=(9, 6), owner="plot_comparison", sharex=True)
-    axes[0].plot(first.t[show], first.omega_true[show], "k", lw=2, label="truth")
-    axes[1].plot(first.t[show], first.alpha_true[show], "k", lw=2, label="truth")
     for r in comparison.results:
-        axes[0].plot(r.t[show], r.omega[show], lw=0.9, label=r.estimator)
-        axes[1].plot(r.t[show], r.alpha[show], lw=0.9, label=r.estimator)
-    axes[0].set_ylabel("omega [rad/s]")
-    axes[1].set_ylabel("alpha [rad/s^2]")
+        axes[0].plot(r.t[show], (r.omega - r.omega_true)[show], lw=0.9, label=r.estimator)
+        axes[1].plot(r.t[show], (r.alpha - r.alpha_true)[show], lw=0.9, label=r.estimator)
+    for a in axes:
+        a.axhline(0.0, color="k", lw=0.6)
+    axes[0].set_ylabel("speed error [rad/s]")
+    axes[1].set_ylabel("acceleration error [rad/s^2]")
     axes[1].set_xlabel("t [s]")
-    axes[0].legend(loc="upper right", fontsize=8)
-    axes[0].set_title(f"{comparison.trajectory}, {comparison.encoder.ppr}-ppr encoder")
+    axes[0].legend(loc="upper left", bbox_to_anchor=(1.01, 1.0), fontsize=8)  # outside: the errors fill the panel
+    axes[0].set_title(f"estimation errors, {comparison.trajectory}, {comparison.encoder.ppr}-ppr encoder")
     fig.tight_layout()
     return fig

@@ -1,0 +1,82 @@
+"""Certification plots (issue 16 item 5): `certify --plot`, `classify --plot`, the figure generator of the docs."""
+
+from __future__ import annotations
+
+import re
+import shlex
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from switchobs._figures import save_figure
+from switchobs.certify import as_family, certify, classify_planar, plot_certification, plot_planar
+from switchobs.cli.main import main
+from switchobs.exceptions import SimulationError
+
+ROOT = Path(__file__).resolve().parents[1]
+A1, A2 = [["-0.1", -1], [2, "-0.1"]], [["-0.1", -2], [1, "-0.1"]]  # planar case iv, R = 1.604 (docs/certify.md)
+
+
+def _figure_commands() -> list[list[str]]:
+    """The `switchobs ...` lines of the Makefile's `figures` target."""
+    text = (ROOT / "Makefile").read_text("utf-8")
+    block = re.search(r"^figures:.*\n((?:\t.*\n)+)", text, re.M).group(1)
+    return [shlex.split(line.strip())[1:] for line in block.splitlines() if "switchobs" in line]
+
+
+def test_the_docs_figure_generator_runs_and_its_figures_are_used(tmp_path, capsys):
+    commands = _figure_commands()
+    assert len(commands) == 2
+    docs = (ROOT / "docs" / "certify.md").read_text("utf-8")
+    for argv in commands:
+        target = argv[argv.index("--plot") + 1]
+        assert f"({target.removeprefix('docs/')})" in docs and (ROOT / target).is_file()
+        out = tmp_path / Path(target).name
+        argv[argv.index("--plot") + 1] = str(out)
+        assert main(argv) == 0
+        assert out.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+        assert f"figure written to {out}" in capsys.readouterr().out
+    assert not list(tmp_path.glob(".*partial*"))
+
+
+def test_worst_trajectory_grows_by_R_per_half_turn():
+    c = classify_planar(A1, A2)
+    fig = plot_planar(c, A1, A2, turns=2)
+    (ax,) = fig.axes
+    path = next(line for line in ax.lines if line.get_label().startswith("worst switching")).get_xydata()
+    growth = np.linalg.norm(path[-1]) / np.linalg.norm(path[0])
+    assert growth == pytest.approx(c.R ** 2, rel=0.05)
+    assert ax.get_title() == "planar case (iv): unbounded"
+
+
+def test_certification_figure_marks_tau_D_and_plots_every_eigenvalue():
+    rep = certify([[[-1, 0], [0, -2]], [[-2, 0], [0, -1]]])  # strict common P: no dwell time, one panel
+    assert rep.dwell is None and len(plot_certification(rep).axes) == 1
+    rep = certify(as_family([A1, A2]))
+    assert rep.dwell is not None and rep.dwell.certified
+    fig = plot_certification(rep)
+    assert sum(len(c.get_offsets()) for c in fig.axes[0].collections) == 4
+    tau = [line for line in fig.axes[1].lines if line.get_label().startswith("certified")]
+    assert tau and tau[0].get_xdata()[0] == pytest.approx(float(rep.dwell.tau_D))
+
+
+def test_save_figure_is_atomic(tmp_path):
+    fig = plot_planar(classify_planar(A1, A2), A1, A2)
+    with pytest.raises(SimulationError, match="cannot write"):
+        save_figure(fig, tmp_path / "missing" / "x.png")
+    with pytest.raises(SimulationError, match="cannot write"):
+        save_figure(fig, tmp_path / "x.unknownformat")
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_braking_figure_title_fits_and_legend_sits_above_the_xbs_data():
+    from switchobs.plants import BrakingScenario, plot_braking, simulate
+
+    res = simulate(BrakingScenario("dry-asphalt", speed_m_s=15.0, duration_s=0.5))
+    fig = plot_braking(res)
+    assert all(len(line) <= 110 for line in fig._suptitle.get_text().splitlines())
+    xbs = fig.axes[4]
+    true = res.series["xbs"]
+    top = np.percentile(true[np.isfinite(true)], 99)
+    assert xbs.get_ylim()[1] > top + 0.4 * (top - np.percentile(true[np.isfinite(true)], 1))  # legend headroom
