@@ -45,11 +45,12 @@ from fractions import Fraction
 from pathlib import Path
 from typing import Any
 
+from .._limits import MAX_CERTIFICATE_BYTES, MAX_CERTIFICATE_DIGITS
 from .._progress import progress
 from ..exceptions import CertificateError
 from ._exact import (Matrix, add, definiteness, expm_enclosure, fraction_matrix, inf_norm,
                      integer_form, is_zero, lyapunov_form, matmul, observable, scale, sqrt_upper,
-                     transpose)
+                     to_fraction, transpose)
 from ._schema import (ANY_DWELL, ArbitrarySwitching, CertificateDocument, CertificateKind, Check, DualEntry,
                       DwellTimeEntry, Existence, FamilySection, LyapunovEntry, Verdict)
 
@@ -97,16 +98,34 @@ def load_certificate(path: str | Path) -> dict[str, Any]:
         If the file cannot be read or is not JSON.
     """
     try:
+        size = Path(path).stat().st_size
+        if size > MAX_CERTIFICATE_BYTES:
+            raise CertificateError(f"certificate {str(path)!r} has {size} bytes (limit {MAX_CERTIFICATE_BYTES})")
         text = Path(path).read_text(encoding="utf-8")
     except OSError as exc:
         raise CertificateError(f"cannot read certificate {str(path)!r}: {exc.strerror}") from None
+    except UnicodeDecodeError as exc:
+        raise CertificateError(f"certificate {str(path)!r} is not UTF-8 text ({exc.reason} at byte {exc.start})") \
+            from None
     try:
-        doc = json.loads(text)
+        doc = json.loads(text, parse_int=_json_integer)
     except json.JSONDecodeError as exc:
         raise CertificateError(f"certificate {str(path)!r} is not valid JSON: {exc}") from None
+    except RecursionError:
+        raise CertificateError(f"certificate {str(path)!r} is nested too deeply to be a certificate") from None
+    except CertificateError as exc:  # a number refused by _json_integer
+        raise CertificateError(f"certificate {str(path)!r}: {exc}") from None
     if not isinstance(doc, dict):
         raise CertificateError(f"certificate {str(path)!r} must be a JSON object, got {type(doc).__name__}")
     return doc
+
+
+def _json_integer(text: str) -> int:
+    """A JSON integer, refused before conversion when it has more digits than a certificate number may."""
+    if len(text.lstrip("-")) > MAX_CERTIFICATE_DIGITS:
+        raise CertificateError(f"a JSON integer of {len(text.lstrip('-'))} digits (limit {MAX_CERTIFICATE_DIGITS}): "
+                               f"{text[:20]}...")
+    return int(text)
 
 
 # ------------------------------------------------------------------ family
@@ -211,10 +230,7 @@ def _check_dual(names: Sequence[str], As: Sequence[Matrix], cert: DualEntry) -> 
 
 def _check_dwell(names: Sequence[str], As: Sequence[Matrix], cert: DwellTimeEntry) -> Check:
     n = len(As[0])
-    try:
-        T = Fraction(str(cert.tau_D))
-    except (ValueError, ZeroDivisionError):
-        raise CertificateError(f"dwell-time: tau_D {cert.tau_D!r} is not a rational number") from None
+    T = to_fraction(cert.tau_D, what="dwell-time tau_D")
     if T <= 0:
         return Check("dwell-time", False, f"tau_D = {T} must be positive")
     Ps = _per_mode(cert.P, "dwell-time", "P", names, n)
@@ -387,7 +403,7 @@ def verify_certificate(doc: Mapping[str, Any] | str | Path) -> VerificationRepor
         elif kind is CertificateKind.DWELL_TIME:
             c = _check_dwell(names, As, cert)
             if c.holds:
-                dwell.append(Fraction(str(cert.tau_D)))
+                dwell.append(to_fraction(cert.tau_D, what="dwell-time tau_D"))
         else:
             if len(As) != 2 or len(As[0]) != 2:
                 c = Check("planar", False, "the planar classification needs exactly two 2x2 matrices")

@@ -2,10 +2,8 @@
 
 Each sub-command lives in its own module ``switchobs.cli._<name>`` exposing
 ``register(subparsers)``, which adds its parser and sets ``func`` to a
-callable ``func(args) -> int``.  Errors raised on purpose by switchobs (all
-subclasses of :class:`switchobs.exceptions.SwitchobsError`) become one line on
-stderr and exit status 2; nothing else is caught, so a real bug still shows
-its traceback.
+callable ``func(args) -> int``.  What a failure prints and which exit status
+it gives is the policy of :mod:`switchobs.cli._errors` (``docs/errors.md``).
 """
 
 from __future__ import annotations
@@ -13,13 +11,13 @@ from __future__ import annotations
 import argparse
 import importlib
 import math
-import os
 import sys
 import time
 from collections.abc import Callable, Sequence
 
 from .._progress import listening
-from ..exceptions import FreeSymbolError, PrerequisiteError, SwitchobsError
+from ..exceptions import PrerequisiteError
+from ._errors import guarded
 
 __all__ = ["main", "build_parser"]
 
@@ -106,20 +104,11 @@ def main(argv: Sequence[str] | None = None) -> int:
     command = next((a for a in argv if not a.startswith("-")), None)
     parser = build_parser(command if command in COMMANDS else None)
     args = parser.parse_args(argv)
-    try:
+
+    def run() -> int:
         with listening(stderr_progress(args.command)):
-            return int(args.func(args) or 0)
-    except SwitchobsError as exc:
-        # The library names what has no value; only here is the way to give it a command-line flag.
-        hint = "; give values with --param NAME=VALUE" if isinstance(exc, FreeSymbolError) else ""
-        print(f"switchobs {args.command}: error: {exc}{hint}", file=sys.stderr)
-        return 2
-    except BrokenPipeError:  # output piped into `head`: not an error of ours
-        sys.stdout = open(os.devnull, "w")
-        return 0
-    except KeyboardInterrupt:
-        print(f"switchobs {args.command}: interrupted", file=sys.stderr)
-        return 130
+            return args.func(args)
+    return guarded(args.command, run)
 
 
 if __name__ == "__main__":  # pragma: no cover

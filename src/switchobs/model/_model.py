@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import re
 import tomllib
+from fractions import Fraction
 from collections.abc import Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -17,6 +18,7 @@ from typing import Any
 import numpy as np
 import sympy as sp
 
+from .._limits import MAX_NUMBER_DIGITS, check_double, digits, exact_number
 from ..exceptions import DimensionError, FreeSymbolError, ModelError, NotRealError
 from ._expr import parse_expression
 
@@ -244,6 +246,8 @@ class Model:
             _check_sign(key, number, self.symbols[key])
             subs[self.symbols[key]] = number
         remaining = tuple(p for p in self.parameters if p not in values)
+        for name in ("A", "C", "d", "b", "time_scale"):
+            _check_number_size(getattr(self, name).subs(subs), name)
         return Model(name=self.name, states=self.states, output=self.output,
                      A=self.A.subs(subs), C=self.C.subs(subs), d=self.d.subs(subs),
                      b=self.b.subs(subs), time_scale=self.time_scale.subs(subs),
@@ -283,17 +287,35 @@ def rational_value(value: Any, *, what: str) -> sp.Rational:
     is the exact decimal it spells (``"0.1"`` is ``1/10``); a Python float is
     its exact binary value (``0.1`` is ``3602879701896397/36028797018963968``),
     the number the computer actually holds, as the certificate checker reads it.
+    A value is meant as a double: it must be 0 or a normal double in magnitude
+    (``"1e400"`` and ``"1e-400"`` are refused), with at most
+    :data:`~switchobs._limits.MAX_NUMBER_DIGITS` digits.
     """
     if isinstance(value, bool):
         raise ModelError(f"{what}: expected a number, got {value!r}")
-    try:
-        if isinstance(value, (float, np.floating)):
-            if not np.isfinite(value):
-                raise ValueError
-            return sp.Rational(*float(value).as_integer_ratio())
-        return sp.Rational(str(value).strip())
-    except (ValueError, TypeError, SyntaxError, sp.SympifyError):
-        raise ModelError(f"{what}: {value!r} is not a finite number (write e.g. 187.5 or 375/2)") from None
+    if isinstance(value, (float, np.floating)):
+        if not np.isfinite(value):
+            raise ModelError(f"{what}: {value!r} is not a finite number (write e.g. 187.5 or 375/2)")
+        number = Fraction(float(value))
+    elif isinstance(value, (int, np.integer, sp.Rational, Fraction)):
+        exact = sp.Rational(value)
+        number = Fraction(int(exact.p), int(exact.q))
+        if max(digits(number.numerator), digits(number.denominator)) > MAX_NUMBER_DIGITS:
+            raise ModelError(f"{what}: the value has more than {MAX_NUMBER_DIGITS} digits "
+                             f"(limit {MAX_NUMBER_DIGITS})")
+    else:  # text, and numbers that print as a decimal (sympy Float, Decimal)
+        number = exact_number(str(value), what=what, error=ModelError)
+    check_double(number, what=what, error=ModelError, text=str(value).strip())
+    return sp.Rational(number.numerator, number.denominator)
+
+
+def _check_number_size(expr: sp.Basic, name: str) -> None:
+    """Exact numbers stay printable and cheap once values are substituted (``a**64`` at ``a = 1e300``)."""
+    for atom in expr.atoms(sp.Rational):
+        if max(digits(int(atom.p)), digits(int(atom.q))) > MAX_NUMBER_DIGITS:
+            raise ModelError(f"'{name}' holds an exact number of about {max(digits(int(atom.p)), digits(int(atom.q)))} "
+                             f"digits at these values (limit {MAX_NUMBER_DIGITS}); give smaller values or "
+                             "rescale the model")
 
 
 def _check_sign(name: str, value: sp.Rational, symbol: sp.Symbol) -> None:
