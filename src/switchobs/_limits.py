@@ -94,7 +94,7 @@ def exact_number(text: str, *, what: str, error: type[Exception], max_digits: in
     else:
         m = _DECIMAL.match(s)
         if not m or not (m.group(2) or m.group(3)):
-            raise error(f"{what}: {_shorten(text)!r} is not a number (write e.g. 187.5, 375/2 or -3e-2)")
+            raise error(f"{what}: {_shorten(text)!r} is not a finite number (write e.g. 187.5, 375/2 or -3e-2)")
         exponent = m.group(4) or "0"
         if len(exponent.lstrip("+-")) > 12:
             size = max_digits + 1

@@ -24,6 +24,7 @@ __all__ = [
     "ObserverInputError",
     "CodegenError",
     "PrerequisiteError",
+    "OutputError",
 ]
 
 
@@ -94,3 +95,7 @@ class CodegenError(SwitchobsError, RuntimeError):
 
 class PrerequisiteError(SwitchobsError, RuntimeError):
     """A pipeline stage cannot start: a package does not import or a tool (C compiler) is missing."""
+
+
+class OutputError(SwitchobsError, OSError):
+    """An output file or directory cannot be written (missing directory, a directory in the way, no space)."""

@@ -5,6 +5,7 @@ from __future__ import annotations
 import argparse
 import math
 
+from .._atomic import check_output_file
 from ..certify import certify_model
 from ..spec import STEP_METHODS
 from ..exceptions import CertificateError, SpectrumError
@@ -54,6 +55,8 @@ def run(args: argparse.Namespace) -> int:
         raise SpectrumError("give either a spectrum (--spectrum) or the gains (--gains-plus [--gains-minus])")
     if not (math.isfinite(args.rate_hz) and args.rate_hz > 0):
         raise CertificateError(f"--rate-hz must be a positive number of samples per second, got {args.rate_hz!r}")
+    if args.out:
+        check_output_file(args.out, what="the certificate")
     model = load_model(args.model)
     solvers = (args.solver,) if args.solver else ("CLARABEL", "SCS")
     report = certify_model(model, values=parse_params(args.param), spectrum=args.spectrum,

@@ -5,6 +5,7 @@ from __future__ import annotations
 import argparse
 import math
 
+from .._atomic import check_output_file
 from ..certify import certify_model, synthesize
 from ..exceptions import ModelError
 from ..model import load_model
@@ -40,6 +41,8 @@ def register(sub: argparse._SubParsersAction) -> None:
 def run(args: argparse.Namespace) -> int:
     if not (math.isfinite(args.noise_weight) and args.noise_weight >= 0):
         raise ModelError(f"--noise-weight must be a finite number >= 0, got {args.noise_weight!r}")
+    if args.out:
+        check_output_file(args.out, what="the certificate")
     model = load_model(args.model)
     values = parse_params(args.param)
     solvers = (args.solver,) if args.solver else ("CLARABEL", "SCS")
