@@ -110,9 +110,19 @@ def _syntax_tree(text: str, what: str) -> tuple[ast.expr, str]:
         if terms > MAX_EXPRESSION_TERMS:
             raise ExpressionError(f"{what}: the expression has more than {MAX_EXPRESSION_TERMS} terms "
                                   f"(limit {MAX_EXPRESSION_TERMS}): {text[:30]!r}...")
-        stack.extend((child, depth + 1) for child in ast.iter_child_nodes(node)
+        stack.extend((child, depth + (0 if _chained(node, child) else 1)) for child in ast.iter_child_nodes(node)
                      if not isinstance(child, (ast.operator, ast.unaryop, ast.expr_context)))
     return tree.body, source
+
+
+_SUMS, _PRODUCTS = (ast.Add, ast.Sub), (ast.Mult, ast.Div)
+
+
+def _chained(parent: ast.AST, child: ast.AST) -> bool:
+    """``a + b + c`` is one sum, not a nesting: the left operand of a sum (product) that is a sum (product)."""
+    if not (isinstance(parent, ast.BinOp) and isinstance(child, ast.BinOp) and child is parent.left):
+        return False
+    return any(isinstance(parent.op, group) and isinstance(child.op, group) for group in (_SUMS, _PRODUCTS))
 
 
 def free_names(text: str) -> list[str]:
@@ -180,12 +190,15 @@ class _Translator(ast.NodeVisitor):
             return
         if exponent.is_Rational:
             p, q = abs(int(exponent.p)), int(exponent.q)
-            if max(p, q) > MAX_EXPONENT:
+            # A number to a power is bounded by its digits; a power of a name by its exponent, since the
+            # name's value is only known later.
+            if base.is_Rational and q <= MAX_EXPONENT:
+                if max(digits(int(base.p)), digits(int(base.q))) * p > MAX_NUMBER_DIGITS:
+                    raise self._fail(f"{_short(base)}**{_short(exponent)} has more than {MAX_NUMBER_DIGITS} digits "
+                                     f"(limit {MAX_NUMBER_DIGITS})")
+            elif max(p, q) > MAX_EXPONENT:
                 raise self._fail(f"the exponent {_short(exponent)} is larger than {MAX_EXPONENT} "
-                                 f"(limit {MAX_EXPONENT} on exact powers)")
-            if base.is_Rational and max(digits(int(base.p)), digits(int(base.q))) * p > MAX_NUMBER_DIGITS:
-                raise self._fail(f"{_short(base)}**{exponent} has more than {MAX_NUMBER_DIGITS} digits "
-                                 f"(limit {MAX_NUMBER_DIGITS})")
+                                 f"(limit {MAX_EXPONENT} on exact powers of names)")
 
     def _check_size(self, value: sp.Expr) -> sp.Expr:
         """Exact numbers stay within MAX_NUMBER_DIGITS and powers within MAX_EXPONENT (sympy merges them)."""
