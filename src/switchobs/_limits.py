@@ -21,6 +21,7 @@ from fractions import Fraction
 
 __all__ = ["MAX_EXPRESSION_LENGTH", "MAX_EXPRESSION_DEPTH", "MAX_EXPRESSION_TERMS", "MAX_EXPONENT",
            "MAX_NUMBER_DIGITS", "MAX_CERTIFICATE_DIGITS", "MAX_CERTIFICATE_BYTES", "MAX_CERTIFICATE_DIMENSION",
+           "MAX_DWELL_BITS", "MAX_BOX_VERTICES",
            "DOUBLE_MAX", "DOUBLE_MIN", "LIMITS", "exact_number", "check_double", "digits"]
 
 #: Characters in one expression string (a matrix entry, a pole, a gain).
@@ -41,6 +42,11 @@ MAX_CERTIFICATE_DIGITS = 4000
 MAX_CERTIFICATE_BYTES = 50_000_000
 #: Largest state dimension and number of modes in a certificate's family.
 MAX_CERTIFICATE_DIMENSION = 100
+#: A dwell-time certificate is checked while ``||A_p||_inf * tau_D <= 2**MAX_DWELL_BITS`` (the enclosure of
+#: ``exp(A_p tau_D)`` takes that many squarings); beyond, the check fails as undecidable in reasonable time.
+MAX_DWELL_BITS = 64
+#: Vertex matrices a box certificate may ask the checker to build (sub-boxes times monomial choices).
+MAX_BOX_VERTICES = 65536
 #: The largest finite double and the smallest positive normal double: a number meant as a double lies in
 #: ``[DOUBLE_MIN, DOUBLE_MAX]`` in magnitude, or is 0.
 DOUBLE_MAX = sys.float_info.max
@@ -52,6 +58,7 @@ LIMITS: dict[str, int | float] = {
     "MAX_EXPRESSION_TERMS": MAX_EXPRESSION_TERMS, "MAX_EXPONENT": MAX_EXPONENT,
     "MAX_NUMBER_DIGITS": MAX_NUMBER_DIGITS, "MAX_CERTIFICATE_DIGITS": MAX_CERTIFICATE_DIGITS,
     "MAX_CERTIFICATE_BYTES": MAX_CERTIFICATE_BYTES, "MAX_CERTIFICATE_DIMENSION": MAX_CERTIFICATE_DIMENSION,
+    "MAX_DWELL_BITS": MAX_DWELL_BITS, "MAX_BOX_VERTICES": MAX_BOX_VERTICES,
 }
 
 _FRACTION = re.compile(r"^([+-]?)(\d+)\s*/\s*(\d+)$")

@@ -48,7 +48,7 @@ from fractions import Fraction
 from pathlib import Path
 from typing import Any
 
-from .._limits import MAX_CERTIFICATE_BYTES, MAX_CERTIFICATE_DIGITS
+from .._limits import MAX_CERTIFICATE_BYTES, MAX_CERTIFICATE_DIGITS, MAX_DWELL_BITS
 from .._progress import progress
 from ..exceptions import CertificateError
 from ._exact import (Matrix, add, definiteness, expm_enclosure, fraction_matrix, inf_norm,
@@ -258,6 +258,9 @@ def _check_dwell(names: Sequence[str], As: Sequence[Matrix], cert: DwellTimeEntr
     T = to_fraction(cert.tau_D, what="dwell-time tau_D")
     if T <= 0:
         return Check("dwell-time", False, f"tau_D = {T} must be positive")
+    if max(inf_norm(A) for A in As) * T > 2 ** MAX_DWELL_BITS:
+        return Check("dwell-time", False, f"||A_p||_inf * tau_D exceeds 2^{MAX_DWELL_BITS} (limit "
+                                          "MAX_DWELL_BITS): exp(A_p tau_D) is not enclosed; certify a smaller tau_D")
     Ps = _per_mode(cert.P, "dwell-time", "P", names, n)
     for nm, A, P in zip(names, As, Ps):
         r = _defin(P, strict=True)
