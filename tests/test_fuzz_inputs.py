@@ -3,7 +3,7 @@
 Every generated input is run through the real command line (``design`` for a model file, ``verify``
 for a certificate); each run must end with exit 0, 1 or 2, and a failure must be exactly one line on
 stderr, never a traceback or an internal error. Hypothesis draws ``SWITCHOBS_FUZZ_EXAMPLES`` inputs
-per test (12 by default, derandomised so that ``make test`` is repeatable; ``make fuzz`` draws many
+per test (10 by default, derandomised so that ``make test`` is repeatable; ``make fuzz`` draws many
 more, at random); a subprocess per input would cost seconds of start-up each, so the inputs are
 collected first and run in one subprocess capped at 1 GiB of address space, and a failure names its
 input (it is not shrunk).
@@ -20,7 +20,7 @@ from hypothesis import strategies as st
 
 from _cli_batch import run_batch, valid_certificate
 
-EXAMPLES = int(os.environ.get("SWITCHOBS_FUZZ_EXAMPLES", "12"))
+EXAMPLES = int(os.environ.get("SWITCHOBS_FUZZ_EXAMPLES", "10"))
 FUZZING = "SWITCHOBS_FUZZ_EXAMPLES" in os.environ
 DRAW = settings(max_examples=EXAMPLES, deadline=None, derandomize=not FUZZING, database=None,
                 suppress_health_check=list(HealthCheck))
