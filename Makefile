@@ -5,7 +5,7 @@ PY := $(VENV)/bin/python
 STAMP := $(VENV)/.installed
 DEMO_ARGS ?=
 
-.PHONY: demo test bench docs install clean cc-tools figures
+.PHONY: demo test bench docs install clean cc-tools figures fuzz
 
 $(STAMP): pyproject.toml
 	$(PYTHON) -m venv $(VENV)
@@ -33,6 +33,11 @@ cc-tools:
 
 test: $(STAMP) cc-tools
 	$(PY) -m pytest -n 2 -q
+
+# Many more hostile inputs than make test draws (tests/test_fuzz_inputs.py), at random; FUZZ_EXAMPLES per batch.
+FUZZ_EXAMPLES ?= 300
+fuzz: $(STAMP)
+	SWITCHOBS_FUZZ_EXAMPLES=$(FUZZ_EXAMPLES) $(PY) -m pytest -q -p no:cacheprovider tests/test_fuzz_inputs.py tests/test_errors.py
 
 # Every benchmark script (benchmarks/_*.py are helpers), then their result tables into the docs pages.
 bench: $(STAMP)

@@ -67,7 +67,9 @@ def test_demo_certificates_pass_switchobs_verify(demo_run, capsys):
     out, _ = demo_run
     for model in ("abs-xbs3", "abs-xbs4"):
         assert main(["verify", str(out / f"certificate-{model}.json")]) == 0
-        assert capsys.readouterr().out.startswith("certificate holds exactly")
+        printed = capsys.readouterr().out
+        assert printed.startswith(f"certificate about model {model}") and "\ncertificate holds exactly\n" in printed
+        assert f"model: holds - the observer's A and C are those of model '{model}'" in printed
 
 
 @pytest.mark.slow

@@ -10,7 +10,7 @@ import pytest
 
 import switchobs
 from switchobs import loop
-from switchobs.exceptions import DimensionError, ModelError, ObserverInputError, SimulationError
+from switchobs.exceptions import DimensionError, ModelError, ObserverInputError, OutputError, SimulationError
 from switchobs.loop import DEFAULT_BETA, INITIAL_STATE, EstimatorSpec, ObserverXbsEstimator, xbs_estimator
 from switchobs.model import builtin_model
 from switchobs.observers import ErrorCode, SwitchedObserver, xbs3_observer
@@ -163,7 +163,7 @@ def test_plots_return_figures_and_draw_on_given_axes(tmp_path):
         plot_braking(res, ax=axes[:3])
     path = save_figure(fig, tmp_path / "b.png")
     assert path.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
-    with pytest.raises(SimulationError, match="cannot write the plot"):
+    with pytest.raises(OutputError, match="cannot write the plot"):
         save_figure(fig, tmp_path / "missing" / "b.png")
     two = simulate_two_axle(replace(aguado_sec36(), duration_s=0.5))
     assert isinstance(plot_two_axle(two), Figure)

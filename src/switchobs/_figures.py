@@ -17,6 +17,7 @@ from typing import Any
 
 import numpy as np
 
+from ._atomic import atomic_file
 from .exceptions import SimulationError
 
 __all__ = ["panels", "save_figure"]
@@ -60,22 +61,19 @@ def panels(ax: Any, count: int, *, figsize: tuple[float, float], owner: str, **s
 def save_figure(fig: Any, path: str | Path, *, dpi: int = 110) -> Path:
     """Write ``fig`` to ``path`` (format from the suffix); the path.
 
-    The figure is written to a temporary file next to ``path`` and renamed, so
-    that an interrupted or failed write leaves no half-written image.
+    The file appears whole or not at all (:func:`switchobs._atomic.atomic_file`).
 
     Raises
     ------
+    OutputError
+        If the file cannot be written (missing directory, a directory in the way); the message names it.
     SimulationError
-        If the file cannot be written (missing directory, unknown format).
+        For a suffix that is not an image format matplotlib writes.
     """
     path = Path(path)
-    partial = path.with_name(f".{path.name}.partial")
-    try:
-        fig.savefig(partial, dpi=dpi, format=path.suffix.lstrip(".").lower() or None)
-        os.replace(partial, path)
-    except (OSError, ValueError) as exc:
-        detail = exc.strerror if isinstance(exc, OSError) and exc.strerror else exc  # not the temporary name
-        raise SimulationError(f"cannot write the plot {str(path)!r}: {detail}") from None
-    finally:
-        partial.unlink(missing_ok=True)
+    with atomic_file(path, what="the plot") as partial:
+        try:
+            fig.savefig(partial, dpi=dpi, format=path.suffix.lstrip(".").lower() or None)
+        except ValueError as exc:
+            raise SimulationError(f"cannot write the plot {str(path)!r}: {exc}") from None
     return path

@@ -9,6 +9,7 @@ from typing import Any
 
 import numpy as np
 
+from ._limits import decimal_fraction
 from .exceptions import DimensionError
 
 __all__ = ["named_vector", "signal_matrix", "adaptation_gain", "substep_bound", "round_down",
@@ -88,9 +89,13 @@ def substep_bound(h_max: Any, max_substeps: Any, *, error: type[Exception]) -> t
     try:
         if isinstance(h_max, bool):
             raise TypeError
-        exact = Fraction(repr(float(h_max))) if isinstance(h_max, (float, np.floating)) else Fraction(h_max)
-    except (TypeError, ValueError, ZeroDivisionError):
-        raise error(f"h_max = {h_max!r} must be a positive finite number such as 0.01 or 1/100") from None
+        if isinstance(h_max, str):  # size first: "1e999999999" must not be expanded
+            exact = decimal_fraction(h_max, what="h_max", error=ValueError)
+        else:
+            exact = Fraction(repr(float(h_max))) if isinstance(h_max, (float, np.floating)) else Fraction(h_max)
+    except (TypeError, ValueError, ZeroDivisionError, OverflowError) as exc:
+        detail = f" ({exc})" if "limit" in str(exc) else ""  # a size refusal names its limit; keep it
+        raise error(f"h_max = {h_max!r} must be a positive finite number such as 0.01 or 1/100{detail}") from None
     if exact <= 0:
         raise error(f"h_max = {h_max!r} must be > 0 (a step bound in the rescaled time tau)")
     limit = DEFAULT_MAX_SUBSTEPS if max_substeps is None else max_substeps

@@ -25,6 +25,7 @@ __all__ = [
     "CodegenError",
     "PrerequisiteError",
     "TransformError",
+    "OutputError",
 ]
 
 
@@ -99,3 +100,7 @@ class PrerequisiteError(SwitchobsError, RuntimeError):
 
 class TransformError(SwitchobsError, ValueError):
     """A candidate time scale or change of coordinates that cannot be checked (wrong length, unknown name)."""
+
+
+class OutputError(SwitchobsError, OSError):
+    """An output file or directory cannot be written (missing directory, a directory in the way, no space)."""

@@ -40,6 +40,7 @@ import cvxpy as cp
 import numpy as np
 import sympy as sp
 
+from .._limits import check_double
 from ..exceptions import CertificateError, FreeSymbolError, ModelError
 from ..model import Model, matrix_rows
 from ._box_check import Interval, check_dwell, check_strict, vertex_matrices
@@ -121,7 +122,8 @@ def parse_box(items: Sequence[str] | Mapping[str, Sequence[Any]]) -> ParameterBo
     lower, upper = [], []
     for name, lo, hi in pairs:
         try:
-            a, b = to_fraction(lo, what=f"box {name} lower"), to_fraction(hi, what=f"box {name} upper")
+            a, b = (check_double(to_fraction(x, what=f"box {name} {end}"), what=f"box {name} {end}",
+                                 error=CertificateError, text=str(x)) for x, end in ((lo, "lower"), (hi, "upper")))
         except CertificateError as exc:
             raise ModelError(str(exc)) from None
         if a > b:

@@ -32,10 +32,12 @@ Kinds (``He(X) = X + X'``):
 from __future__ import annotations
 
 import itertools
+import math
 from collections.abc import Iterator, Mapping, Sequence
 from fractions import Fraction
 from typing import Any
 
+from .._limits import MAX_BOX_VERTICES, MAX_EXPONENT
 from ..exceptions import CertificateError
 from ._exact import (Matrix, add, definiteness, fraction_matrix, lyapunov_form, matmul, scale, sub, to_fraction,
                      zeros)
@@ -180,8 +182,9 @@ def check_box_data(data: Mapping[str, Any], family: Sequence[Matrix] | None = No
     terms = []
     for t in data["A_terms"]:
         mono = [int(e) for e in t["monomial"]]
-        if len(mono) != len(params) or min(mono, default=0) < 0:
-            raise CertificateError(f"box A_terms monomial {mono} does not match the parameters {params}")
+        if len(mono) != len(params) or min(mono, default=0) < 0 or max(mono, default=0) > MAX_EXPONENT:
+            raise CertificateError(f"box A_terms monomial {str(mono)[:60]} does not match the parameters {params} "
+                                   f"(exponents 0..{MAX_EXPONENT})")
         terms.append((mono, fraction_matrix(t["matrix"], what="box A_terms matrix")))
     n = len(terms[0][1])
     C = fraction_matrix(data["C"], what="box C", cols=n)
@@ -190,6 +193,10 @@ def check_box_data(data: Mapping[str, Any], family: Sequence[Matrix] | None = No
     pieces = int(data.get("pieces", 1))
     if pieces < 1:
         raise CertificateError(f"box pieces must be a positive integer, got {pieces}")
+    cut = sum(1 for i in range(len(params)) if max((m[i] for m, _ in terms), default=0) > 1)
+    if cut * math.log2(pieces) + len(terms) > math.log2(MAX_BOX_VERTICES):
+        raise CertificateError(f"box: {pieces} pieces on {cut} parameter(s) with {len(terms)} monomials may need "
+                               f"more than {MAX_BOX_VERTICES} vertex matrices (limit MAX_BOX_VERTICES)")
     if family is not None:
         values = [Fraction(1)] * len(terms)
         for i, (mono, _) in enumerate(terms):

@@ -14,7 +14,6 @@ from __future__ import annotations
 
 import json
 import math
-import os
 import time
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
@@ -25,6 +24,7 @@ from typing import Any
 import numpy as np
 import sympy as sp
 
+from .._atomic import write_text
 from .._progress import progress
 from ..design import GainDesign
 from ..exceptions import CertificateError, FreeSymbolError, SpectrumError
@@ -137,14 +137,14 @@ class CertificationReport:
         return self.verification.holds and bool(kinds & stable)
 
     def write(self, path: str | Path) -> None:
-        """Write the certificate; an interrupted write leaves no half-written file (temporary file, then rename)."""
-        target = Path(path)
-        partial = target.with_name(f".{target.name}.partial")
-        try:
-            partial.write_text(json.dumps(self.document, indent=2) + "\n", encoding="utf-8")
-            os.replace(partial, target)
-        finally:
-            partial.unlink(missing_ok=True)
+        """Write the certificate whole or not at all (:func:`switchobs._atomic.write_text`).
+
+        Raises
+        ------
+        OutputError
+            If ``path`` cannot be written; the message names it.
+        """
+        write_text(path, json.dumps(self.document, indent=2) + "\n", what="the certificate")
 
     def to_json(self) -> dict[str, Any]:
         return {"verdict": self.verdict.to_json(), "text": self.text, "certified": self.certified,

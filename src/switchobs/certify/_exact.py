@@ -21,6 +21,7 @@ from dataclasses import dataclass
 from fractions import Fraction
 from typing import Any
 
+from .._limits import MAX_CERTIFICATE_DIGITS, digits, decimal_fraction
 from ..exceptions import CertificateError, DimensionError
 
 __all__ = [
@@ -45,18 +46,21 @@ def to_fraction(value: Any, *, what: str = "entry") -> Fraction:
     Raises
     ------
     CertificateError
-        For NaN, infinities, non-numbers and irrational symbolic values.
+        For NaN, infinities, non-numbers, irrational symbolic values and numbers of more than
+        :data:`~switchobs._limits.MAX_CERTIFICATE_DIGITS` digits (a decimal exponent counting as
+        that many digits, checked before the number is expanded).
     """
     if isinstance(value, bool):
         raise CertificateError(f"{what}: expected a number, got {value!r}")
     if isinstance(value, (int, Fraction)):
-        return Fraction(value)
+        out = Fraction(value)
+        if max(digits(out.numerator), digits(out.denominator)) > MAX_CERTIFICATE_DIGITS:
+            raise CertificateError(f"{what}: a number of more than {MAX_CERTIFICATE_DIGITS} digits "
+                                   f"(limit {MAX_CERTIFICATE_DIGITS})")
+        return out
     if isinstance(value, str):
-        try:
-            return Fraction(value.strip())
-        except (ValueError, ZeroDivisionError):
-            raise CertificateError(f"{what}: {value!r} is not a finite rational number "
-                                   "(write e.g. 187.5, 375/2 or -3e-2)") from None
+        # Size first: "1e999999999" would otherwise be expanded to a billion digits.
+        return decimal_fraction(value, what=what, error=CertificateError, max_digits=MAX_CERTIFICATE_DIGITS)
     p, q = getattr(value, "p", None), getattr(value, "q", None)
     if isinstance(p, int) and isinstance(q, int) and q != 0:
         return Fraction(p, q)

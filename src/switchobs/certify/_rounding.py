@@ -286,6 +286,8 @@ def project_dual(As: Sequence[Matrix], R_nums: Sequence[np.ndarray], rel_tol: fl
     n = len(As[0])
     Af = [np.array([[float(x) for x in row] for row in A]) for A in As]
     S_num = sum(A @ R + R @ A.T for A, R in zip(Af, R_nums))
+    if not all(np.all(np.isfinite(M)) for M in (*R_nums, S_num)):  # a solver answer beyond double range
+        return None
     scale_R = max(float(np.max(np.abs(R))) for R in R_nums)
     faces = [range_basis(R, rel_tol) for R in R_nums]
     ranks = [len(U[0]) if U and U[0] else 0 for U in faces]

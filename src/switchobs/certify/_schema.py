@@ -28,6 +28,7 @@ from dataclasses import MISSING, dataclass, field, fields
 from enum import Enum
 from typing import Any, ClassVar, Protocol
 
+from .._limits import MAX_CERTIFICATE_DIMENSION
 from ..exceptions import CertificateError
 
 __all__ = ["FORMAT", "VERSION", "CertificateKind", "ArbitrarySwitching", "Existence", "ANY_DWELL", "Verdict",
@@ -93,11 +94,17 @@ class Check:
         return f"{self.name}: {'holds' if self.holds else 'FAILS'}{(' - ' + self.detail) if self.detail else ''}"
 
 
+def _show(value: Any, limit: int = 80) -> str:
+    """A JSON value for a message, shortened: a tampered file may hold megabytes."""
+    text = repr(value)
+    return text if len(text) <= limit else f"{text[:limit]}... ({type(value).__name__})"
+
+
 def _enum(kind: type[Enum], value: Any, what: str) -> Any:
     try:
         return kind(value)
-    except ValueError:
-        raise CertificateError(f"{what} is {value!r}; expected one of {[k.value for k in kind]}") from None
+    except (ValueError, TypeError):
+        raise CertificateError(f"{what} is {_show(value)}; expected one of {[k.value for k in kind]}") from None
 
 
 @dataclass(frozen=True)
@@ -120,7 +127,7 @@ class Verdict:
     @classmethod
     def from_json(cls, data: Any) -> "Verdict":
         if not isinstance(data, Mapping):
-            raise CertificateError(f"certificate 'verdict' must be an object, got {data!r}")
+            raise CertificateError(f"certificate 'verdict' must be an object, got {_show(data)}")
         keys = set(cls.__dataclass_fields__)
         if set(data) != keys:
             raise CertificateError(f"certificate 'verdict' must have the keys {sorted(keys)}, got {sorted(data)}")
@@ -149,8 +156,18 @@ class FamilySection:
             raise CertificateError("certificate has no 'family' with 'matrices'")
         mats = data["matrices"]
         if not isinstance(mats, list) or not mats:
-            raise CertificateError("certificate 'family.matrices' must be a non-empty list of matrices")
+            raise CertificateError(f"certificate 'family.matrices' must be a non-empty list of matrices, "
+                                   f"got {_show(mats)}")
+        if len(mats) > MAX_CERTIFICATE_DIMENSION:
+            raise CertificateError(f"certificate 'family.matrices' has {len(mats)} modes "
+                                   f"(limit {MAX_CERTIFICATE_DIMENSION})")
+        for i, M in enumerate(mats):
+            if not isinstance(M, list) or len(M) > MAX_CERTIFICATE_DIMENSION:
+                raise CertificateError(f"certificate 'family.matrices[{i}]' must be a list of at most "
+                                       f"{MAX_CERTIFICATE_DIMENSION} rows, got {_show(M)}")
         names = data.get("names") or [f"A_{i + 1}" for i in range(len(mats))]
+        if not isinstance(names, list) or not all(isinstance(nm, str) for nm in names):
+            raise CertificateError(f"certificate 'family.names' must be a list of strings, got {_show(names)}")
         if len(names) != len(mats):
             raise CertificateError(f"'family.names' has {len(names)} names for {len(mats)} matrices")
         return cls(tuple(names), tuple(mats))
@@ -200,7 +217,11 @@ class ObserverSection:
     @classmethod
     def from_json(cls, data: Any) -> "ObserverSection":
         if not isinstance(data, Mapping):
-            raise CertificateError(f"certificate 'observer' must be an object, got {data!r}")
+            raise CertificateError(f"certificate 'observer' must be an object, got {_show(data)}")
+        for key in ("K_plus", "K_minus"):
+            if not isinstance(data.get(key, []), list):
+                raise CertificateError(f"certificate 'observer.{key}' must be a list of numbers, "
+                                       f"got {_show(data.get(key))}")
         return cls(data.get("A"), data.get("C"), data.get("K_plus", []), data.get("K_minus", []))
 
     def check(self, names: Sequence[str], matrices: Sequence[Any]) -> Check:
@@ -246,7 +267,7 @@ class DiscreteSection:
                           ("C", list), ("modes", list)):
             if not isinstance(data.get(key), kind):
                 raise CertificateError(f"certificate 'discrete' needs {key!r} as a {kind.__name__}, "
-                                       f"got {data.get(key)!r}")
+                                       f"got {_show(data.get(key))}")
         return cls(dict(data))
 
     def check(self, names: Sequence[str], matrices: Sequence[Any]) -> Check:
@@ -290,7 +311,7 @@ class BoxSection:
                           ("C", list), ("K_plus", list), ("K_minus", list), ("certificate", Mapping)):
             if not isinstance(data.get(key), kind):
                 raise CertificateError(f"certificate 'box' needs {key!r} as a {getattr(kind, '__name__', kind)}, "
-                                       f"got {data.get(key)!r}")
+                                       f"got {_show(data.get(key))}")
         return cls(dict(data))
 
     def check(self, names: Sequence[str], matrices: Sequence[Any]) -> Check:
@@ -395,7 +416,7 @@ _ENTRIES: dict[CertificateKind, Callable[[Mapping[str, Any]], CertificateEntry]]
 
 def _entry(data: Any) -> CertificateEntry:
     kind = data.get("kind") if isinstance(data, Mapping) else None
-    if kind not in {k.value for k in CertificateKind}:
+    if not isinstance(kind, str) or kind not in {k.value for k in CertificateKind}:
         raise CertificateError(f"unknown certificate kind {kind!r}; known kinds: "
                                f"{', '.join(k.value for k in CertificateKind)}")
     return _ENTRIES[CertificateKind(kind)](data)
@@ -434,5 +455,8 @@ class CertificateDocument:
         if not isinstance(certs, list) or not certs:
             raise CertificateError("certificate has no 'certificates' list")
         sections = {key: SECTIONS[key].from_json(data[key]) for key in SECTIONS if data.get(key) is not None}
+        provenance = data.get("provenance") or {}
+        if not isinstance(provenance, Mapping):
+            raise CertificateError(f"certificate 'provenance' must be an object, got {_show(provenance)}")
         return cls(family, tuple(_entry(c) for c in certs), Verdict.from_json(data.get("verdict")),
-                   dict(data.get("provenance") or {}), sections)
+                   dict(provenance), sections)

@@ -55,6 +55,7 @@ import scipy.linalg
 import sympy as sp
 from sympy.polys.matrices import DomainMatrix
 
+from .._limits import check_double
 from ..exceptions import CertificateError, DimensionError, ModelError
 from ..model import Model
 from ._family import user_matrix
@@ -298,7 +299,8 @@ def synthesize_gains(A: Any, C: Any, *, decay_rate: Any, noise_weight: float = 0
     if len(A_ex[0]) != n:
         raise DimensionError(f"A must be square, got {n}x{len(A_ex[0])}")
     C_ex = user_matrix(C, what="C", part="C", cols=n)
-    rate = to_fraction(decay_rate, what="decay_rate")
+    rate = check_double(to_fraction(decay_rate, what="decay_rate"), what="decay_rate", error=ModelError,
+                        text=str(decay_rate))
     if rate <= 0:
         raise ModelError(f"decay_rate must be positive, got {rate}")
     if not (noise_weight >= 0 and np.isfinite(noise_weight)):

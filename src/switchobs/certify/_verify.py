@@ -1,5 +1,8 @@
 """Independent exact checker of switchobs certificates (standard library only).
 
+Only the link to the named model (:mod:`switchobs.certify._provenance`) reads
+the model file, with the exact model layer; every inequality is decided here.
+
 A certificate is a JSON document (format ``switchobs-certificate``, version 1,
 sections in :mod:`switchobs.certify._schema`) holding the switched family
 ``{A_p}`` and, as rational strings, the matrices of one or more certificates.  :func:`verify_certificate` re-derives every
@@ -41,18 +44,20 @@ from __future__ import annotations
 import json
 import sys
 from collections.abc import Mapping, Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from fractions import Fraction
 from pathlib import Path
 from typing import Any
 
+from .._limits import MAX_CERTIFICATE_BYTES, MAX_CERTIFICATE_DIGITS, MAX_DWELL_BITS
 from .._progress import progress
 from ..exceptions import CertificateError
 from ._exact import (Matrix, add, definiteness, expm_enclosure, fraction_matrix, inf_norm,
                      integer_form, is_zero, lyapunov_form, matmul, observable, scale, sqrt_upper,
-                     transpose)
+                     to_fraction, transpose)
 from ._schema import (ANY_DWELL, ArbitrarySwitching, CertificateDocument, CertificateKind, Check, DualEntry,
-                      DwellTimeEntry, Existence, FamilySection, LyapunovEntry, Verdict)
+                      DwellTimeEntry, Existence, FamilySection, LyapunovEntry, ObserverSection, Verdict)
+from ._provenance import model_link
 
 __all__ = ["Check", "VerificationReport", "verify_certificate", "load_certificate", "implied_verdict",
            "planar_case_exact"]
@@ -71,16 +76,32 @@ class VerificationReport:
         The verdict the verified certificates imply.
     claimed : Verdict
         The verdict written in the document.
+    model : str or None
+        The model the document says it is about (``provenance.model``).
+    parameters : mapping str -> str
+        Its parameter values (``provenance.parameters``).
+    gains : mapping str -> tuple of str
+        ``K_plus`` and ``K_minus`` of the ``observer`` section (empty without one).
+    unchecked : tuple of str
+        The links the document does not let the checker verify (no ``observer`` section: the
+        model-gain link; a model that is not built in: its A and C), one sentence each.
+        ``switchobs verify --strict`` fails when there is any.
     """
 
     holds: bool
     checks: tuple[Check, ...]
     implied: Verdict
     claimed: Verdict
+    model: str | None = None
+    parameters: Mapping[str, str] = field(default_factory=dict)
+    gains: Mapping[str, tuple[str, ...]] = field(default_factory=dict)
+    unchecked: tuple[str, ...] = ()
 
     def to_json(self) -> dict[str, Any]:
         return {"holds": self.holds, "checks": [c.to_json() for c in self.checks],
-                "implied": self.implied.to_json(), "claimed": self.claimed.to_json()}
+                "implied": self.implied.to_json(), "claimed": self.claimed.to_json(), "model": self.model,
+                "parameters": dict(self.parameters), "gains": {k: list(v) for k, v in self.gains.items()},
+                "unchecked": list(self.unchecked)}
 
     @classmethod
     def from_json(cls, data: Mapping[str, Any]) -> "VerificationReport":
@@ -88,12 +109,19 @@ class VerificationReport:
         if not isinstance(data, Mapping) or not isinstance(data.get("holds"), bool):
             raise CertificateError(f"not a verification report: {data!r}")
         return cls(data["holds"], tuple(Check.from_json(c) for c in data.get("checks", [])),
-                   Verdict.from_json(data.get("implied")), Verdict.from_json(data.get("claimed")))
+                   Verdict.from_json(data.get("implied")), Verdict.from_json(data.get("claimed")),
+                   data.get("model"), dict(data.get("parameters", {})),
+                   {k: tuple(v) for k, v in data.get("gains", {}).items()}, tuple(data.get("unchecked", ())))
 
     def __str__(self) -> str:
-        head = "certificate holds exactly" if self.holds else "certificate does NOT hold"
-        lines = [head] + [f"  {c}" for c in self.checks]
+        values = ", ".join(f"{k} = {v}" for k, v in self.parameters.items())
+        lines = [f"certificate about model {self.model}" + (f" ({values})" if values else "")
+                 if self.model is not None else "certificate names no model (no provenance.model)"]
+        lines += [f"  {k:<7} = [{', '.join(v)}]" for k, v in self.gains.items()]
+        lines.append("certificate holds exactly" if self.holds else "certificate does NOT hold")
+        lines += [f"  {c}" for c in self.checks]
         lines.append("  implied verdict: " + ", ".join(f"{k} = {v}" for k, v in self.implied.to_json().items()))
+        lines += [f"  not checked: {u}" for u in self.unchecked]
         return "\n".join(lines)
 
 
@@ -108,16 +136,39 @@ def load_certificate(path: str | Path) -> dict[str, Any]:
     stdin = str(path) == "-"
     where = "<stdin>" if stdin else str(path)
     try:
-        text = sys.stdin.read() if stdin else Path(path).read_text(encoding="utf-8")
+        if stdin:
+            text = sys.stdin.read(MAX_CERTIFICATE_BYTES + 1)
+            size = len(text.encode("utf-8"))
+        else:
+            size = Path(path).stat().st_size
+        if size > MAX_CERTIFICATE_BYTES:
+            raise CertificateError(f"certificate {where!r} has {size} bytes (limit {MAX_CERTIFICATE_BYTES})")
+        if not stdin:
+            text = Path(path).read_text(encoding="utf-8")
     except OSError as exc:
         raise CertificateError(f"cannot read certificate {where!r}: {exc.strerror}") from None
+    except UnicodeDecodeError as exc:
+        raise CertificateError(f"certificate {where!r} is not UTF-8 text ({exc.reason} at byte {exc.start})") \
+            from None
     try:
-        doc = json.loads(text)
+        doc = json.loads(text, parse_int=_json_integer)
     except json.JSONDecodeError as exc:
         raise CertificateError(f"certificate {where!r} is not valid JSON: {exc}") from None
+    except RecursionError:
+        raise CertificateError(f"certificate {where!r} is nested too deeply to be a certificate") from None
+    except CertificateError as exc:  # a number refused by _json_integer
+        raise CertificateError(f"certificate {where!r}: {exc}") from None
     if not isinstance(doc, dict):
         raise CertificateError(f"certificate {where!r} must be a JSON object, got {type(doc).__name__}")
     return doc
+
+
+def _json_integer(text: str) -> int:
+    """A JSON integer, refused before conversion when it has more digits than a certificate number may."""
+    if len(text.lstrip("-")) > MAX_CERTIFICATE_DIGITS:
+        raise CertificateError(f"a JSON integer of {len(text.lstrip('-'))} digits (limit {MAX_CERTIFICATE_DIGITS}): "
+                               f"{text[:20]}...")
+    return int(text)
 
 
 # ------------------------------------------------------------------ family
@@ -222,12 +273,12 @@ def _check_dual(names: Sequence[str], As: Sequence[Matrix], cert: DualEntry) -> 
 
 def _check_dwell(names: Sequence[str], As: Sequence[Matrix], cert: DwellTimeEntry) -> Check:
     n = len(As[0])
-    try:
-        T = Fraction(str(cert.tau_D))
-    except (ValueError, ZeroDivisionError):
-        raise CertificateError(f"dwell-time: tau_D {cert.tau_D!r} is not a rational number") from None
+    T = to_fraction(cert.tau_D, what="dwell-time tau_D")
     if T <= 0:
         return Check("dwell-time", False, f"tau_D = {T} must be positive")
+    if max(inf_norm(A) for A in As) * T > 2 ** MAX_DWELL_BITS:
+        return Check("dwell-time", False, f"||A_p||_inf * tau_D exceeds 2^{MAX_DWELL_BITS} (limit "
+                                          "MAX_DWELL_BITS): exp(A_p tau_D) is not enclosed; certify a smaller tau_D")
     Ps = _per_mode(cert.P, "dwell-time", "P", names, n)
     for nm, A, P in zip(names, As, Ps):
         r = _defin(P, strict=True)
@@ -349,18 +400,24 @@ def implied_verdict(holding: Sequence[str], planar_case: str | None = None,
     return Verdict(arbitrary, dwell_time, cqlf, common)
 
 
-def verify_certificate(doc: Mapping[str, Any] | str | Path) -> VerificationReport:
+def verify_certificate(doc: Mapping[str, Any] | str | Path, *, model: Any = None) -> VerificationReport:
     """Re-check a certificate exactly, from its matrices alone.
 
     Parameters
     ----------
     doc : mapping, or path of a JSON file
+    model : Model, optional
+        The model the certificate should be about; its ``A`` and ``C`` at the
+        recorded parameter values are compared with the ``observer`` section.
+        By default the built-in model named in ``provenance.model`` (if any).
 
     Returns
     -------
     VerificationReport
-        ``holds`` is True iff every certificate in the document holds exactly
-        and the claimed ``verdict`` equals the verdict they imply.
+        ``holds`` is True iff every certificate in the document holds exactly,
+        the claimed ``verdict`` equals the verdict they imply, and the observer
+        is the model's (when that can be checked); ``unchecked`` lists the
+        links that could not be checked.
 
     Raises
     ------
@@ -383,6 +440,9 @@ def verify_certificate(doc: Mapping[str, Any] | str | Path) -> VerificationRepor
     document = CertificateDocument.from_json(doc)
     names, As = _family(document.family)
     checks = [section.check(names, As) for section in document.sections.values()]
+    link, unchecked = model_link(document, model)
+    if link is not None:
+        checks.append(link)
     holding: list[str] = []
     dwell: list[Fraction] = []
     planar: str | None = None
@@ -398,7 +458,7 @@ def verify_certificate(doc: Mapping[str, Any] | str | Path) -> VerificationRepor
         elif kind is CertificateKind.DWELL_TIME:
             c = _check_dwell(names, As, cert)
             if c.holds:
-                dwell.append(Fraction(str(cert.tau_D)))
+                dwell.append(to_fraction(cert.tau_D, what="dwell-time tau_D"))
         else:
             if len(As) != 2 or len(As[0]) != 2:
                 c = Check("planar", False, "the planar classification needs exactly two 2x2 matrices")
@@ -420,5 +480,20 @@ def verify_certificate(doc: Mapping[str, Any] | str | Path) -> VerificationRepor
                             f"in {sorted(diff)}: claimed {claimed.to_json()}, implied {implied.to_json()}"))
     else:
         checks.append(Check("verdict", True))
+    observer = document.sections.get(ObserverSection.KEY)
+    gains = {} if observer is None else {k: tuple(_text(x) for x in getattr(observer, k))
+                                         for k in ("K_plus", "K_minus")}
+    parameters = document.provenance.get("parameters")
     return VerificationReport(holds=all(c.holds for c in checks), checks=tuple(checks), implied=implied,
-                              claimed=claimed)
+                              claimed=claimed, model=_text(document.provenance.get("model"), none=True),
+                              parameters={_text(k): _text(v) for k, v in parameters.items()}
+                              if isinstance(parameters, Mapping) else {},
+                              gains=gains, unchecked=unchecked)
+
+
+def _text(value: Any, *, none: bool = False) -> Any:
+    """A free-form provenance value as short text (a tampered file may hold anything there)."""
+    if value is None and none:
+        return None
+    text = value if isinstance(value, str) else str(value)
+    return text if len(text) <= 80 else text[:77] + "..."

@@ -5,6 +5,7 @@ from __future__ import annotations
 import argparse
 import math
 
+from .._atomic import check_output_file
 from ..certify import certify_model
 from ..spec import STEP_METHODS
 from ..exceptions import CertificateError, SpectrumError
@@ -59,6 +60,8 @@ def run(args: argparse.Namespace) -> int:
         raise CertificateError(f"--rate-hz must be a positive number of samples per second, got {args.rate_hz!r}")
     if args.out == STDIO and args.json:
         raise CertificateError("--out - writes the certificate to standard output; give --json or --out -, not both")
+    if args.out and args.out != STDIO:
+        check_output_file(args.out, what="the certificate")
     model = load_model(args.model)
     solvers = (args.solver,) if args.solver else ("CLARABEL", "SCS")
     report = certify_model(model, values=parse_params(args.param), spectrum=args.spectrum,

@@ -9,6 +9,7 @@ from typing import Any
 
 import sympy as sp
 
+from .._atomic import check_output_directory
 from ..codegen import generate_observer, generate_super_twisting
 from ..design import GainDesign, design
 from ..exceptions import CodegenError, FreeSymbolError, PrerequisiteError, SpectrumError
@@ -109,6 +110,7 @@ def _discrete_certificate(model: Model, gains: GainDesign, values: dict[str, str
 
 
 def run(args: argparse.Namespace) -> int:
+    check_output_directory(args.out, what="the generated C into")
     values = parse_params(args.param)
     command = _command(args)
     if args.model == SUPER_TWISTING:

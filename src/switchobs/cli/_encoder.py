@@ -5,6 +5,7 @@ from __future__ import annotations
 import argparse
 
 from ..exceptions import SimulationError
+from .._atomic import check_output_file
 from .._figures import save_figure
 from ..sensors import (ESTIMATORS, AngleTrajectory, ChainSettings, Encoder, braking_trajectory,
                        compare_estimators, constant_speed, plot_comparison, varying_speed)
@@ -52,6 +53,8 @@ def _trajectory(args: argparse.Namespace) -> AngleTrajectory:
 
 
 def run(args: argparse.Namespace) -> int:
+    if args.plot:
+        check_output_file(args.plot, what="the plot")
     if args.warmup >= args.duration:
         raise SimulationError(f"--warmup {args.warmup:g} must be shorter than --duration {args.duration:g}")
     encoder = Encoder(ppr=args.ppr, dnl_cycles=args.dnl, eccentricity=args.eccentricity,

@@ -5,6 +5,7 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
+from .._atomic import check_output_directory
 from ..report import GENERATED_SECTIONS, stale_pages, write_reproductions
 from ._common import write_or_check
 
@@ -24,6 +25,6 @@ def register(sub: argparse._SubParsersAction) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    root = Path(args.root)
+    root = Path(args.root) if args.check else check_output_directory(args.root, what="the reproduction pages under")
     return write_or_check(args.check, lambda: [root / path for path in stale_pages(root)],
                           lambda: write_reproductions(root), f"switchobs reproduce --root {root}", root)

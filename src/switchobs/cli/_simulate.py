@@ -13,6 +13,7 @@ import argparse
 from dataclasses import replace
 from typing import Any
 
+from .._atomic import check_output_file
 from .._figures import save_figure
 from ..exceptions import SimulationError
 from ..loop import DEFAULT_GAMMA, OBSERVER_KINDS, EstimatorSpec, xbs_estimator
@@ -159,6 +160,8 @@ def _two_axle(args: argparse.Namespace) -> int:
 
 
 def run(args: argparse.Namespace) -> int:
+    if args.plot:
+        check_output_file(args.plot, what="the plot")
     if args.series and not args.json:
         raise SimulationError("--series only applies with --json")
     if args.scenario == "table41":

@@ -5,6 +5,7 @@ from __future__ import annotations
 import argparse
 import math
 
+from .._atomic import check_output_file
 from ..certify import certify_model, synthesize
 from ..exceptions import ModelError
 from ..model import load_model
@@ -43,6 +44,8 @@ def run(args: argparse.Namespace) -> int:
         raise ModelError(f"--noise-weight must be a finite number >= 0, got {args.noise_weight!r}")
     if args.out == STDIO and args.json:
         raise ModelError("--out - writes the certificate to standard output; give --json or --out -, not both")
+    if args.out and args.out != STDIO:
+        check_output_file(args.out, what="the certificate")
     model = load_model(args.model)
     values = parse_params(args.param)
     solvers = (args.solver,) if args.solver else ("CLARABEL", "SCS")

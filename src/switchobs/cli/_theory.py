@@ -5,6 +5,7 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
+from .._atomic import check_output_directory
 from ..report import theory_documents, write_theory
 from ._common import write_or_check
 
@@ -24,7 +25,7 @@ def register(sub: argparse._SubParsersAction) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    out = Path(args.out)
+    out = Path(args.out) if args.check else check_output_directory(args.out, what="the theory documents into")
 
     def stale() -> list[Path]:
         return [out / doc.filename for doc in theory_documents()

@@ -7,7 +7,8 @@ imported: ``switchobs --help`` lists the commands from :data:`COMMANDS`
 without importing any (cvxpy, casadi and scipy.signal take seconds).  Errors
 raised on purpose by switchobs (all subclasses of
 :class:`switchobs.exceptions.SwitchobsError`) become one line on stderr and
-exit status 2; nothing else is caught, so a real bug still shows its traceback.
+exit status 2.  What a failure prints and which exit status it gives is the
+policy of :mod:`switchobs.cli._errors` (``docs/errors.md``).
 
 Global options (before or after the command): ``--version``, ``-q/--quiet``
 (nothing on stderr but errors), ``-v/--verbose`` (every progress note as a
@@ -22,7 +23,6 @@ from __future__ import annotations
 import argparse
 import importlib
 import math
-import os
 import sys
 import time
 from collections.abc import Callable, Iterator, Sequence
@@ -30,7 +30,8 @@ from contextlib import contextmanager
 
 from .. import __version__
 from .._progress import listening
-from ..exceptions import FreeSymbolError, PrerequisiteError, SwitchobsError
+from ..exceptions import PrerequisiteError
+from ._errors import guarded, install_hint
 from ._status import StatusLine, is_terminal
 
 __all__ = ["main", "build_parser"]
@@ -54,9 +55,6 @@ COMMANDS: dict[str, str] = {
 
 #: Verbosity levels (``args.verbosity``).
 QUIET, NORMAL, VERBOSE = 0, 1, 2
-
-#: Optional third-party modules -> the extra that installs them.
-EXTRAS: dict[str, str] = {"casadi": "codegen", "matplotlib": "plots"}
 
 
 def _add_verbosity(parser: argparse.ArgumentParser, default: object) -> None:
@@ -97,16 +95,9 @@ def build_parser(only: str | None = None) -> argparse.ArgumentParser:
     return parser
 
 
-def _install_hint(module: str | None) -> str:
-    extra = EXTRAS.get((module or "").split(".")[0])
-    if extra is not None:
-        return f'install it with pip install "switchobs[{extra}]" (or `make install`)'
-    return "reinstall with `make install` (or pip install -e .)"
-
-
 def _register_unavailable(sub: argparse._SubParsersAction, name: str, exc: ImportError) -> None:
     what = f"importing {exc.name} failed" if exc.name else "a dependency failed to import"
-    message = f"command {name!r} cannot run: {what} ({exc}); {_install_hint(exc.name)}"
+    message = f"command {name!r} cannot run: {what} ({exc}); {install_hint(exc.name)}"
 
     def unavailable(args: argparse.Namespace) -> int:
         raise PrerequisiteError(message)
@@ -174,26 +165,11 @@ def main(argv: Sequence[str] | None = None) -> int:
     command = next((a for a in argv if not a.startswith("-")), None)
     parser = build_parser(command if command in COMMANDS else None)
     args = parser.parse_args(argv)
-    try:
+
+    def run() -> int:
         with progress_display(args.command, args.verbosity):
-            return int(args.func(args) or 0)
-    except SwitchobsError as exc:
-        # The library names what has no value; only here is the way to give it a command-line flag.
-        hint = "; give values with --param NAME=VALUE" if isinstance(exc, FreeSymbolError) else ""
-        print(f"switchobs {args.command}: error: {exc}{hint}", file=sys.stderr)
-        return 2
-    except ModuleNotFoundError as exc:
-        if (exc.name or "").split(".")[0] not in EXTRAS:
-            raise
-        print(f"switchobs {args.command}: error: this needs {exc.name}, which is not installed; "
-              f"{_install_hint(exc.name)}", file=sys.stderr)
-        return 2
-    except BrokenPipeError:  # output piped into `head`: not an error of ours
-        sys.stdout = open(os.devnull, "w")
-        return 0
-    except KeyboardInterrupt:
-        print(f"switchobs {args.command}: interrupted", file=sys.stderr)
-        return 130
+            return args.func(args)
+    return guarded(args.command, run)
 
 
 if __name__ == "__main__":  # pragma: no cover

@@ -46,6 +46,7 @@ import sympy as sp
 
 from ..design import GainDesign
 from .._validate import adaptation_gain, round_down, substep_bound
+from .._atomic import write_files
 from ..exceptions import CodegenError, DimensionError, ModelError
 from ..model import Model, numeric, rational_value
 from ..spec import METHODS, STATUS_TEXT, STEP_METHODS, Guard, ObserverSpec, StepStatus, require_explicit
@@ -209,18 +210,16 @@ class GeneratedObserver:
         return out
 
     def write(self, directory: str | Path) -> tuple[Path, ...]:
-        """Write ``<prefix>.h``, ``<prefix>.c`` and ``README.md`` into ``directory`` (created if needed)."""
-        out = Path(directory)
-        try:
-            out.mkdir(parents=True, exist_ok=True)
-            paths = []
-            for name, text in self.files.items():
-                path = out / name
-                path.write_text(text, encoding="utf-8")
-                paths.append(path)
-        except OSError as exc:
-            raise CodegenError(f"cannot write the generated files into {str(out)!r}: {exc.strerror}") from None
-        return tuple(paths)
+        """Write ``<prefix>.h``, ``<prefix>.c`` and ``README.md`` into ``directory`` (created if needed).
+
+        All files appear together or none does (:func:`switchobs._atomic.write_files`).
+
+        Raises
+        ------
+        OutputError
+            If a file cannot be written (the message names it); nothing is left behind.
+        """
+        return write_files(directory, self.files, what="the generated C into")
 
     def to_json(self) -> dict[str, Any]:
         return {

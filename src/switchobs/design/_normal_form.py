@@ -172,8 +172,11 @@ def observer_normal_form(model: Model) -> ObserverNormalForm:
     det = sp.factor(O.det(method="berkowitz"))
     if det == 0:
         raise _unobservable(model, [sp.simplify(x) for x in O.nullspace(simplify=True)[0]])
-    _, factors = sp.factor_list(det)
-    conditions = tuple(sp.Ne(f, 0, evaluate=False) for f, _ in factors if f.free_symbols)
+    # det may be a rational function of the parameters (A = [[0, 7/a], ...]): its numerator's factors must not
+    # vanish, nor its denominator's (where the model is not defined)
+    num, den = sp.fraction(sp.together(det))
+    factors = [f for part in (num, den) for f, _ in sp.factor_list(part)[1]]
+    conditions = tuple(dict.fromkeys(sp.Ne(f, 0, evaluate=False) for f in factors if f.free_symbols))
     s = sp.Dummy("s")
     coeffs = A.charpoly(s).all_coeffs()  # [1, c1, ..., cn]
     a = sp.ImmutableMatrix([sp.expand(-c) for c in coeffs[1:]])

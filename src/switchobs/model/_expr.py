@@ -4,6 +4,12 @@ Strings are parsed with Python's :mod:`ast` and translated node by node into
 sympy objects; nothing is ever passed to :func:`eval`.  Only arithmetic,
 numbers, whitelisted function calls and names from an explicit table are
 accepted, so a model file cannot run code.
+
+Exact arithmetic makes short text expensive (``9**9**9**9``, ``2**1000000``),
+so every expression is bounded before any of it is evaluated: its length,
+its nesting depth and number of terms, the digits of its exact numbers and
+the exponent of its exact powers (:mod:`switchobs._limits`).  A decimal
+literal must be a double (``1e400`` and ``1e-400`` are refused).
 """
 
 from __future__ import annotations
@@ -18,6 +24,8 @@ from typing import Any
 import numpy as np
 import sympy as sp
 
+from .._limits import (MAX_EXPONENT, MAX_EXPRESSION_DEPTH, MAX_EXPRESSION_LENGTH, MAX_EXPRESSION_TERMS,
+                       MAX_NUMBER_DIGITS, check_double, digits, exact_number)
 from ..exceptions import ExpressionError
 
 __all__ = ["parse_expression", "free_names", "exact_number", "FUNCTIONS"]
@@ -109,13 +117,48 @@ def parse_expression(text: str | int | float, names: Mapping[str, sp.Symbol], *,
         return _rename(text, names, what)
     if not isinstance(text, str):
         raise ExpressionError(f"{what}: expected an expression string, got {type(text).__name__} {text!r}")
+    body, source = _syntax_tree(text, what)
+    return _Translator(names, what, text, source).visit(body)
+
+
+def _syntax_tree(text: str, what: str) -> tuple[ast.expr, str]:
+    """The checked syntax tree of ``text``: length, depth and size within the limits before anything is built."""
+    if len(text) > MAX_EXPRESSION_LENGTH:
+        raise ExpressionError(f"{what}: the expression has {len(text)} characters (limit {MAX_EXPRESSION_LENGTH}): "
+                              f"{text[:30]!r}...; simplify it or split it into parameters")
+    # Engineers write x^2; Python's ^ binds looser than + and *, so it is
+    # rewritten before parsing rather than mapped on the syntax tree.
+    source = text.strip().replace("^", "**")
     try:
-        # Engineers write x^2; Python's ^ binds looser than + and *, so it is
-        # rewritten before parsing rather than mapped on the syntax tree.
-        tree = ast.parse(text.strip().replace("^", "**"), mode="eval")
+        tree = ast.parse(source, mode="eval")
     except SyntaxError as exc:
         raise ExpressionError(f"{what}: cannot parse {text!r} ({exc.msg})") from None
-    return _Translator(names, what, text).visit(tree.body)
+    except (RecursionError, MemoryError):  # the parser's own stack: nesting far beyond the limit
+        raise ExpressionError(f"{what}: the expression is nested more than {MAX_EXPRESSION_DEPTH} levels deep "
+                              f"(limit {MAX_EXPRESSION_DEPTH}): {text[:30]!r}...") from None
+    terms, stack = 0, [(tree.body, 1)]
+    while stack:  # iterative: a deep tree must not exhaust the Python stack here either
+        node, depth = stack.pop()
+        terms += 1
+        if depth > MAX_EXPRESSION_DEPTH:
+            raise ExpressionError(f"{what}: the expression is nested more than {MAX_EXPRESSION_DEPTH} levels deep "
+                                  f"(limit {MAX_EXPRESSION_DEPTH}): {text[:30]!r}...")
+        if terms > MAX_EXPRESSION_TERMS:
+            raise ExpressionError(f"{what}: the expression has more than {MAX_EXPRESSION_TERMS} terms "
+                                  f"(limit {MAX_EXPRESSION_TERMS}): {text[:30]!r}...")
+        stack.extend((child, depth + (0 if _chained(node, child) else 1)) for child in ast.iter_child_nodes(node)
+                     if not isinstance(child, (ast.operator, ast.unaryop, ast.expr_context)))
+    return tree.body, source
+
+
+_SUMS, _PRODUCTS = (ast.Add, ast.Sub), (ast.Mult, ast.Div)
+
+
+def _chained(parent: ast.AST, child: ast.AST) -> bool:
+    """``a + b + c`` is one sum, not a nesting: the left operand of a sum (product) that is a sum (product)."""
+    if not (isinstance(parent, ast.BinOp) and isinstance(child, ast.BinOp) and child is parent.left):
+        return False
+    return any(isinstance(parent.op, group) and isinstance(child.op, group) for group in (_SUMS, _PRODUCTS))
 
 
 def _rename(expr: sp.Basic, names: Mapping[str, sp.Symbol], what: str) -> sp.Expr:
@@ -133,18 +176,19 @@ def free_names(text: str) -> list[str]:
     Lets callers declare new design symbols (``beta1``) before parsing.
     """
     try:
-        tree = ast.parse(str(text).strip().replace("^", "**"), mode="eval")
-    except SyntaxError:
-        return []  # parse_expression reports the syntax error with context
-    return [node.id for node in ast.walk(tree)
+        body, _ = _syntax_tree(str(text), "expression")
+    except ExpressionError:
+        return []  # parse_expression reports the error with context
+    return [node.id for node in ast.walk(body)
             if isinstance(node, ast.Name) and node.id not in FUNCTIONS and node.id not in _CONSTANTS]
 
 
 class _Translator(ast.NodeVisitor):
-    def __init__(self, names: Mapping[str, sp.Symbol], what: str, text: str):
+    def __init__(self, names: Mapping[str, sp.Symbol], what: str, text: str, source: str):
         self.names = names
         self.what = what
         self.text = text
+        self.source = source
 
     def _fail(self, detail: str) -> ExpressionError:
         return ExpressionError(f"{self.what}: {detail} in {self.text!r}")
@@ -157,7 +201,12 @@ class _Translator(ast.NodeVisitor):
         value = node.value
         if isinstance(value, bool) or not isinstance(value, (int, float)):
             raise self._fail(f"unsupported constant {value!r}")
-        return sp.Rational(repr(value)) if isinstance(value, float) else sp.Integer(value)
+        # The literal as written ("0.1" is 1/10, "1e400" is not inf): the digits are checked before expansion.
+        literal = ast.get_source_segment(self.source, node) or repr(value)
+        number = exact_number(literal, what=self.what, error=ExpressionError)
+        if isinstance(value, float):
+            check_double(number, what=self.what, error=ExpressionError, text=literal)
+        return sp.Rational(number.numerator, number.denominator)
 
     def visit_Name(self, node: ast.Name) -> sp.Expr:
         if node.id in self.names:
@@ -172,11 +221,46 @@ class _Translator(ast.NodeVisitor):
         op = _BINOPS.get(type(node.op))
         if op is None:
             raise self._fail(f"unsupported operator {type(node.op).__name__!r}")
-        return op(self.visit(node.left), self.visit(node.right))
+        left, right = self.visit(node.left), self.visit(node.right)
+        if isinstance(node.op, ast.Pow):
+            self._check_power(left, right)
+        return self._check_size(op(left, right))
+
+    def _check_power(self, base: sp.Expr, exponent: sp.Expr) -> None:
+        """An exact power may not explode: a bounded numeric exponent, a result of bounded size (estimated)."""
+        if not exponent.is_Number:
+            if exponent.free_symbols:
+                raise self._fail(f"the exponent {exponent} is not a number (a symbolic exponent can take any "
+                                 "size once values are given); write exp(k*log(x)) if you mean it")
+            return
+        if exponent.is_Rational:
+            p, q = abs(int(exponent.p)), int(exponent.q)
+            # A number to a power is bounded by its digits; a power of a name by its exponent, since the
+            # name's value is only known later.
+            if base.is_Rational and q <= MAX_EXPONENT:
+                if max(digits(int(base.p)), digits(int(base.q))) * p > MAX_NUMBER_DIGITS:
+                    raise self._fail(f"{_short(base)}**{_short(exponent)} has more than {MAX_NUMBER_DIGITS} digits "
+                                     f"(limit {MAX_NUMBER_DIGITS})")
+            elif max(p, q) > MAX_EXPONENT:
+                raise self._fail(f"the exponent {_short(exponent)} is larger than {MAX_EXPONENT} "
+                                 f"(limit {MAX_EXPONENT} on exact powers of names)")
+
+    def _check_size(self, value: sp.Expr) -> sp.Expr:
+        """Exact numbers stay within MAX_NUMBER_DIGITS and powers within MAX_EXPONENT (sympy merges them)."""
+        for atom in value.atoms(sp.Rational) if not value.is_Rational else (value,):
+            if max(digits(int(atom.p)), digits(int(atom.q))) > MAX_NUMBER_DIGITS:
+                raise self._fail(f"an exact number has more than {MAX_NUMBER_DIGITS} digits "
+                                 f"(limit {MAX_NUMBER_DIGITS})")
+        for power in value.atoms(sp.Pow):
+            exponent = power.exp
+            if exponent.is_Rational and max(abs(int(exponent.p)), int(exponent.q)) > MAX_EXPONENT:
+                raise self._fail(f"the power {_short(power)} has an exponent larger than {MAX_EXPONENT} "
+                                 f"(limit {MAX_EXPONENT} on exact powers)")
+        return value
 
     def visit_UnaryOp(self, node: ast.UnaryOp) -> sp.Expr:
         if isinstance(node.op, ast.USub):
-            return -self.visit(node.operand)
+            return self._check_size(-self.visit(node.operand))
         if isinstance(node.op, ast.UAdd):
             return self.visit(node.operand)
         raise self._fail(f"unsupported operator {type(node.op).__name__!r}")
@@ -187,4 +271,12 @@ class _Translator(ast.NodeVisitor):
             raise self._fail(f"call of {name!r} is not allowed (allowed: {', '.join(sorted(FUNCTIONS))})")
         if node.keywords:
             raise self._fail("keyword arguments are not allowed")
-        return FUNCTIONS[node.func.id](*[self.visit(arg) for arg in node.args])
+        return self._check_size(FUNCTIONS[node.func.id](*[self.visit(arg) for arg in node.args]))
+
+
+def _short(value: sp.Basic) -> str:
+    """A value for a message: its text, or its size when the text would be long."""
+    if isinstance(value, sp.Integer) and digits(int(value)) > 40:
+        return f"<integer of about {digits(int(value))} digits>"
+    text = str(value)
+    return text if len(text) <= 60 else text[:30] + "..."

@@ -13,12 +13,14 @@ import sys
 import tomllib
 from collections.abc import Mapping
 from dataclasses import dataclass, field
+from fractions import Fraction
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 import sympy as sp
 
+from .._limits import MAX_NUMBER_DIGITS, check_double, decimal_fraction, digits
 from ..exceptions import DimensionError, ExpressionError, FreeSymbolError, ModelError, NotRealError
 from ._expr import exact_number, parse_expression
 from ._interop import matrix_rows, statespace_matrices
@@ -300,6 +302,8 @@ class Model:
             _check_sign(key, number, self.symbols[key])
             subs[self.symbols[key]] = number
         remaining = tuple(p for p in self.parameters if p not in values)
+        for name in ("A", "C", "d", "b", "time_scale"):
+            _check_number_size(getattr(self, name).subs(subs), name)
         return Model(name=self.name, states=self.states, output=self.output,
                      A=self.A.subs(subs), C=self.C.subs(subs), d=self.d.subs(subs),
                      b=self.b.subs(subs), time_scale=self.time_scale.subs(subs),
@@ -414,17 +418,32 @@ def rational_value(value: Any, *, what: str) -> sp.Rational:
     NumPy or sympy) is its exact binary value (``0.1`` is
     ``3602879701896397/36028797018963968``), the number the computer actually
     holds, as the certificate checker reads it (:func:`exact_number`).
+    A value is meant as a double: it must be 0 or a normal double in magnitude
+    (``"1e400"`` and ``"1e-400"`` are refused), with at most
+    :data:`~switchobs._limits.MAX_NUMBER_DIGITS` digits.
     """
     try:
         number = exact_number(value, what=what)
     except ExpressionError as exc:
         raise ModelError(str(exc)) from None
     if isinstance(number, sp.Rational):
-        return number
-    try:
-        return sp.Rational(str(value).strip())
-    except (ValueError, TypeError, SyntaxError, sp.SympifyError):
-        raise ModelError(f"{what}: {value!r} is not a finite number (write e.g. 187.5 or 375/2)") from None
+        exact = Fraction(int(number.p), int(number.q))
+        if max(digits(exact.numerator), digits(exact.denominator)) > MAX_NUMBER_DIGITS:
+            raise ModelError(f"{what}: the value has more than {MAX_NUMBER_DIGITS} digits "
+                             f"(limit {MAX_NUMBER_DIGITS})")
+    else:  # text (a decimal or a fraction), size-checked before it is expanded
+        exact = decimal_fraction(str(value), what=what, error=ModelError)
+    check_double(exact, what=what, error=ModelError, text=str(value).strip())
+    return sp.Rational(exact.numerator, exact.denominator)
+
+
+def _check_number_size(expr: sp.Basic, name: str) -> None:
+    """Exact numbers stay printable and cheap once values are substituted (``a**64`` at ``a = 1e300``)."""
+    for atom in expr.atoms(sp.Rational):
+        if max(digits(int(atom.p)), digits(int(atom.q))) > MAX_NUMBER_DIGITS:
+            raise ModelError(f"'{name}' holds an exact number of about {max(digits(int(atom.p)), digits(int(atom.q)))} "
+                             f"digits at these values (limit {MAX_NUMBER_DIGITS}); give smaller values or "
+                             "rescale the model")
 
 
 def _check_sign(name: str, value: sp.Rational, symbol: sp.Symbol) -> None:

@@ -38,6 +38,7 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
+from .._atomic import staged_directory
 from ..exceptions import SimulationError
 from ._progress import Progress, Stage, check_prerequisites
 
@@ -240,7 +241,8 @@ def run_demo(out_dir: str | Path = "out/demo", *, fast: bool = False,
     Parameters
     ----------
     out_dir : path
-        Created if needed; receives ``report.md``, ``report.json``, the
+        Created if needed (checked writable before any stage runs); the files appear in it only when
+        the whole run succeeds, and none of them otherwise.  It receives ``report.md``, ``report.json``, the
         certificates, the generated C sources and the figures.
     fast : bool
         Shorter braking (ends shortly after the change to snow) and a shorter
@@ -270,58 +272,61 @@ def run_demo(out_dir: str | Path = "out/demo", *, fast: bool = False,
 
     settings = DemoSettings.for_mode(fast)
     out = Path(out_dir)
-    out.mkdir(parents=True, exist_ok=True)
+    # Every file is written into a staging folder and moved into `out` only when the whole run succeeds;
+    # the report names the files at their final place.
+    with staged_directory(out, what="the demo output into") as work:
+        with progress.stage("rig", "built-in models abs-xbs3, abs-xbs4 with the TU Delft rig of seed 000"):
+            models = _rig_models()
+        designs: dict[str, Any] = {}
+        with progress.stage("design", "symbolic K+ / K- (Theorem 1), exact re-check"):
+            for name, spectrum in DEMO_MODELS:
+                designs[name] = _design(models[name], spectrum)
+                progress.note(f"{name}: at beta1 = beta2 = 100, K+ = [{', '.join(f'{k:.6g}' for k in designs[name][1]['K_plus'])}]")
+        certs: dict[str, dict[str, Any]] = {}
+        with progress.stage("certify", "LMIs + exact re-check, certificate JSON re-verified from the file"):
+            for name, _ in DEMO_MODELS:
+                certs[name] = _certify(models[name], designs[name][0], work)
+                progress.note(f"{name}: {'verified' if certs[name]['verified'] else 'NOT verified'}")
+        code: dict[str, dict[str, Any]] = {}
+        with progress.stage("codegen", "C99 observers, compiled, compared with Python, timed"):
+            for name, _ in DEMO_MODELS:
+                code[name] = _codegen(models[name], *designs[name], work, settings)
+                progress.note(f"{name}: {code[name]['prefix']}, {code[name]['run_ns']:.0f} ns per step")
+        with progress.stage("braking", "dry -> wet -> snow, encoder chain, C observer in the loop"):
+            t0 = time.perf_counter()
+            sc, result, record = demo_braking({n: c["observer"] for n, c in code.items()}, settings)
+            braking = summarise_braking(sc, result, record, time.perf_counter() - t0)
+            progress.note(f"{result.status}, {float(result.series['t'][-1]):.2f} s simulated, "
+                          f"{record.events} encoder edges")
+        model_results = tuple(
+            ModelResult(model=name, spectrum=spectrum,
+                        K_plus_symbolic=tuple(str(k) for k in designs[name][0].K_plus),
+                        K_minus_symbolic=tuple(str(k) for k in designs[name][0].K_minus),
+                        exact_checks=designs[name][0].verify(),
+                        K_plus=tuple(float(k) for k in designs[name][1]["K_plus"]),
+                        K_minus=tuple(float(k) for k in designs[name][1]["K_minus"]),
+                        method=DEMO_METHOD, discrete=certs[name]["discrete"],
+                        certificate=str(out / certs[name]["path"].name),
+                        certified=certs[name]["certified"],
+                        verdict=certs[name]["verdict"], verified=certs[name]["verified"],
+                        verification=certs[name]["checks"], c_prefix=code[name]["prefix"], c_files=code[name]["files"],
+                        c_run_ns=code[name]["run_ns"], c_step_us=code[name]["step_us"],
+                        c_vs_python=code[name]["c_vs_python"])
+            for name, spectrum in DEMO_MODELS)
+        with progress.stage("report", "figures, report.md, report.json"):
+            from .._figures import save_figure
+            from ._plots import demo_figures
 
-    with progress.stage("rig", "built-in models abs-xbs3, abs-xbs4 with the TU Delft rig of seed 000"):
-        models = _rig_models()
-    designs: dict[str, Any] = {}
-    with progress.stage("design", "symbolic K+ / K- (Theorem 1), exact re-check"):
-        for name, spectrum in DEMO_MODELS:
-            designs[name] = _design(models[name], spectrum)
-            progress.note(f"{name}: at beta1 = beta2 = 100, K+ = [{', '.join(f'{k:.6g}' for k in designs[name][1]['K_plus'])}]")
-    certs: dict[str, dict[str, Any]] = {}
-    with progress.stage("certify", "LMIs + exact re-check, certificate JSON re-verified from the file"):
-        for name, _ in DEMO_MODELS:
-            certs[name] = _certify(models[name], designs[name][0], out)
-            progress.note(f"{name}: {'verified' if certs[name]['verified'] else 'NOT verified'}")
-    code: dict[str, dict[str, Any]] = {}
-    with progress.stage("codegen", "C99 observers, compiled, compared with Python, timed"):
-        for name, _ in DEMO_MODELS:
-            code[name] = _codegen(models[name], *designs[name], out, settings)
-            progress.note(f"{name}: {code[name]['prefix']}, {code[name]['run_ns']:.0f} ns per step")
-    with progress.stage("braking", "dry -> wet -> snow, encoder chain, C observer in the loop"):
-        t0 = time.perf_counter()
-        sc, result, record = demo_braking({n: c["observer"] for n, c in code.items()}, settings)
-        braking = summarise_braking(sc, result, record, time.perf_counter() - t0)
-        progress.note(f"{result.status}, {float(result.series['t'][-1]):.2f} s simulated, "
-                      f"{record.events} encoder edges")
-    model_results = tuple(
-        ModelResult(model=name, spectrum=spectrum,
-                    K_plus_symbolic=tuple(str(k) for k in designs[name][0].K_plus),
-                    K_minus_symbolic=tuple(str(k) for k in designs[name][0].K_minus),
-                    exact_checks=designs[name][0].verify(),
-                    K_plus=tuple(float(k) for k in designs[name][1]["K_plus"]),
-                    K_minus=tuple(float(k) for k in designs[name][1]["K_minus"]),
-                    method=DEMO_METHOD, discrete=certs[name]["discrete"], certificate=str(certs[name]["path"]),
-                    certified=certs[name]["certified"],
-                    verdict=certs[name]["verdict"], verified=certs[name]["verified"],
-                    verification=certs[name]["checks"], c_prefix=code[name]["prefix"], c_files=code[name]["files"],
-                    c_run_ns=code[name]["run_ns"], c_step_us=code[name]["step_us"],
-                    c_vs_python=code[name]["c_vs_python"])
-        for name, spectrum in DEMO_MODELS)
-    with progress.stage("report", "figures, report.md, report.json"):
-        from .._figures import save_figure
-        from ._plots import demo_figures
+            figures = [out / save_figure(fig, work / name).name
+                       for name, fig in demo_figures(sc, result, record).items()]
+            report = DemoReport(out_dir=str(out), settings=settings, models=model_results, braking=braking,
+                                files=tuple(sorted([*map(str, figures), str(out / "report.md"), str(out / "report.json"),
+                                                    *(m.certificate for m in model_results),
+                                                    *(str(out / f) for m in model_results for f in m.c_files)])),
+                                timings=progress.summary())
+            from ._markdown import demo_markdown
 
-        figures = [save_figure(fig, out / name) for name, fig in demo_figures(sc, result, record).items()]
-        report = DemoReport(out_dir=str(out), settings=settings, models=model_results, braking=braking,
-                            files=tuple(sorted([*map(str, figures), str(out / "report.md"), str(out / "report.json"),
-                                                *(m.certificate for m in model_results),
-                                                *(str(out / f) for m in model_results for f in m.c_files)])),
-                            timings=progress.summary())
-        from ._markdown import demo_markdown
-
-        (out / "report.json").write_text(json.dumps(report.to_json(), indent=2) + "\n", encoding="utf-8")
-        (out / "report.md").write_text(demo_markdown(report), encoding="utf-8")
+            (work / "report.json").write_text(json.dumps(report.to_json(), indent=2) + "\n", encoding="utf-8")
+            (work / "report.md").write_text(demo_markdown(report), encoding="utf-8")
     return DemoReport(out_dir=report.out_dir, settings=settings, models=model_results, braking=braking,
                       files=report.files, timings=progress.summary())

@@ -18,6 +18,7 @@ from pathlib import Path
 
 import numpy as np
 
+from .._atomic import write_files
 from .._progress import progress
 from ..exceptions import PrerequisiteError
 from ..loop import EstimatorSpec, xbs_estimator
@@ -628,14 +629,8 @@ def reproduction_pages(root: str | Path = ".") -> tuple[ReproductionPage, ...]:
 
 def write_reproductions(root: str | Path = ".") -> tuple[Path, ...]:
     """Write :func:`reproduction_pages` under ``root``; return the paths written."""
-    out = []
-    for page in reproduction_pages(root):
-        path = Path(root) / page.path
-        tmp = path.with_suffix(".md.tmp")
-        tmp.write_text(page.text, encoding="utf-8")
-        tmp.replace(path)
-        out.append(path)
-    return tuple(out)
+    return write_files(root, {page.path: page.text for page in reproduction_pages(root)},
+                       what="the reproduction pages under")
 
 
 def stale_pages(root: str | Path = ".") -> tuple[str, ...]:

@@ -16,6 +16,7 @@ from pathlib import Path
 
 import sympy as sp
 
+from .._atomic import write_files
 from .._progress import progress
 from ..design import GainDesign, design
 from ..model import Model, builtin_model
@@ -259,11 +260,5 @@ def theory_documents() -> tuple[TheoryDocument, ...]:
 
 def write_theory(out_dir: str | Path = "theory") -> tuple[Path, ...]:
     """Write :func:`theory_documents` into ``out_dir`` (created if needed); return the paths written."""
-    out = Path(out_dir)
-    out.mkdir(parents=True, exist_ok=True)
-    paths = []
-    for doc in theory_documents():
-        path = out / doc.filename
-        path.write_text(doc.text, encoding="utf-8")
-        paths.append(path)
-    return tuple(paths)
+    return write_files(out_dir, {doc.filename: doc.text for doc in theory_documents()},
+                       what="the theory documents into")

@@ -1,0 +1,90 @@
+"""The failure policy of the ``switchobs`` command: one line on stderr and a documented exit status.
+
+=====  ==========================================================================
+ 0     success (a certificate holds, files written, a run finished)
+ 1     a negative verdict or a failed run (no certificate holds, an observer diverged)
+ 2     bad input or environment (a malformed model or certificate, a limit exceeded,
+       an output that cannot be written, a missing compiler), and internal errors
+ 130   interrupted (Ctrl-C)
+=====  ==========================================================================
+
+Nothing else reaches the user: errors raised on purpose
+(:class:`switchobs.exceptions.SwitchobsError`) print their message; input that
+exhausts the interpreter (``RecursionError``, ``MemoryError``,
+``OverflowError``) and a failed write (``OSError``, naming the path) print
+what happened; any other exception is a bug, printed as one line asking for a
+report (with the traceback when ``SWITCHOBS_DEBUG=1``).  ``docs/errors.md``
+states the same policy.
+"""
+
+from __future__ import annotations
+
+import os
+import sys
+import traceback
+from collections.abc import Callable
+
+from ..exceptions import FreeSymbolError, SwitchobsError
+
+__all__ = ["EXIT_OK", "EXIT_FAILED", "EXIT_BAD_INPUT", "EXIT_INTERRUPTED", "DEBUG_ENV", "EXTRAS", "guarded",
+           "install_hint"]
+
+EXIT_OK = 0
+EXIT_FAILED = 1
+EXIT_BAD_INPUT = 2
+EXIT_INTERRUPTED = 130
+#: Environment variable: when set to a non-empty value other than 0, an internal error also prints its traceback.
+DEBUG_ENV = "SWITCHOBS_DEBUG"
+#: Optional third-party modules -> the extra that installs them.
+EXTRAS: dict[str, str] = {"casadi": "codegen", "matplotlib": "plots", "dask": "sweep", "distributed": "sweep"}
+
+
+def install_hint(module: str | None) -> str:
+    """How to install what ``module`` belongs to: its extra, or a reinstall."""
+    extra = EXTRAS.get((module or "").split(".")[0])
+    if extra is not None:
+        return f'install it with pip install "switchobs[{extra}]" (or `make install`)'
+    return "reinstall with `make install` (or pip install -e .)"
+
+
+def _one_line(text: str, limit: int = 500) -> str:
+    line = " ".join(str(text).split())
+    return line if len(line) <= limit else line[:limit] + " ..."
+
+
+def _message(exc: BaseException) -> str:
+    """The one line for an exception that escaped a command, without the ``switchobs CMD: error:`` prefix."""
+    if isinstance(exc, SwitchobsError):
+        # The library names what has no value; only here is the way to give it a command-line flag.
+        hint = "; give values with --param NAME=VALUE" if isinstance(exc, FreeSymbolError) else ""
+        return f"{exc}{hint}"
+    if isinstance(exc, ModuleNotFoundError) and (exc.name or "").split(".")[0] in EXTRAS:
+        return f"this needs {exc.name}, which is not installed; {install_hint(exc.name)}"
+    if isinstance(exc, RecursionError):
+        return "the input is nested too deeply to process (RecursionError); simplify it"
+    if isinstance(exc, MemoryError):
+        return "out of memory: the input or the options ask for more than this machine has; make them smaller"
+    if isinstance(exc, OverflowError):
+        return f"a number is too large to process ({exc}); check the values and options"
+    if isinstance(exc, OSError):
+        where = f" {exc.filename!r}" if exc.filename else ""
+        return f"cannot access{where}: {exc.strerror or exc}"
+    return (f"internal error {type(exc).__name__}: {exc} (a bug in switchobs: please report it with the command "
+            f"line; {DEBUG_ENV}=1 shows the traceback)")
+
+
+def guarded(command: str, run: Callable[[], int | None]) -> int:
+    """Run one sub-command under the policy: its exit status, or one line on stderr and 1, 2 or 130."""
+    try:
+        return int(run() or EXIT_OK)
+    except BrokenPipeError:  # output piped into `head`: not an error of ours
+        sys.stdout = open(os.devnull, "w")
+        return EXIT_OK
+    except KeyboardInterrupt:
+        print(f"switchobs {command}: interrupted", file=sys.stderr)
+        return EXIT_INTERRUPTED
+    except Exception as exc:
+        if os.environ.get(DEBUG_ENV, "") not in ("", "0"):
+            traceback.print_exc()
+        print(f"switchobs {command}: error: {_one_line(_message(exc))}", file=sys.stderr)
+        return EXIT_BAD_INPUT

@@ -1,0 +1,167 @@
+"""Fuzzing the input boundaries: random model files and mutated certificates (issue 13, docs/errors.md).
+
+Every generated input is run through the real command line (``design`` for a model file, ``verify``
+for a certificate); each run must end with exit 0, 1 or 2, and a failure must be exactly one line on
+stderr, never a traceback or an internal error. Hypothesis draws ``SWITCHOBS_FUZZ_EXAMPLES`` inputs
+per test (10 by default, derandomised so that ``make test`` is repeatable; ``make fuzz`` draws many
+more, at random); a subprocess per input would cost seconds of start-up each, so the inputs are
+collected first and run in one subprocess capped at 1 GiB of address space, and a failure names its
+input (it is not shrunk).
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import random
+
+from hypothesis import HealthCheck, given, settings
+from hypothesis import strategies as st
+
+from _cli_batch import run_batch, valid_certificate
+
+EXAMPLES = int(os.environ.get("SWITCHOBS_FUZZ_EXAMPLES", "10"))
+FUZZING = "SWITCHOBS_FUZZ_EXAMPLES" in os.environ
+DRAW = settings(max_examples=EXAMPLES, deadline=None, derandomize=not FUZZING, database=None,
+                suppress_health_check=list(HealthCheck))
+#: Wall time allowed per input (the subprocess's timeout is this times the batch size, plus start-up).
+SECONDS_PER_INPUT = 20
+
+PARAMETERS = ["a", "b", "c"]
+NUMBERS = st.one_of(
+    st.integers(-10**6, 10**6).map(str),
+    st.floats(allow_nan=False, allow_infinity=False, width=64).map(repr),
+    st.sampled_from(["1e400", "1e-400", "-1e308", "2.2e-308", "5e-324", "1e999999999", "1e-999999999", "0",
+                     "1/3", "375/2", "1/0", "9" * 1200, "0.1", "1_000", "nan", "inf", "-0.0"]),
+)
+NAMES = st.sampled_from(PARAMETERS + ["pi", "E", "zz", "t", "y"])
+
+
+def _expressions() -> st.SearchStrategy[str]:
+    leaves = st.one_of(NUMBERS, NAMES)
+
+    def extend(inner: st.SearchStrategy[str]) -> st.SearchStrategy[str]:
+        return st.one_of(
+            st.tuples(inner, st.sampled_from(["+", "-", "*", "/", "**", "^"]), inner).map(lambda t: f"({t[0]}{t[1]}{t[2]})"),
+            st.tuples(st.sampled_from(["exp", "log", "sqrt", "sin", "abs", "sign", "open", "__import__"]), inner)
+            .map(lambda t: f"{t[0]}({t[1]})"),
+            st.tuples(st.integers(1, 3000), inner).map(lambda t: "-" * t[0] + t[1]),
+            st.tuples(inner, st.sampled_from(["10**10", "9**9**9", "100000", "1/3", "a", "-2", "0.5"]))
+            .map(lambda t: f"({t[0]})**({t[1]})"),
+            # long sums, kept under a megabyte of text
+            st.tuples(inner, st.integers(2, 60_000)).map(lambda t: "+".join([t[0]] * min(t[1], 10**6 // len(t[0])))),
+        )
+    return st.recursive(leaves, extend, max_leaves=6)
+
+
+#: Expressions a model would hold: small numbers, the parameters, + - * / and small powers.
+BENIGN = st.recursive(st.one_of(st.integers(-50, 50).map(str), st.sampled_from(PARAMETERS)),
+                      lambda inner: st.tuples(inner, st.sampled_from(["+", "-", "*", "/"]), inner)
+                      .map(lambda t: f"({t[0]}{t[1]}{t[2]})") | inner.map(lambda e: f"{e}^2"), max_leaves=4)
+EXPRESSIONS = st.one_of(BENIGN, BENIGN, _expressions())
+JUNK = st.one_of(st.none(), st.booleans(), st.integers(), st.lists(st.integers(), max_size=3),
+                 st.dictionaries(st.text(max_size=3), st.integers(), max_size=2), st.text(max_size=20))
+
+
+@st.composite
+def model_files(draw: st.DrawFn) -> tuple[str, int]:
+    """A TOML model and its state count: mostly well-formed, hostile expressions and values, sometimes a broken key."""
+    n = draw(st.integers(1, 3))
+    states = [f"z{i + 1}" for i in range(n)]
+    data: dict = {
+        "name": "fuzz", "states": states, "parameters": PARAMETERS,
+        "A": [[draw(EXPRESSIONS) if draw(st.booleans()) else "0" for _ in range(n)] for _ in range(n)],
+        "C": ["1"] + ["0"] * (n - 1),
+        "time_scale": draw(st.one_of(st.just("y"), EXPRESSIONS)),
+        "values": {p: draw(st.one_of(st.integers(-100, 100).map(str), st.integers(-100, 100).map(str), NUMBERS))
+                   for p in PARAMETERS if draw(st.integers(0, 3))},
+    }
+    if draw(st.integers(0, 9)) == 0:  # a structural mutation
+        data[draw(st.sampled_from(["A", "C", "states", "values", "time_scale", "name", "bogus"]))] = draw(JUNK)
+    return _toml(data), n
+
+
+def _toml(data: dict) -> str:
+    def value(v) -> str:
+        if v is None:
+            return '""'
+        if isinstance(v, dict):
+            return "{" + ", ".join(f"{json.dumps(str(k))} = {value(x)}" for k, x in v.items()) + "}"
+        if isinstance(v, list):
+            return "[" + ", ".join(value(x) for x in v) + "]"
+        return json.dumps(v)
+    return "".join(f"{k} = {value(v)}\n" for k, v in data.items())
+
+
+def _check(cases: list[dict], results: list[dict], label: str) -> None:
+    assert len(results) == len(cases), f"{label}: hung or crashed on input {len(results)}: {cases[len(results)]}"
+    for case, result in zip(cases, results):
+        err = result["stderr"]
+        assert result["rc"] in (0, 1, 2), (case, result)
+        assert "Traceback" not in err and "internal error" not in err, (case, result)
+        if result["rc"] == 2:
+            assert err.count("\n") == 1 and err.startswith("switchobs "), (case, result)
+
+
+def _draw(strategy: st.SearchStrategy) -> list:
+    """``EXAMPLES`` inputs drawn by Hypothesis (collected, to be run in one batch)."""
+    drawn: list = []
+
+    @DRAW
+    @given(strategy)
+    def collect(example) -> None:
+        drawn.append(example)
+    collect()
+    return drawn
+
+
+def test_random_model_files_end_in_one_line_and_a_documented_status():
+    poles = st.lists(st.sampled_from(["-1", "-2", "-1e400", "-beta1", "-10**100", "1"]), min_size=3, max_size=3)
+    cases = [{"argv": ["design", "m.toml", f"--spectrum={','.join(p[:n])}"], "files": {"m.toml": text}}
+             for (text, n), p in _draw(st.tuples(model_files(), poles))]
+    _check(cases, run_batch(cases, timeout=30 + SECONDS_PER_INPUT * len(cases)), "model files")
+
+
+def _paths(node, prefix=()):
+    """Every path into a JSON tree (keys and list indices)."""
+    yield prefix
+    if isinstance(node, dict):
+        for k, v in node.items():
+            yield from _paths(v, (*prefix, k))
+    elif isinstance(node, list):
+        for i, v in enumerate(node):
+            yield from _paths(v, (*prefix, i))
+
+
+CERT_VALUES = st.one_of(
+    JUNK, NUMBERS, st.floats(), st.just([[["1"]]]), st.just("1" * 3999 + "/7"),
+    st.integers(1, 30).map(lambda d: [[[["1"]]] * d]), st.just({"kind": "dwell-time", "tau_D": "1e3000", "P": []}),
+)
+
+
+@st.composite
+def certificates(draw: st.DrawFn) -> str:
+    """The valid certificate with 1 to 3 mutations: a value replaced, a key deleted, a list emptied or grown."""
+    doc = json.loads(valid_certificate())
+    rng = random.Random(draw(st.integers(0, 2**32)))
+    for _ in range(draw(st.integers(1, 3))):
+        paths = [p for p in _paths(doc) if p]
+        path = rng.choice(paths)
+        parent = doc
+        for key in path[:-1]:
+            parent = parent[key]
+        action = draw(st.sampled_from(["replace", "replace", "delete", "grow"]))
+        if action == "delete" and isinstance(parent, dict):
+            del parent[path[-1]]
+        elif action == "grow" and isinstance(parent[path[-1]], list):
+            parent[path[-1]] = parent[path[-1]] * draw(st.integers(0, 3))
+        else:
+            parent[path[-1]] = draw(CERT_VALUES)
+    return json.dumps(doc)
+
+
+def test_mutated_certificates_end_in_one_line_and_a_documented_status():
+    flags = st.sampled_from([[], ["--strict"], ["--json"]])
+    cases = [{"argv": ["verify", "c.json", *f], "files": {"c.json": text}}
+             for text, f in _draw(st.tuples(certificates(), flags))]
+    _check(cases, run_batch(cases, timeout=30 + SECONDS_PER_INPUT * len(cases)), "certificates")
