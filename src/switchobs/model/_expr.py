@@ -25,7 +25,7 @@ import numpy as np
 import sympy as sp
 
 from .._limits import (MAX_EXPONENT, MAX_EXPRESSION_DEPTH, MAX_EXPRESSION_LENGTH, MAX_EXPRESSION_TERMS,
-                       MAX_NUMBER_DIGITS, check_double, digits, exact_number)
+                       MAX_NUMBER_DIGITS, check_double, digits, decimal_fraction)
 from ..exceptions import ExpressionError
 
 __all__ = ["parse_expression", "free_names", "exact_number", "FUNCTIONS"]
@@ -203,7 +203,7 @@ class _Translator(ast.NodeVisitor):
             raise self._fail(f"unsupported constant {value!r}")
         # The literal as written ("0.1" is 1/10, "1e400" is not inf): the digits are checked before expansion.
         literal = ast.get_source_segment(self.source, node) or repr(value)
-        number = exact_number(literal, what=self.what, error=ExpressionError)
+        number = decimal_fraction(literal, what=self.what, error=ExpressionError)
         if isinstance(value, float):
             check_double(number, what=self.what, error=ExpressionError, text=literal)
         return sp.Rational(number.numerator, number.denominator)
