@@ -24,7 +24,7 @@ def test_hoang2014_xbs3_certificate_verdict(xbs3_report):
     assert rep.verdict.to_json() == {"arbitrary_switching": "UGS", "dwell_time": "any", "strict_cqlf": "none",
                                      "common_lyapunov": "exists"}
     kinds = [c["kind"] for c in rep.document["certificates"]]
-    assert kinds == ["hespanha", "no-strict-cqlf", "dwell-time"]
+    assert kinds == ["hespanha", "singular-sum", "dwell-time"]
     assert rep.document["observer"]["K_plus"] == ["84", "-7312/375", "-64/3"]   # seed 000 Sec. III-E
     assert rep.document["observer"]["K_minus"] == ["-16", "-512/375", "64/3"]
 
@@ -75,7 +75,7 @@ def test_tampered_family_or_gain_is_caught(xbs3_report):
 
 def test_tampered_dual_and_dwell_time_and_verdict(xbs3_report):
     def edit_dual(d):
-        _cert(d, "no-strict-cqlf")["R"][0][1][1] = "-1"
+        _cert(d, "singular-sum")["v"] = ["1", "0", "0"]   # (A_plus + A_minus) e1 = K_minus - K_plus != 0
 
     def edit_dwell(d):
         c = _cert(d, "dwell-time")
@@ -85,7 +85,7 @@ def test_tampered_dual_and_dwell_time_and_verdict(xbs3_report):
         d["verdict"]["arbitrary_switching"] = "UGES"
 
     r = _tampered(xbs3_report.document, edit_dual)
-    assert not r.holds and "R_A_plus >= 0 fails" in next(c.detail for c in r.checks if c.name == "no-strict-cqlf")
+    assert not r.holds and "entry 1 is nonzero" in next(c.detail for c in r.checks if c.name == "singular-sum")
     r = _tampered(xbs3_report.document, edit_dwell)
     assert not r.holds and "tau_D" in next(c.detail for c in r.checks if c.name == "dwell-time")
     r = _tampered(xbs3_report.document, edit_verdict)
@@ -189,7 +189,7 @@ def test_schema_round_trip_keeps_the_json_and_types_the_verdict(xbs3_report):
 
     doc = CertificateDocument.from_json(xbs3_report.document)
     assert json.dumps(doc.to_json()) == json.dumps(xbs3_report.document)
-    assert [c.kind for c in doc.certificates] == [CertificateKind.HESPANHA, CertificateKind.NO_STRICT_CQLF,
+    assert [c.kind for c in doc.certificates] == [CertificateKind.HESPANHA, CertificateKind.SINGULAR_SUM,
                                                   CertificateKind.DWELL_TIME]
     assert doc.verdict == xbs3_report.verdict
     assert xbs3_report.verdict.arbitrary_switching is ArbitrarySwitching.UGS

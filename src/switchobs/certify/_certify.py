@@ -162,11 +162,14 @@ class CertificationReport:
         if s.certified:
             strict_res = "exists"
         elif s.dual is not None and s.dual.certified:
-            strict_res = "none (dual certificate)" if s.dual.kind == "no-strict-cqlf" else "none (not even non-strict)"
+            strict_res = {"no-strict-cqlf": "none (dual certificate)",
+                          "singular-sum": "none (A_plus + A_minus singular)" if list(self.family.names) == [
+                              "A_plus", "A_minus"] else "none (sum of the A_p singular)"}.get(
+                s.dual.kind, "none (not even non-strict)")
         else:
             strict_res = "not found" if not s.feasible else "feasible, not certified"
-        rows.append(("strict common P", strict_res, f"{s.margin:.3g}", _solver(s), _exact_col(s.certified or (
-            s.dual is not None and s.dual.certified))))
+        rows.append(("strict common P", strict_res, "-" if math.isnan(s.margin) else f"{s.margin:.3g}", _solver(s),
+                     _exact_col(s.certified or (s.dual is not None and s.dual.certified))))
         h = self.hespanha
         h_res = "certified" if h.certified else ("not found" if not h.feasible else "feasible, not certified")
         rows.append(("Hespanha non-strict P", h_res, "-" if math.isnan(h.margin) else f"{h.margin:.3g}", _solver(h),

@@ -22,6 +22,13 @@ Certificate kinds and what they prove (``W_p(P) = A_p' P + P A_p``):
     ``R_p >= 0``, not all zero, ``sum_p (A_p R_p + R_p A_p') >= 0``: no strict common
     quadratic Lyapunov function exists (theorem of alternatives: for such a P,
     ``0 <= <P, sum_p ...> = sum_p <W_p(P), R_p> < 0``).
+``singular-sum``
+    A rational ``v != 0`` with ``(sum_p A_p) v = 0``: no strict common quadratic
+    Lyapunov function exists (for such a P, ``M = sum_p A_p`` has
+    ``M' P + P M < 0``, yet ``v' (M' P + P M) v = 2 (M v)' P v = 0``).  It is the
+    ``no-strict-cqlf`` alternative with ``R_p = v v'``, stored as ``v`` and checked
+    in ``O(n^2)``; every observer pair has one (``A_plus + A_minus = (K_minus - K_plus) C``,
+    ``v`` in the kernel of ``C``).
 ``no-common-lyapunov``
     Same with ``S = sum_p (A_p R_p + R_p A_p') >= 0`` and ``S != 0``: not even a
     non-strict ``P > 0`` with ``W_p(P) <= 0`` exists.
@@ -51,7 +58,7 @@ from ._exact import (Matrix, add, definiteness, expm_enclosure, fraction_matrix,
                      integer_form, is_zero, lyapunov_form, matmul, observable, scale, sqrt_upper,
                      transpose)
 from ._schema import (ANY_DWELL, ArbitrarySwitching, CertificateDocument, CertificateKind, Check, DualEntry,
-                      DwellTimeEntry, Existence, FamilySection, LyapunovEntry, Verdict)
+                      DwellTimeEntry, Existence, FamilySection, LyapunovEntry, SingularSumEntry, Verdict)
 
 __all__ = ["Check", "VerificationReport", "verify_certificate", "load_certificate", "implied_verdict",
            "planar_case_exact"]
@@ -209,6 +216,17 @@ def _check_dual(names: Sequence[str], As: Sequence[Matrix], cert: DualEntry) -> 
     return Check(kind, True)
 
 
+def _check_singular_sum(names: Sequence[str], As: Sequence[Matrix], cert: SingularSumEntry) -> Check:
+    n = len(As[0])
+    v = fraction_matrix([cert.v], what="singular-sum v", rows=1, cols=n)[0]
+    if all(x == 0 for x in v):
+        return Check("singular-sum", False, "v is zero (the kernel vector must be nonzero)")
+    for i in range(n):
+        if sum(A[i][j] * v[j] for A in As for j in range(n) if v[j]) != 0:
+            return Check("singular-sum", False, f"(sum_p A_p) v = 0 fails: entry {i + 1} is nonzero")
+    return Check("singular-sum", True)
+
+
 def _check_dwell(names: Sequence[str], As: Sequence[Matrix], cert: DwellTimeEntry) -> Check:
     n = len(As[0])
     try:
@@ -324,7 +342,8 @@ def implied_verdict(holding: Sequence[str], planar_case: str | None = None,
         dwell_time = None
     if strict:
         cqlf = Existence.EXISTS
-    elif {CertificateKind.NO_STRICT_CQLF, CertificateKind.NO_COMMON_LYAPUNOV} & set(holding) \
+    elif {CertificateKind.NO_STRICT_CQLF, CertificateKind.NO_COMMON_LYAPUNOV, CertificateKind.SINGULAR_SUM} \
+            & set(holding) \
             or planar_case in ("i", "ii", "iv"):
         cqlf = Existence.NONE
     else:
@@ -384,6 +403,8 @@ def verify_certificate(doc: Mapping[str, Any] | str | Path) -> VerificationRepor
             c = _check_hespanha(names, As, cert)
         elif kind in (CertificateKind.NO_STRICT_CQLF, CertificateKind.NO_COMMON_LYAPUNOV):
             c = _check_dual(names, As, cert)
+        elif kind is CertificateKind.SINGULAR_SUM:
+            c = _check_singular_sum(names, As, cert)
         elif kind is CertificateKind.DWELL_TIME:
             c = _check_dwell(names, As, cert)
             if c.holds:
