@@ -39,6 +39,20 @@ def _cert(d, kind):
     return next(c for c in d["certificates"] if c["kind"] == kind)
 
 
+def test_interval_arithmetic_verifies_and_rejects_like_the_exact_check(xbs3_report, tmp_path, capsys):
+    assert xbs3_report.document["provenance"]["arithmetic"] == "exact"
+    rep = verify_certificate(xbs3_report.document, arithmetic="interval")
+    assert rep.holds and rep.arithmetic == "interval" and "interval arithmetic" in str(rep)
+    bad = copy.deepcopy(xbs3_report.document)
+    _cert(bad, "hespanha")["P"][0][0] = "-1"
+    rep = verify_certificate(bad, arithmetic="interval")
+    assert not rep.holds and "P > 0 fails" in next(c.detail for c in rep.checks if c.name == "hespanha")
+    path = tmp_path / "cert.json"
+    xbs3_report.write(path)
+    assert main(["verify", str(path), "--arithmetic", "interval"]) == 0
+    assert capsys.readouterr().out.startswith("certificate holds (interval arithmetic")
+
+
 def test_tampered_P_breaks_the_named_inequality(xbs3_report):
     def edit(d):
         _cert(d, "hespanha")["P"][2][2] = "1/100"

@@ -29,6 +29,7 @@ from ..design import GainDesign
 from ..exceptions import CertificateError, FreeSymbolError, SpectrumError
 from ..model import Model
 from ._box import BoxCertificate, certify_box
+from ._exact import arithmetic as exact_arithmetic
 from ._exact import fraction_matrix, matrix_strings
 from ._family import Family, FamilyLike, as_family, format_spectrum
 from ._discrete import DiscreteCertificate, discrete_certificate, stability_function
@@ -215,7 +216,7 @@ def certify(family: FamilyLike, *, names: Sequence[str] | None = None, output: A
             dwell: bool = True, eps: float = DEFAULT_EPS, solvers: Sequence[str] = DEFAULT_SOLVERS,
             observer: ObserverSection | None = None, provenance: Mapping[str, Any] | None = None,
             discrete: str | None = None, box: BoxCertificate | None = None,
-            candidate: tuple[Any, Sequence[Any]] | None = None) -> CertificationReport:
+            candidate: tuple[Any, Sequence[Any]] | None = None, arithmetic: str = "exact") -> CertificationReport:
     """Run every applicable check on a switched family and return the verified certificate.
 
     Parameters
@@ -244,6 +245,11 @@ def certify(family: FamilyLike, *, names: Sequence[str] | None = None, output: A
     candidate : (P, [C_p, ...]), optional
         An exact Hespanha certificate known beforehand (the design's common P),
         checked exactly before any LMI (see :func:`common_lyapunov`).
+    arithmetic : {"exact", "interval"}
+        How the checks decide strict definiteness: exact rational elimination, or
+        first an LDL' in arb balls with outward rounding (rigorous too, and much
+        faster for large ``P`` with long rationals; exact wherever it cannot decide).
+        Recorded in the document's provenance.
 
     Returns
     -------
@@ -262,6 +268,15 @@ def certify(family: FamilyLike, *, names: Sequence[str] | None = None, output: A
     ('any', 'ii')
     """
     fam = as_family(family, names)
+    with exact_arithmetic(arithmetic):
+        return _certify(fam, output, dwell, eps, solvers, observer, provenance, discrete, box, candidate,
+                        arithmetic)
+
+
+def _certify(fam: Family, output: Any, dwell: bool, eps: float, solvers: Sequence[str],
+             observer: ObserverSection | None, provenance: Mapping[str, Any] | None, discrete: str | None,
+             box: BoxCertificate | None, candidate: tuple[Any, Sequence[Any]] | None,
+             arithmetic: str) -> CertificationReport:
     if discrete is not None:
         stability_function(discrete)
         if output is None or list(fam.names) != ["A_plus", "A_minus"]:
@@ -308,14 +323,15 @@ def certify(family: FamilyLike, *, names: Sequence[str] | None = None, output: A
     tau = [Fraction(c.tau_D) for c in certs if c.kind is CertificateKind.DWELL_TIME]
     verdict = implied_verdict(holding, planar.case if planar is not None else None, tau)
     document = CertificateDocument(FamilySection(**fam.to_json()), tuple(certs), verdict,
-                                   {**(provenance or {}), "produced_by": "switchobs certify"}, sections)
+                                   {**(provenance or {}), "produced_by": "switchobs certify",
+                                    "arithmetic": arithmetic}, sections)
     doc = document.to_json()
     t0 = time.perf_counter()
     if certs:
         progress(f"certify: independent exact check of the certificate ({size})")
-        check = verify_certificate(doc)
+        check = verify_certificate(doc, arithmetic=arithmetic)
     else:
-        check = VerificationReport(False, (), verdict, verdict)
+        check = VerificationReport(False, (), verdict, verdict, arithmetic)
     timings["verify"] = time.perf_counter() - t0
     return CertificationReport(fam, strict, hesp, dw, planar, doc, check, verdict, verdict_text(verdict, planar),
                                timings, disc, discrete, box)
@@ -324,7 +340,7 @@ def certify(family: FamilyLike, *, names: Sequence[str] | None = None, output: A
 def certify_model(model: Model, *, values: Mapping[str, Any] | None = None, spectrum: str | Sequence | None = None,
                   gains: GainDesign | None = None, K_plus: Any = None, K_minus: Any = None, dwell: bool = True,
                   eps: float = DEFAULT_EPS, solvers: Sequence[str] = DEFAULT_SOLVERS,
-                  discrete: str | None = None, box: Any = None) -> CertificationReport:
+                  discrete: str | None = None, box: Any = None, arithmetic: str = "exact") -> CertificationReport:
     """Certify the switched observer of a numeric model (seed 004; seed 000 eq. (13)).
 
     The error dynamics in the rescaled time are ``A_plus = A - K_plus C`` and
@@ -346,7 +362,7 @@ def certify_model(model: Model, *, values: Mapping[str, Any] | None = None, spec
         the model's values (its design symbols must have values already).
     K_plus, K_minus : str or sequence, optional
         Numeric gains, e.g. ``"84,-7312/375,-64/3"`` (the command line's form).
-    dwell, eps, solvers, discrete
+    dwell, eps, solvers, discrete, arithmetic
         As in :func:`certify`.
     box : ParameterBox, ``["a=150:230", ...]`` or mapping, optional
         Also certify the gains for every parameter value of this box
@@ -415,7 +431,7 @@ def certify_model(model: Model, *, values: Mapping[str, Any] | None = None, spec
     robust = None if box is None else certify_box(parametric, box, Kp, Km, values=values, eps=eps, solvers=solvers)
     return certify([A_plus, A_minus], names=["A_plus", "A_minus"], output=model.C, dwell=dwell, eps=eps,
                    solvers=solvers, observer=observer, provenance=provenance, discrete=discrete, box=robust,
-                   candidate=_design_candidate(design))
+                   candidate=_design_candidate(design), arithmetic=arithmetic)
 
 
 def _design_candidate(design: GainDesign | None) -> tuple[Any, list[Any]] | None:

@@ -10,13 +10,20 @@ never exponentially as in naive rational elimination.
 The module deliberately imports nothing from numpy, scipy, cvxpy or sympy, so
 that the certificate checker built on it (:mod:`switchobs.certify._verify`)
 shares no code with the floating-point pipeline that produced a certificate.
+
+Large strict definiteness checks may instead run in interval arithmetic
+(``with arithmetic("interval"):``): an LDL' elimination in python-flint's
+``arb`` balls (outward rounding, 256 to 4096 bits) proves ``M > 0`` when every
+pivot's ball is positive; whatever it cannot prove is decided exactly as above.
 """
 
 from __future__ import annotations
 
 import math
 import operator
-from collections.abc import Iterable, Sequence
+from collections.abc import Iterable, Iterator, Sequence
+from contextlib import contextmanager
+from contextvars import ContextVar
 from dataclasses import dataclass
 from fractions import Fraction
 from typing import Any
@@ -27,7 +34,7 @@ __all__ = [
     "Matrix", "to_fraction", "fraction_matrix", "matrix_strings", "identity", "zeros", "transpose",
     "matmul", "add", "sub", "scale", "lyapunov_form", "integer_form", "Definiteness", "definiteness",
     "rank", "nullspace", "solve", "observable", "expm_enclosure", "inf_norm", "sqrt_lower", "sqrt_upper",
-    "is_zero",
+    "is_zero", "ARITHMETICS", "arithmetic",
 ]
 
 Matrix = list[list[Fraction]]
@@ -192,6 +199,64 @@ def sqrt_upper(x: Fraction, bits: int = 64) -> Fraction:
 
 
 # ------------------------------------------------------------------ definiteness
+#: How strict definiteness is decided: ``"exact"`` (rational Bareiss, standard library) or ``"interval"``
+#: (arb balls first, exact when they cannot decide).
+ARITHMETICS = ("exact", "interval")
+_ARITHMETIC: ContextVar[str] = ContextVar("switchobs_arithmetic", default="exact")
+#: Working precisions [bits] of the interval LDL', tried in turn.
+INTERVAL_BITS = (256, 1024, 4096)
+
+
+@contextmanager
+def arithmetic(kind: str) -> Iterator[None]:
+    """Decide strict definiteness in ``kind`` arithmetic inside the block (see the module docstring).
+
+    Raises
+    ------
+    CertificateError
+        ``kind`` is not one of :data:`ARITHMETICS`.
+    """
+    if kind not in ARITHMETICS:
+        raise CertificateError(f"arithmetic {kind!r} is unknown; use one of {', '.join(ARITHMETICS)}")
+    token = _ARITHMETIC.set(kind)
+    try:
+        yield
+    finally:
+        _ARITHMETIC.reset(token)
+
+
+def _interval_positive_definite(N: Sequence[Sequence[int]]) -> bool:
+    """``N > 0`` proven by an LDL' elimination in arb balls (True), or not proven (False).
+
+    Every ball contains the exact value of its entry, so positive pivot balls are the
+    exact pivots' signs: the ratios of consecutive leading principal minors (Sylvester).
+    """
+    import flint
+
+    n = len(N)
+    saved = flint.ctx.prec
+    try:
+        for bits in INTERVAL_BITS:
+            flint.ctx.prec = bits
+            a = [[flint.arb(x) for x in row] for row in N]
+            for k in range(n):
+                p = a[k][k]
+                if not p > 0:
+                    break
+                row_k = a[k]
+                for i in range(k + 1, n):
+                    f = a[i][k] / p
+                    row_i = a[i]
+                    for j in range(i, n):
+                        row_i[j] -= f * row_k[j]
+                        a[j][i] = row_i[j]
+            else:
+                return True
+    finally:
+        flint.ctx.prec = saved
+    return False
+
+
 @dataclass(frozen=True)
 class Definiteness:
     """Outcome of :func:`definiteness`.
@@ -239,6 +304,8 @@ def definiteness(M: Sequence[Sequence[Any]], *, strict: bool) -> Definiteness:
         a = [list(row) for row in M]
     else:
         a, _ = integer_form([[Fraction(x) for x in row] for row in M])
+    if strict and _ARITHMETIC.get() == "interval" and _interval_positive_definite(a):
+        return Definiteness(True)
     prev = 1
     kept: list[int] = []
     for k in range(n):

@@ -17,12 +17,15 @@ def register(sub: argparse._SubParsersAction) -> None:
                                    "the one they imply. Exit status 0 iff everything holds, 1 otherwise, "
                                    "2 for a malformed file.")
     p.add_argument("certificate", metavar="CERT.json", help="certificate written by switchobs certify --out")
+    p.add_argument("--arithmetic", choices=("exact", "interval"), default="exact",
+                   help="decide strict definiteness exactly (default) or by interval arithmetic with outward "
+                        "rounding where it can (rigorous, much faster for large certificates, e.g. n = 64)")
     p.add_argument("--json", action="store_true", help="print the report as JSON")
     p.set_defaults(func=run)
 
 
 def run(args: argparse.Namespace) -> int:
-    report = verify_certificate(args.certificate)
+    report = verify_certificate(args.certificate, arithmetic=args.arithmetic)
     if args.json:
         emit_json(report.to_json())
     else:
