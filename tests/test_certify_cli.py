@@ -15,7 +15,7 @@ from switchobs.model import builtin_model
 @pytest.fixture(scope="module")
 def xbs3_report():
     """abs-xbs3 on the TU Delft rig (a = 187.5, c = 34, seed 000 Fig. 2), beta1 = 10, beta2 = 20."""
-    return certify_model(builtin_model("abs-xbs3"), spectrum="-10,-20,-20")
+    return certify_model(builtin_model("abs-xbs3"), spectrum="-10,-20,-20", dwell=True)
 
 
 def test_hoang2014_xbs3_certificate_verdict(xbs3_report):
@@ -51,6 +51,15 @@ def test_interval_arithmetic_verifies_and_rejects_like_the_exact_check(xbs3_repo
     xbs3_report.write(path)
     assert main(["verify", str(path), "--arithmetic", "interval"]) == 0
     assert capsys.readouterr().out.startswith("certificate holds (interval arithmetic")
+
+
+def test_dwell_time_runs_by_default_only_where_it_can_change_the_verdict():
+    xbs3 = certify_model(builtin_model("abs-xbs3"), spectrum="-10,-20,-20")      # Hespanha: every dwell time
+    assert xbs3.dwell is None and xbs3.verdict.dwell_time == "any"
+    off = certify_model(builtin_model("abs-adaptive2"), K_plus="8,-2/25", K_minus="-3,-1/25")   # no common P
+    assert not off.hespanha.certified and off.dwell is not None and off.dwell.certified
+    with pytest.raises(CertificateError, match="dwell must be 'auto', True or False"):
+        certify_model(builtin_model("abs-xbs3"), spectrum="-10,-20,-20", dwell="always")
 
 
 def test_tampered_P_breaks_the_named_inequality(xbs3_report):

@@ -2,7 +2,8 @@
 
 :func:`certify` runs, for a family ``{A_p}``: the strict CQLF LMI (with its
 dual when infeasible), Hespanha's non-strict condition, the Geromel–Colaneri
-dwell time (when no strict CQLF is certified) and, for two ``2 x 2`` matrices,
+dwell time (by default only when neither of them is certified, the one case
+where it changes the verdict) and, for two ``2 x 2`` matrices,
 the Balde–Boscain–Mason classification.  The certificates that hold exactly
 are collected in a JSON document whose verdict is the one they imply, and
 the document is passed through the independent checker before it is
@@ -86,7 +87,7 @@ class CertificationReport:
     strict : LyapunovResult
     hespanha : LyapunovResult
     dwell : DwellTimeResult or None
-        Run when no strict CQLF is certified.
+        Run as ``certify(..., dwell=...)`` asks.
     planar : PlanarClassification or None
         For two 2 x 2 matrices.
     document : dict
@@ -213,7 +214,7 @@ def _exact_col(ok: bool) -> str:
 
 
 def certify(family: FamilyLike, *, names: Sequence[str] | None = None, output: Any = None,
-            dwell: bool = True, eps: float = DEFAULT_EPS, solvers: Sequence[str] = DEFAULT_SOLVERS,
+            dwell: bool | str = "auto", eps: float = DEFAULT_EPS, solvers: Sequence[str] = DEFAULT_SOLVERS,
             observer: ObserverSection | None = None, provenance: Mapping[str, Any] | None = None,
             discrete: str | None = None, box: BoxCertificate | None = None,
             candidate: tuple[Any, Sequence[Any]] | None = None, arithmetic: str = "exact") -> CertificationReport:
@@ -225,8 +226,12 @@ def certify(family: FamilyLike, *, names: Sequence[str] | None = None, output: A
     names : names of the matrices
     output : matrix, optional
         Output rows for Hespanha's LMI (the model's ``C`` for an observer).
-    dwell : bool
-        Compute the Geromel–Colaneri dwell time when no strict CQLF is certified.
+    dwell : {"auto", True, False}
+        Compute the Geromel–Colaneri dwell time: ``"auto"`` when neither a strict
+        CQLF nor a Hespanha certificate holds (a Hespanha certificate already gives
+        every positive dwell time, and the bisection's LMIs are ill-conditioned and
+        slow for large observers), True whenever no strict CQLF is certified (the
+        number itself, e.g. to compare designs), False never.
     eps : float
         Numerical margin threshold.
     solvers : cvxpy solvers in order of preference
@@ -273,7 +278,7 @@ def certify(family: FamilyLike, *, names: Sequence[str] | None = None, output: A
                         arithmetic)
 
 
-def _certify(fam: Family, output: Any, dwell: bool, eps: float, solvers: Sequence[str],
+def _certify(fam: Family, output: Any, dwell: bool | str, eps: float, solvers: Sequence[str],
              observer: ObserverSection | None, provenance: Mapping[str, Any] | None, discrete: str | None,
              box: BoxCertificate | None, candidate: tuple[Any, Sequence[Any]] | None,
              arithmetic: str) -> CertificationReport:
@@ -293,7 +298,9 @@ def _certify(fam: Family, output: Any, dwell: bool, eps: float, solvers: Sequenc
     hesp = common_lyapunov(fam, output=output, eps=eps, solvers=solvers, dual=False, candidate=candidate)
     timings["hespanha"] = time.perf_counter() - t0
     dw = None
-    if dwell and not strict.certified:
+    if dwell not in ("auto", True, False):
+        raise CertificateError(f"dwell must be 'auto', True or False, got {dwell!r}")
+    if (dwell is True or (dwell == "auto" and not hesp.certified)) and not strict.certified:
         t0 = time.perf_counter()
         progress(f"certify: Geromel-Colaneri dwell time, bisection ({size})")
         dw = dwell_time(fam, eps=eps, solvers=solvers)
@@ -338,7 +345,8 @@ def _certify(fam: Family, output: Any, dwell: bool, eps: float, solvers: Sequenc
 
 
 def certify_model(model: Model, *, values: Mapping[str, Any] | None = None, spectrum: str | Sequence | None = None,
-                  gains: GainDesign | None = None, K_plus: Any = None, K_minus: Any = None, dwell: bool = True,
+                  gains: GainDesign | None = None, K_plus: Any = None, K_minus: Any = None,
+                  dwell: bool | str = "auto",
                   eps: float = DEFAULT_EPS, solvers: Sequence[str] = DEFAULT_SOLVERS,
                   discrete: str | None = None, box: Any = None, arithmetic: str = "exact") -> CertificationReport:
     """Certify the switched observer of a numeric model (seed 004; seed 000 eq. (13)).
