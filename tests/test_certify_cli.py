@@ -58,6 +58,8 @@ def test_dwell_time_runs_by_default_only_where_it_can_change_the_verdict():
     assert xbs3.dwell is None and xbs3.verdict.dwell_time == "any"
     off = certify_model(builtin_model("abs-adaptive2"), K_plus="8,-2/25", K_minus="-3,-1/25")   # no common P
     assert not off.hespanha.certified and off.dwell is not None and off.dwell.certified
+    # without a common P the LMI dual is tried too: it excludes every common P, more than the singular sum
+    assert off.strict.dual.kind == "no-common-lyapunov" and off.verdict.common_lyapunov == "none"
     with pytest.raises(CertificateError, match="dwell must be 'auto', True or False"):
         certify_model(builtin_model("abs-xbs3"), spectrum="-10,-20,-20", dwell="always")
 

@@ -18,7 +18,7 @@ import math
 import os
 import time
 from collections.abc import Mapping, Sequence
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from fractions import Fraction
 from pathlib import Path
 from typing import Any
@@ -36,7 +36,8 @@ from ._family import Family, FamilyLike, as_family, format_spectrum
 from ._discrete import DiscreteCertificate, discrete_certificate, stability_function
 from ._dwell import DwellTimeResult, dwell_time
 from ._lmi import DEFAULT_SOLVERS
-from ._lyapunov import DEFAULT_EPS, LyapunovResult, common_lyapunov, strict_common_lyapunov
+from ._lyapunov import (DEFAULT_EPS, LyapunovResult, SingularSum, common_lyapunov, infeasibility_certificate,
+                        strict_common_lyapunov)
 from ._planar import PlanarClassification, classify_planar
 from ._rounding import short_sqrt_lower
 from ._schema import (ANY_DWELL, ArbitrarySwitching, BoxSection, CertificateDocument, CertificateKind,
@@ -297,6 +298,14 @@ def _certify(fam: Family, output: Any, dwell: bool | str, eps: float, solvers: S
     progress(f"certify: Hespanha non-strict common Lyapunov LMI and exact re-check ({size})")
     hesp = common_lyapunov(fam, output=output, eps=eps, solvers=solvers, dual=False, candidate=candidate)
     timings["hespanha"] = time.perf_counter() - t0
+    if not hesp.certified and isinstance(strict.dual, SingularSum):
+        # the singular sum excludes a strict P only; the LMI dual may exclude every common P
+        t0 = time.perf_counter()
+        progress(f"certify: dual (infeasibility) LMI: is there any common Lyapunov P? ({size})")
+        wider = infeasibility_certificate(fam, eps=eps, solvers=solvers)
+        if wider.certified and wider.kind == CertificateKind.NO_COMMON_LYAPUNOV:
+            strict = replace(strict, dual=wider)
+        timings["dual"] = time.perf_counter() - t0
     dw = None
     if dwell not in ("auto", True, False):
         raise CertificateError(f"dwell must be 'auto', True or False, got {dwell!r}")
