@@ -67,7 +67,8 @@ def run(args: argparse.Namespace) -> int:
     solvers = (args.solver,) if args.solver else ("CLARABEL", "SCS")
     dwell = True if args.dwell else False if args.no_dwell else "auto"
     report = certify_model(model, values=parse_params(args.param), spectrum=args.spectrum,
-                           K_plus=args.gains_plus, K_minus=args.gains_minus, dwell=dwell, solvers=solvers, discrete=args.discrete, box=args.box, arithmetic=args.arithmetic)
+                           K_plus=args.gains_plus, K_minus=args.gains_minus, dwell=dwell, solvers=solvers,
+                           discrete=args.discrete, box=args.box, arithmetic=args.arithmetic)
     if args.out:
         report.write(args.out)
     if args.json:
