@@ -265,7 +265,8 @@ def certify(family: FamilyLike, *, names: Sequence[str] | None = None, output: A
     ------
     DimensionError, ModelError, NotHurwitzError, SolverFailure
     CertificateError
-        An unknown ``discrete`` method, or ``discrete`` without ``output``.
+        An unknown ``discrete`` method, or ``discrete`` without ``output``; an unknown ``dwell``
+        or ``arithmetic``.
 
     Examples
     --------
@@ -274,6 +275,8 @@ def certify(family: FamilyLike, *, names: Sequence[str] | None = None, output: A
     ('any', 'ii')
     """
     fam = as_family(family, names)
+    if dwell not in ("auto", True, False):
+        raise CertificateError(f"dwell must be 'auto', True or False, got {dwell!r}")
     with exact_arithmetic(arithmetic):
         return _certify(fam, output, dwell, eps, solvers, observer, provenance, discrete, box, candidate,
                         arithmetic)
@@ -307,8 +310,6 @@ def _certify(fam: Family, output: Any, dwell: bool | str, eps: float, solvers: S
             strict = replace(strict, dual=wider)
         timings["dual"] = time.perf_counter() - t0
     dw = None
-    if dwell not in ("auto", True, False):
-        raise CertificateError(f"dwell must be 'auto', True or False, got {dwell!r}")
     if (dwell is True or (dwell == "auto" and not hesp.certified)) and not strict.certified:
         t0 = time.perf_counter()
         progress(f"certify: Geromel-Colaneri dwell time, bisection ({size})")
