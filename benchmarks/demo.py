@@ -66,9 +66,7 @@ def main() -> None:
               "process, and its CPU time (`RUSAGE_CHILDREN`: interpreter, imports and every stage), median "
               "[min–max]; the generated C step the demo ships, as the demo measures it (`<prefix>_run` over "
               f"{reports[0]['settings'].get('timing_steps', 'the')} ABS-like samples, best of 3, and one "
-              "`<prefix>_step` through ctypes), median [min–max] over the runs. The demo's clocks are wall "
-              "clocks, so these figures grow with the machine's load; the CPU time of the same C step is in "
-              "the generated-C table (`benchmarks/codegen_step.py`).")
+              "`<prefix>_step` through ctypes), median [min–max] over the runs.")
     notes = ["The braking stage simulates the whole emergency braking with the encoder chain and the C observers "
              "in the loop. Goal (whole demo under 3 minutes, `--fast` well under a minute): "
              f"{'**met**' if max(walls) < 180 else '**not met**'} (slowest run {max(walls):.1f} s wall)."]
