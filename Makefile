@@ -40,12 +40,14 @@ fuzz: $(STAMP)
 	SWITCHOBS_FUZZ_EXAMPLES=$(FUZZ_EXAMPLES) $(PY) -m pytest -q -p no:cacheprovider tests/test_fuzz_inputs.py tests/test_errors.py
 
 # Every benchmark script (benchmarks/_*.py are helpers), then their result tables into the docs pages.
+# BENCH_QUICK=1: every script with --quick (smaller sizes, fewer runs), printed only: nothing is published.
+BENCH_QUICK ?=
 bench: $(STAMP)
 	@$(PY) -m pip install --quiet -e ".[bench]" || echo "!!! could not install numba: codegen_step.py will say that its numba column is missing !!!"
 	@for f in benchmarks/[!_]*.py; do \
 	  [ "$$f" = benchmarks/render_docs.py ] && continue; \
-	  echo "== $$f"; $(PY) $$f || exit 1; done
-	$(PY) benchmarks/render_docs.py
+	  echo "== $$f"; $(PY) $$f $(if $(BENCH_QUICK),--quick) || exit 1; done
+	$(if $(BENCH_QUICK),@echo "BENCH_QUICK: smoke run - the results files and docs are unchanged",$(PY) benchmarks/render_docs.py)
 
 docs: $(STAMP)
 	NO_MKDOCS_2_WARNING=1 $(VENV)/bin/mkdocs build --strict --site-dir site

@@ -10,7 +10,7 @@ closed form: ``k_i^+`` the coefficients of the target polynomial, ``k_i^- = (-1)
   exact Lyapunov P and decay checks).
 
 CPU seconds (``time.process_time``), median [min-max] of ``REPEATS`` runs (1 for n = 16).
-Run: ``.venv/bin/python benchmarks/synthesis.py``.
+Run: ``.venv/bin/python benchmarks/synthesis.py [--quick | n ...]`` (``--quick``: n = 3, 4).
 """
 
 from __future__ import annotations
@@ -26,7 +26,7 @@ from fractions import Fraction
 from switchobs.model import builtin_model
 
 REPEATS = 3
-SIZES = tuple(int(x) for x in sys.argv[1:]) or (3, 4, 8, 16)
+SIZES = (3, 4) if "--quick" in sys.argv else tuple(int(x) for x in sys.argv[1:]) or (3, 4, 8, 16)
 HALF_WIDTH = "0.01"
 
 

@@ -15,7 +15,7 @@ from switchobs.model import builtin_model
 @pytest.fixture(scope="module")
 def xbs3_report():
     """abs-xbs3 on the TU Delft rig (a = 187.5, c = 34, seed 000 Fig. 2), beta1 = 10, beta2 = 20."""
-    return certify_model(builtin_model("abs-xbs3"), spectrum="-10,-20,-20")
+    return certify_model(builtin_model("abs-xbs3"), spectrum="-10,-20,-20", dwell=True)
 
 
 def test_hoang2014_xbs3_certificate_verdict(xbs3_report):
@@ -24,7 +24,7 @@ def test_hoang2014_xbs3_certificate_verdict(xbs3_report):
     assert rep.verdict.to_json() == {"arbitrary_switching": "UGS", "dwell_time": "any", "strict_cqlf": "none",
                                      "common_lyapunov": "exists"}
     kinds = [c["kind"] for c in rep.document["certificates"]]
-    assert kinds == ["hespanha", "no-strict-cqlf", "dwell-time"]
+    assert kinds == ["hespanha", "singular-sum", "dwell-time"]
     assert rep.document["observer"]["K_plus"] == ["84", "-7312/375", "-64/3"]   # seed 000 Sec. III-E
     assert rep.document["observer"]["K_minus"] == ["-16", "-512/375", "64/3"]
 
@@ -37,6 +37,31 @@ def _tampered(doc, edit):
 
 def _cert(d, kind):
     return next(c for c in d["certificates"] if c["kind"] == kind)
+
+
+def test_interval_arithmetic_verifies_and_rejects_like_the_exact_check(xbs3_report, tmp_path, capsys):
+    assert xbs3_report.document["provenance"]["arithmetic"] == "exact"
+    rep = verify_certificate(xbs3_report.document, arithmetic="interval")
+    assert rep.holds and rep.arithmetic == "interval" and "interval arithmetic" in str(rep)
+    bad = copy.deepcopy(xbs3_report.document)
+    _cert(bad, "hespanha")["P"][0][0] = "-1"
+    rep = verify_certificate(bad, arithmetic="interval")
+    assert not rep.holds and "P > 0 fails" in next(c.detail for c in rep.checks if c.name == "hespanha")
+    path = tmp_path / "cert.json"
+    xbs3_report.write(path)
+    assert main(["verify", str(path), "--arithmetic", "interval"]) == 0
+    assert capsys.readouterr().out.startswith("certificate holds (interval arithmetic")
+
+
+def test_dwell_time_runs_by_default_only_where_it_can_change_the_verdict():
+    xbs3 = certify_model(builtin_model("abs-xbs3"), spectrum="-10,-20,-20")      # Hespanha: every dwell time
+    assert xbs3.dwell is None and xbs3.verdict.dwell_time == "any"
+    off = certify_model(builtin_model("abs-adaptive2"), K_plus="8,-2/25", K_minus="-3,-1/25")   # no common P
+    assert not off.hespanha.certified and off.dwell is not None and off.dwell.certified
+    # without a common P the LMI dual is tried too: it excludes every common P, more than the singular sum
+    assert off.strict.dual.kind == "no-common-lyapunov" and off.verdict.common_lyapunov == "none"
+    with pytest.raises(CertificateError, match="dwell must be 'auto', True or False"):
+        certify_model(builtin_model("abs-xbs3"), spectrum="-10,-20,-20", dwell="always")
 
 
 def test_tampered_P_breaks_the_named_inequality(xbs3_report):
@@ -75,7 +100,7 @@ def test_tampered_family_or_gain_is_caught(xbs3_report):
 
 def test_tampered_dual_and_dwell_time_and_verdict(xbs3_report):
     def edit_dual(d):
-        _cert(d, "no-strict-cqlf")["R"][0][1][1] = "-1"
+        _cert(d, "singular-sum")["v"] = ["1", "0", "0"]   # (A_plus + A_minus) e1 = K_minus - K_plus != 0
 
     def edit_dwell(d):
         c = _cert(d, "dwell-time")
@@ -85,7 +110,7 @@ def test_tampered_dual_and_dwell_time_and_verdict(xbs3_report):
         d["verdict"]["arbitrary_switching"] = "UGES"
 
     r = _tampered(xbs3_report.document, edit_dual)
-    assert not r.holds and "R_A_plus >= 0 fails" in next(c.detail for c in r.checks if c.name == "no-strict-cqlf")
+    assert not r.holds and "entry 1 is nonzero" in next(c.detail for c in r.checks if c.name == "singular-sum")
     r = _tampered(xbs3_report.document, edit_dwell)
     assert not r.holds and "tau_D" in next(c.detail for c in r.checks if c.name == "dwell-time")
     r = _tampered(xbs3_report.document, edit_verdict)
@@ -189,7 +214,7 @@ def test_schema_round_trip_keeps_the_json_and_types_the_verdict(xbs3_report):
 
     doc = CertificateDocument.from_json(xbs3_report.document)
     assert json.dumps(doc.to_json()) == json.dumps(xbs3_report.document)
-    assert [c.kind for c in doc.certificates] == [CertificateKind.HESPANHA, CertificateKind.NO_STRICT_CQLF,
+    assert [c.kind for c in doc.certificates] == [CertificateKind.HESPANHA, CertificateKind.SINGULAR_SUM,
                                                   CertificateKind.DWELL_TIME]
     assert doc.verdict == xbs3_report.verdict
     assert xbs3_report.verdict.arbitrary_switching is ArbitrarySwitching.UGS

@@ -98,7 +98,7 @@ def test_hoang2014_xbs4_dwell_time_certified_despite_a_thin_margin():
     from switchobs.certify import certify_model
     from switchobs.model import builtin_model
 
-    rep = certify_model(builtin_model("abs-xbs4"), spectrum="-40,-40,-60,-60")
+    rep = certify_model(builtin_model("abs-xbs4"), spectrum="-40,-40,-60,-60", dwell=True)
     assert rep.dwell is not None and rep.dwell.certified
     assert rep.verdict.dwell_time == "any" and rep.verification.holds
     kinds = [c["kind"] for c in rep.document["certificates"]]

@@ -10,7 +10,8 @@ import sympy as sp
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from switchobs.certify._exact import (definiteness, expm_enclosure, fraction_matrix, lyapunov_form, nullspace,
+from switchobs.certify._exact import (_full_rank_mod_p, _interval_positive_definite, arithmetic, definiteness,
+                                      expm_enclosure, fraction_matrix, integer_form, lyapunov_form, nullspace,
                                       observable, rank, to_fraction)
 from switchobs.certify._rounding import factor_rows, range_basis, short_sqrt_lower
 from switchobs.exceptions import CertificateError, DimensionError
@@ -32,6 +33,24 @@ def test_definiteness_agrees_with_sympy_on_integer_matrices(M):
     S = sp.Matrix(M)
     assert definiteness(M, strict=True).holds == bool(S.is_positive_definite)
     assert definiteness(M, strict=False).holds == bool(S.is_positive_semidefinite)
+    with arithmetic("interval"):
+        assert definiteness(M, strict=True).holds == bool(S.is_positive_definite)
+
+
+def test_interval_arithmetic_proves_an_ill_conditioned_matrix_and_leaves_failures_to_the_exact_check():
+    n = 12
+    hilbert = [[Fraction(1, i + j + 1) for j in range(n)] for i in range(n)]   # smallest eigenvalue 1.05e-16
+    assert _interval_positive_definite(integer_form(hilbert)[0])
+    with arithmetic("interval"):
+        assert definiteness(hilbert, strict=True).holds
+        shifted = [[x - (Fraction(1, 10**15) if i == j else 0) for j, x in enumerate(row)]
+                   for i, row in enumerate(hilbert)]
+        assert not definiteness(shifted, strict=True).holds   # not proven by the balls, refuted exactly
+        bad = definiteness([[1, 2], [2, 1]], strict=True)
+    assert not bad.holds and bad.reason == "the principal minor on rows/columns [1, 2] is negative"
+    with pytest.raises(CertificateError, match="arithmetic 'float' is unknown"):
+        with arithmetic("float"):
+            pass
 
 
 def test_definiteness_semidefinite_zero_pivot_rule():
@@ -76,6 +95,10 @@ def test_rank_nullspace_observability():
     assert observable(A, [[Fraction(1), Fraction(0), Fraction(0)]]) == (True, 3)
     # a diagonal A with a single-state output is not observable
     assert observable(fraction_matrix([[1, 0], [0, 2]]), fraction_matrix([[1, 0]])) == (False, 1)
+    # the modular rank proves full rank only: (diag(1, 1 + p), e1 + e2) is unobservable modulo p = 2^61 - 1
+    p = (1 << 61) - 1
+    A, C = fraction_matrix([[1, 0], [0, 1 + p]]), fraction_matrix([[1, 1]])
+    assert not _full_rank_mod_p(A, C) and observable(A, C) == (True, 2)
 
 
 @pytest.mark.parametrize("A, T", [

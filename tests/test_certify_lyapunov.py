@@ -9,7 +9,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from switchobs.certify import (as_family, classify_planar, common_lyapunov, infeasibility_certificate,
-                               strict_common_lyapunov, verify_certificate)
+                               singular_sum, strict_common_lyapunov, verify_certificate)
 from switchobs.certify import _lmi
 from switchobs.certify._exact import definiteness, lyapunov_form, matmul, transpose
 from switchobs.certify._verify import planar_case_exact
@@ -86,7 +86,9 @@ def test_hoang2014_xbs_theorem1_pairs_have_no_strict_cqlf(b1, b2):
     for fam in (xbs3_family(b1, b2)[:2], xbs4_family(b1, b2)):
         res = strict_common_lyapunov(list(fam), names=["A_plus", "A_minus"])
         assert not res.certified and res.dual is not None and res.dual.certified
-        assert res.dual.kind == "no-strict-cqlf"
+        assert res.dual.kind == "singular-sum" and res.solver is None      # decided exactly, without an LMI
+        lmi = infeasibility_certificate(list(fam), names=["A_plus", "A_minus"])   # the LMI dual agrees
+        assert lmi.certified and lmi.kind == "no-strict-cqlf"
 
 
 def seed004_planar_example(k1, k2, a=A_RIG, c=C_RIG):
@@ -109,7 +111,9 @@ def test_seed004_2d_example_has_no_strict_cqlf(k1, k2, c):
     assert classify_planar(A1, A2).case == "ii"  # Gamma = -sqrt(det A1 det A2) exactly
     res = strict_common_lyapunov([A1, A2])
     assert not res.certified and not res.feasible
-    assert res.dual is not None and res.dual.certified and res.dual.kind == "no-strict-cqlf"
+    assert res.dual is not None and res.dual.certified and res.dual.kind == "singular-sum"
+    assert res.dual.v == (0, 1)                                          # the kernel of C = (1 0)
+    assert strict_common_lyapunov([A1, A2], dual=False).margin < 1e-7   # the LMI finds no strict P either
     hesp = common_lyapunov([A1, A2], output=[[1, 0]])
     assert hesp.certified
 
@@ -130,7 +134,8 @@ def test_theorem1_dual_certificate_R_equals_e2e2_in_any_dimension(n):
            "verdict": {"arbitrary_switching": "unknown", "dwell_time": None, "strict_cqlf": "none",
                        "common_lyapunov": "unknown"}}
     assert verify_certificate(doc).holds
-    assert not strict_common_lyapunov([Ap, Am]).certified
+    res = strict_common_lyapunov([Ap, Am])
+    assert not res.certified and res.dual.v == tuple(int(i == 1) for i in range(n))   # R_p = v v' = e2 e2'
 
 
 def _planted(n: int, count: int = 2, seed: int = 0) -> tuple[list[np.ndarray], np.ndarray]:
@@ -276,3 +281,30 @@ def test_a_large_planted_pair_is_certified_exactly_with_scs_first():
     assert res.certified and res.solver.solver == "SCS"
     for A in as_family(mats).exact:
         assert definiteness([[-x for x in r] for r in lyapunov_form(A, res.P)], strict=True).holds
+
+
+def _singular_sum_doc(As, v, strict_cqlf="none"):
+    return {"format": "switchobs-certificate", "version": 1,
+            "family": {"names": [f"A_{i + 1}" for i in range(len(As))], "matrices": As},
+            "certificates": [{"kind": "singular-sum", "v": v}],
+            "verdict": {"arbitrary_switching": "unknown", "dwell_time": None, "strict_cqlf": strict_cqlf,
+                        "common_lyapunov": "unknown"}}
+
+
+def test_singular_sum_certificate_is_checked_exactly_and_tampering_fails():
+    A1, A2 = [["-1", "-1"], ["1", "0"]], [["-1", "1"], ["-1", "0"]]   # A1 + A2 = [[-2, 0], [0, 0]]
+    cert = singular_sum([A1, A2])
+    assert cert.v == (0, 1) and cert.certificate().to_json() == {"kind": "singular-sum", "v": ["0", "1"],
+                                                                 "method": "exact kernel of sum_p A_p"}
+    assert verify_certificate(_singular_sum_doc([A1, A2], ["0", "1"])).holds
+    assert verify_certificate(_singular_sum_doc([A1, A2], ["0", "-7/3"])).holds        # any kernel vector
+    for v, reason in ((["1", "0"], "entry 1 is nonzero"), (["0", "0"], "v is zero")):
+        rep = verify_certificate(_singular_sum_doc([A1, A2], v))
+        check = next(c for c in rep.checks if c.name == "singular-sum")
+        assert not rep.holds and reason in check.detail
+    wrong_claim = verify_certificate(_singular_sum_doc([A1, A2], ["0", "1"], strict_cqlf="exists"))
+    assert not wrong_claim.holds and "strict_cqlf" in wrong_claim.checks[-1].detail
+
+
+def test_singular_sum_is_none_for_a_nonsingular_sum():
+    assert singular_sum([[[-1, 2], [-3, -4]], [[-2, 0], [1, -1]]]) is None

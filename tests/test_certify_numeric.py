@@ -109,10 +109,11 @@ def test_ctrl_c_stops_certify_with_130_and_no_certificate(tmp_path):
     n = 16
     model = chain_file(n, tmp_path)
     cert = tmp_path / "cert.json"
-    # --verbose: into a pipe, the progress notes are lines only when asked for
+    # --verbose: into a pipe, the progress notes are lines only when asked for; --dwell: the Geromel-Colaneri
+    # bisection runs for minutes at n = 16, so the signal finds it at work
     proc = subprocess.Popen([sys.executable, "-m", "switchobs", "--verbose", "certify", str(model), "--spectrum",
-                             spectrum(n), "--out", str(cert)], stderr=subprocess.PIPE, stdout=subprocess.PIPE,
-                            text=True)
+                             spectrum(n), "--dwell", "--out", str(cert)], stderr=subprocess.PIPE,
+                            stdout=subprocess.PIPE, text=True)
     first = proc.stderr.readline()          # the first progress line: the command is at work
     assert first.startswith("switchobs certify: [")
     proc.send_signal(signal.SIGINT)

@@ -128,6 +128,25 @@ def test_run_stops_at_the_first_failing_row_and_names_it(xbs4):
     assert err.value.code == StepStatus.BAD_DT
 
 
+def test_run_checks_dt_and_parameters_once_but_reports_what_step_reports(xbs4):
+    """_run validates dt and the parameters before its loop; when they fail, the rows keep _step's order."""
+    ref, c, _ = xbs4
+    bad = c.with_params({"alpha1": NAN})
+    rows = np.tile(SIG, (3, 1))
+    for x0, row0, dt, status in ((X0, SIG, 1e-3, StepStatus.BAD_PARAM),
+                                 (X0, (NAN, *SIG[1:]), 1e-3, StepStatus.NONFINITE_SIGNAL),
+                                 ((NAN, *X0[1:]), SIG, 1e-3, StepStatus.NONFINITE_STATE),
+                                 (X0, (NAN, *SIG[1:]), -1.0, StepStatus.BAD_DT)):
+        rows[0] = row0
+        with pytest.raises(ObserverInputError, match="row 0") as run_err:
+            bad.run(x0, rows, dt)
+        with pytest.raises(ObserverInputError) as step_err:
+            bad.step(x0, row0, dt)
+        assert run_err.value.code == step_err.value.code == status
+    assert np.array_equal(c.run(X0, np.tile(SIG, (3, 1)), 1e-3)[-1],
+                          c.step(c.step(c.step(X0, SIG, 1e-3), SIG, 1e-3), SIG, 1e-3))
+
+
 def test_domain_guards_of_d_and_b_match_the_reference(tmp_path):
     """Division by zero and log of a non-positive number in d(y): NONFINITE_RESULT in C and in Python."""
     path = tmp_path / "dom.toml"

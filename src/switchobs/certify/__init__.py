@@ -12,6 +12,7 @@ certify_model             -- the same for a model's observer: A_plus = A - K_plu
 common_lyapunov           -- Hespanha's non-strict common Lyapunov condition (LMI + exact check)
 strict_common_lyapunov    -- strict CQLF, or an exact dual proof that none exists
 infeasibility_certificate -- the dual (theorem of alternatives) certificate alone
+singular_sum              -- exact proof without an LMI that no strict CQLF exists (sum_p A_p singular)
 dwell_time                -- Geromel–Colaneri dwell-time bound, bisected on tau, certified exactly
 discrete_certificate      -- the sampled observer e+ = R(h A_pm) e for every step h = |s| dt (exact SOS proof
                              or exact refutation; rk4, euler, midpoint, radau3)
@@ -38,14 +39,14 @@ plot_certification, plot_spectra, plot_dwell_margin, plot_planar
                           -- figures: spectra of the modes, dwell-time margin against T, planar level sets and
                              the worst-case trajectory (matplotlib Figures, ``ax=``)
 
-Results: CertificationReport, LyapunovResult, DualCertificate, DwellTimeResult,
+Results: CertificationReport, LyapunovResult, DualCertificate, SingularSum, DwellTimeResult,
 PlanarClassification, VerificationReport, TrajectoryReport, AdmissibleConstants, DiscreteCertificate,
 DiscreteVerdict, BoxCertificate, ParameterBox, GainSynthesis, FrontPoint,
 ZeroCrossing, Family.
 
 Certificate schema (one frozen class per section, ``to_json`` / ``from_json``):
 CertificateDocument, FamilySection, ObserverSection, LyapunovEntry, DualEntry,
-DwellTimeEntry, PlanarEntry, BoxSection, Verdict; enums CertificateKind, ArbitrarySwitching,
+SingularSumEntry, DwellTimeEntry, PlanarEntry, BoxSection, Verdict; enums CertificateKind, ArbitrarySwitching,
 Existence; document_section registers a new optional section.
 """
 
@@ -54,13 +55,14 @@ from ._certify import CertificationReport, certify, certify_model, verdict_text
 from ._discrete import DiscreteCertificate, DiscreteVerdict, check_discrete, discrete_certificate
 from ._dwell import DwellTimeResult, dwell_time
 from ._family import Family, as_family
-from ._lyapunov import (DEFAULT_EPS, DualCertificate, LyapunovResult, common_lyapunov,
-                        infeasibility_certificate, strict_common_lyapunov)
+from ._lyapunov import (DEFAULT_EPS, DualCertificate, LyapunovResult, SingularSum, common_lyapunov,
+                        infeasibility_certificate, singular_sum, strict_common_lyapunov)
 from ._planar import PlanarClassification, classify_planar
 from ._plot import plot_certification, plot_dwell_margin, plot_planar, plot_spectra
 from ._synthesis import FrontPoint, GainSynthesis, noise_decay_front, noise_gain, synthesize, synthesize_gains
 from ._schema import (ArbitrarySwitching, BoxSection, CertificateDocument, CertificateKind, DualEntry, DwellTimeEntry, Existence,
-                      FamilySection, LyapunovEntry, ObserverSection, PlanarEntry, Verdict, document_section)
+                      FamilySection, LyapunovEntry, ObserverSection, PlanarEntry, SingularSumEntry, Verdict,
+                      document_section)
 from ._trajectory import (AdmissibleConstants, TrajectoryReport, ZeroCrossing, admissible_constants, pe_level,
                           regressor_excitation, time_rescaling, trajectory_conditions, windowed_energy,
                           zero_crossings)
@@ -74,11 +76,12 @@ __all__ = [
     "DwellTimeResult", "dwell_time",
     "Family", "as_family",
     "DEFAULT_EPS", "DualCertificate", "LyapunovResult", "common_lyapunov", "infeasibility_certificate",
-    "strict_common_lyapunov",
+    "strict_common_lyapunov", "SingularSum", "singular_sum",
     "PlanarClassification", "classify_planar",
     "plot_certification", "plot_dwell_margin", "plot_planar", "plot_spectra",
     "ArbitrarySwitching", "CertificateDocument", "CertificateKind", "DualEntry", "DwellTimeEntry", "Existence",
-    "FamilySection", "LyapunovEntry", "ObserverSection", "PlanarEntry", "Verdict", "document_section",
+    "FamilySection", "LyapunovEntry", "ObserverSection", "PlanarEntry", "SingularSumEntry", "Verdict",
+    "document_section",
     "AdmissibleConstants", "TrajectoryReport", "ZeroCrossing", "admissible_constants", "pe_level",
     "regressor_excitation", "time_rescaling", "trajectory_conditions", "windowed_energy", "zero_crossings",
     "Check", "VerificationReport", "load_certificate", "verify_certificate",

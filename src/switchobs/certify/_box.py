@@ -34,11 +34,13 @@ import time
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 from fractions import Fraction
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
-import cvxpy as cp
 import numpy as np
 import sympy as sp
+
+if TYPE_CHECKING:  # imported where an LMI is built (see _lmi)
+    import cvxpy as cp
 
 from .._limits import check_double
 from ..exceptions import CertificateError, FreeSymbolError, ModelError
@@ -259,6 +261,8 @@ class BoxCertificate:
 def pwl_margin(modes: Sequence[Sequence[np.ndarray]], T: float, segments: int, *,
                solvers: Sequence[str] = DEFAULT_SOLVERS) -> tuple[list[list[np.ndarray]], float, SolveInfo]:
     """Normalised margin of the piecewise-linear dwell-time LMIs at dwell time ``T`` (positive: feasible)."""
+    import cvxpy as cp
+
     n = modes[0][0].shape[0]
     K = segments
     delta = T / K

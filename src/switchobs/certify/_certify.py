@@ -2,7 +2,8 @@
 
 :func:`certify` runs, for a family ``{A_p}``: the strict CQLF LMI (with its
 dual when infeasible), Hespanha's non-strict condition, the Geromel–Colaneri
-dwell time (when no strict CQLF is certified) and, for two ``2 x 2`` matrices,
+dwell time (by default only when neither of them is certified, the one case
+where it changes the verdict) and, for two ``2 x 2`` matrices,
 the Balde–Boscain–Mason classification.  The certificates that hold exactly
 are collected in a JSON document whose verdict is the one they imply, and
 the document is passed through the independent checker before it is
@@ -16,7 +17,7 @@ import json
 import math
 import time
 from collections.abc import Mapping, Sequence
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from fractions import Fraction
 from pathlib import Path
 from typing import Any
@@ -30,12 +31,14 @@ from ..design import GainDesign
 from ..exceptions import CertificateError, FreeSymbolError, SpectrumError
 from ..model import Model
 from ._box import BoxCertificate, certify_box
+from ._exact import arithmetic as exact_arithmetic
 from ._exact import fraction_matrix, matrix_strings
 from ._family import Family, FamilyLike, as_family, format_spectrum, user_matrix
 from ._discrete import DiscreteCertificate, discrete_certificate, stability_function
 from ._dwell import DwellTimeResult, dwell_time
 from ._lmi import DEFAULT_SOLVERS
-from ._lyapunov import DEFAULT_EPS, LyapunovResult, common_lyapunov, strict_common_lyapunov
+from ._lyapunov import (DEFAULT_EPS, LyapunovResult, SingularSum, common_lyapunov, infeasibility_certificate,
+                        strict_common_lyapunov)
 from ._planar import PlanarClassification, classify_planar
 from ._rounding import short_sqrt_lower
 from ._schema import (ANY_DWELL, ArbitrarySwitching, BoxSection, CertificateDocument, CertificateKind,
@@ -86,7 +89,7 @@ class CertificationReport:
     strict : LyapunovResult
     hespanha : LyapunovResult
     dwell : DwellTimeResult or None
-        Run when no strict CQLF is certified.
+        Run as ``certify(..., dwell=...)`` asks.
     planar : PlanarClassification or None
         For two 2 x 2 matrices.
     document : dict
@@ -192,11 +195,14 @@ class CertificationReport:
         if s.certified:
             strict_res = "exists"
         elif s.dual is not None and s.dual.certified:
-            strict_res = "none (dual certificate)" if s.dual.kind == "no-strict-cqlf" else "none (not even non-strict)"
+            strict_res = {"no-strict-cqlf": "none (dual certificate)",
+                          "singular-sum": "none (A_plus + A_minus singular)" if list(self.family.names) == [
+                              "A_plus", "A_minus"] else "none (sum of the A_p singular)"}.get(
+                s.dual.kind, "none (not even non-strict)")
         else:
             strict_res = "not found" if not s.feasible else "feasible, not certified"
-        rows.append(("strict common P", strict_res, f"{s.margin:.3g}", _solver(s), _exact_col(s.certified or (
-            s.dual is not None and s.dual.certified))))
+        rows.append(("strict common P", strict_res, "-" if math.isnan(s.margin) else f"{s.margin:.3g}", _solver(s),
+                     _exact_col(s.certified or (s.dual is not None and s.dual.certified))))
         h = self.hespanha
         h_res = "certified" if h.certified else ("not found" if not h.feasible else "feasible, not certified")
         rows.append(("Hespanha non-strict P", h_res, "-" if math.isnan(h.margin) else f"{h.margin:.3g}", _solver(h),
@@ -243,10 +249,10 @@ def _exact_col(ok: bool) -> str:
 
 
 def certify(family: FamilyLike, *, names: Sequence[str] | None = None, output: Any = None,
-            dwell: bool = True, eps: float = DEFAULT_EPS, solvers: Sequence[str] = DEFAULT_SOLVERS,
+            dwell: bool | str = "auto", eps: float = DEFAULT_EPS, solvers: Sequence[str] = DEFAULT_SOLVERS,
             observer: ObserverSection | None = None, provenance: Mapping[str, Any] | None = None,
             discrete: str | None = None, box: BoxCertificate | None = None,
-            candidate: tuple[Any, Sequence[Any]] | None = None) -> CertificationReport:
+            candidate: tuple[Any, Sequence[Any]] | None = None, arithmetic: str = "exact") -> CertificationReport:
     """Run every applicable check on a switched family and return the verified certificate.
 
     Parameters
@@ -255,8 +261,12 @@ def certify(family: FamilyLike, *, names: Sequence[str] | None = None, output: A
     names : names of the matrices
     output : matrix, optional
         Output rows for Hespanha's LMI (the model's ``C`` for an observer).
-    dwell : bool
-        Compute the Geromel–Colaneri dwell time when no strict CQLF is certified.
+    dwell : {"auto", True, False}
+        Compute the Geromel–Colaneri dwell time: ``"auto"`` when neither a strict
+        CQLF nor a Hespanha certificate holds (a Hespanha certificate already gives
+        every positive dwell time, and the bisection's LMIs are ill-conditioned and
+        slow for large observers), True whenever no strict CQLF is certified (the
+        number itself, e.g. to compare designs), False never.
     eps : float
         Numerical margin threshold.
     solvers : cvxpy solvers in order of preference
@@ -275,6 +285,11 @@ def certify(family: FamilyLike, *, names: Sequence[str] | None = None, output: A
     candidate : (P, [C_p, ...]), optional
         An exact Hespanha certificate known beforehand (the design's common P),
         checked exactly before any LMI (see :func:`common_lyapunov`).
+    arithmetic : {"exact", "interval"}
+        How the checks decide strict definiteness: exact rational elimination, or
+        first an LDL' in arb balls with outward rounding (rigorous too, and much
+        faster for large ``P`` with long rationals; exact wherever it cannot decide).
+        Recorded in the document's provenance.
 
     Returns
     -------
@@ -284,7 +299,8 @@ def certify(family: FamilyLike, *, names: Sequence[str] | None = None, output: A
     ------
     DimensionError, ModelError, NotHurwitzError, SolverFailure
     CertificateError
-        An unknown ``discrete`` method, or ``discrete`` without ``output``.
+        An unknown ``discrete`` method, or ``discrete`` without ``output``; an unknown ``dwell``
+        or ``arithmetic``.
 
     Examples
     --------
@@ -293,6 +309,17 @@ def certify(family: FamilyLike, *, names: Sequence[str] | None = None, output: A
     ('any', 'ii')
     """
     fam = as_family(family, names)
+    if dwell not in ("auto", True, False):
+        raise CertificateError(f"dwell must be 'auto', True or False, got {dwell!r}")
+    with exact_arithmetic(arithmetic):
+        return _certify(fam, output, dwell, eps, solvers, observer, provenance, discrete, box, candidate,
+                        arithmetic)
+
+
+def _certify(fam: Family, output: Any, dwell: bool | str, eps: float, solvers: Sequence[str],
+             observer: ObserverSection | None, provenance: Mapping[str, Any] | None, discrete: str | None,
+             box: BoxCertificate | None, candidate: tuple[Any, Sequence[Any]] | None,
+             arithmetic: str) -> CertificationReport:
     if discrete is not None:
         stability_function(discrete)
         if output is None or list(fam.names) != ["A_plus", "A_minus"]:
@@ -308,8 +335,16 @@ def certify(family: FamilyLike, *, names: Sequence[str] | None = None, output: A
     progress(f"certify: Hespanha non-strict common Lyapunov LMI and exact re-check ({size})")
     hesp = common_lyapunov(fam, output=output, eps=eps, solvers=solvers, dual=False, candidate=candidate)
     timings["hespanha"] = time.perf_counter() - t0
+    if not hesp.certified and isinstance(strict.dual, SingularSum):
+        # the singular sum excludes a strict P only; the LMI dual may exclude every common P
+        t0 = time.perf_counter()
+        progress(f"certify: dual (infeasibility) LMI: is there any common Lyapunov P? ({size})")
+        wider = infeasibility_certificate(fam, eps=eps, solvers=solvers)
+        if wider.certified and wider.kind == CertificateKind.NO_COMMON_LYAPUNOV:
+            strict = replace(strict, dual=wider)
+        timings["dual"] = time.perf_counter() - t0
     dw = None
-    if dwell and not strict.certified:
+    if (dwell is True or (dwell == "auto" and not hesp.certified)) and not strict.certified:
         t0 = time.perf_counter()
         progress(f"certify: Geromel-Colaneri dwell time, bisection ({size})")
         dw = dwell_time(fam, eps=eps, solvers=solvers)
@@ -339,23 +374,25 @@ def certify(family: FamilyLike, *, names: Sequence[str] | None = None, output: A
     tau = [Fraction(c.tau_D) for c in certs if c.kind is CertificateKind.DWELL_TIME]
     verdict = implied_verdict(holding, planar.case if planar is not None else None, tau)
     document = CertificateDocument(FamilySection(**fam.to_json()), tuple(certs), verdict,
-                                   {**(provenance or {}), "produced_by": "switchobs certify"}, sections)
+                                   {**(provenance or {}), "produced_by": "switchobs certify",
+                                    "arithmetic": arithmetic}, sections)
     doc = document.to_json()
     t0 = time.perf_counter()
     if certs:
         progress(f"certify: independent exact check of the certificate ({size})")
-        check = verify_certificate(doc)
+        check = verify_certificate(doc, arithmetic=arithmetic)
     else:
-        check = VerificationReport(False, (), verdict, verdict)
+        check = VerificationReport(False, (), verdict, verdict, arithmetic)
     timings["verify"] = time.perf_counter() - t0
     return CertificationReport(fam, strict, hesp, dw, planar, doc, check, verdict, verdict_text(verdict, planar),
                                timings, disc, discrete, box)
 
 
 def certify_model(model: Model, *, values: Mapping[str, Any] | None = None, spectrum: str | Sequence | None = None,
-                  gains: GainDesign | None = None, K_plus: Any = None, K_minus: Any = None, dwell: bool = True,
+                  gains: GainDesign | None = None, K_plus: Any = None, K_minus: Any = None,
+                  dwell: bool | str = "auto",
                   eps: float = DEFAULT_EPS, solvers: Sequence[str] = DEFAULT_SOLVERS,
-                  discrete: str | None = None, box: Any = None) -> CertificationReport:
+                  discrete: str | None = None, box: Any = None, arithmetic: str = "exact") -> CertificationReport:
     """Certify the switched observer of a numeric model (seed 004; seed 000 eq. (13)).
 
     The error dynamics in the rescaled time are ``A_plus = A - K_plus C`` and
@@ -377,7 +414,7 @@ def certify_model(model: Model, *, values: Mapping[str, Any] | None = None, spec
         the model's values (its design symbols must have values already).
     K_plus, K_minus : str or sequence, optional
         Numeric gains, e.g. ``"84,-7312/375,-64/3"`` (the command line's form).
-    dwell, eps, solvers, discrete
+    dwell, eps, solvers, discrete, arithmetic
         As in :func:`certify`.
     box : ParameterBox, ``["a=150:230", ...]`` or mapping, optional
         Also certify the gains for every parameter value of this box
@@ -446,7 +483,7 @@ def certify_model(model: Model, *, values: Mapping[str, Any] | None = None, spec
     robust = None if box is None else certify_box(parametric, box, Kp, Km, values=values, eps=eps, solvers=solvers)
     return certify([A_plus, A_minus], names=["A_plus", "A_minus"], output=model.C, dwell=dwell, eps=eps,
                    solvers=solvers, observer=observer, provenance=provenance, discrete=discrete, box=robust,
-                   candidate=_design_candidate(design))
+                   candidate=_design_candidate(design), arithmetic=arithmetic)
 
 
 def _design_candidate(design: GainDesign | None) -> tuple[Any, list[Any]] | None:

@@ -25,7 +25,6 @@ from dataclasses import dataclass
 from fractions import Fraction
 from typing import Any
 
-import cvxpy as cp
 import numpy as np
 import scipy.linalg
 
@@ -113,6 +112,8 @@ class DwellTimeResult:
 def gc_margin(mats: Sequence[np.ndarray], T: float, *, solvers: Sequence[str] = DEFAULT_SOLVERS
               ) -> tuple[list[np.ndarray], float, SolveInfo]:
     """Normalised margin of the Geromel–Colaneri LMIs at dwell time ``T`` (positive: feasible)."""
+    import cvxpy as cp
+
     n = mats[0].shape[0]
     N = len(mats)
     eye = np.eye(n)

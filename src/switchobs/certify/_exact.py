@@ -10,13 +10,20 @@ never exponentially as in naive rational elimination.
 The module deliberately imports nothing from numpy, scipy, cvxpy or sympy, so
 that the certificate checker built on it (:mod:`switchobs.certify._verify`)
 shares no code with the floating-point pipeline that produced a certificate.
+
+Large strict definiteness checks may instead run in interval arithmetic
+(``with arithmetic("interval"):``): an LDL' elimination in python-flint's
+``arb`` balls (outward rounding, 256 to 4096 bits) proves ``M > 0`` when every
+pivot's ball is positive; whatever it cannot prove is decided exactly as above.
 """
 
 from __future__ import annotations
 
 import math
 import operator
-from collections.abc import Iterable, Sequence
+from collections.abc import Iterable, Iterator, Sequence
+from contextlib import contextmanager
+from contextvars import ContextVar
 from dataclasses import dataclass
 from fractions import Fraction
 from typing import Any
@@ -28,7 +35,7 @@ __all__ = [
     "Matrix", "to_fraction", "fraction_matrix", "matrix_strings", "identity", "zeros", "transpose",
     "matmul", "add", "sub", "scale", "lyapunov_form", "integer_form", "Definiteness", "definiteness",
     "rank", "nullspace", "solve", "observable", "expm_enclosure", "inf_norm", "sqrt_lower", "sqrt_upper",
-    "is_zero",
+    "is_zero", "ARITHMETICS", "arithmetic",
 ]
 
 Matrix = list[list[Fraction]]
@@ -198,6 +205,64 @@ def sqrt_upper(x: Fraction, bits: int = 64) -> Fraction:
 
 
 # ------------------------------------------------------------------ definiteness
+#: How strict definiteness is decided: ``"exact"`` (rational Bareiss, standard library) or ``"interval"``
+#: (arb balls first, exact when they cannot decide).
+ARITHMETICS = ("exact", "interval")
+_ARITHMETIC: ContextVar[str] = ContextVar("switchobs_arithmetic", default="exact")
+#: Working precisions [bits] of the interval LDL', tried in turn.
+INTERVAL_BITS = (256, 1024, 4096)
+
+
+@contextmanager
+def arithmetic(kind: str) -> Iterator[None]:
+    """Decide strict definiteness in ``kind`` arithmetic inside the block (see the module docstring).
+
+    Raises
+    ------
+    CertificateError
+        ``kind`` is not one of :data:`ARITHMETICS`.
+    """
+    if kind not in ARITHMETICS:
+        raise CertificateError(f"arithmetic {kind!r} is unknown; use one of {', '.join(ARITHMETICS)}")
+    token = _ARITHMETIC.set(kind)
+    try:
+        yield
+    finally:
+        _ARITHMETIC.reset(token)
+
+
+def _interval_positive_definite(N: Sequence[Sequence[int]]) -> bool:
+    """``N > 0`` proven by an LDL' elimination in arb balls (True), or not proven (False).
+
+    Every ball contains the exact value of its entry, so positive pivot balls are the
+    exact pivots' signs: the ratios of consecutive leading principal minors (Sylvester).
+    """
+    import flint
+
+    n = len(N)
+    saved = flint.ctx.prec
+    try:
+        for bits in INTERVAL_BITS:
+            flint.ctx.prec = bits
+            a = [[flint.arb(x) for x in row] for row in N]
+            for k in range(n):
+                p = a[k][k]
+                if not p > 0:
+                    break
+                row_k = a[k]
+                for i in range(k + 1, n):
+                    f = a[i][k] / p
+                    row_i = a[i]
+                    for j in range(i, n):
+                        row_i[j] -= f * row_k[j]
+                        a[j][i] = row_i[j]
+            else:
+                return True
+    finally:
+        flint.ctx.prec = saved
+    return False
+
+
 @dataclass(frozen=True)
 class Definiteness:
     """Outcome of :func:`definiteness`.
@@ -245,6 +310,8 @@ def definiteness(M: Sequence[Sequence[Any]], *, strict: bool) -> Definiteness:
         a = [list(row) for row in M]
     else:
         a, _ = integer_form([[Fraction(x) for x in row] for row in M])
+    if strict and _ARITHMETIC.get() == "interval" and _interval_positive_definite(a):
+        return Definiteness(True)
     prev = 1
     kept: list[int] = []
     for k in range(n):
@@ -331,12 +398,53 @@ def nullspace(M: Sequence[Sequence[Any]], cols: int | None = None) -> list[list[
     return basis
 
 
+#: A prime near 2**61 for the modular rank test of :func:`observable`.
+_PRIME = (1 << 61) - 1
+
+
+def _full_rank_mod_p(A: Sequence[Sequence[Fraction]], C: Sequence[Sequence[Fraction]]) -> bool:
+    """The Krylov rows of ``(d A, d C)`` (``d`` the common denominator) have rank ``n`` modulo a prime.
+
+    Their determinant is then a nonzero integer, so ``(A, C)`` is observable; the converse
+    can fail (the prime may divide it), and a False answer proves nothing.  The integers stay
+    below ``2**61``: ``O(n^3)`` small operations instead of the exact elimination's big rationals.
+    """
+    n = len(A)
+    NA, _ = integer_form([[Fraction(x) for x in row] for row in A])
+    NC, _ = integer_form([[Fraction(x) for x in row] for row in C])
+    p = _PRIME
+    At = [[x % p for x in col] for col in zip(*NA)]
+    pivots: dict[int, list[int]] = {}  # echelon rows mod p, by leading column
+    frontier = [[x % p for x in row] for row in NC]
+    while frontier and len(pivots) < n:
+        grown = []
+        for row in frontier:
+            r = list(row)
+            for c in range(n):
+                if r[c] and c in pivots:
+                    f = r[c]
+                    r = [(x - f * y) % p for x, y in zip(r, pivots[c])]
+            lead = next((c for c in range(n) if r[c]), None)
+            if lead is None:
+                continue
+            inv = pow(r[lead], -1, p)
+            pivots[lead] = [x * inv % p for x in r]
+            grown.append(row)
+        frontier = [[sum(x * y for x, y in zip(row, col)) % p for col in At] for row in grown]
+    return len(pivots) == n
+
+
 def observable(A: Sequence[Sequence[Fraction]], C: Sequence[Sequence[Fraction]]) -> tuple[bool, int]:
     """Exact observability of ``(A, C)``: grow the row space of ``C, CA, CA^2, ...`` until it stops.
+
+    A full rank modulo a prime decides it at once (the integer Krylov determinant is then
+    nonzero); otherwise the row space is grown in exact rational arithmetic.
 
     Returns ``(observable, dimension of the observable subspace)``.
     """
     n = len(A)
+    if C and _full_rank_mod_p(A, C):
+        return True, n
     basis, _ = _rref(C) if C else ([], [])
     block = basis
     dim = len(basis)

@@ -18,10 +18,13 @@ import time
 import warnings
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
-import cvxpy as cp
 import numpy as np
 import scipy.linalg
+
+if TYPE_CHECKING:  # cvxpy is imported when a problem is solved: it costs about 1.5 s, and exact paths need none
+    import cvxpy as cp
 
 from ..exceptions import SolverFailure
 
@@ -71,7 +74,7 @@ class SolveInfo:
 
     @property
     def accurate(self) -> bool:
-        return self.status == cp.OPTIMAL
+        return self.status == "optimal"
 
 
 @dataclass(frozen=True)
@@ -115,6 +118,8 @@ def solve(build: Callable[[], tuple[cp.Problem, dict]], *, solvers: Sequence[str
     SolverFailure
         If no solver returns values; the message lists every attempt.
     """
+    import cvxpy as cp
+
     attempts: list[str] = []
     fallback: tuple[dict, SolveInfo] | None = None
     for name in solvers:
@@ -156,6 +161,8 @@ def primal_margin(mats: Sequence[np.ndarray], H: Sequence[np.ndarray | None], *,
 
     With some ``H_p = None`` the problem can be infeasible; ``t = -inf`` is then returned.
     """
+    import cvxpy as cp
+
     n = mats[0].shape[0]
     eye = np.eye(n)
 
@@ -170,7 +177,7 @@ def primal_margin(mats: Sequence[np.ndarray], H: Sequence[np.ndarray | None], *,
 
     v, info = solve(fn, solvers=by_size(solvers, n), what=what,
                     infeasible_ok=not all(Hp is not None for Hp in H))
-    if info.status == cp.INFEASIBLE:
+    if info.status == "infeasible":
         return np.full((n, n), np.nan), -np.inf, info
     P = np.asarray(v["P"].value, dtype=float)
     return (P + P.T) / 2, float(v["t"].value), info
@@ -179,6 +186,8 @@ def primal_margin(mats: Sequence[np.ndarray], H: Sequence[np.ndarray | None], *,
 def dual_margin(mats: Sequence[np.ndarray], *, solvers: Sequence[str] = DEFAULT_SOLVERS, what: str
                 ) -> tuple[list[np.ndarray], float, SolveInfo]:
     """Maximise ``s``: ``R_p >= 0``, ``sum tr R_p = 1``, ``sum_p (A_p R_p + R_p A_p') >= s I``."""
+    import cvxpy as cp
+
     n = mats[0].shape[0]
     eye = np.eye(n)
 

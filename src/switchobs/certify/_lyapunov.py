@@ -20,13 +20,13 @@ from .._progress import progress
 from ._exact import Matrix, fraction_matrix, lyapunov_form, matrix_strings
 from ._family import Family, FamilyLike, as_family, user_matrix
 from ._lmi import DEFAULT_SOLVERS, SolveInfo, balance, dual_margin, primal_margin
-from ._rounding import (FACE_TOLERANCES, dyadic, factor_rows, normalise, project_dual, project_primal, psd_dyadic,
-                        short_sqrt_lower)
-from ._schema import CertificateKind, DualEntry, LyapunovEntry
-from ._verify import _check_dual, _check_hespanha, _check_strict
+from ._rounding import (FACE_TOLERANCES, dyadic, factor_rows, kernel_vector, normalise, project_dual, project_primal,
+                        psd_dyadic, short_sqrt_lower)
+from ._schema import CertificateKind, DualEntry, LyapunovEntry, SingularSumEntry
+from ._verify import _check_dual, _check_hespanha, _check_singular_sum, _check_strict
 
-__all__ = ["LyapunovResult", "DualCertificate", "common_lyapunov", "strict_common_lyapunov",
-           "infeasibility_certificate", "DEFAULT_EPS"]
+__all__ = ["LyapunovResult", "DualCertificate", "SingularSum", "common_lyapunov", "strict_common_lyapunov",
+           "infeasibility_certificate", "singular_sum", "DEFAULT_EPS"]
 
 #: Numerical decision threshold on the normalised margin (``tr P = n``, family scaled to unit norm).
 DEFAULT_EPS = 1e-7
@@ -99,6 +99,65 @@ class DualCertificate:
 
 
 @dataclass(frozen=True)
+class SingularSum:
+    """Exact proof that no strict CQLF exists: ``(sum_p A_p) v = 0`` for a rational ``v != 0``.
+
+    A strict ``P`` would give ``M' P + P M < 0`` for ``M = sum_p A_p`` (a sum of
+    negative definite matrices), yet ``v' (M' P + P M) v = 2 (M v)' P v = 0``.
+    It is the dual certificate ``R_p = v v'`` of :class:`DualCertificate`
+    (``sum_p (A_p R_p + R_p A_p') = M v v' + v v' M' = 0``), found without an LMI.
+    Every observer pair has one: ``A_plus + A_minus = (K_minus - K_plus) C`` vanishes on
+    the kernel of ``C``.
+
+    Attributes
+    ----------
+    v : tuple of Fraction
+        The kernel vector (integers with no common factor).
+    exact_s : float
+        Wall time of finding and checking it.
+    """
+
+    v: tuple[Fraction, ...]
+    exact_s: float
+    method: str = "exact kernel of sum_p A_p"
+
+    kind = "singular-sum"
+    certified = True
+
+    def certificate(self) -> SingularSumEntry:
+        """The certificate entry of the document."""
+        return SingularSumEntry([str(x) for x in self.v], self.method)
+
+    def to_json(self) -> dict[str, Any]:
+        return {"kind": self.kind, "certified": self.certified, "v": [str(x) for x in self.v],
+                "method": self.method, "exact_s": self.exact_s}
+
+    def __str__(self) -> str:
+        return (f"no strict CQLF [{self.kind}]: (sum_p A_p) v = 0 for v = [{', '.join(str(x) for x in self.v)}], "
+                "verified exactly")
+
+
+def singular_sum(family: FamilyLike, *, names: Sequence[str] | None = None) -> SingularSum | None:
+    """The exact :class:`SingularSum` proof that no strict CQLF exists, or None when ``sum_p A_p`` is nonsingular.
+
+    Examples
+    --------
+    >>> singular_sum([[[-1, -1], [1, 0]], [[-1, 1], [-1, 0]]]).v
+    (Fraction(0, 1), Fraction(1, 1))
+    """
+    fam = as_family(family, names)
+    t0 = time.perf_counter()
+    n = fam.n
+    total = [[sum(A[i][j] for A in fam.exact) for j in range(n)] for i in range(n)]
+    v = kernel_vector(total)
+    if v is None:
+        return None
+    if not _check_singular_sum(fam.names, fam.exact, SingularSumEntry([str(x) for x in v])).holds:
+        return None
+    return SingularSum(tuple(v), time.perf_counter() - t0)
+
+
+@dataclass(frozen=True)
 class LyapunovResult:
     """Outcome of :func:`common_lyapunov` (Hespanha) or :func:`strict_common_lyapunov`.
 
@@ -125,7 +184,7 @@ class LyapunovResult:
         Wall time of rounding and exact re-checking.
     detail : str
         Why the result is not certified, when it is not.
-    dual : DualCertificate or None
+    dual : DualCertificate, SingularSum or None
         When infeasible: the exact proof of infeasibility, if one was found.
     """
 
@@ -141,7 +200,7 @@ class LyapunovResult:
     method: str
     exact_s: float
     detail: str = ""
-    dual: DualCertificate | None = None
+    dual: DualCertificate | SingularSum | None = None
 
     @property
     def P_float(self) -> np.ndarray | None:
@@ -173,6 +232,8 @@ class LyapunovResult:
             state = f"certified exactly ({self.method})"
         elif self.feasible:
             state = f"numerically feasible but NOT certified: {self.detail}"
+        elif math.isnan(self.margin):
+            state = f"none: {self.detail}"
         else:
             state = f"not found (margin {self.margin:.3g} <= eps {self.eps:g})"
         lines = [f"{title}: {state}", f"  margin {self.margin:.4g}, solver {_solver_text(self.solver)}"]
@@ -330,7 +391,9 @@ def strict_common_lyapunov(family: FamilyLike, *, names: Sequence[str] | None = 
     The LMI ``max t : tr P = n, P >= t I, A_p' P + P A_p <= -t I`` (family
     balanced and scaled to unit norm) decides numerically (``t > eps``); a
     positive answer is rounded to a rational ``P`` and ``P > 0``,
-    ``A_p' P + P A_p < 0`` are re-checked exactly.  Otherwise the dual problem
+    ``A_p' P + P A_p < 0`` are re-checked exactly.  With ``dual``, a singular
+    ``sum_p A_p`` is tried first: it proves exactly, without any LMI, that no
+    strict P exists (:func:`singular_sum`).  Otherwise the dual problem
     gives ``R_p >= 0`` with ``sum_p (A_p R_p + R_p A_p') >= 0``, checked exactly:
     that is a proof of infeasibility, a solver status is not.
 
@@ -354,6 +417,11 @@ def strict_common_lyapunov(family: FamilyLike, *, names: Sequence[str] | None = 
     True
     """
     fam = as_family(family, names)
+    if dual:
+        kernel = singular_sum(fam)
+        if kernel is not None:  # decided exactly, no LMI needed
+            return LyapunovResult("strict-cqlf", fam, False, False, math.nan, eps, None, None, None, "",
+                                  kernel.exact_s, "no strict common P exists: sum_p A_p is singular", kernel)
     bal = balance(fam.numeric)
     P_b, t, info = primal_margin(bal.matrices, [np.eye(fam.n)] * len(fam), solvers=solvers,
                                  what="strict CQLF LMI")

@@ -34,7 +34,7 @@ from sympy.polys.matrices import DomainMatrix
 from ._exact import Matrix, definiteness, matmul, sqrt_lower, transpose
 
 __all__ = ["dyadic", "psd_dyadic", "factor_rows", "ldl_psd", "range_basis", "project_primal", "project_dual",
-           "MAX_PROJECTION_UNKNOWNS", "FACE_TOLERANCES", "short_sqrt_lower", "normalise"]
+           "kernel_vector", "MAX_PROJECTION_UNKNOWNS", "FACE_TOLERANCES", "short_sqrt_lower", "normalise"]
 
 #: Projection is exact rational elimination; beyond this many unknowns it is skipped (too slow).
 MAX_PROJECTION_UNKNOWNS = 240
@@ -194,6 +194,18 @@ def _qq(rows: Sequence[Sequence[Any]], cols: int) -> DomainMatrix:
 
 def _fraction(x: Any) -> Fraction:
     return Fraction(int(x.numerator), int(x.denominator))
+
+
+def kernel_vector(M: Sequence[Sequence[Any]]) -> list[Fraction] | None:
+    """A nonzero integer vector ``v`` (no common factor) with ``M v = 0`` for a square rational ``M``, or None."""
+    N = _qq(M, len(M[0])).nullspace()
+    if N.shape[0] == 0:
+        return None
+    row = [_fraction(N[0, j].element) for j in range(N.shape[1])]
+    den = math.lcm(*(x.denominator for x in row))
+    ints = [int(x * den) for x in row]
+    g = math.gcd(*ints)
+    return [Fraction(x // g) for x in ints]
 
 
 def _vech_coords(X: np.ndarray, r: int) -> list[float]:

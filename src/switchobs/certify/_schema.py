@@ -5,7 +5,7 @@ A certificate is a JSON object (format ``switchobs-certificate``, version 1)::
     {"format": ..., "version": 1,
      "family": FamilySection,
      "observer": ObserverSection,            optional sections, in registration order
-     "certificates": [LyapunovEntry | DualEntry | DwellTimeEntry | PlanarEntry, ...],
+     "certificates": [LyapunovEntry | DualEntry | SingularSumEntry | DwellTimeEntry | PlanarEntry, ...],
      "verdict": Verdict,
      "provenance": {...}}                    free-form: model, parameters, spectrum, producer
 
@@ -33,8 +33,8 @@ from ..exceptions import CertificateError
 
 __all__ = ["FORMAT", "VERSION", "CertificateKind", "ArbitrarySwitching", "Existence", "ANY_DWELL", "Verdict",
            "FamilySection", "ObserverSection", "LyapunovEntry", "DualEntry", "DwellTimeEntry", "PlanarEntry",
-           "CertificateEntry", "CertificateDocument", "document_section", "Check", "DiscreteSection",
-           "BoxSection"]
+           "SingularSumEntry", "CertificateEntry", "CertificateDocument", "document_section", "Check",
+           "DiscreteSection", "BoxSection"]
 
 FORMAT = "switchobs-certificate"
 VERSION = 1
@@ -49,6 +49,7 @@ class CertificateKind(str, Enum):
     NO_COMMON_LYAPUNOV = "no-common-lyapunov"
     DWELL_TIME = "dwell-time"
     PLANAR = "planar"
+    SINGULAR_SUM = "singular-sum"
 
 
 class ArbitrarySwitching(str, Enum):
@@ -402,7 +403,20 @@ class PlanarEntry(_Entry):
     kind: CertificateKind = field(default=CertificateKind.PLANAR, init=False)
 
 
-CertificateEntry = LyapunovEntry | DualEntry | DwellTimeEntry | PlanarEntry
+@dataclass(frozen=True)
+class SingularSumEntry(_Entry):
+    """``singular-sum``: a nonzero rational ``v`` with ``(sum_p A_p) v = 0``: no strict CQLF.
+
+    The compact form of the ``no-strict-cqlf`` alternative with ``R_p = v v'`` for every p
+    (then ``sum_p (A_p R_p + R_p A_p') = M v v' + v v' M' = 0``, ``M = sum_p A_p``).
+    """
+
+    v: Any
+    method: str = ""
+    kind: CertificateKind = field(default=CertificateKind.SINGULAR_SUM, init=False)
+
+
+CertificateEntry = LyapunovEntry | DualEntry | DwellTimeEntry | PlanarEntry | SingularSumEntry
 
 _ENTRIES: dict[CertificateKind, Callable[[Mapping[str, Any]], CertificateEntry]] = {
     CertificateKind.STRICT_CQLF: LyapunovEntry.from_json,
@@ -411,6 +425,7 @@ _ENTRIES: dict[CertificateKind, Callable[[Mapping[str, Any]], CertificateEntry]]
     CertificateKind.NO_COMMON_LYAPUNOV: DualEntry.from_json,
     CertificateKind.DWELL_TIME: DwellTimeEntry.from_json,
     CertificateKind.PLANAR: PlanarEntry.from_json,
+    CertificateKind.SINGULAR_SUM: SingularSumEntry.from_json,
 }
 
 

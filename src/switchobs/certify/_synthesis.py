@@ -47,13 +47,15 @@ import time
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 from fractions import Fraction
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
-import cvxpy as cp
 import numpy as np
 import scipy.linalg
 import sympy as sp
 from sympy.polys.matrices import DomainMatrix
+
+if TYPE_CHECKING:  # imported where an LMI is built (see _lmi)
+    import cvxpy as cp
 
 from .._limits import check_double
 from ..exceptions import CertificateError, DimensionError, ModelError
@@ -240,6 +242,8 @@ def _lmi(A: np.ndarray, C: np.ndarray, E: np.ndarray, rate: float, W: float, str
 
     H2 by the observability Gramian: ``||G_p||_2^2 <= tr X + W^2 tr(K_p' X K_p)`` when
     ``He(X A_p) + E'E <= 0``; with ``Y_p = X K_p`` and ``[[Z_p, Y_p'], [Y_p, X]] >= 0`` all is linear."""
+    import cvxpy as cp
+
     n, k = A.shape[0], C.shape[0]
     lam = rate * (1 + RATE_MARGIN)
     weight = E.T @ E + STATE_REGULARISATION * np.eye(n)
@@ -325,7 +329,7 @@ def synthesize_gains(A: Any, C: Any, *, decay_rate: Any, noise_weight: float = 0
     t0 = time.perf_counter()
     v, info = _lmi(Af / sigma, Cf, E, 1.0, float(noise_weight) * sigma, use_strict, solvers)
     solve_s = time.perf_counter() - t0
-    if info.status == cp.INFEASIBLE or v["X"].value is None:
+    if info.status == "infeasible" or v["X"].value is None:
         return fail(f"the LMI is infeasible ({'; '.join(info.attempts)})", info, solve_s)
     t0 = time.perf_counter()
     X_num = np.asarray(v["X"].value)

@@ -25,6 +25,13 @@ Certificate kinds and what they prove (``W_p(P) = A_p' P + P A_p``):
     ``R_p >= 0``, not all zero, ``sum_p (A_p R_p + R_p A_p') >= 0``: no strict common
     quadratic Lyapunov function exists (theorem of alternatives: for such a P,
     ``0 <= <P, sum_p ...> = sum_p <W_p(P), R_p> < 0``).
+``singular-sum``
+    A rational ``v != 0`` with ``(sum_p A_p) v = 0``: no strict common quadratic
+    Lyapunov function exists (for such a P, ``M = sum_p A_p`` has
+    ``M' P + P M < 0``, yet ``v' (M' P + P M) v = 2 (M v)' P v = 0``).  It is the
+    ``no-strict-cqlf`` alternative with ``R_p = v v'``, stored as ``v`` and checked
+    in ``O(n^2)``; every observer pair has one (``A_plus + A_minus = (K_minus - K_plus) C``,
+    ``v`` in the kernel of ``C``).
 ``no-common-lyapunov``
     Same with ``S = sum_p (A_p R_p + R_p A_p') >= 0`` and ``S != 0``: not even a
     non-strict ``P > 0`` with ``W_p(P) <= 0`` exists.
@@ -54,9 +61,10 @@ from .._progress import progress
 from ..exceptions import CertificateError
 from ._exact import (Matrix, add, definiteness, expm_enclosure, fraction_matrix, inf_norm,
                      integer_form, is_zero, lyapunov_form, matmul, observable, scale, sqrt_upper,
-                     to_fraction, transpose)
+                     to_fraction, transpose, arithmetic as _arithmetic)
 from ._schema import (ANY_DWELL, ArbitrarySwitching, CertificateDocument, CertificateKind, Check, DualEntry,
-                      DwellTimeEntry, Existence, FamilySection, LyapunovEntry, ObserverSection, Verdict)
+                      DwellTimeEntry, Existence, FamilySection, LyapunovEntry, ObserverSection, SingularSumEntry,
+                      Verdict)
 from ._provenance import model_link
 
 __all__ = ["Check", "VerificationReport", "verify_certificate", "load_certificate", "implied_verdict",
@@ -86,6 +94,8 @@ class VerificationReport:
         The links the document does not let the checker verify (no ``observer`` section: the
         model-gain link; a model that is not built in: its A and C), one sentence each.
         ``switchobs verify --strict`` fails when there is any.
+    arithmetic : str
+        ``"exact"`` or ``"interval"`` (strict definiteness by arb balls where they decide it).
     """
 
     holds: bool
@@ -96,12 +106,13 @@ class VerificationReport:
     parameters: Mapping[str, str] = field(default_factory=dict)
     gains: Mapping[str, tuple[str, ...]] = field(default_factory=dict)
     unchecked: tuple[str, ...] = ()
+    arithmetic: str = "exact"
 
     def to_json(self) -> dict[str, Any]:
         return {"holds": self.holds, "checks": [c.to_json() for c in self.checks],
                 "implied": self.implied.to_json(), "claimed": self.claimed.to_json(), "model": self.model,
                 "parameters": dict(self.parameters), "gains": {k: list(v) for k, v in self.gains.items()},
-                "unchecked": list(self.unchecked)}
+                "unchecked": list(self.unchecked), "arithmetic": self.arithmetic}
 
     @classmethod
     def from_json(cls, data: Mapping[str, Any]) -> "VerificationReport":
@@ -111,14 +122,16 @@ class VerificationReport:
         return cls(data["holds"], tuple(Check.from_json(c) for c in data.get("checks", [])),
                    Verdict.from_json(data.get("implied")), Verdict.from_json(data.get("claimed")),
                    data.get("model"), dict(data.get("parameters", {})),
-                   {k: tuple(v) for k, v in data.get("gains", {}).items()}, tuple(data.get("unchecked", ())))
+                   {k: tuple(v) for k, v in data.get("gains", {}).items()}, tuple(data.get("unchecked", ())),
+                   data.get("arithmetic", "exact"))
 
     def __str__(self) -> str:
         values = ", ".join(f"{k} = {v}" for k, v in self.parameters.items())
         lines = [f"certificate about model {self.model}" + (f" ({values})" if values else "")
                  if self.model is not None else "certificate names no model (no provenance.model)"]
         lines += [f"  {k:<7} = [{', '.join(v)}]" for k, v in self.gains.items()]
-        lines.append("certificate holds exactly" if self.holds else "certificate does NOT hold")
+        how = "exactly" if self.arithmetic == "exact" else "(interval arithmetic where it decides, else exactly)"
+        lines.append(f"certificate holds {how}" if self.holds else "certificate does NOT hold")
         lines += [f"  {c}" for c in self.checks]
         lines.append("  implied verdict: " + ", ".join(f"{k} = {v}" for k, v in self.implied.to_json().items()))
         lines += [f"  not checked: {u}" for u in self.unchecked]
@@ -271,6 +284,17 @@ def _check_dual(names: Sequence[str], As: Sequence[Matrix], cert: DualEntry) -> 
     return Check(kind, True)
 
 
+def _check_singular_sum(names: Sequence[str], As: Sequence[Matrix], cert: SingularSumEntry) -> Check:
+    n = len(As[0])
+    v = fraction_matrix([cert.v], what="singular-sum v", rows=1, cols=n)[0]
+    if all(x == 0 for x in v):
+        return Check("singular-sum", False, "v is zero (the kernel vector must be nonzero)")
+    for i in range(n):
+        if sum(A[i][j] * v[j] for A in As for j in range(n) if v[j]) != 0:
+            return Check("singular-sum", False, f"(sum_p A_p) v = 0 fails: entry {i + 1} is nonzero")
+    return Check("singular-sum", True)
+
+
 def _check_dwell(names: Sequence[str], As: Sequence[Matrix], cert: DwellTimeEntry) -> Check:
     n = len(As[0])
     T = to_fraction(cert.tau_D, what="dwell-time tau_D")
@@ -386,7 +410,8 @@ def implied_verdict(holding: Sequence[str], planar_case: str | None = None,
         dwell_time = None
     if strict:
         cqlf = Existence.EXISTS
-    elif {CertificateKind.NO_STRICT_CQLF, CertificateKind.NO_COMMON_LYAPUNOV} & set(holding) \
+    elif {CertificateKind.NO_STRICT_CQLF, CertificateKind.NO_COMMON_LYAPUNOV, CertificateKind.SINGULAR_SUM} \
+            & set(holding) \
             or planar_case in ("i", "ii", "iv"):
         cqlf = Existence.NONE
     else:
@@ -400,7 +425,8 @@ def implied_verdict(holding: Sequence[str], planar_case: str | None = None,
     return Verdict(arbitrary, dwell_time, cqlf, common)
 
 
-def verify_certificate(doc: Mapping[str, Any] | str | Path, *, model: Any = None) -> VerificationReport:
+def verify_certificate(doc: Mapping[str, Any] | str | Path, *, model: Any = None,
+                       arithmetic: str = "exact") -> VerificationReport:
     """Re-check a certificate exactly, from its matrices alone.
 
     Parameters
@@ -410,6 +436,10 @@ def verify_certificate(doc: Mapping[str, Any] | str | Path, *, model: Any = None
         The model the certificate should be about; its ``A`` and ``C`` at the
         recorded parameter values are compared with the ``observer`` section.
         By default the built-in model named in ``provenance.model`` (if any).
+    arithmetic : {"exact", "interval"}
+        ``"interval"`` proves strict definiteness by an LDL' in arb balls (outward
+        rounding) where it can and falls back to exact arithmetic elsewhere: still
+        rigorous, much faster for large matrices with long rationals (n = 64).
 
     Returns
     -------
@@ -435,6 +465,11 @@ def verify_certificate(doc: Mapping[str, Any] | str | Path, *, model: Any = None
     >>> verify_certificate(doc).holds
     True
     """
+    with _arithmetic(arithmetic):
+        return _verify(doc, arithmetic, model)
+
+
+def _verify(doc: Mapping[str, Any] | str | Path, how: str, model: Any) -> VerificationReport:
     if not isinstance(doc, Mapping):
         doc = load_certificate(doc)
     document = CertificateDocument.from_json(doc)
@@ -455,6 +490,8 @@ def verify_certificate(doc: Mapping[str, Any] | str | Path, *, model: Any = None
             c = _check_hespanha(names, As, cert)
         elif kind in (CertificateKind.NO_STRICT_CQLF, CertificateKind.NO_COMMON_LYAPUNOV):
             c = _check_dual(names, As, cert)
+        elif kind is CertificateKind.SINGULAR_SUM:
+            c = _check_singular_sum(names, As, cert)
         elif kind is CertificateKind.DWELL_TIME:
             c = _check_dwell(names, As, cert)
             if c.holds:
@@ -488,7 +525,7 @@ def verify_certificate(doc: Mapping[str, Any] | str | Path, *, model: Any = None
                               claimed=claimed, model=_text(document.provenance.get("model"), none=True),
                               parameters={_text(k): _text(v) for k, v in parameters.items()}
                               if isinstance(parameters, Mapping) else {},
-                              gains=gains, unchecked=unchecked)
+                              gains=gains, unchecked=unchecked, arithmetic=how)
 
 
 def _text(value: Any, *, none: bool = False) -> Any:

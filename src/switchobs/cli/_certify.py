@@ -19,7 +19,7 @@ def register(sub: argparse._SubParsersAction) -> None:
     p = sub.add_parser(
         "certify",
         description="Build A_plus = A - K_plus C and A_minus = -A + K_minus C for MODEL with numeric values, "
-                    "run the strict and Hespanha common-Lyapunov LMIs, the Geromel-Colaneri dwell time and "
+                    "run the strict and Hespanha common-Lyapunov LMIs, the Geromel-Colaneri dwell time (when needed) and "
                     "(n = 2) the Balde-Boscain-Mason classification, re-check every certificate in exact "
                     "arithmetic and print the verdict. With --discrete METHOD, also certify the sampled "
                     "observer that runs in C (one METHOD step per sample, h = |s|*dt) for every step length. "
@@ -34,7 +34,12 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--gains-minus", help="K_minus entries (default: the Theorem 1 choice)")
     p.add_argument("--solver", choices=("CLARABEL", "SCS"), help="use only this cvxpy solver "
                    "(default: CLARABEL, then SCS as fallback)")
-    p.add_argument("--no-dwell", action="store_true", help="skip the dwell-time bisection")
+    dwell = p.add_mutually_exclusive_group()
+    dwell.add_argument("--dwell", action="store_true",
+                       help="always run the Geromel-Colaneri dwell-time bisection when no strict common P is "
+                            "certified (by default it runs only when the Hespanha certificate does not hold either: "
+                            "that one already gives every positive dwell time)")
+    dwell.add_argument("--no-dwell", action="store_true", help="skip the dwell-time bisection")
     p.add_argument("--discrete", choices=tuple(STEP_METHODS), metavar="METHOD",
                    help=f"also certify the sampled observer of this step method ({', '.join(STEP_METHODS)}): "
                         "adds a 'discrete' section to the certificate")
@@ -43,6 +48,10 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--box", action="append", metavar="NAME=LOWER:UPPER",
                    help="uncertain parameter range, e.g. a=150:230 (repeatable): adds a 'box' section, valid for "
                         "every value in the box, even varying in time")
+    p.add_argument("--arithmetic", choices=("exact", "interval"), default="exact",
+                   help="decide strict definiteness in the exact re-checks exactly (default) or by interval "
+                        "arithmetic with outward rounding where it can (rigorous, much faster at n = 64); "
+                        "recorded in the certificate's provenance")
     p.add_argument("--json", action="store_true", help="print the full report as JSON")
     p.add_argument("--out", metavar="CERT.json", help="write the certificate (checkable with switchobs verify); "
                    "- writes it to standard output and the summary to stderr")
@@ -64,9 +73,10 @@ def run(args: argparse.Namespace) -> int:
         check_output_file(args.out, what="the certificate")
     model = load_model(args.model)
     solvers = (args.solver,) if args.solver else ("CLARABEL", "SCS")
+    dwell = True if args.dwell else False if args.no_dwell else "auto"
     report = certify_model(model, values=parse_params(args.param), spectrum=args.spectrum,
-                           K_plus=args.gains_plus, K_minus=args.gains_minus, dwell=not args.no_dwell,
-                           solvers=solvers, discrete=args.discrete, box=args.box)
+                           K_plus=args.gains_plus, K_minus=args.gains_minus, dwell=dwell, solvers=solvers,
+                           discrete=args.discrete, box=args.box, arithmetic=args.arithmetic)
     if args.out:
         write_certificate(report, args.out)
     if args.plot:
