@@ -66,11 +66,13 @@ def run_batch(cases: list[dict], *, timeout: float, memory: int = 1 << 30) -> li
 
 @functools.lru_cache(maxsize=1)
 def valid_certificate() -> str:
-    """A certificate of abs-xbs3 with every kind certify writes for it (Hespanha, dual, dwell time), as JSON text."""
+    """A certificate of abs-xbs3 with every kind certify writes for it (Hespanha, singular sum, dwell time), as JSON
+    text."""
     from switchobs.certify import certify_model
     from switchobs.model import builtin_model
 
-    report = certify_model(builtin_model("abs-xbs3"), spectrum="-10,-20,-20")
+    # dwell=True: the dwell-time entry is written only on request once a Hespanha certificate holds
+    report = certify_model(builtin_model("abs-xbs3"), spectrum="-10,-20,-20", dwell=True)
     return json.dumps(report.document, indent=2) + "\n"
 
 

@@ -12,7 +12,7 @@ import pytest
 from switchobs._figures import save_figure
 from switchobs.certify import as_family, certify, classify_planar, plot_certification, plot_planar
 from switchobs.cli.main import main
-from switchobs.exceptions import SimulationError
+from switchobs.exceptions import OutputError, SimulationError
 
 ROOT = Path(__file__).resolve().parents[1]
 A1, A2 = [["-0.1", -1], [2, "-0.1"]], [["-0.1", -2], [1, "-0.1"]]  # planar case iv, R = 1.604 (docs/certify.md)
@@ -63,7 +63,7 @@ def test_certification_figure_marks_tau_D_and_plots_every_eigenvalue():
 
 def test_save_figure_is_atomic(tmp_path):
     fig = plot_planar(classify_planar(A1, A2), A1, A2)
-    with pytest.raises(SimulationError, match="cannot write"):
+    with pytest.raises(OutputError, match="cannot write the plot .*missing.* does not exist"):
         save_figure(fig, tmp_path / "missing" / "x.png")
     with pytest.raises(SimulationError, match="cannot write"):
         save_figure(fig, tmp_path / "x.unknownformat")
