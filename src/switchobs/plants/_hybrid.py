@@ -47,15 +47,20 @@ from typing import Any, Protocol
 import numpy as np
 import numpy.typing as npt
 
+from .._validate import check_work
 from ..exceptions import SimulationError
 
-__all__ = ["rk4_step", "locate_event", "integrate", "HybridPlant", "HybridRun", "Crossing", "MAX_CASCADE"]
+__all__ = ["rk4_step", "locate_event", "integrate", "HybridPlant", "HybridRun", "Crossing", "MAX_CASCADE",
+           "MAX_STEPS"]
 
 State = tuple[float, ...]
 Rhs = Callable[[float, State], State]
 
 #: Rounds of phase changes allowed at one instant before the thresholds are declared contradictory.
 MAX_CASCADE = 8
+#: Steps a run may take (each stores one row of the series, about 1 kB with the observer's bookkeeping): a
+#: bound on memory and time checked before the first step, from the time bound over the initial step.
+MAX_STEPS = 500_000
 
 
 def rk4_step(f: Rhs, t: float, y: State, h: float, k1: State) -> State:
@@ -247,8 +252,15 @@ def integrate(plant: HybridPlant, t_end: float, *, name: str) -> HybridRun:
     Raises
     ------
     SimulationError
-        When phase changes cascade more than :data:`MAX_CASCADE` rounds at one instant.
+        When phase changes cascade more than :data:`MAX_CASCADE` rounds at one instant, or when
+        ``t_end`` over the initial step exceeds :data:`MAX_STEPS` (refused before the first step).
     """
+    if not (isinstance(t_end, (int, float)) and math.isfinite(t_end) and t_end > 0.0):
+        raise SimulationError(f"scenario {name!r}: the time bound must be finite and > 0 s, got {t_end!r}")
+    h0 = plant.step_size(0.0, plant.initial_state())
+    check_work(f"scenario {name!r}: integration steps of {h0:g} s over {t_end:g} s (each one stored)",
+               t_end / h0, MAX_STEPS,
+               "use a larger step or a shorter time bound", error=SimulationError)
     wall0 = time.perf_counter()
     # bound methods as locals: this loop runs once per step, in plain Python
     rhs, step_size, breakpoint, crossings = plant.rhs, plant.step_size, plant.breakpoint, plant.crossings

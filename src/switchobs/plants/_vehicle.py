@@ -8,9 +8,19 @@ from typing import Any
 
 from ..exceptions import SimulationError
 
-__all__ = ["QuarterCar", "BrakeActuator", "PrescribedSpeed", "GRAVITY"]
+__all__ = ["QuarterCar", "BrakeActuator", "PrescribedSpeed", "GRAVITY", "MAX_SPEED_KMH", "check_speed"]
 
 GRAVITY = 9.81
+#: Highest initial speed of a braking run: above any road car, and far below the speeds at which the tyre
+#: and the step of the integrator stop making sense (a mistyped 1e9 km/h would "brake" over 1e19 m).
+MAX_SPEED_KMH = 500.0
+
+
+def check_speed(owner: str, speed_m_s: float) -> None:
+    """Refuse an initial speed (a finite number, checked by the caller) outside ``(0, MAX_SPEED_KMH]``."""
+    if not 0.0 < speed_m_s <= MAX_SPEED_KMH / 3.6:
+        raise SimulationError(f"{owner}: the initial speed {3.6 * speed_m_s:g} km/h lies outside "
+                              f"(0, {MAX_SPEED_KMH:g}] km/h, the range of a road vehicle")
 
 
 def _positive(owner: str, **values: float) -> None:

@@ -21,7 +21,7 @@ from ..exceptions import SimulationError
 from ._encoder import Encoder, EncoderEvents
 from ._series import SpeedEstimate, estimate_lag, rms_error
 from ._super_twisting import low_pass, super_twisting, super_twisting_gains
-from ._three_stage import notch, three_stage
+from ._three_stage import check_harmonics, notch, three_stage
 from ._trajectory import AngleTrajectory, constant_speed, rpm_to_rad_s, trapezoid_speed, varying_speed
 from ._tsa import check_order_window, controller_times, time_stamping
 from ._validate import check_int, check_positive
@@ -87,7 +87,7 @@ class ChainSettings:
     def __post_init__(self) -> None:
         check_positive(self.rate_hz, "rate_hz")
         check_order_window(self.order, self.window)
-        check_int(self.harmonics, "harmonics (M)", minimum=1)
+        check_harmonics(self.harmonics)
         for name in ("kappa", "gamma0", "st_f_plus", "st_tau_s"):
             check_positive(getattr(self, name), name)
         if self.highpass_hz is not None:
