@@ -5,7 +5,7 @@ PY := $(VENV)/bin/python
 STAMP := $(VENV)/.installed
 DEMO_ARGS ?=
 
-.PHONY: demo test bench docs install clean cc-tools
+.PHONY: demo test bench docs install clean cc-tools fuzz
 
 $(STAMP): pyproject.toml
 	$(PYTHON) -m venv $(VENV)
@@ -33,6 +33,11 @@ cc-tools:
 
 test: $(STAMP) cc-tools
 	$(PY) -m pytest -n 2 -q
+
+# The fuzzing suites with many more examples than `make test` runs (random, not derandomised).
+FUZZ_EXAMPLES ?= 500
+fuzz: $(STAMP)
+	SWITCHOBS_FUZZ_EXAMPLES=$(FUZZ_EXAMPLES) $(PY) -m pytest -q tests/test_fuzz_options.py
 
 # Every benchmark script (benchmarks/_*.py are helpers), then their result tables into the docs pages.
 bench: $(STAMP)

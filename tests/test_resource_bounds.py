@@ -9,6 +9,7 @@ import dataclasses
 import functools
 import math
 import re
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -21,7 +22,12 @@ from switchobs.plants import BrakingScenario, simulate
 from switchobs.plants._hybrid import MAX_STEPS
 from switchobs.sensors import ChainSettings, Encoder, compare_estimators, constant_speed
 from switchobs.sensors import _tsa
-from switchobs.sensors._chain import MAX_EDGES, MAX_SAMPLES
+from switchobs.plants._vehicle import MAX_SPEED_KMH
+from switchobs.sensors import _chain as chain
+from switchobs.sensors._chain import MAX_EDGES, MAX_LAG_WORK, MAX_RLS_WORK, MAX_SAMPLES, MAX_TSA_WORK
+from switchobs.sensors._encoder import MAX_PPR
+from switchobs.sensors._three_stage import MAX_HARMONICS
+from switchobs.sensors._trajectory import MAX_DURATION_S, MAX_RPM
 
 
 def run(capsys, *argv):
@@ -41,7 +47,7 @@ REFUSED = [
     (("encoder", "--events", "100000", "--duration", "2"), "never fills"),
     (("encoder", "--ppr", "1000000000"), "lies above 100000"),
     (("encoder", "--order", "1000", "--events", "1001", "--duration", "2"), "TSA least-squares numbers"),
-    (("encoder", "--rate-hz", "0.01"), "2 samples after the warm-up"),
+    (("encoder", "--rate-hz", "0.01"), "the statistics need 2 samples"),
     (("encoder", "--profile", "braking", "--duration", "1e9"), "limit of 5e+05"),
     (("encoder", "--ppr", "4", "--harmonics", "5", "--duration", "2"), "half the edges"),
     (("simulate", "--dt", "1e-9"), "about 6e+10, above the limit of 5e+05"),
@@ -128,3 +134,30 @@ def test_tsa_fits_in_chunks_equal_one_batch(monkeypatch):
     for a, b in ((whole.theta, chunked.theta), (whole.omega, chunked.omega), (whole.alpha, chunked.alpha)):
         assert np.array_equal(np.isnan(a), np.isnan(b)) and np.allclose(a, b, rtol=1e-12, equal_nan=True)
     assert math.isfinite(float(whole.omega[-1]))
+
+
+def _limits_section() -> str:
+    text = (Path(__file__).parents[1] / "docs" / "errors.md").read_text("utf-8")
+    start = text.index("## Simulation and encoder options")
+    end = text.find("\n## ", start + 1)
+    return text[start:] if end < 0 else text[start:end]
+
+
+def test_the_documented_limits_are_the_constants_of_the_code():
+    constants = {"MAX_SPEED_KMH": MAX_SPEED_KMH, "MAX_STEPS": MAX_STEPS, "MAX_RPM": MAX_RPM,
+                 "MAX_DURATION_S": MAX_DURATION_S, "MAX_PPR": MAX_PPR, "MAX_HARMONICS": MAX_HARMONICS,
+                 "MAX_EDGES": MAX_EDGES, "MAX_SAMPLES": MAX_SAMPLES, "MAX_TSA_WORK": MAX_TSA_WORK,
+                 "MAX_RLS_WORK": MAX_RLS_WORK, "MAX_LAG_WORK": MAX_LAG_WORK}
+    rows = {m.group(1): float(m.group(2).replace(" ", ""))
+            for m in re.finditer(r"^\| `(MAX_\w+)` \| ([0-9e .]+) \|", _limits_section(), re.MULTILINE)}
+    assert rows == constants
+    # every limit of the chain module is in the table
+    assert {name for name in chain.__all__ if name.startswith("MAX_")} <= rows.keys()
+
+
+def test_the_refusals_shown_in_the_docs_are_what_the_commands_print(capsys):
+    shown = re.findall(r"^\$ switchobs (.+)\n(.+)$", _limits_section(), re.MULTILINE)
+    assert len(shown) == 2
+    for command, line in shown:
+        code, _, err = run(capsys, *command.split())
+        assert code == 2 and err == line + "\n"

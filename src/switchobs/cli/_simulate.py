@@ -14,6 +14,8 @@ import sys
 from dataclasses import replace
 from typing import Any
 
+import numpy as np
+
 from .._figures import save_figure
 from ..exceptions import SimulationError
 from ..loop import DEFAULT_GAMMA, OBSERVER_KINDS, EstimatorSpec, xbs_estimator
@@ -179,6 +181,12 @@ def _unfinished(args: argparse.Namespace, result: BrakingResult) -> str | None:
 
 
 def run(args: argparse.Namespace) -> int:
+    # an overflowing observer is reported once, as a failed or diverged run, not also by numpy's warnings
+    with np.errstate(over="ignore", invalid="ignore", divide="ignore"):
+        return _run(args)
+
+
+def _run(args: argparse.Namespace) -> int:
     if args.series and not args.json:
         raise SimulationError("--series only applies with --json")
     if args.scenario == "table41":

@@ -188,8 +188,10 @@ class BrakingMetrics:
                      f" -> braking distance (Table 4.1 definition) {self.braking_distance_m:.2f} m")]
         if self.abs_activation_s is not None:
             eff = "" if self.efficiency is None else f", {100 * self.efficiency:.1f} % of the peak"
+            # None when the ABS became active at the last sample (a run cut short by a failure)
+            mean_abs = "n/a" if self.mean_friction_abs is None else f"{self.mean_friction_abs:.4f}"
             lines.append(f"ABS active from {self.abs_activation_s:.3f} s: {self.abs_cycles} cycles, mean friction "
-                         f"{self.mean_friction_abs:.4f}{eff}, slip {self.slip_mean:.4f} ± {self.slip_std:.4f}")
+                         f"{mean_abs}{eff}, slip {self.slip_mean:.4f} ± {self.slip_std:.4f}")
         if self.xbs_rms_error is not None:
             rec = "; ".join(f"{r.label}: " + ("not re-converged" if r.time_s is None else f"{r.time_s:.3f} s")
                             for r in self.reconvergence)

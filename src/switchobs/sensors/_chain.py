@@ -253,7 +253,7 @@ def check_chain_work(trajectory: AngleTrajectory, encoder: Encoder, settings: Ch
     ------
     SimulationError
         An estimate above its limit, more harmonics than the wheel resolves (``n_edges / 2``), a TSA
-        window that the run's edges never fill, or fewer than 2 samples after the warm-up.
+        window that the run's edges never fill, fewer than 2 samples, or none after the warm-up.
     """
     fix = "shorten the duration or lower the rate"
     th0, th1 = (float(v) for v in trajectory.theta(np.array([trajectory.t_start, trajectory.t_end])))
@@ -268,10 +268,11 @@ def check_chain_work(trajectory: AngleTrajectory, encoder: Encoder, settings: Ch
                               f"encoder with {encoder.n_edges} edges per revolution resolves (half the edges)")
     span = trajectory.t_end - trajectory.t_start
     samples = math.floor(span * settings.rate_hz + 1e-9) + 1
-    if math.floor((span - settings.warmup_s) * settings.rate_hz + 1e-9) + 1 < 2:
-        raise SimulationError(f"the statistics need 2 samples after the warm-up of {settings.warmup_s:g} s; at "
-                              f"{settings.rate_hz:g} Hz over {span:g} s there are fewer; lengthen the run, raise "
-                              f"the rate or shorten the warm-up")
+    # the same samples and warm-up test as controller_times and _score
+    if samples < 2 or (samples - 1) / settings.rate_hz < settings.warmup_s:
+        raise SimulationError(f"the statistics need 2 samples and one after the warm-up of {settings.warmup_s:g} "
+                              f"s; at {settings.rate_hz:g} Hz over {span:g} s there are {samples}; lengthen the "
+                              f"run, raise the rate or shorten the warm-up")
     fine = samples * settings.st_substeps if "super-twisting" in estimators else 0
     tsa_runs = samples * sum(name != "super-twisting" for name in estimators) + fine
     check_work(f"estimator samples at {settings.rate_hz:g} Hz over {span:g} s", samples + fine, MAX_SAMPLES,
