@@ -48,13 +48,13 @@ REFUSED = [
     (("encoder", "--ppr", "1000000000"), "lies above 100000"),
     (("encoder", "--order", "1000", "--events", "1001", "--duration", "2"), "TSA least-squares numbers"),
     (("encoder", "--rate-hz", "0.01"), "the statistics need 2 samples"),
-    (("encoder", "--profile", "braking", "--duration", "1e9"), "limit of 5e+05"),
-    (("encoder", "--ppr", "4", "--harmonics", "5", "--duration", "2"), "half the edges"),
-    (("simulate", "--dt", "1e-9"), "about 6e+10, above the limit of 5e+05"),
-    (("simulate", "--duration", "1e9"), "limit of 5e+05"),
+    (("encoder", "--profile", "braking", "--duration", "1e9"), "limit of 1e+06"),
+    (("encoder", "--ppr", "4", "--harmonics", "5", "--estimator", "three-stage", "--duration", "2"), "half the edges"),
+    (("simulate", "--dt", "1e-9"), "about 6e+10, above the limit of 1e+06"),
+    (("simulate", "--duration", "1e9"), "limit of 1e+06"),
     (("simulate", "--speed-kmh", "1e9"), "(0, 500] km/h"),
     (("simulate", "aguado-sec36", "--speed-kmh", "1e9"), "(0, 500] km/h"),
-    (("simulate", "table41", "--dt", "1e-9"), "limit of 5e+05"),
+    (("simulate", "table41", "--dt", "1e-9"), "limit of 1e+06"),
 ]
 
 

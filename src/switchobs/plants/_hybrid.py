@@ -58,9 +58,11 @@ Rhs = Callable[[float, State], State]
 
 #: Rounds of phase changes allowed at one instant before the thresholds are declared contradictory.
 MAX_CASCADE = 8
-#: Steps a run may take (each stores one row of the series, about 1 kB with the observer's bookkeeping): a
-#: bound on memory and time checked before the first step, from the time bound over the initial step.
-MAX_STEPS = 500_000
+#: Steps a run may take (each stores one row of the series, 8 bytes a column, and the plant's bookkeeping):
+#: a bound on memory (some 400 MB) and time (about 20 s), checked before the first step from the time
+#: bound over the initial step.
+MAX_STEPS = 1_000_000
+_BLOCK = 4096
 
 
 def rk4_step(f: Rhs, t: float, y: State, h: float, k1: State) -> State:
@@ -272,7 +274,10 @@ def integrate(plant: HybridPlant, t_end: float, *, name: str) -> HybridRun:
     k1 = rhs(t, y)
     if plant.start(t, y):
         k1 = rhs(t, y)
+    # rows are packed into arrays of doubles every _BLOCK steps: a tuple of float objects costs some
+    # 36 bytes a number, a packed one 8
     rows = [row(t, y)]
+    blocks: list[npt.NDArray[np.float64]] = []
     events: list[tuple[float, str]] = []
     g_old = [guard_values(k) for k in range(len(automata))]
     status, message = "duration", f"reached the time bound {t_end:g} s"
@@ -307,6 +312,9 @@ def integrate(plant: HybridPlant, t_end: float, *, name: str) -> HybridRun:
         steps += 1
         failure = after_step(t, y, h)
         rows.append(row(t, y))
+        if len(rows) == _BLOCK:
+            blocks.append(np.array(rows, dtype=float))
+            rows.clear()
         if failure is not None:
             status, message = "observer-failed", failure
             break
@@ -332,7 +340,8 @@ def integrate(plant: HybridPlant, t_end: float, *, name: str) -> HybridRun:
         k1 = k_end
         if t >= t_end - 1e-12:
             break
-    data = np.array(rows, dtype=float).reshape(-1, len(plant.series))
+    blocks.append(np.array(rows, dtype=float).reshape(-1, len(plant.series)))
+    data = np.concatenate(blocks)
     return HybridRun(series={col: data[:, i].copy() for i, col in enumerate(plant.series)}, events=tuple(events),
                      status=status, message=message, steps=steps, wall_time_s=time.perf_counter() - wall0)
 

@@ -210,7 +210,8 @@ class EstimatorComparison:
         failed run; ``rms_x2`` and the lags may be NaN by design (no ``x2`` in the trajectory, a
         constant truth) and print as "-".
         """
-        bad = [r.estimator for r in self.results if not (math.isfinite(r.rms_omega) and math.isfinite(r.rms_alpha))]
+        bad = [r.estimator for r in self.results
+               if not (math.isfinite(r.rms_omega) and math.isfinite(r.rms_alpha))]
         if not bad:
             return None
         return (f"no finite RMS error for {', '.join(bad)}: no estimate after the warm-up "
@@ -259,11 +260,12 @@ def check_chain_work(trajectory: AngleTrajectory, encoder: Encoder, settings: Ch
     th0, th1 = (float(v) for v in trajectory.theta(np.array([trajectory.t_start, trajectory.t_end])))
     edges = encoder.n_edges * (th1 - th0) / (2.0 * math.pi)
     check_work(f"{encoder.n_edges} edges per revolution over {(th1 - th0) / (2.0 * math.pi):.3g} revolutions",
-               edges, MAX_EDGES, "lower the speed, the duration or the pulses per revolution", error=SimulationError)
+               edges, MAX_EDGES, "lower the speed, the duration or the pulses per revolution",
+               error=SimulationError)
     if edges < settings.window:
         raise SimulationError(f"the TSA window of n = {settings.window} events never fills: the run produces "
                               f"about {edges:.0f} edges; lower the window or lengthen the run")
-    if settings.harmonics > encoder.n_edges // 2:
+    if "three-stage" in estimators and settings.harmonics > encoder.n_edges // 2:
         raise SimulationError(f"harmonics (M) = {settings.harmonics} exceeds {encoder.n_edges // 2}, the most an "
                               f"encoder with {encoder.n_edges} edges per revolution resolves (half the edges)")
     span = trajectory.t_end - trajectory.t_start
