@@ -22,7 +22,7 @@ from switchobs.plants import BrakingScenario, simulate
 from switchobs.plants._hybrid import MAX_STEPS
 from switchobs.sensors import ChainSettings, Encoder, compare_estimators, constant_speed
 from switchobs.sensors import _tsa
-from switchobs.plants._vehicle import MAX_SPEED_KMH
+from switchobs.plants._vehicle import MAX_DELAY_S, MAX_SPEED_KMH
 from switchobs.sensors import _chain as chain
 from switchobs.sensors._chain import MAX_EDGES, MAX_LAG_WORK, MAX_RLS_WORK, MAX_SAMPLES, MAX_TSA_WORK
 from switchobs.sensors._encoder import MAX_PPR
@@ -53,6 +53,7 @@ REFUSED = [
     (("simulate", "--dt", "1e-9"), "about 6e+10, above the limit of 1e+06"),
     (("simulate", "--duration", "1e9"), "limit of 1e+06"),
     (("simulate", "--speed-kmh", "1e9"), "(0, 500] km/h"),
+    (("simulate", "--delay", "1e9"), "[0, 1] s"),
     (("simulate", "aguado-sec36", "--speed-kmh", "1e9"), "(0, 500] km/h"),
     (("simulate", "table41", "--dt", "1e-9"), "limit of 1e+06"),
 ]
@@ -144,7 +145,7 @@ def _limits_section() -> str:
 
 
 def test_the_documented_limits_are_the_constants_of_the_code():
-    constants = {"MAX_SPEED_KMH": MAX_SPEED_KMH, "MAX_STEPS": MAX_STEPS, "MAX_RPM": MAX_RPM,
+    constants = {"MAX_SPEED_KMH": MAX_SPEED_KMH, "MAX_DELAY_S": MAX_DELAY_S, "MAX_STEPS": MAX_STEPS, "MAX_RPM": MAX_RPM,
                  "MAX_DURATION_S": MAX_DURATION_S, "MAX_PPR": MAX_PPR, "MAX_HARMONICS": MAX_HARMONICS,
                  "MAX_EDGES": MAX_EDGES, "MAX_SAMPLES": MAX_SAMPLES, "MAX_TSA_WORK": MAX_TSA_WORK,
                  "MAX_RLS_WORK": MAX_RLS_WORK, "MAX_LAG_WORK": MAX_LAG_WORK}
