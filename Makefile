@@ -34,10 +34,11 @@ cc-tools:
 test: $(STAMP) cc-tools
 	$(PY) -m pytest -n 2 -q
 
-# Many more hostile inputs than make test draws (tests/test_fuzz_inputs.py), at random; FUZZ_EXAMPLES per batch.
+# The fuzzing suites with many more examples than `make test` runs (random, not derandomised): model files and
+# certificates (tests/test_fuzz_inputs.py, test_errors.py) and CLI option values (tests/test_fuzz_options.py).
 FUZZ_EXAMPLES ?= 300
 fuzz: $(STAMP)
-	SWITCHOBS_FUZZ_EXAMPLES=$(FUZZ_EXAMPLES) $(PY) -m pytest -q -p no:cacheprovider tests/test_fuzz_inputs.py tests/test_errors.py
+	SWITCHOBS_FUZZ_EXAMPLES=$(FUZZ_EXAMPLES) $(PY) -m pytest -q -p no:cacheprovider tests/test_fuzz_inputs.py tests/test_errors.py tests/test_fuzz_options.py
 
 # Every benchmark script (benchmarks/_*.py are helpers), then their result tables into the docs pages.
 # BENCH_QUICK=1: every script with --quick (smaller sizes, fewer runs), printed only: nothing is published.

@@ -12,7 +12,7 @@ import numpy as np
 from ._limits import decimal_fraction
 from .exceptions import DimensionError
 
-__all__ = ["named_vector", "signal_matrix", "adaptation_gain", "substep_bound", "round_down",
+__all__ = ["named_vector", "signal_matrix", "adaptation_gain", "substep_bound", "round_down", "check_work",
            "DEFAULT_MAX_SUBSTEPS"]
 
 #: Sub-steps allowed per step when a step bound h_max is given and max_substeps is not.
@@ -121,3 +121,15 @@ def round_down(value: Fraction, real: str = "double", *, error: type[Exception])
     if not near > 0.0:
         raise error(f"h_max = {value} is below the smallest positive {real}; give a larger bound")
     return near
+
+
+def check_work(what: str, estimate: float, limit: float, fix: str, *, error: type[Exception]) -> None:
+    """Refuse a run whose estimated size ``estimate`` (edges, samples, steps...) exceeds ``limit``.
+
+    Called before anything of that size is allocated, so that a hostile or
+    mistyped option ends with one message naming the estimate, the limit and
+    the way out (``fix``) instead of exhausting memory or time.  A NaN
+    estimate is refused too.
+    """
+    if not estimate <= limit:
+        raise error(f"{what}: about {estimate:.3g}, above the limit of {limit:.3g}; {fix}")

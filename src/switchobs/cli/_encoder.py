@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import argparse
+import sys
 
 from ..exceptions import SimulationError
 from .._atomic import check_output_file
@@ -71,4 +72,7 @@ def run(args: argparse.Namespace) -> int:
         save_figure(plot_comparison(comparison), args.plot)
         if not args.json:
             print(f"plot written to {args.plot}")
+    if comparison.failure is not None:
+        print(f"switchobs encoder: failed: {comparison.failure}", file=sys.stderr)
+        return 1
     return 0

@@ -10,17 +10,20 @@ of seed 001 Table 4.1).
 from __future__ import annotations
 
 import argparse
+import sys
 from dataclasses import replace
 from typing import Any
+
+import numpy as np
 
 from .._atomic import check_output_file
 from .._figures import save_figure
 from ..exceptions import SimulationError
 from ..loop import DEFAULT_GAMMA, OBSERVER_KINDS, EstimatorSpec, xbs_estimator
-from ..plants import (TABLE41_ROADS, TABLE41_SPEEDS_KMH, BrakeActuator, BrakingScenario, ContinuousXbsControl,
-                      FivePhaseABS, TwoPhaseABS, XbsEstimator, aguado_sec36, plot_braking, plot_table41,
-                      plot_two_axle, road, road_names, scenario, scenario_description, scenario_names,
-                      scenario_observer, simulate, simulate_two_axle, table41)
+from ..plants import (TABLE41_ROADS, TABLE41_SPEEDS_KMH, BrakeActuator, BrakingResult, BrakingScenario,
+                      ContinuousXbsControl, FivePhaseABS, TwoPhaseABS, XbsEstimator, aguado_sec36, plot_braking,
+                      plot_table41, plot_two_axle, road, road_names, scenario, scenario_description,
+                      scenario_names, scenario_observer, simulate, simulate_two_axle, table41)
 from ._common import emit_json
 
 __all__ = ["register"]
@@ -156,12 +159,37 @@ def _two_axle(args: argparse.Namespace) -> int:
     else:
         print(scenario_description(args.scenario))
         print(result)
-    return 0
+    return _verdict(result.failure)
+
+
+def _verdict(failure: str | None) -> int:
+    """Exit status 1 with the reason on stderr for a failed run, 0 otherwise (docs/errors.md)."""
+    if failure is None:
+        return 0
+    print(f"switchobs simulate: failed: {failure}", file=sys.stderr)
+    return 1
+
+
+def _unfinished(args: argparse.Namespace, result: BrakingResult) -> str | None:
+    """The default run brakes "to standstill": ending at the default time bound before the stop fails it.
+
+    A named scenario's bound and a --duration the user gave are the window asked for, not a failure.
+    """
+    if result.status != "duration" or args.scenario is not None or args.duration is not None:
+        return None
+    return (f"the car did not stop within the default time bound of {result.scenario.duration_s:g} s "
+            f"(final speed {result.metrics.final_speed_m_s:.2f} m/s); give a longer --duration")
 
 
 def run(args: argparse.Namespace) -> int:
     if args.plot:
         check_output_file(args.plot, what="the plot")
+    # an overflowing observer is reported once, as a failed or diverged run, not also by numpy's warnings
+    with np.errstate(over="ignore", invalid="ignore", divide="ignore"):
+        return _run(args)
+
+
+def _run(args: argparse.Namespace) -> int:
     if args.series and not args.json:
         raise SimulationError("--series only applies with --json")
     if args.scenario == "table41":
@@ -182,4 +210,4 @@ def run(args: argparse.Namespace) -> int:
         if args.scenario is not None:
             print(scenario_description(args.scenario))
         print(result)
-    return 0
+    return _verdict(result.failure or _unfinished(args, result))

@@ -47,15 +47,22 @@ from typing import Any, Protocol
 import numpy as np
 import numpy.typing as npt
 
+from .._validate import check_work
 from ..exceptions import SimulationError
 
-__all__ = ["rk4_step", "locate_event", "integrate", "HybridPlant", "HybridRun", "Crossing", "MAX_CASCADE"]
+__all__ = ["rk4_step", "locate_event", "integrate", "HybridPlant", "HybridRun", "Crossing", "MAX_CASCADE",
+           "MAX_STEPS"]
 
 State = tuple[float, ...]
 Rhs = Callable[[float, State], State]
 
 #: Rounds of phase changes allowed at one instant before the thresholds are declared contradictory.
 MAX_CASCADE = 8
+#: Steps a run may take (each stores one row of the series, 8 bytes a column, and the plant's bookkeeping):
+#: a bound on memory (some 400 MB) and time (about 20 s), checked before the first step from the time
+#: bound over the initial step.
+MAX_STEPS = 1_000_000
+_BLOCK = 4096
 
 
 def rk4_step(f: Rhs, t: float, y: State, h: float, k1: State) -> State:
@@ -247,8 +254,15 @@ def integrate(plant: HybridPlant, t_end: float, *, name: str) -> HybridRun:
     Raises
     ------
     SimulationError
-        When phase changes cascade more than :data:`MAX_CASCADE` rounds at one instant.
+        When phase changes cascade more than :data:`MAX_CASCADE` rounds at one instant, or when
+        ``t_end`` over the initial step exceeds :data:`MAX_STEPS` (refused before the first step).
     """
+    if not (isinstance(t_end, (int, float)) and math.isfinite(t_end) and t_end > 0.0):
+        raise SimulationError(f"scenario {name!r}: the time bound must be finite and > 0 s, got {t_end!r}")
+    h0 = plant.step_size(0.0, plant.initial_state())
+    check_work(f"scenario {name!r}: integration steps of {h0:g} s over {t_end:g} s (each one stored)",
+               t_end / h0, MAX_STEPS,
+               "use a larger step or a shorter time bound", error=SimulationError)
     wall0 = time.perf_counter()
     # bound methods as locals: this loop runs once per step, in plain Python
     rhs, step_size, breakpoint, crossings = plant.rhs, plant.step_size, plant.breakpoint, plant.crossings
@@ -260,7 +274,10 @@ def integrate(plant: HybridPlant, t_end: float, *, name: str) -> HybridRun:
     k1 = rhs(t, y)
     if plant.start(t, y):
         k1 = rhs(t, y)
+    # rows are packed into arrays of doubles every _BLOCK steps: a tuple of float objects costs some
+    # 36 bytes a number, a packed one 8
     rows = [row(t, y)]
+    blocks: list[npt.NDArray[np.float64]] = []
     events: list[tuple[float, str]] = []
     g_old = [guard_values(k) for k in range(len(automata))]
     status, message = "duration", f"reached the time bound {t_end:g} s"
@@ -295,6 +312,9 @@ def integrate(plant: HybridPlant, t_end: float, *, name: str) -> HybridRun:
         steps += 1
         failure = after_step(t, y, h)
         rows.append(row(t, y))
+        if len(rows) == _BLOCK:
+            blocks.append(np.array(rows, dtype=float))
+            rows.clear()
         if failure is not None:
             status, message = "observer-failed", failure
             break
@@ -320,7 +340,8 @@ def integrate(plant: HybridPlant, t_end: float, *, name: str) -> HybridRun:
         k1 = k_end
         if t >= t_end - 1e-12:
             break
-    data = np.array(rows, dtype=float).reshape(-1, len(plant.series))
+    blocks.append(np.array(rows, dtype=float).reshape(-1, len(plant.series)))
+    data = np.concatenate(blocks)
     return HybridRun(series={col: data[:, i].copy() for i, col in enumerate(plant.series)}, events=tuple(events),
                      status=status, message=message, steps=steps, wall_time_s=time.perf_counter() - wall0)
 

@@ -5,8 +5,10 @@ Definitions (all over the recorded samples, trapezoidal integrals):
 * ``mean_friction`` ``mū``: time average of the braking friction ``-mu(lambda(t))``
   over the whole run; ``braking_distance_m = vx(0)² / (2 g mū)`` is the braking
   distance as seed 001 Table 4.1 defines it (Sec. 4.4), ``None`` when the speed
-  is imposed (drum) since the tyre force then does not stop the vehicle.
-* ``stopping_distance_m``: distance actually travelled until the stop speed.
+  is imposed (drum) since the tyre force then does not stop the vehicle, and
+  when the run ended before the stop (``mū`` would average part of a braking).
+* ``stopping_distance_m``: distance actually travelled until the stop speed, or
+  until the end of the run when the car did not stop (printed "distance travelled").
 * XBS error ``e = mu_hat' - mu'``: RMS over the ABS-active part; after each road
   change (and from the ABS activation for the initial road) the re-convergence
   time is the time after the end of the transition from which ``|e|`` stays
@@ -33,7 +35,7 @@ from ._vehicle import GRAVITY
 if TYPE_CHECKING:
     from ._simulate import BrakingScenario
 
-__all__ = ["BrakingMetrics", "Assumption1Status", "Reconvergence", "braking_metrics", "assumption1"]
+__all__ = ["BrakingMetrics", "Assumption1Status", "Reconvergence", "braking_metrics", "assumption1", "diverged"]
 
 #: Defaults of the Assumption 1 check.
 PE_WINDOW_S = 0.2
@@ -178,16 +180,18 @@ class BrakingMetrics:
         return out
 
     def __str__(self) -> str:
-        stop = "not reached" if self.stop_time_s is None else f"{self.stop_time_s:.3f} s"
-        lines = [f"stop: {stop}, stopping distance {self.stopping_distance_m:.2f} m, final speed "
-                 f"{self.final_speed_m_s:.2f} m/s",
+        distance = ("not reached, distance travelled" if self.stop_time_s is None else
+                    f"{self.stop_time_s:.3f} s, stopping distance")
+        lines = [f"stop: {distance} {self.stopping_distance_m:.2f} m, final speed {self.final_speed_m_s:.2f} m/s",
                  f"mean friction {self.mean_friction:.4f}" + (
                      "" if self.braking_distance_m is None else
                      f" -> braking distance (Table 4.1 definition) {self.braking_distance_m:.2f} m")]
         if self.abs_activation_s is not None:
             eff = "" if self.efficiency is None else f", {100 * self.efficiency:.1f} % of the peak"
+            # None when the ABS became active at the last sample (a run cut short by a failure)
+            mean_abs = "n/a" if self.mean_friction_abs is None else f"{self.mean_friction_abs:.4f}"
             lines.append(f"ABS active from {self.abs_activation_s:.3f} s: {self.abs_cycles} cycles, mean friction "
-                         f"{self.mean_friction_abs:.4f}{eff}, slip {self.slip_mean:.4f} ± {self.slip_std:.4f}")
+                         f"{mean_abs}{eff}, slip {self.slip_mean:.4f} ± {self.slip_std:.4f}")
         if self.xbs_rms_error is not None:
             rec = "; ".join(f"{r.label}: " + ("not re-converged" if r.time_s is None else f"{r.time_s:.3f} s")
                             for r in self.reconvergence)
@@ -221,7 +225,7 @@ def braking_metrics(series: dict[str, npt.NDArray[np.float64]], scenario: Brakin
     duration = float(t[-1] - t[0])
     mean_mu = float(_cumtrapz(t, -mu)[-1] / duration) if duration > 0 else 0.0
     # with an imposed speed the tyre force does not stop the vehicle: no braking distance
-    braking = None if scenario.speed_profile is not None else (
+    braking = None if scenario.speed_profile is not None or status != "stopped" else (
         v0 * v0 / (2.0 * GRAVITY * mean_mu) if mean_mu > 0 else None)
     phase = series["phase"]
     active = np.nonzero(phase >= 1)[0]
@@ -260,3 +264,14 @@ def braking_metrics(series: dict[str, npt.NDArray[np.float64]], scenario: Brakin
                           braking_distance_m=braking, abs_activation_s=t_abs, mean_friction_abs=mean_abs,
                           efficiency=eff, abs_cycles=cycles, slip_mean=slip_mean, slip_std=slip_std,
                           xbs_rms_error=rms, reconvergence=tuple(reconv), assumption1=a1)
+
+
+def diverged(estimate: npt.NDArray[np.float64], rms_error: float | None, label: str = "the observer") -> str | None:
+    """Say so when an XBS estimate diverged: an infinite sample, or an error RMS that is not finite.
+
+    NaN samples alone are not divergence (an estimator without a measurement yet reports NaN);
+    an RMS error that overflows to ``inf`` is, since the estimate then left every physical range.
+    """
+    if np.isinf(estimate).any() or (rms_error is not None and not math.isfinite(rms_error)):
+        return f"{label} diverged: its XBS estimate is not finite (estimation error RMS {rms_error})"
+    return None

@@ -228,6 +228,11 @@ class Table41Result:
         return "\n".join(lines)
 
 
+def _status(result: BrakingResult) -> str:
+    """The run's status, ``diverged`` for a run that stopped with a diverged estimate (not a complete row)."""
+    return "diverged" if result.status == "stopped" and result.failure is not None else result.status
+
+
 def table41(*, roads: Sequence[str] = TABLE41_ROADS, speeds_kmh: Sequence[float] = TABLE41_SPEEDS_KMH,
             five_phase: FivePhaseABS | None = None, two_phase: TwoPhaseABS | None = None, dt_s: float = 1e-3,
             estimator_factory: Callable[[BrakingScenario], XbsEstimator] | None = None,
@@ -282,7 +287,7 @@ def table41(*, roads: Sequence[str] = TABLE41_ROADS, speeds_kmh: Sequence[float]
                                    seed_two_phase_m=None if seed is None else seed[1],
                                    five_phase_stopping_m=out[0].metrics.stopping_distance_m,
                                    two_phase_stopping_m=out[1].metrics.stopping_distance_m,
-                                   five_phase_status=out[0].status, two_phase_status=out[1].status))
+                                   five_phase_status=_status(out[0]), two_phase_status=_status(out[1])))
     return Table41Result(rows=tuple(rows), five_phase=five_phase, two_phase=two_phase, observer=observer,
                          wall_time_s=time.perf_counter() - t0)
 

@@ -39,10 +39,10 @@ from ._controllers import ContinuousXbsControl, Controller, FivePhaseABS, TwoPha
 from ._compiled import compiled_support, compiler_available, run_compiled
 from ._estimator import TrueXbs, XbsEstimator
 from ._hybrid import Crossing, HybridPlant, HybridRun, integrate
-from ._metrics import BrakingMetrics, braking_metrics
+from ._metrics import BrakingMetrics, braking_metrics, diverged
 from ._road import RoadSchedule, _RoadState
 from ._tyre import Burckhardt
-from ._vehicle import BrakeActuator, PrescribedSpeed, QuarterCar
+from ._vehicle import BrakeActuator, PrescribedSpeed, QuarterCar, check_speed
 
 __all__ = ["BrakingScenario", "BrakingResult", "simulate", "SERIES"]
 
@@ -67,7 +67,7 @@ class BrakingScenario:
     roads : RoadSchedule or str
         Surface(s); a road name means one surface throughout.
     speed_m_s : float
-        Initial vehicle speed ``vx(0)`` [m/s], > 0.
+        Initial vehicle speed ``vx(0)`` [m/s], in ``(0, MAX_SPEED_KMH / 3.6]``.
     controller : FivePhaseABS, TwoPhaseABS or ContinuousXbsControl
     name : str
     vehicle : QuarterCar
@@ -113,6 +113,7 @@ class BrakingScenario:
             raise SimulationError(f"unknown controller {self.controller!r}")
         owner = f"scenario {self.name!r}"
         _check(owner, "initial speed speed_m_s", self.speed_m_s)
+        check_speed(owner, self.speed_m_s)
         _check(owner, "duration_s", self.duration_s)
         _check(owner, "stop_speed_m_s", self.stop_speed_m_s)
         _check(owner, "dt_s", self.dt_s)
@@ -198,9 +199,24 @@ class BrakingResult:
     steps: int
     compiled: bool = False
 
+    @property
+    def failure(self) -> str | None:
+        """Why the run failed, or ``None``: the exit status 1 of ``switchobs simulate``.
+
+        A run fails when the estimator refused a step (``observer-failed``), the
+        continuous law became undefined (``controller-singular``), or the estimate
+        diverged (:func:`diverged`).  Reaching the time bound before the stop is
+        not a failure here: whether the bound was the point of the run (a drum
+        scenario, a chosen window) is the caller's to say.
+        """
+        if self.status in ("observer-failed", "controller-singular"):
+            return f"{self.status}: {self.message}"
+        return diverged(self.series["xbs_hat"], self.metrics.xbs_rms_error)
+
     def to_json(self, *, include_series: bool = False) -> dict[str, Any]:
         out: dict[str, Any] = {
             "scenario": self.scenario.to_json(), "status": self.status, "message": self.message,
+            "failure": self.failure,
             "observer": self.observer, "observer_in_loop": self.observer_in_loop,
             "metrics": self.metrics.to_json(),
             "cost": {"steps": self.steps, "wall_time_s": self.wall_time_s, "observer_time_s": self.observer_time_s,

@@ -36,9 +36,9 @@ from ..exceptions import SimulationError
 from ._controllers import FivePhaseABS, TwoPhaseABS
 from ._estimator import XbsEstimator
 from ._hybrid import Crossing, HybridPlant, integrate
-from ._metrics import _cumtrapz
+from ._metrics import _cumtrapz, diverged
 from ._road import RoadSchedule, _RoadState
-from ._vehicle import GRAVITY, BrakeActuator, QuarterCar
+from ._vehicle import GRAVITY, BrakeActuator, QuarterCar, check_speed
 
 __all__ = ["TwoAxleVehicle", "Accelerometer", "TwoAxleScenario", "TwoAxleResult", "simulate_two_axle"]
 
@@ -188,6 +188,7 @@ class TwoAxleScenario:
         _positive(f"scenario {self.name!r}", speed_m_s=self.speed_m_s, duration_s=self.duration_s,
                   stop_speed_m_s=self.stop_speed_m_s, dt_s=self.dt_s, speed_filter_q=self.speed_filter_q,
                   speed_filter_r=self.speed_filter_r, low_speed_m_s=self.low_speed_m_s)
+        check_speed(f"scenario {self.name!r}", self.speed_m_s)
         if not (isinstance(self.brake_start_s, (int, float)) and 0 <= self.brake_start_s < self.duration_s):
             raise SimulationError(f"brake_start_s must lie in [0, duration_s), got {self.brake_start_s!r}")
         if self.stop_speed_m_s >= self.speed_m_s:
@@ -242,8 +243,21 @@ class TwoAxleResult:
     wall_time_s: float
     steps: int
 
+    @property
+    def failure(self) -> str | None:
+        """Why the run failed, or ``None`` (as :attr:`BrakingResult.failure`, per axle)."""
+        if self.status == "observer-failed":
+            return f"{self.status}: {self.message}"
+        for axle in ("front", "rear"):
+            why = diverged(self.series[f"xbs_hat_{axle[0]}"], self.metrics[axle]["xbs_rms_error"],
+                           f"the {axle} observer")
+            if why is not None:
+                return why
+        return None
+
     def to_json(self, *, include_series: bool = False) -> dict[str, Any]:
         out = {"scenario": self.scenario.to_json(), "status": self.status, "message": self.message,
+               "failure": self.failure,
                "metrics": self.metrics,
                "events": [{"t": t, "event": e} for t, e in self.events],
                "cost": {"steps": self.steps, "wall_time_s": self.wall_time_s}}
@@ -254,7 +268,8 @@ class TwoAxleResult:
     def __str__(self) -> str:
         m = self.metrics
         status = self.status + (f" ({self.message})" if self.status == "observer-failed" else "")
-        lines = [str(self.scenario), f"  status: {status}; stopping distance {m['stopping_distance_m']:.2f} m,"
+        distance = "stopping distance" if self.status == "stopped" else "distance travelled"
+        lines = [str(self.scenario), f"  status: {status}; {distance} {m['stopping_distance_m']:.2f} m,"
                  f" mean deceleration {m['mean_deceleration_m_s2']:.2f} m/s²",
                  f"  speed estimate error: mean {m['speed_error_mean_pct']:.1f} %, worst "
                  f"{m['speed_error_max_pct']:.1f} %"]

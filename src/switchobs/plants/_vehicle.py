@@ -8,9 +8,23 @@ from typing import Any
 
 from ..exceptions import SimulationError
 
-__all__ = ["QuarterCar", "BrakeActuator", "PrescribedSpeed", "GRAVITY"]
+__all__ = ["QuarterCar", "BrakeActuator", "PrescribedSpeed", "GRAVITY", "MAX_SPEED_KMH", "MAX_DELAY_S",
+           "check_speed"]
 
 GRAVITY = 9.81
+#: Highest initial speed of a braking run: above any road car, and far below the speeds at which the tyre
+#: and the step of the integrator stop making sense (a mistyped 1e9 km/h would "brake" over 1e19 m).
+MAX_SPEED_KMH = 500.0
+#: Longest actuator delay: brake hydraulics answer within tens of milliseconds; a delay of seconds is a
+#: car without brakes, whose run only ends at its time bound.
+MAX_DELAY_S = 1.0
+
+
+def check_speed(owner: str, speed_m_s: float) -> None:
+    """Refuse an initial speed (a finite number, checked by the caller) outside ``(0, MAX_SPEED_KMH]``."""
+    if not 0.0 < speed_m_s <= MAX_SPEED_KMH / 3.6:
+        raise SimulationError(f"{owner}: the initial speed {3.6 * speed_m_s:g} km/h lies outside "
+                              f"(0, {MAX_SPEED_KMH:g}] km/h, the range of a road vehicle")
 
 
 def _positive(owner: str, **values: float) -> None:
@@ -92,7 +106,7 @@ class BrakeActuator:
         (seed 001 Sec. 2.2.2).
     delay_s : float
         Delay between the commanded and the applied pressure rate; ``0`` or at
-        least the integration step.
+        least the integration step, at most :data:`MAX_DELAY_S`.
     """
 
     max_rate_bar_s: float = 2000.0
@@ -101,8 +115,9 @@ class BrakeActuator:
 
     def __post_init__(self) -> None:
         _positive("BrakeActuator", max_rate_bar_s=self.max_rate_bar_s, max_pressure_bar=self.max_pressure_bar)
-        if not isinstance(self.delay_s, (int, float)) or not math.isfinite(self.delay_s) or self.delay_s < 0:
-            raise SimulationError(f"BrakeActuator: delay_s must be finite and >= 0, got {self.delay_s!r}")
+        if not isinstance(self.delay_s, (int, float)) or not 0 <= self.delay_s <= MAX_DELAY_S:
+            raise SimulationError(f"BrakeActuator: delay_s must lie in [0, {MAX_DELAY_S:g}] s (brake hydraulics "
+                                  f"answer within tens of ms), got {self.delay_s!r}")
 
     def to_json(self) -> dict[str, Any]:
         return asdict(self)

@@ -18,23 +18,39 @@ import numpy as np
 import numpy.typing as npt
 
 from .._progress import progress
+from .._validate import check_work
 from ..exceptions import SimulationError
 from ._encoder import Encoder, EncoderEvents
 from ._series import SpeedEstimate, estimate_lag, rms_error
 from ._super_twisting import low_pass, super_twisting, super_twisting_gains
-from ._three_stage import notch, three_stage
+from ._three_stage import check_harmonics, notch, three_stage
 from ._trajectory import AngleTrajectory, constant_speed, rpm_to_rad_s, trapezoid_speed, varying_speed
 from ._tsa import check_order_window, controller_times, time_stamping
 from ._validate import check_int, check_positive
 
 __all__ = ["ESTIMATORS", "TABLE61_SEED", "TABLE61_ENCODER", "TABLE61_PROFILES", "ROBUSTNESS_PROFILES",
            "ChainSettings", "ChainResult", "EstimatorComparison", "encoder_chain",
-           "compare_estimators"]
+           "compare_estimators", "check_chain_work", "MAX_EDGES", "MAX_SAMPLES", "MAX_TSA_WORK",
+           "MAX_RLS_WORK", "MAX_LAG_WORK"]
 
 Array = npt.NDArray[np.float64]
 
 #: Estimators of the chain, in the order of the comparison tables.
 ESTIMATORS: tuple[str, ...] = ("tsa", "notch", "three-stage", "super-twisting")
+
+# Work limits of one run of the chain, checked before the events are generated (check_chain_work): each
+# bounds memory (about 1 GB) or time (minutes), far above what the seed's set-ups need (10 s at 1020 rpm and
+# 1 kHz: 10 200 edges, 10 001 samples, 1.1e5 with the super-twisting observer's sub-steps).
+#: Encoder edges (each costs some 200 bytes while the crossings are located).
+MAX_EDGES = 1_000_000
+#: Estimator samples: controller samples, times the sub-steps of the super-twisting observer.
+MAX_SAMPLES = 1_000_000
+#: Numbers in the TSA least-squares problems, samples x window n x (order m + 1), over all estimators.
+MAX_TSA_WORK = 1e8
+#: Multiply-adds of the three-stage least squares, 2 (2 M)^2 per sample.
+MAX_RLS_WORK = 1e9
+#: Sample pairs compared by the lag estimate, samples x shifts within 0.1 s, over all estimators.
+MAX_LAG_WORK = 2e8
 
 
 @dataclass(frozen=True)
@@ -88,7 +104,7 @@ class ChainSettings:
     def __post_init__(self) -> None:
         check_positive(self.rate_hz, "rate_hz")
         check_order_window(self.order, self.window)
-        check_int(self.harmonics, "harmonics (M)", minimum=1)
+        check_harmonics(self.harmonics)
         for name in ("kappa", "gamma0", "st_f_plus", "st_tau_s"):
             check_positive(getattr(self, name), name)
         if self.highpass_hz is not None:
@@ -217,9 +233,24 @@ class EstimatorComparison:
                 return r
         raise KeyError(estimator)
 
+    @property
+    def failure(self) -> str | None:
+        """Why the comparison has no figures, or ``None``: the exit status 1 of ``switchobs encoder``.
+
+        A speed or acceleration RMS error that is NaN (no estimate after the warm-up) or infinite is a
+        failed run; ``rms_x2`` and the lags may be NaN by design (no ``x2`` in the trajectory, a
+        constant truth) and print as "-".
+        """
+        bad = [r.estimator for r in self.results
+               if not (math.isfinite(r.rms_omega) and math.isfinite(r.rms_alpha))]
+        if not bad:
+            return None
+        return (f"no finite RMS error for {', '.join(bad)}: no estimate after the warm-up "
+                f"({self.results[0].settings.warmup_s:g} s), or the estimate diverged")
+
     def to_json(self) -> dict[str, Any]:
         enc = {k: v for k, v in asdict(self.encoder).items() if not k.startswith("_")}
-        return {"trajectory": self.trajectory, "encoder": enc,
+        return {"trajectory": self.trajectory, "encoder": enc, "failure": self.failure,
                 "settings": self.results[0].settings.to_json() if self.results else None,
                 "results": [r.summary() for r in self.results]}
 
@@ -241,6 +272,54 @@ def _check_estimator(name: str) -> str:
     if name not in ESTIMATORS:
         raise SimulationError(f"unknown estimator {name!r}; choose one of {', '.join(ESTIMATORS)}")
     return name
+
+
+def check_chain_work(trajectory: AngleTrajectory, encoder: Encoder, settings: ChainSettings,
+                     estimators: tuple[str, ...]) -> None:
+    """Refuse, before any work, a run of the chain that would exhaust memory or time or give no statistics.
+
+    Estimates the encoder edges from the angle swept, the samples from the rate and the duration, and the
+    work of the TSA fits, the three-stage least squares and the lag search (limits ``MAX_*`` of this module).
+
+    Raises
+    ------
+    SimulationError
+        An estimate above its limit, more harmonics than the wheel resolves (``n_edges / 2``), a TSA
+        window that the run's edges never fill, fewer than 2 samples, or none after the warm-up.
+    """
+    fix = "shorten the duration or lower the rate"
+    th0, th1 = (float(v) for v in trajectory.theta(np.array([trajectory.t_start, trajectory.t_end])))
+    edges = encoder.n_edges * (th1 - th0) / (2.0 * math.pi)
+    check_work(f"{encoder.n_edges} edges per revolution over {(th1 - th0) / (2.0 * math.pi):.3g} revolutions",
+               edges, MAX_EDGES, "lower the speed, the duration or the pulses per revolution",
+               error=SimulationError)
+    if edges < settings.window:
+        raise SimulationError(f"the TSA window of n = {settings.window} events never fills: the run produces "
+                              f"about {edges:.0f} edges; lower the window or lengthen the run")
+    if "three-stage" in estimators and settings.harmonics > encoder.n_edges // 2:
+        raise SimulationError(f"harmonics (M) = {settings.harmonics} exceeds {encoder.n_edges // 2}, the most an "
+                              f"encoder with {encoder.n_edges} edges per revolution resolves (half the edges)")
+    span = trajectory.t_end - trajectory.t_start
+    samples = math.floor(span * settings.rate_hz + 1e-9) + 1
+    # the same samples and warm-up test as controller_times and _score
+    if samples < 2 or (samples - 1) / settings.rate_hz < settings.warmup_s:
+        raise SimulationError(f"the statistics need 2 samples and one after the warm-up of {settings.warmup_s:g} "
+                              f"s; at {settings.rate_hz:g} Hz over {span:g} s there are {samples}; lengthen the "
+                              f"run, raise the rate or shorten the warm-up")
+    fine = samples * settings.st_substeps if "super-twisting" in estimators else 0
+    tsa_runs = samples * sum(name != "super-twisting" for name in estimators) + fine
+    check_work(f"estimator samples at {settings.rate_hz:g} Hz over {span:g} s", samples + fine, MAX_SAMPLES,
+               fix, error=SimulationError)
+    check_work(f"TSA least-squares numbers ({tsa_runs} fits of {settings.window} events, order "
+               f"{settings.order})", tsa_runs * settings.window * (settings.order + 1), MAX_TSA_WORK,
+               f"lower the window n or the order m, or {fix}", error=SimulationError)
+    if "three-stage" in estimators:
+        check_work(f"three-stage least-squares multiply-adds ({settings.harmonics} harmonics, {samples} samples)",
+                   2.0 * samples * (2 * settings.harmonics) ** 2, MAX_RLS_WORK,
+                   f"lower the harmonics M, or {fix}", error=SimulationError)
+    check_work(f"sample pairs of the lag search ({samples} samples, {round(0.1 * settings.rate_hz)} shifts)",
+               2.0 * len(estimators) * samples * round(0.1 * settings.rate_hz), MAX_LAG_WORK, fix,
+               error=SimulationError)
 
 
 def _super_twisting_estimate(events: EncoderEvents, ts: Array, s: ChainSettings) -> SpeedEstimate:
@@ -328,6 +407,7 @@ def encoder_chain(
     True
     """
     _check_estimator(estimator)
+    check_chain_work(trajectory, encoder, settings, (estimator,))
     events = encoder.events(trajectory)
     ts = controller_times(trajectory.t_start, trajectory.t_end, settings.rate_hz)
     return _score(trajectory, _estimate(events, ts, estimator, settings), len(events), settings)
@@ -343,6 +423,7 @@ def compare_estimators(
     """Run several estimators on the same encoder events (seed 001 Table 6.1 layout)."""
     for name in estimators:
         _check_estimator(name)
+    check_chain_work(trajectory, encoder, settings, estimators)
     progress(f"encoder: edges of the {trajectory.name} trajectory")
     events = encoder.events(trajectory)
     ts = controller_times(trajectory.t_start, trajectory.t_end, settings.rate_hz)

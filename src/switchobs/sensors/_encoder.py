@@ -21,11 +21,13 @@ from ..exceptions import SimulationError
 from ._trajectory import AngleTrajectory
 from ._validate import check_int, check_positive, check_range
 
-__all__ = ["Encoder", "EncoderEvents"]
+__all__ = ["Encoder", "EncoderEvents", "MAX_PPR"]
 
 Array = npt.NDArray[np.float64]
 
 _MAX_ECCENTRICITY = 0.1
+#: Most teeth per revolution: ABS tone wheels have 40-100, optical encoders up to some 10 000.
+MAX_PPR = 100_000
 
 
 @dataclass(frozen=True)
@@ -61,7 +63,7 @@ class Encoder:
     Raises
     ------
     SimulationError
-        For ``ppr < 2``, a negative or too large ``dnl_cycles``, ``eccentricity``
+        For ``ppr`` outside ``[2, MAX_PPR]``, a negative or too large ``dnl_cycles``, ``eccentricity``
         outside ``[0, 0.1]`` or a non-positive ``clock_hz``.
 
     References
@@ -87,7 +89,8 @@ class Encoder:
     _transitions: Array = field(init=False, repr=False, compare=False)
 
     def __post_init__(self) -> None:
-        check_int(self.ppr, "ppr (pulses per revolution)", minimum=2)
+        if check_int(self.ppr, "ppr (pulses per revolution)", minimum=2) > MAX_PPR:
+            raise SimulationError(f"ppr = {self.ppr} lies above {MAX_PPR}, more teeth than any wheel encoder has")
         limit = 0.25 if self.both_edges else 0.5
         dnl = check_positive(self.dnl_cycles, "dnl_cycles", allow_zero=True)
         if dnl >= limit:

@@ -123,9 +123,11 @@ class _Wheel(HybridPlant):
         self.R, self.J = vehicle.radius_m, vehicle.inertia_kg_m2
         self.m = float(vehicle.mass_kg)  # type: ignore[arg-type]  # set by QuarterCar.__post_init__
         self.v0 = speed0_m_s
-        n = max(int(round(duration_s / sample_s)), 1)
-        self.grid = np.linspace(0.0, duration_s, n + 1)
-        self.h = float(self.grid[1])
+        # the sample grid k h, h = duration / n, is computed on demand: a long run is refused by the
+        # integrator's step limit before anything of its size is allocated
+        self.n = max(int(round(duration_s / sample_s)), 1)
+        self.duration = duration_s
+        self.h = duration_s / self.n
 
     def initial_state(self) -> tuple[float, ...]:
         return (0.0, self.v0 / self.R, self.v0)
@@ -140,8 +142,8 @@ class _Wheel(HybridPlant):
 
     def breakpoint(self, t: float) -> float:
         """The next sample: steps end on the grid without accumulating rounding."""
-        k = min(int(t / self.h + 0.5) + 1, self.grid.size - 1)
-        return float(self.grid[k])
+        k = int(t / self.h + 0.5) + 1
+        return k * self.h if k < self.n else self.duration
 
     def crossings(self, t: float, y: tuple[float, ...], y1: tuple[float, ...]) -> list[Crossing]:
         R = self.R

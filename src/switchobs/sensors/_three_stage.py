@@ -17,6 +17,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Sequence
+from typing import Any
 
 import numpy as np
 import numpy.typing as npt
@@ -26,9 +27,23 @@ from ._series import SpeedEstimate
 from ._tsa import TsaEstimate
 from ._validate import check_int, check_positive, check_range
 
-__all__ = ["ThreeStageEstimator", "NotchFilter", "three_stage", "notch"]
+__all__ = ["ThreeStageEstimator", "NotchFilter", "three_stage", "notch", "MAX_HARMONICS", "check_harmonics"]
 
 Array = npt.NDArray[np.float64]
+
+
+#: Most harmonics of the perturbation model (6.2): the seed takes ceil(N / n) + 1 = 5, and the least squares
+#: cost (2 M)^2 per sample.
+MAX_HARMONICS = 200
+
+
+def check_harmonics(value: Any) -> int:
+    """The number ``M`` of harmonics, an integer in ``[1, MAX_HARMONICS]``."""
+    m = check_int(value, "harmonics (M)", minimum=1)
+    if m > MAX_HARMONICS:
+        raise SimulationError(f"harmonics (M) = {m} lies above {MAX_HARMONICS}; the seed uses ceil(N/n) + 1 "
+                              f"(5 for N = 60 teeth and n = 15 events)")
+    return m
 
 
 class _HighPass:
@@ -175,7 +190,7 @@ class ThreeStageEstimator:
         gamma0: float | Sequence[float] = 1e5,
         highpass_hz: float | None = None,
     ) -> None:
-        self.harmonics = check_int(harmonics, "harmonics (M)", minimum=1)
+        self.harmonics = check_harmonics(harmonics)
         self.dt_s = check_positive(dt_s, "dt_s")
         kappa = check_positive(kappa, "kappa")
         beta = check_positive(beta, "beta", allow_zero=True)

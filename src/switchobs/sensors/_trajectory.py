@@ -20,12 +20,18 @@ from scipy.interpolate import BPoly, CubicHermiteSpline, CubicSpline, PchipInter
 from ..exceptions import SimulationError
 from ._validate import as_signal, check_increasing, check_positive
 
-__all__ = ["AngleTrajectory", "constant_speed", "varying_speed", "trapezoid_speed", "rpm_to_rad_s"]
+__all__ = ["AngleTrajectory", "constant_speed", "varying_speed", "trapezoid_speed", "rpm_to_rad_s", "MAX_RPM",
+           "MAX_DURATION_S"]
 
 Array = npt.NDArray[np.float64]
 Signal = Callable[[Array], Array]
 
 _EPS = np.finfo(float).eps
+#: Highest wheel speed of the built-in profiles: a car wheel at 300 km/h turns at about 2700 rpm, a motor
+#: test rig at a few 10 000 rpm.
+MAX_RPM = 30_000.0
+#: Longest built-in profile (its root-finding grid has a point every 10 ms).
+MAX_DURATION_S = 3600.0
 
 
 def rpm_to_rad_s(rpm: float) -> float:
@@ -203,6 +209,22 @@ def _signal_function(value: npt.ArrayLike | Signal | None, t: Array) -> Signal |
     return lambda x: np.interp(x, t, samples)
 
 
+def _rpm(value: float, name: str) -> float:
+    """A wheel speed in ``(0, MAX_RPM]`` rpm, in rad/s."""
+    rpm = check_positive(value, name)
+    if rpm > MAX_RPM:
+        raise SimulationError(f"{name} = {rpm:g} rpm lies above {MAX_RPM:g} rpm, beyond any wheel or test rig")
+    return rpm_to_rad_s(rpm)
+
+
+def _duration(value: float) -> float:
+    """A profile length in ``(0, MAX_DURATION_S]`` seconds."""
+    dur = check_positive(value, "duration_s")
+    if dur > MAX_DURATION_S:
+        raise SimulationError(f"duration_s = {dur:g} s lies above {MAX_DURATION_S:g} s, the longest profile")
+    return dur
+
+
 def _grid(t0: float, t1: float, step: float) -> Array:
     return np.linspace(t0, t1, max(2, math.ceil((t1 - t0) / step) + 1))
 
@@ -212,8 +234,8 @@ def constant_speed(rpm: float = 1020.0, duration_s: float = 10.0, *, theta0: flo
 
     ``theta(t) = theta0 + omega0 t`` on ``[0, duration_s]``.
     """
-    w0 = rpm_to_rad_s(check_positive(rpm, "rpm"))
-    dur = check_positive(duration_s, "duration_s")
+    w0 = _rpm(rpm, "rpm")
+    dur = _duration(duration_s)
     return AngleTrajectory(
         theta=lambda t: theta0 + w0 * np.asarray(t, dtype=float),
         omega=lambda t: np.full(np.shape(t), w0),
@@ -240,8 +262,8 @@ def varying_speed(
     SimulationError
         If ``amplitude_rad_s >= omega0`` (the wheel would stop or reverse).
     """
-    w0 = rpm_to_rad_s(check_positive(rpm, "rpm"))
-    dur = check_positive(duration_s, "duration_s")
+    w0 = _rpm(rpm, "rpm")
+    dur = _duration(duration_s)
     amp = check_positive(amplitude_rad_s, "amplitude_rad_s", allow_zero=True)
     f = check_positive(frequency_hz, "frequency_hz")
     if amp >= w0:
@@ -271,11 +293,11 @@ def trapezoid_speed(low_rpm: float, high_rpm: float, duration_s: float = 10.0, *
     SimulationError
         If ``low_rpm >= high_rpm`` or a value is not positive.
     """
-    lo = rpm_to_rad_s(check_positive(low_rpm, "low_rpm"))
-    hi = rpm_to_rad_s(check_positive(high_rpm, "high_rpm"))
+    lo = _rpm(low_rpm, "low_rpm")
+    hi = _rpm(high_rpm, "high_rpm")
     if lo >= hi:
         raise SimulationError(f"low_rpm = {low_rpm:g} must be below high_rpm = {high_rpm:g}")
-    dur = check_positive(duration_s, "duration_s")
+    dur = _duration(duration_s)
     seg = check_positive(segment_s, "segment_s")
     knots = np.arange(0.0, dur + seg, seg)
     speeds = np.resize([lo, lo, hi, hi], knots.size)     # lo plateau, ramp up, hi plateau, ramp down

@@ -34,6 +34,10 @@ def check_order_window(order: Any, window: Any) -> tuple[int, int]:
     return m, n
 
 
+#: Numbers in the batched Vandermonde matrices of one call of :func:`_fit` (about 16 MB).
+_FIT_CHUNK = 2_000_000
+
+
 def _fit(tw: Array, thw: Array, t_eval: Array, order: int) -> tuple[Array, Array, Array]:
     """Batched least-squares fits, one per row of ``tw`` (K x n), evaluated at ``t_eval`` (K,).
 
@@ -162,13 +166,13 @@ def time_stamping(
     last = np.searchsorted(tt, ts, side="right") - 1
     out = np.full((3, ts.size), np.nan)
     ok = last >= n - 1
-    if np.any(ok):
-        # the fit depends only on the window, so solve once per distinct newest event
-        ks, inverse = np.unique(last[ok], return_inverse=True)
-        idx = ks[:, None] + np.arange(-n + 1, 1)
-        te = ts[ok]
-        tw, thw = tt[idx][inverse], th[idx][inverse]
-        out[:, ok] = _fit(tw, thw, te, m)
+    rows = np.flatnonzero(ok)
+    # the batched matrices hold rows x n x (m + 1) numbers: a chunk of rows at a time keeps memory bounded
+    chunk = max(1, _FIT_CHUNK // (n * (m + 1)))
+    for start in range(0, rows.size, chunk):
+        sel = rows[start:start + chunk]
+        idx = last[sel, None] + np.arange(-n + 1, 1)
+        out[:, sel] = _fit(tt[idx], th[idx], ts[sel], m)
     return TsaEstimate(t=ts, theta=out[0], omega=out[1], alpha=out[2], last_event=last, order=m, window=n)
 
 
