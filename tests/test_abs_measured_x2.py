@@ -83,3 +83,14 @@ def test_the_encoder_source_measures_the_cruise_and_feeds_the_controller():
     t01 = [t for t, e in res.events if e == "phase 0 -> 1"][0]
     k = np.searchsorted(rec.t, t01 - 1e-9)
     assert rec.x2_measured[k] <= -sc.controller.eps[0] < rec.x2_measured[k - 1]
+
+
+def test_fig67_scenario_needs_its_slow_build_up_with_the_exact_x2():
+    """docs/reproductions.md, Sec. 6.4: at the default 1000 bar/s the printed Fig. 6.6 stalls in the release."""
+    from switchobs.report._reproductions import fig67_scenario
+
+    sc = replace(fig67_scenario(), duration_s=1.5)
+    fast = simulate(replace(sc, controller=replace(sc.controller, initial_rate_bar_s=1000.0)))
+    assert [e for _, e in fast.events] == ["phase 0 -> 1"] and fast.series["phase"][-1] == 1.0
+    assert fast.series["P_b"][-1] == 0.0
+    assert simulate(sc).metrics.abs_cycles >= 3
