@@ -18,6 +18,7 @@ from pathlib import Path
 
 import numpy as np
 
+from .._figures import panels, save_figure
 from .._progress import progress
 from ..exceptions import PrerequisiteError
 from ..loop import X2_MEASUREMENTS, EncoderX2, EstimatorSpec, xbs_estimator
@@ -312,13 +313,9 @@ def _fig67_section(runs: _Runs) -> list[str]:
 
 def plot_fig67(runs: _Runs, path: Path) -> None:
     """The phase plane (slip, true x2) of the four runs of Figs. 6.7-6.9, each beside the ideal cycle."""
-    import matplotlib
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
     eps = fig67_scenario().controller.eps
     ideal = runs.fig67["exact"].series
-    fig, axes = plt.subplots(1, 3, figsize=(12, 3.8), sharey=True)
+    fig, axes = panels(None, 3, figsize=(12, 3.8), owner="plot_fig67", nrows=1, ncols=3, sharey=True)
     for ax, kind in zip(axes, X2_MEASUREMENTS):
         s = runs.fig67[kind].series
         ax.plot(100 * s["lambda"], s["x2"], lw=0.5, color="tab:blue", label=f"x2 read from {kind}")
@@ -332,8 +329,7 @@ def plot_fig67(runs: _Runs, path: Path) -> None:
         ax.legend(loc="lower left", fontsize=7)
     axes[0].set_ylabel("x2 [m/s²]")
     fig.tight_layout()
-    fig.savefig(path, dpi=110)
-    plt.close(fig)
+    save_figure(fig, path)
 
 
 # ---------------------------------------------------------------- Table 6.1
