@@ -246,8 +246,8 @@ def test_encoder_loop_measurement_is_the_window_centre_and_the_observer_is_in_th
 def test_encoder_loop_rejects_bad_settings():
     obs = xbs4_observer(100.0, 100.0)
     enc = Encoder(ppr=60)
-    with pytest.raises(SimulationError, match="at least one observer"):
-        EncoderLoopEstimator([], encoder=enc, radius_m=0.3)
+    # without observers the chain only measures (EncoderX2) and returns the initial estimate
+    assert EncoderLoopEstimator([], encoder=enc, radius_m=0.3).describe().startswith("no observer on x2")
     with pytest.raises(SimulationError, match="rate_hz must be finite and > 0, got -1"):
         EncoderLoopEstimator([("x", obs, {})], encoder=enc, radius_m=0.3, rate_hz=-1.0)
     with pytest.raises(SimulationError, match="window n = 2 must exceed"):

@@ -15,7 +15,8 @@ __all__ = ["register"]
 def register(sub: argparse._SubParsersAction) -> None:
     p = sub.add_parser(
         "reproduce",
-        description="Run the seed reproductions (Table 4.1, Table 6.1, the seeds' scenarios, Appendix C, the "
+        description="Run the seed reproductions (Table 4.1, Table 6.1, the ABS on the encoder of Figs. 6.7-6.9, the "
+                    "seeds' scenarios, Appendix C, the "
                     "Poincaré map, the super-twisting orders) and write docs/reproductions.md and the generated "
                     f"sections of {', '.join(sorted({path for path, _ in GENERATED_SECTIONS}))}. About a minute. With --check, write nothing and "
                     "exit 1 if a committed page differs from the fresh run.")

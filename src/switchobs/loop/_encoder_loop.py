@@ -46,10 +46,13 @@ import numpy as np
 import numpy.typing as npt
 
 from ..exceptions import SimulationError
-from ..sensors import Encoder, ThreeStageEstimator, TimeStamper
+from ..sensors import Encoder, NotchFilter, ThreeStageEstimator, TimeStamper
 from ._adapter import ObserverXbsEstimator, SteppingObserver, check_xbs_signals, initial_xbs_state
 
-__all__ = ["EncoderLoopEstimator", "EncoderLoopRecord"]
+__all__ = ["EncoderLoopEstimator", "EncoderLoopRecord", "EncoderX2", "X2_MEASUREMENTS"]
+
+#: What :class:`EncoderX2` hands the controller: raw TSA, TSA + notch, TSA + three-stage (seed 001 Figs. 6.7-6.9).
+X2_MEASUREMENTS: tuple[str, ...] = ("tsa", "notch", "three-stage")
 
 Array = npt.NDArray[np.float64]
 
@@ -64,8 +67,9 @@ class EncoderLoopRecord:
     t_measured : ndarray
         Time the measurement of each sample describes: the mean time stamp of the TSA window
         (NaN until the window is full).
-    x2_tsa, x2_measured : ndarray
-        ``R α - a_x`` from the raw TSA and after three-stage compensation [m/s²].
+    x2_tsa, x2_notch, x2_measured : ndarray
+        ``R α - a_x`` from the raw TSA, through the notch (centre ``ω_m``) and after three-stage
+        compensation [m/s²].
     omega_tsa, omega_measured : ndarray
         Raw TSA and compensated wheel speed [rad/s].
     vx : ndarray
@@ -85,6 +89,7 @@ class EncoderLoopRecord:
     t: Array
     t_measured: Array
     x2_tsa: Array
+    x2_notch: Array
     x2_measured: Array
     omega_tsa: Array
     omega_measured: Array
@@ -105,6 +110,7 @@ class EncoderLoopRecord:
         def clean(a: Array) -> list[float | None]:
             return [None if math.isnan(v) else float(v) for v in np.asarray(a, dtype=float)]
         return {"t": clean(self.t), "t_measured": clean(self.t_measured), "x2_tsa": clean(self.x2_tsa),
+                "x2_notch": clean(self.x2_notch),
                 "x2_measured": clean(self.x2_measured), "omega_tsa": clean(self.omega_tsa),
                 "omega_measured": clean(self.omega_measured), "vx": clean(self.vx),
                 "estimates": {k: clean(v) for k, v in self.estimates.items()},
@@ -128,7 +134,7 @@ class EncoderLoopEstimator:
         Observers with signals ``(y, vx, u)`` and a readout (the XBS): Python
         reference observers or compiled C observers (:class:`switchobs.codegen.CObserver`).
         The first one's estimate is returned to the controller; the others run beside it on
-        the same measurements.  ``initial_state`` maps state names to initial values; the first
+        the same measurements.  Empty: the chain only measures (:class:`EncoderX2`).  ``initial_state`` maps state names to initial values; the first
         state (the measured ``z1``) starts at the first measurement.  Each interval between two
         measurements is ONE observer step: the observer's own step method and step bound decide
         whether that is safe (``radau3`` and ``midpoint`` are certified for every step length,
@@ -141,7 +147,9 @@ class EncoderLoopEstimator:
     order, window, harmonics : int
         TSA order ``m`` and window ``n`` (seed 001 (5.2)-(5.5)), harmonics ``M`` of (6.2).
     initial_xbs : float
-        Estimate returned before the first measurement.
+        Estimate returned before the first measurement (and always, without observers).
+    notch_damping : float
+        Damping ratio of the notch baseline (seed 001 Sec. 6.3: 0.5).
     beside : sequence of (label, ObserverXbsEstimator)
         Observers stepped with the plant's exact signals, for comparison.
 
@@ -156,9 +164,7 @@ class EncoderLoopEstimator:
     def __init__(self, observers: Sequence[tuple[str, SteppingObserver, dict[str, float]]], *,
                  encoder: Encoder, radius_m: float, rate_hz: float = 1000.0,
                  order: int = 2, window: int = 15, harmonics: int = 5, initial_xbs: float = 0.5,
-                 beside: Sequence[tuple[str, ObserverXbsEstimator]] = ()):
-        if not observers:
-            raise SimulationError("EncoderLoopEstimator needs at least one observer")
+                 notch_damping: float = 0.5, beside: Sequence[tuple[str, ObserverXbsEstimator]] = ()):
         for label, obs, _ in observers:
             check_xbs_signals(obs, f"the encoder loop's observer {label!r}")
         for name, value in (("rate_hz", rate_hz), ("radius_m", radius_m)):
@@ -171,14 +177,16 @@ class EncoderLoopEstimator:
         self._rate = float(rate_hz)
         self._order, self._window, self._harmonics = order, window, harmonics
         self._initial_xbs = float(initial_xbs)
+        self._damping = notch_damping
         self._base = encoder.rotation_angles()
         self._nominal = encoder.nominal_angles()
         # validate the chain settings now rather than at the first sample
         TimeStamper(order=order, window=window)
         ThreeStageEstimator(harmonics, dt_s=1.0 / rate_hz)
+        NotchFilter(dt_s=1.0 / rate_hz, damping=notch_damping)
 
     def describe(self) -> str:
-        first = str(self._observers[0][1]).splitlines()[0]
+        first = str(self._observers[0][1]).splitlines()[0] if self._observers else "no observer"
         return (f"{first} on x2 from a {self._encoder.ppr}-ppr encoder (TSA n = {self._window}, "
                 f"three-stage M = {self._harmonics}, {self._rate:g} Hz)")
 
@@ -196,6 +204,9 @@ class EncoderLoopEstimator:
         self._stamps: deque[float] = deque(maxlen=self._window)
         self._tsa = TimeStamper(order=self._order, window=self._window)
         self._comp = ThreeStageEstimator(self._harmonics, dt_s=1.0 / self._rate)
+        self._notch = NotchFilter(dt_s=1.0 / self._rate, damping=self._damping)
+        #: the latest measured x2 of each kind of X2_MEASUREMENTS (0, free rolling, before the first)
+        self.latest_x2 = dict.fromkeys(X2_MEASUREMENTS, 0.0)
         self._k = math.floor(t0 * self._rate + 1e-9) + 1          # next controller sample
         self._hist_t, self._hist_vx, self._hist_U = [self._t], [self._vx], [0.0]
         self._last: tuple[float, float, float, float] | None = None   # (t_c, y, vx, ∫u) of the last measurement
@@ -272,13 +283,15 @@ class EncoderLoopEstimator:
         vx_s = self._history(ts)[0]
         th_m, om_m, al_m = self._tsa.estimate(ts)
         if math.isnan(om_m):
-            self._rows.append((ts, math.nan, math.nan, math.nan, math.nan, math.nan, vx_s,
+            self._rows.append((ts, math.nan, math.nan, math.nan, math.nan, math.nan, math.nan, vx_s,
                                *(math.nan for _ in self._observers)))
             return
         om_c, al_c = self._comp.update(th_m, om_m, al_m)
         tc = sum(self._stamps) / len(self._stamps)
         vx_c, U_c, ax_c = self._history(tc)
         y_meas = self._R * al_c - ax_c
+        x2_tsa, x2_notch = self._R * al_m - ax_c, self._R * self._notch.update(al_m, om_m) - ax_c
+        self.latest_x2 = {"tsa": x2_tsa, "notch": x2_notch, "three-stage": y_meas}
         if self._last is None:
             self._states = [initial_xbs_state(obs, y_meas, init) for _, obs, init in self._observers]
             self._last = (tc, y_meas, vx_c, U_c)
@@ -292,16 +305,78 @@ class EncoderLoopEstimator:
                 self._states[i] = obs.step(self._states[i], (y_hold, vx_hold, u_mean), span)
             self._last = (tc, y_meas, vx_c, U_c)
         estimates = [float(obs.readout(self._states[i])) for i, (_, obs, _) in enumerate(self._observers)]
-        self._estimate = estimates[0]
-        self._rows.append((ts, tc, self._R * al_m - ax_c, y_meas, om_m, om_c, vx_s, *estimates))
+        if estimates:
+            self._estimate = estimates[0]
+        self._rows.append((ts, tc, x2_tsa, x2_notch, y_meas, om_m, om_c, vx_s, *estimates))
 
     def record(self) -> EncoderLoopRecord:
         """What happened so far (call after the simulation)."""
-        data = np.array(self._rows, dtype=float).reshape(-1, 7 + len(self._observers))
-        beside = np.array(self._beside_rows, dtype=float).reshape(-1, len(self._beside))
+        data = np.array(self._rows, dtype=float).reshape(-1, 8 + len(self._observers))
+        beside = np.array(self._beside_rows, dtype=float).reshape(len(self._beside_rows), len(self._beside))
         return EncoderLoopRecord(
-            t=data[:, 0], t_measured=data[:, 1], x2_tsa=data[:, 2], x2_measured=data[:, 3],
-            omega_tsa=data[:, 4], omega_measured=data[:, 5], vx=data[:, 6],
-            estimates={label: data[:, 7 + i] for i, (label, _, _) in enumerate(self._observers)},
+            t=data[:, 0], t_measured=data[:, 1], x2_tsa=data[:, 2], x2_notch=data[:, 3], x2_measured=data[:, 4],
+            omega_tsa=data[:, 5], omega_measured=data[:, 6], vx=data[:, 7],
+            estimates={label: data[:, 8 + i] for i, (label, _, _) in enumerate(self._observers)},
             events=self._events, steps_t=np.array(self._hist_t), omega_steps=np.array(self._omega_steps),
             beside={label: beside[:, i] for i, (label, _) in enumerate(self._beside)})
+
+
+class EncoderX2:
+    """The encoder chain's measured ``x2`` as the brake controller's input (seed 001 Sec. 6.4, Figs. 6.7-6.9).
+
+    A :class:`switchobs.plants.X2Measurement`: pass it as ``simulate(..., x2_source=EncoderX2(...))``
+    and the five-phase thresholds switch on ``x2 = R α̂ - a_x`` computed at each controller sample
+    from the encoder's edges, as :class:`EncoderLoopEstimator` generates them, instead of on the exact
+    ``x2``.  ``a_x`` is the plant's (the seed's accelerometer is not the subject there).
+
+    Parameters
+    ----------
+    measurement : {"tsa", "notch", "three-stage"}
+        Raw TSA (Fig. 6.7), TSA through the notch centred on ``ω_m`` (Fig. 6.8), TSA with the
+        three-stage compensation (Fig. 6.9).
+    encoder, radius_m, rate_hz, order, window, harmonics, notch_damping
+        As :class:`EncoderLoopEstimator`; the defaults are seed 001 Sec. 6.4's TSA (``m = 2``,
+        ``n = 12``, ``M = 6``) at 1 kHz.
+    cruise_s : float
+        The chain runs this long at the initial speed, wheel free rolling, before the braking
+        starts (a car cruises before its driver brakes): the TSA window is full and the
+        three-stage parameters and the notch have settled when the controller first reads them
+        (seed 001 Sec. 6.3: "once the estimated parameters have converged").  0: from cold.
+
+    Raises
+    ------
+    SimulationError
+        An unknown measurement or bad chain settings.
+    """
+
+    def __init__(self, measurement: str = "three-stage", *, encoder: Encoder, radius_m: float,
+                 rate_hz: float = 1000.0, order: int = 2, window: int = 12, harmonics: int = 6,
+                 notch_damping: float = 0.5, cruise_s: float = 2.0):
+        if measurement not in X2_MEASUREMENTS:
+            raise SimulationError(f"unknown x2 measurement {measurement!r}; use one of {', '.join(X2_MEASUREMENTS)}")
+        if not (isinstance(cruise_s, (int, float)) and math.isfinite(cruise_s) and cruise_s >= 0):
+            raise SimulationError(f"cruise_s must be finite and >= 0, got {cruise_s!r}")
+        self.measurement = measurement
+        self.cruise_s = float(cruise_s)
+        self._dt = 1.0 / rate_hz
+        self.encoder = encoder
+        self.chain = EncoderLoopEstimator((), encoder=encoder, radius_m=radius_m, rate_hz=rate_hz, order=order,
+                                          window=window, harmonics=harmonics, notch_damping=notch_damping)
+
+    def reset(self, t0: float, y0: float, vx0: float) -> None:
+        """Start the chain ``cruise_s`` before ``t0`` and run it at constant speed, free rolling, up to ``t0``."""
+        steps = round(self.cruise_s / self._dt)
+        self.chain.reset(t0 - steps * self._dt, 0.0, vx0)
+        for k in range(steps - 1, -1, -1):
+            self.chain.update(t0 - k * self._dt, 0.0, vx0, 0.0, self._dt)
+
+    def update(self, t: float, y: float, vx: float, u: float, dt: float) -> float:
+        self.chain.update(t, y, vx, u, dt)
+        return self.chain.latest_x2[self.measurement]
+
+    def record(self) -> EncoderLoopRecord:
+        """The chain's record of the run (call after the simulation)."""
+        return self.chain.record()
+
+    def __str__(self) -> str:
+        return f"x2 from a {self.encoder.ppr}-ppr encoder, {self.measurement}"

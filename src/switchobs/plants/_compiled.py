@@ -153,6 +153,8 @@ def compiled_support(plant: _QuarterCar) -> tuple[CompiledObserver | None, str |
         return None, f"the controller {type(sc.controller).__name__} runs in the Python loop only"
     if sc.actuator.delay_s > 0.0:
         return None, "an actuator delay runs in the Python loop only"
+    if plant.x2_source is not None:
+        return None, "a measured x2 (x2_source) runs in the Python loop only"
     est = plant.estimator
     if est is None or (isinstance(est, TrueXbs) and getattr(est, "_truth", None) == plant.true_xbs):
         return None, None

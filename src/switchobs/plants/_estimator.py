@@ -13,7 +13,7 @@ from __future__ import annotations
 from collections.abc import Callable
 from typing import Protocol, runtime_checkable
 
-__all__ = ["XbsEstimator", "TrueXbs"]
+__all__ = ["XbsEstimator", "TrueXbs", "X2Measurement"]
 
 
 @runtime_checkable
@@ -50,6 +50,31 @@ class XbsEstimator(Protocol):
         ``ObserverInputError``) to refuse a step; the simulation (quarter car
         and two-axle vehicle alike) then stops with status ``observer-failed``.
         """
+        ...
+
+
+@runtime_checkable
+class X2Measurement(Protocol):
+    """A measured wheel-acceleration offset ``x2`` that the brake controller reads instead of the exact one.
+
+    Seed 001 Sec. 6.4 (Figs. 6.7-6.9) closes the five-phase ABS on ``x2``
+    computed from a wheel encoder: its thresholds then switch on the
+    measurement, with its ripple and its delay.  :func:`switchobs.plants.simulate`
+    (``x2_source=...``) calls :meth:`reset` at the first sample and
+    :meth:`update` after every accepted step with the plant's exact signals
+    (those of :class:`XbsEstimator`), and hands the returned value to the
+    controller's rate, guards and transitions until the next step end.  The
+    guards are then checked at the step ends (the measurement is piecewise
+    constant).  :class:`switchobs.loop.EncoderX2` implements it with the
+    encoder chain of :mod:`switchobs.sensors`.
+    """
+
+    def reset(self, t0: float, y0: float, vx0: float) -> None:
+        """Restart the measurement chain at time ``t0`` from the exact signals."""
+        ...
+
+    def update(self, t: float, y: float, vx: float, u: float, dt: float) -> float:
+        """Advance from ``t - dt`` to ``t`` and return the measured ``x2`` the controller reads from ``t`` on."""
         ...
 
 

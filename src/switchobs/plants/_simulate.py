@@ -37,7 +37,7 @@ import numpy.typing as npt
 from ..exceptions import SimulationError
 from ._controllers import ContinuousXbsControl, Controller, FivePhaseABS, TwoPhaseABS
 from ._compiled import compiled_support, compiler_available, run_compiled
-from ._estimator import TrueXbs, XbsEstimator
+from ._estimator import TrueXbs, X2Measurement, XbsEstimator
 from ._hybrid import Crossing, HybridPlant, HybridRun, integrate
 from ._metrics import BrakingMetrics, braking_metrics, diverged
 from ._road import RoadSchedule, _RoadState
@@ -270,7 +270,8 @@ class _QuarterCar(HybridPlant):
     series = SERIES
     labels = ("",)
 
-    def __init__(self, sc: BrakingScenario, estimator: XbsEstimator | None, in_loop: bool):
+    def __init__(self, sc: BrakingScenario, estimator: XbsEstimator | None, in_loop: bool,
+                 x2_source: X2Measurement | None = None):
         veh = sc.vehicle
         self.sc = sc
         self.R = veh.radius_m
@@ -294,7 +295,10 @@ class _QuarterCar(HybridPlant):
         self.estimator = estimator
         # the controller reads the estimate only if it needs an XBS and the estimator is in the loop
         self.use_hat = bool(estimator is not None and in_loop and ctrl.uses_xbs)
-        self.discrete_feedback = self.use_hat
+        self.x2_source = x2_source
+        # a measured x2 is held between step ends, so the controller's rate changes only there
+        self.discrete_feedback = self.use_hat or x2_source is not None
+        self.x2_meas = 0.0
         self.xbs_hat = math.nan
         self.observer_time_s = 0.0
         self.p_prev = 0.0
@@ -324,7 +328,8 @@ class _QuarterCar(HybridPlant):
         if self.delay > 0.0:
             ucmd = self._delayed(t - self.delay)
         else:
-            ucmd = self.ctrl.rate(t, x2, R * om, vx, self.xbs_hat if self.use_hat else xbs)
+            ucmd = self.ctrl.rate(t, x2 if self.x2_source is None else self.x2_meas, R * om, vx,
+                                  self.xbs_hat if self.use_hat else xbs)
         u = ucmd
         if u > self.max_rate:
             u = self.max_rate
@@ -353,7 +358,11 @@ class _QuarterCar(HybridPlant):
         """Controller output at a step end, for the delayed actuator."""
         xbs = self.xbs_hat if self.use_hat else self.o_xbs
         self.hist_t.append(t)
-        self.hist_u.append(self.ctrl.rate(t, self.o_x2, self.R * y[0], y[1], xbs))
+        self.hist_u.append(self.ctrl.rate(t, self._ctrl_x2(), self.R * y[0], y[1], xbs))
+
+    def _ctrl_x2(self) -> float:
+        """The ``x2`` the controller reads: the exact one, or the measurement held since the last step end."""
+        return self.o_x2 if self.x2_source is None else self.x2_meas
 
     def clamp(self, y: tuple[float, ...]) -> tuple[float, ...]:
         om, vx, x, P = y
@@ -370,6 +379,9 @@ class _QuarterCar(HybridPlant):
         return min(self.road.breakpoint(), kink if kink > t + 1e-12 else math.inf)
 
     def start(self, t: float, y: tuple[float, ...]) -> bool:
+        if self.x2_source is not None:
+            self.x2_source.reset(t, self.o_x2, y[1])
+            self.x2_meas = self.o_x2
         if self.estimator is not None:
             t_obs = time.perf_counter()
             self.estimator.reset(t, self.o_x2, y[1])
@@ -381,6 +393,11 @@ class _QuarterCar(HybridPlant):
 
     def after_step(self, t: float, y: tuple[float, ...], h: float) -> str | None:
         u_mean, self.p_prev = (y[3] - self.p_prev) / h, y[3]
+        if self.x2_source is not None:
+            try:
+                self.x2_meas = float(self.x2_source.update(t, self.o_x2, y[1], u_mean, h))
+            except SimulationError as exc:
+                return str(exc)
         if self.estimator is None:
             return None
         t_obs = time.perf_counter()
@@ -414,13 +431,13 @@ class _QuarterCar(HybridPlant):
         return self.road.at_breakpoint(t)
 
     def guard_values(self, k: int) -> tuple[float, ...]:
-        return self.ctrl.guards(self.o_x2, self.xbs_hat if self.use_hat else self.o_xbs)
+        return self.ctrl.guards(self._ctrl_x2(), self.xbs_hat if self.use_hat else self.o_xbs)
 
     def locatable(self, k: int) -> bool:
-        return not (self.use_hat and self.ctrl.guards_use_xbs)
+        return self.x2_source is None and not (self.use_hat and self.ctrl.guards_use_xbs)
 
     def transition_args(self, k: int, y: tuple[float, ...]) -> tuple[float, float, float]:
-        return (self.o_x2, self.R * y[0], y[1])
+        return (self._ctrl_x2(), self.R * y[0], y[1])
 
     def end_step(self, t: float, y: tuple[float, ...]) -> tuple[str, str] | None:
         failure = getattr(self.ctrl, "failure", None)
@@ -460,7 +477,8 @@ class _QuarterCar(HybridPlant):
 
 
 def simulate(scenario: BrakingScenario, *, estimator: XbsEstimator | str | None = None,
-             observer_in_loop: bool = True, compiled: bool | None = None) -> BrakingResult:
+             observer_in_loop: bool = True, compiled: bool | None = None,
+             x2_source: X2Measurement | None = None) -> BrakingResult:
     """Simulate one emergency braking.
 
     Parameters
@@ -480,6 +498,10 @@ def simulate(scenario: BrakingScenario, *, estimator: XbsEstimator | str | None 
         and the estimator allow it (five- or two-phase ABS, no actuator delay, no estimator, the true
         XBS or an estimator with a C step such as a compiled observer) and a C compiler is installed,
         otherwise the Python loop; ``True`` requires it; ``False`` runs the Python loop.
+    x2_source : X2Measurement, optional
+        A measurement of ``x2`` that the controller reads instead of the exact one (seed 001
+        Figs. 6.7-6.9: the ABS closed on the encoder, :class:`switchobs.loop.EncoderX2`); its
+        guards are then checked at the step ends.  Runs in the Python loop only.
 
     Returns
     -------
@@ -506,11 +528,15 @@ def simulate(scenario: BrakingScenario, *, estimator: XbsEstimator | str | None 
     if isinstance(estimator, str):
         if estimator != "true":
             raise SimulationError(f"estimator must be an XbsEstimator object, 'true' or None, got {estimator!r}")
-        plant = _QuarterCar(scenario, None, observer_in_loop)
+        plant = _QuarterCar(scenario, None, observer_in_loop, x2_source)
         plant.estimator = TrueXbs(plant.true_xbs)
-        plant.use_hat = plant.discrete_feedback = bool(observer_in_loop and scenario.controller.uses_xbs)
+        plant.use_hat = bool(observer_in_loop and scenario.controller.uses_xbs)
+        plant.discrete_feedback = plant.use_hat or x2_source is not None
         return plant.run(compiled)
+    if x2_source is not None and not isinstance(x2_source, X2Measurement):
+        raise SimulationError(f"the x2 source {x2_source!r} lacks reset(t0, y0, vx0) and "
+                              f"update(t, y, vx, u, dt)")
     if estimator is not None and not isinstance(estimator, XbsEstimator):
         raise SimulationError(f"the estimator {estimator!r} lacks reset(t0, y0, vx0) and "
                               f"update(t, y, vx, u, dt)")
-    return _QuarterCar(scenario, estimator, observer_in_loop).run(compiled)
+    return _QuarterCar(scenario, estimator, observer_in_loop, x2_source).run(compiled)

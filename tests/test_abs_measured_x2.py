@@ -1,0 +1,96 @@
+"""The brake controller closed on a measured x2 (seed 001 Sec. 6.4, Figs. 6.7-6.9): the hook, the encoder source."""
+
+from __future__ import annotations
+
+from dataclasses import replace
+
+import numpy as np
+import pytest
+
+from switchobs.exceptions import SimulationError
+from switchobs.loop import EncoderX2
+from switchobs.plants import BrakingScenario, FivePhaseABS, X2Measurement, simulate
+from switchobs.sensors import Encoder
+
+
+class Offset:
+    """The exact x2 plus a constant, as the controller's measurement."""
+
+    def __init__(self, offset: float):
+        self.offset = offset
+        self.calls = 0
+
+    def reset(self, t0, y0, vx0):
+        self.calls = 0
+
+    def update(self, t, y, vx, u, dt):
+        self.calls += 1
+        return y + self.offset
+
+
+SC = BrakingScenario("dry-asphalt", speed_m_s=20.0, duration_s=1.0)
+
+
+def test_the_exact_x2_as_a_measurement_gives_the_exact_run_within_a_step_per_switch():
+    exact, measured = simulate(SC, compiled=False), simulate(SC, x2_source=Offset(0.0))
+    assert isinstance(Offset(0.0), X2Measurement)
+    assert not measured.compiled
+    # the guards are checked at the step ends instead of located: each switch comes at most one step late
+    assert measured.metrics.abs_cycles == exact.metrics.abs_cycles
+    assert abs(measured.metrics.stopping_distance_m / exact.metrics.stopping_distance_m - 1) < 0.01
+    first = [t for t, e in exact.events if "phase 0 -> 1" in e][0]
+    late = [t for t, e in measured.events if "phase 0 -> 1" in e][0]
+    assert 0.0 <= late - first <= SC.dt_s + 1e-12
+
+
+def test_the_controller_switches_on_the_measurement_not_on_the_exact_x2():
+    blind = simulate(SC, x2_source=Offset(+1000.0))        # never sees a deceleration: the build-up never ends
+    assert set(blind.series["phase"]) == {0.0}
+    src = Offset(-1000.0)                                  # sees one at once: phase 0 -> 1 at the first step end
+    eager = simulate(replace(SC, duration_s=0.01), x2_source=src)
+    assert eager.events[0][1] == "phase 0 -> 1" and eager.events[0][0] == pytest.approx(SC.dt_s)
+    assert src.calls == len(eager.series["t"]) - 1
+
+
+def test_the_compiled_loop_refuses_a_measured_x2_and_the_default_falls_back_to_python():
+    assert not simulate(SC, x2_source=Offset(0.0)).compiled
+    with pytest.raises(SimulationError, match="measured x2"):
+        simulate(SC, x2_source=Offset(0.0), compiled=True)
+
+
+def test_bad_sources_and_settings_are_refused():
+    with pytest.raises(SimulationError, match="lacks reset"):
+        simulate(SC, x2_source=object())
+    enc = Encoder(ppr=60)
+    with pytest.raises(SimulationError, match="unknown x2 measurement 'kalman'"):
+        EncoderX2("kalman", encoder=enc, radius_m=0.3)
+    with pytest.raises(SimulationError, match="cruise_s"):
+        EncoderX2("tsa", encoder=enc, radius_m=0.3, cruise_s=-1.0)
+
+
+def test_the_encoder_source_measures_the_cruise_and_feeds_the_controller():
+    sc = BrakingScenario("dry-concrete", speed_m_s=130 / 3.6, duration_s=0.3,
+                         controller=replace(FivePhaseABS.fig66(), stall_timeout_s=None, initial_rate_bar_s=300.0))
+    src = EncoderX2("three-stage", encoder=Encoder(ppr=60, eccentricity=0.003), radius_m=sc.vehicle.radius_m,
+                    cruise_s=0.5)
+    res = simulate(sc, x2_source=src)
+    rec = src.record()
+    assert rec.t[0] < -0.45 and rec.t[-1] == pytest.approx(0.3)
+    # at the start of the braking the window is full: every kind of measurement exists
+    at0 = np.searchsorted(rec.t, 0.0)
+    assert np.all(np.isfinite([rec.x2_tsa[at0], rec.x2_notch[at0], rec.x2_measured[at0]]))
+    # the build-up ends when the measurement, not the exact x2, passes -eps0
+    t01 = [t for t, e in res.events if e == "phase 0 -> 1"][0]
+    k = np.searchsorted(rec.t, t01 - 1e-9)
+    assert rec.x2_measured[k] <= -sc.controller.eps[0] < rec.x2_measured[k - 1]
+
+
+def test_fig67_scenario_needs_its_slow_build_up_with_the_exact_x2():
+    """docs/reproductions.md, Sec. 6.4: at the default 1000 bar/s the printed Fig. 6.6 stalls in the release."""
+    from switchobs.report._reproductions import fig67_scenario
+
+    sc = replace(fig67_scenario(), duration_s=1.5)
+    fast = simulate(replace(sc, controller=replace(sc.controller, initial_rate_bar_s=1000.0)))
+    assert [e for _, e in fast.events] == ["phase 0 -> 1"] and fast.series["phase"][-1] == 1.0
+    assert fast.series["P_b"][-1] == 0.0
+    assert simulate(sc).metrics.abs_cycles >= 3
