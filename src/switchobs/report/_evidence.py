@@ -243,8 +243,8 @@ def two_axle_box_check(*, duration_s: float = 2.45, beta: int = 100,
 
     sc = replace(aguado_sec36(), duration_s=duration_s)
     corner = sc.vehicle.corner("front")
-    values = {"a": str(Fraction(corner.a).limit_denominator(1000)), "b": str(Fraction(-corner.b).limit_denominator(1000)),
-              "c": str(Fraction(road(sc.roads.initial).c).limit_denominator(1000))}
+    values = {k: str(Fraction(v).limit_denominator(1000))
+              for k, v in (("a", corner.a), ("b", -corner.b), ("c", road(sc.roads.initial).c))}
     model = builtin_model("abs-xbs3")
     numeric = model.with_values(values)
     design = design_gains(numeric.numeric(), ",".join([f"-{beta}"] * 3))
@@ -294,5 +294,5 @@ def _xbs3_A(a: float, c: float) -> Array:
 
 
 def synthesis_evidence() -> str:
-    """The generated block of ``docs/certify.md``: :func:`encoder_comparison` (fast demo) and :func:`two_axle_box_check`."""
+    """The generated block of ``docs/certify.md``: :func:`encoder_comparison` (fast demo), :func:`two_axle_box_check`."""
     return encoder_comparison().table() + "\n\n" + two_axle_box_check().text()
