@@ -139,6 +139,7 @@ def test_cli_certify_with_a_box(tmp_path, capsys):
 @pytest.mark.parametrize("command", [
     "switchobs certify abs-xbs3 --spectrum=-100,-100,-100 --no-dwell --box a=150:230 --box c=20:40",
     "switchobs synthesize abs-xbs3 --decay 100 --noise-weight 0.1 --estimate z2",
+    "switchobs synthesize abs-xbs3 --decay 100 --noise-weight 0.1 --estimate z2 --box a=150:230",
 ])
 def test_cli_output_shown_on_the_certify_page_is_what_the_command_prints(command, capsys):
     import re

@@ -3,11 +3,14 @@
 from __future__ import annotations
 
 import json
+from fractions import Fraction
 
 import numpy as np
 import pytest
 
-from switchobs.certify import certify, certify_model, noise_gain, synthesize, synthesize_gains
+from switchobs.certify import certify, certify_model, noise_gain, synthesize, synthesize_box, synthesize_gains
+from switchobs.certify._box_check import observer_pair
+from switchobs.certify._exact import fraction_matrix
 from switchobs.certify._synthesis import decay_holds, hespanha_pair_holds
 from switchobs.cli.main import main
 from switchobs.design import design_gains
@@ -98,3 +101,32 @@ def test_cli_synthesize(tmp_path, capsys):
     assert main(["synthesize", "abs-xbs3", "--decay", "10", "--estimate", "z9"]) == 2
     err = capsys.readouterr().err
     assert "decay_rate must be positive" in err and "z9" in err
+
+
+# ----------------------------------------------------------------------------- joint synthesis over a box
+def test_box_synthesis_is_joint_over_the_load_range_and_the_box_certificate_agrees(tmp_path, capsys):
+    """abs-xbs3 over a = R^2 Fz / I in [150, 230]: one X per mode for both vertices, exact; certify_box agrees."""
+    out = tmp_path / "cert.json"
+    assert main(["synthesize", "abs-xbs3", "--decay", "100", "--noise-weight", "0.1", "--estimate", "z2",
+                 "--box", "a=150:230", "--out", str(out), "--json"]) == 0
+    data = json.loads(capsys.readouterr().out)
+    syn = data["synthesis"]
+    assert syn["feasible"] and syn["formulation"] == "polytopic" and syn["vertices"] == 2
+    assert syn["box"] == {"a": ["150", "230"]} and syn["P"] is None
+    assert data["certification"]["box"]["certified"]
+    K_plus, K_minus, X_plus, X_minus = (fraction_matrix(syn[k]) for k in ("K_plus", "K_minus", "X_plus", "X_minus"))
+    C = [[Fraction(1), Fraction(0), Fraction(0)]]
+    for a in (150, 230):   # the vertices, re-checked here from the JSON alone
+        A = fraction_matrix(XBS3.with_values({"a": a}).numeric().A.tolist())
+        Ap, Am = observer_pair(A, C, K_plus, K_minus)
+        assert decay_holds(Ap, X_plus, Fraction(100)) == "" and decay_holds(Am, X_minus, Fraction(100)) == ""
+    for a in np.linspace(150, 230, 9):   # and so every point between them decays at the rate
+        A = _floats(XBS3.with_values({"a": float(a)}).numeric().A)
+        for M in (A - _floats(K_plus) @ _floats(C), -A + _floats(K_minus) @ _floats(C)):
+            assert max(np.linalg.eigvals(M).real) < -100
+    assert main(["verify", str(out)]) == 0
+
+
+def test_box_synthesis_strict_needs_every_state_measured():
+    res = synthesize_box(XBS3, ["a=150:230"], decay_rate=10, strict=True)
+    assert not res.feasible and res.formulation == "polytopic-strict" and "ker C" in res.detail

@@ -23,6 +23,8 @@ parse_box                 -- "a=150:230" items -> ParameterBox
 synthesize                -- K_plus, K_minus by LMIs (Y = X K): decay rate in tau, smallest H2 noise gain,
                              re-checked exactly (a model at its values)
 synthesize_gains          -- the same for matrices A, C (one or more outputs)
+synthesize_box            -- K_plus, K_minus by polytopic LMIs valid at every vertex of a parameter box, checked
+                             exactly at the vertices (then certify_box certifies the switching on the box)
 noise_gain                -- H2 norm from measurement noise to the weighted estimation error of one mode
 noise_decay_front         -- Theorem 1 designs (all poles at -rate) beside LMI designs: noise gain vs decay rate
 classify_planar           -- Balde–Boscain–Mason cases i–iv with Gamma, det, tr(A1 A2) and R
@@ -51,6 +53,7 @@ Existence; document_section registers a new optional section.
 """
 
 from ._box import BoxCertificate, ParameterBox, certify_box, parse_box
+from ._box_synthesis import synthesize_box
 from ._certify import CertificationReport, certify, certify_model, verdict_text
 from ._discrete import DiscreteCertificate, DiscreteVerdict, check_discrete, discrete_certificate
 from ._dwell import DwellTimeResult, dwell_time
@@ -72,6 +75,7 @@ __all__ = [
     "CertificationReport", "certify", "certify_model", "verdict_text",
     "BoxCertificate", "ParameterBox", "certify_box", "parse_box", "BoxSection",
     "FrontPoint", "GainSynthesis", "noise_decay_front", "noise_gain", "synthesize", "synthesize_gains",
+    "synthesize_box",
     "DiscreteCertificate", "DiscreteVerdict", "check_discrete", "discrete_certificate",
     "DwellTimeResult", "dwell_time",
     "Family", "as_family",

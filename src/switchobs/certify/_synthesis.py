@@ -66,6 +66,9 @@ from ._exact import (Matrix, add, definiteness, fraction_matrix, identity, lyapu
 from ._lmi import DEFAULT_SOLVERS, SolveInfo, solve
 from ._rounding import dyadic
 
+if TYPE_CHECKING:   # _box imports this module
+    from ._box import ParameterBox
+
 __all__ = ["GainSynthesis", "synthesize_gains", "synthesize", "noise_gain", "decay_holds", "STRICT_IMPOSSIBLE",
            "RATE_MARGIN", "FrontPoint", "noise_decay_front"]
 
@@ -85,8 +88,10 @@ class GainSynthesis:
     Attributes
     ----------
     formulation : str
-        ``"strict"`` (common P with decay; needs ``C`` of rank n) or ``"hespanha"``
-        (non-strict common P and per-mode decay certificates).
+        ``"strict"`` (common P with decay; needs ``C`` of rank n), ``"hespanha"``
+        (non-strict common P and per-mode decay certificates), or over a parameter box
+        (:func:`switchobs.certify.synthesize_box`) ``"polytopic-strict"`` (one P for both modes and every
+        vertex) and ``"polytopic"`` (one decay certificate per mode, common to every vertex).
     decay_rate : Fraction
         Requested decay rate in the rescaled time (``He(X A_p) + 2 rate X < 0`` exactly).
     noise_weight : float
@@ -97,17 +102,23 @@ class GainSynthesis:
     K_plus, K_minus : Matrix or None
         Exact gains (``n x k``).
     P : Matrix or None
-        Common Lyapunov matrix: strict with decay, or (one output) ``He(P A_pm) = -C'C`` exactly.
+        Common Lyapunov matrix: strict with decay, or (one output) ``He(P A_pm) = -C'C`` exactly;
+        None for ``"polytopic"``.
     X_plus, X_minus : Matrix or None
-        Per-mode decay certificates (for ``"strict"`` both are ``P``).
+        Per-mode decay certificates (for ``"strict"`` both are ``P``); over a box, valid at every vertex.
     noise_bound : float
         The LMI's H2 bound (``sqrt tr Z``) of the plus mode (both modes for ``"strict"``), W and w included.
     noise_gain : dict
-        H2 norm from the measurement noise ``v`` to ``E e`` of each mode (float, from the exact gains).
+        H2 norm from the measurement noise ``v`` to ``E e`` of each mode (float, from the exact gains;
+        at the nominal point for a box).
     solver : SolveInfo or None
     detail : str
         Why the synthesis failed, when it did.
     solve_s, exact_s : float
+    box : ParameterBox or None
+        The parameter box of a polytopic synthesis.
+    vertices : int
+        Vertex matrices per mode at which the polytopic LMIs hold exactly.
     """
 
     formulation: str
@@ -126,6 +137,8 @@ class GainSynthesis:
     detail: str = ""
     solve_s: float = 0.0
     exact_s: float = 0.0
+    box: ParameterBox | None = None
+    vertices: int = 0
 
     def gains(self) -> tuple[str, str]:
         """``K_plus`` and ``K_minus`` of a single output as the command line's ``"k1,k2,..."`` strings."""
@@ -143,19 +156,27 @@ class GainSynthesis:
                 "X_plus": mat(self.X_plus), "X_minus": mat(self.X_minus), "noise_bound": self.noise_bound,
                 "noise_gain": dict(self.noise_gain),
                 "solver": None if self.solver is None else f"{self.solver.solver} ({self.solver.status})",
-                "detail": self.detail, "solve_s": self.solve_s, "exact_s": self.exact_s}
+                "detail": self.detail, "solve_s": self.solve_s, "exact_s": self.exact_s,
+                "box": None if self.box is None else self.box.to_json(), "vertices": self.vertices}
 
     def __str__(self) -> str:
         head = f"LMI synthesis ({self.formulation}), decay rate {self.decay_rate} in tau, noise weight {self.noise_weight:g}"
+        if self.box is not None:
+            head += f", box {self.box}"
         if not self.feasible:
             return f"{head}: infeasible ({self.detail})"
 
         def col(M: Matrix) -> str:
             return "[" + "; ".join(", ".join(_short(x) for x in row) for row in M) + "]"
 
-        what = ("strict common P with decay rate (UGES under arbitrary switching)" if self.formulation == "strict"
-                else "per-mode decay certificates and the non-strict common P (Hespanha: UES for every positive "
-                     "dwell time)")
+        what = {"strict": "strict common P with decay rate (UGES under arbitrary switching)",
+                "hespanha": "per-mode decay certificates and the non-strict common P (Hespanha: UES for every "
+                            "positive dwell time)",
+                "polytopic-strict": f"one strict P with decay rate at all {self.vertices} vertices per mode (UGES "
+                                    "under arbitrary switching, for every parameter value of the box)",
+                "polytopic": f"one decay certificate per mode, common to all {self.vertices} vertices per mode "
+                             "(each mode decays for every parameter value of the box, even time-varying; "
+                             "switching: the box dwell-time certificate)"}[self.formulation]
         return "\n".join([
             head + ": feasible, checked exactly",
             f"  K_plus  = {col(self.K_plus)}",
@@ -235,32 +256,54 @@ def _he(M: cp.Expression) -> cp.Expression:
 STATE_REGULARISATION = 1e-3
 
 
-def _lmi(A: np.ndarray, C: np.ndarray, E: np.ndarray, rate: float, W: float, strict: bool,
-         solvers: Sequence[str]) -> tuple[dict, SolveInfo]:
+def _lmi(As: Sequence[np.ndarray], C: np.ndarray, E: np.ndarray, rate: float, W: float, signs: Sequence[int],
+         shared: bool, solvers: Sequence[str]) -> tuple[dict, SolveInfo]:
     """The LMIs in the time scaled by ``rate`` (``A`` and ``rate`` divided by it, ``W`` multiplied: the
     decay rate becomes about 1, which keeps the interior point well conditioned).
 
-    H2 by the observability Gramian: ``||G_p||_2^2 <= tr X + W^2 tr(K_p' X K_p)`` when
-    ``He(X A_p) + E'E <= 0``; with ``Y_p = X K_p`` and ``[[Z_p, Y_p'], [Y_p, X]] >= 0`` all is linear."""
+    One gain ``Y_p = X_p K_p`` per mode sign in ``signs`` (``+1``: ``A - K_plus C``, ``-1``:
+    ``-A + K_minus C``), every inequality posed at every matrix of ``As`` (the nominal ``A``, or the
+    vertices of a parameter box: the polytopic LMIs of Boyd et al. 1994, Sec. 5.1); ``shared``: one
+    ``X`` for all modes (the strict common P), else one per mode.  H2 by the observability Gramian:
+    ``||G_p||_2^2 <= tr X + W^2 tr(K_p' X K_p)`` when ``He(X A_p) + E'E <= 0``; with
+    ``[[Z_p, Y_p'], [Y_p, X]] >= 0`` all is linear."""
     import cvxpy as cp
 
-    n, k = A.shape[0], C.shape[0]
+    n, k = As[0].shape[0], C.shape[0]
     lam = rate * (1 + RATE_MARGIN)
     weight = E.T @ E + STATE_REGULARISATION * np.eye(n)
 
     def fn() -> tuple[cp.Problem, dict]:
-        X = cp.Variable((n, n), symmetric=True)
-        Ys = [cp.Variable((n, k)) for _ in range(2 if strict else 1)]
-        Zs = [cp.Variable((k, k), symmetric=True) for _ in Ys]
-        cons = [X >> 0]
-        for sign, Y, Z in zip((1, -1), Ys, Zs):
-            HeA = sign * (_he(X @ A) - _he(Y @ C))
-            cons += [-(HeA + 2 * lam * X) >> 0, -(HeA + weight) >> 0, cp.bmat([[Z, Y.T], [Y, X]]) >> 0]
+        Xs = [cp.Variable((n, n), symmetric=True) for _ in range(1 if shared else len(signs))]
+        Ys = [cp.Variable((n, k)) for _ in signs]
+        Zs = [cp.Variable((k, k), symmetric=True) for _ in signs]
+        cons = [X >> 0 for X in Xs]
+        for i, (sign, Y, Z) in enumerate(zip(signs, Ys, Zs)):
+            X = Xs[0 if shared else i]
+            for A in As:
+                HeA = sign * (_he(X @ A) - _he(Y @ C))
+                cons += [-(HeA + 2 * lam * X) >> 0, -(HeA + weight) >> 0]
+            cons.append(cp.bmat([[Z, Y.T], [Y, X]]) >> 0)
         # normalised so that the objective stays of unit size whatever W
-        objective = (cp.trace(X) + W ** 2 * sum(cp.trace(Z) for Z in Zs)) / (1 + W ** 2)
-        return cp.Problem(cp.Minimize(objective), cons), {"X": X, "Y": Ys, "Z": Zs}
+        objective = (sum(cp.trace(X) for X in Xs) + W ** 2 * sum(cp.trace(Z) for Z in Zs)) / (1 + W ** 2)
+        return cp.Problem(cp.Minimize(objective), cons), {"X": Xs, "Y": Ys, "Z": Zs}
 
     return solve(fn, solvers=solvers, what="gain synthesis LMI", infeasible_ok=True)
+
+
+def check_synthesis_inputs(decay_rate: Any, noise_weight: float, estimate: Sequence[int] | None,
+                           n: int) -> tuple[Fraction, tuple[int, ...]]:
+    """The validated decay rate (exact, > 0) and weighted state indices; raises on a bad value."""
+    rate = check_double(to_fraction(decay_rate, what="decay_rate"), what="decay_rate", error=ModelError,
+                        text=str(decay_rate))
+    if rate <= 0:
+        raise ModelError(f"decay_rate must be positive, got {rate}")
+    if not (noise_weight >= 0 and np.isfinite(noise_weight)):
+        raise ModelError(f"noise_weight must be a finite number >= 0, got {noise_weight!r}")
+    rows = tuple(range(n)) if estimate is None else tuple(int(i) for i in estimate)
+    if not rows or any(i < 0 or i >= n for i in rows):
+        raise DimensionError(f"estimate must list state indices in 0..{n - 1}, got {list(rows)}")
+    return rate, rows
 
 
 def synthesize_gains(A: Any, C: Any, *, decay_rate: Any, noise_weight: float = 0.0,
@@ -303,15 +346,7 @@ def synthesize_gains(A: Any, C: Any, *, decay_rate: Any, noise_weight: float = 0
     if len(A_ex[0]) != n:
         raise DimensionError(f"A must be square, got {n}x{len(A_ex[0])}")
     C_ex = user_matrix(C, what="C", part="C", cols=n)
-    rate = check_double(to_fraction(decay_rate, what="decay_rate"), what="decay_rate", error=ModelError,
-                        text=str(decay_rate))
-    if rate <= 0:
-        raise ModelError(f"decay_rate must be positive, got {rate}")
-    if not (noise_weight >= 0 and np.isfinite(noise_weight)):
-        raise ModelError(f"noise_weight must be a finite number >= 0, got {noise_weight!r}")
-    rows = tuple(range(n)) if estimate is None else tuple(int(i) for i in estimate)
-    if not rows or any(i < 0 or i >= n for i in rows):
-        raise DimensionError(f"estimate must list state indices in 0..{n - 1}, got {list(rows)}")
+    rate, rows = check_synthesis_inputs(decay_rate, noise_weight, estimate, n)
     full_rank = rank(C_ex) == n
     use_strict = full_rank if strict is None else strict
     formulation = "strict" if use_strict else "hespanha"
@@ -327,12 +362,13 @@ def synthesize_gains(A: Any, C: Any, *, decay_rate: Any, noise_weight: float = 0
     E = np.eye(n)[list(rows)]
     sigma = float(rate)
     t0 = time.perf_counter()
-    v, info = _lmi(Af / sigma, Cf, E, 1.0, float(noise_weight) * sigma, use_strict, solvers)
+    v, info = _lmi([Af / sigma], Cf, E, 1.0, float(noise_weight) * sigma, (1, -1) if use_strict else (1,), True,
+                   solvers)
     solve_s = time.perf_counter() - t0
-    if info.status == "infeasible" or v["X"].value is None:
+    if info.status == "infeasible" or v["X"][0].value is None:
         return fail(f"the LMI is infeasible ({'; '.join(info.attempts)})", info, solve_s)
     t0 = time.perf_counter()
-    X_num = np.asarray(v["X"].value)
+    X_num = np.asarray(v["X"][0].value)
     K_nums = [np.linalg.solve(X_num, np.asarray(Y.value)) * sigma for Y in v["Y"]]
     K_plus = dyadic(K_nums[0], 40)
     A_plus = sub(A_ex, matmul(K_plus, C_ex))
@@ -383,15 +419,20 @@ def synthesize(model: Model, *, decay_rate: Any, noise_weight: float = 0.0, esti
                solvers: Sequence[str] = DEFAULT_SOLVERS) -> GainSynthesis:
     """:func:`synthesize_gains` for a model at its numeric values; ``estimate`` names states (``["z2"]``)."""
     numeric = model.with_values(dict(values or {})).numeric()
-    names = list(model.states)
-    unknown = [s for s in (estimate or ()) if s not in names]
-    if unknown:
-        raise ModelError(f"estimate names {unknown}, which are not states of {model.name!r} (states: {names})")
-    rows = None if not estimate else [names.index(s) for s in estimate]
+    rows = state_rows(model, estimate)
     A = fraction_matrix(numeric.A, what="A")
     C = fraction_matrix(numeric.C, what="C")
     return synthesize_gains(A, C, decay_rate=decay_rate, noise_weight=noise_weight, estimate=rows, strict=strict,
                             solvers=solvers)
+
+
+def state_rows(model: Model, estimate: Sequence[str] | None) -> list[int] | None:
+    """0-based indices of the named states (None: all); raises on a name that is not a state."""
+    names = list(model.states)
+    unknown = [s for s in (estimate or ()) if s not in names]
+    if unknown:
+        raise ModelError(f"estimate names {unknown}, which are not states of {model.name!r} (states: {names})")
+    return None if not estimate else [names.index(s) for s in estimate]
 
 
 @dataclass(frozen=True)

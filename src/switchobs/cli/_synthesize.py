@@ -6,7 +6,7 @@ import argparse
 import math
 
 from .._atomic import check_output_file
-from ..certify import certify_model, synthesize
+from ..certify import certify_model, synthesize, synthesize_box
 from ..exceptions import ModelError
 from ..model import load_model
 from ._common import STDIO, add_model_arguments, emit_json, parse_params, summary_stream, write_certificate
@@ -21,9 +21,11 @@ def register(sub: argparse._SubParsersAction) -> None:
                     "H2 gain from measurement noise (weight W against a unit process disturbance) to the error of "
                     "the chosen states is minimised. With one output a strict common Lyapunov function is "
                     "impossible, so the pair gets the non-strict common P (Hespanha) and per-mode decay "
-                    "certificates. The gains are re-checked exactly, then certified like `switchobs certify` "
-                    "(with --box, over a parameter box). Exit status 0 if the synthesis and the certificate hold, "
-                    "1 if not, 2 on bad input.")
+                    "certificates. With --box the gains are synthesised jointly for the whole parameter box "
+                    "(polytopic LMIs: each mode decays at RATE at every vertex, with one Lyapunov matrix per mode "
+                    "common to all vertices). The gains are re-checked exactly, then certified like "
+                    "`switchobs certify` (with --box, over the box). Exit status 0 if the synthesis and the "
+                    "certificate hold, 1 if not, 2 on bad input.")
     add_model_arguments(p)
     p.add_argument("--decay", required=True, metavar="RATE", help="decay rate in the rescaled time, e.g. 99")
     p.add_argument("--noise-weight", type=float, default=0.0, metavar="W",
@@ -31,7 +33,8 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--estimate", action="append", metavar="STATE",
                    help="state whose estimation error is weighted (repeatable; default all), e.g. z2")
     p.add_argument("--box", action="append", metavar="NAME=LOWER:UPPER",
-                   help="also certify the synthesised gains for every value of this parameter range (repeatable)")
+                   help="synthesise the gains for every value of this parameter range (polytopic LMIs, exact vertex "
+                        "checks) and certify them over it (repeatable), e.g. a=150:230")
     p.add_argument("--solver", choices=("CLARABEL", "SCS"), help="use only this cvxpy solver")
     p.add_argument("--json", action="store_true", help="print the synthesis and the certificate report as JSON")
     p.add_argument("--out", metavar="CERT.json", help="write the certificate of the synthesised pair; - writes it "
@@ -49,8 +52,9 @@ def run(args: argparse.Namespace) -> int:
     model = load_model(args.model)
     values = parse_params(args.param)
     solvers = (args.solver,) if args.solver else ("CLARABEL", "SCS")
-    result = synthesize(model, decay_rate=args.decay, noise_weight=args.noise_weight, estimate=args.estimate,
-                        values=values, solvers=solvers)
+    common = dict(decay_rate=args.decay, noise_weight=args.noise_weight, estimate=args.estimate, values=values,
+                  solvers=solvers)
+    result = synthesize_box(model, args.box, **common) if args.box else synthesize(model, **common)
     report = None
     if result.feasible:
         K_plus, K_minus = result.gains()

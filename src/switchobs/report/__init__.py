@@ -12,9 +12,13 @@ reproduction_pages, write_reproductions, stale_pages, ReproductionPage, GENERATE
 demo_figures, mark_road_changes -- figures of the demo (matplotlib Figure objects)
 Progress, Stage, check_prerequisites -- stage lines with elapsed times; prerequisites of a pipeline
 sampled_lines, sampled_observer_table, speed_table -- the sampled observer's certificate in sample rate and vehicle speed
+encoder_comparison, two_axle_box_check, synthesis_evidence, EncoderComparison, BoxRun -- the seed's beta design
+                       against the synthesised pair on the demo braking (60-ppr encoder), and the box certificate
+                       against a two-axle braking whose load varies
 """
 
 from ._demo import DEMO_BETAS, DEMO_MODELS, STAGES, DemoReport, ModelResult, run_demo
+from ._evidence import BoxRun, EncoderComparison, encoder_comparison, synthesis_evidence, two_axle_box_check
 from ._plots import demo_figures, mark_road_changes
 from ._progress import Progress, Stage, check_prerequisites
 from ._reproductions import (GENERATED_SECTIONS, ReproductionPage, reproduction_pages, stale_pages,
@@ -25,4 +29,5 @@ from ._theory import THEORY_MODELS, TheoryDocument, theory_document, theory_docu
 __all__ = ["DEMO_BETAS", "DEMO_MODELS", "STAGES", "DemoReport", "ModelResult", "run_demo", "mark_road_changes",
            "demo_figures", "Progress", "Stage", "check_prerequisites", "THEORY_MODELS", "TheoryDocument",
            "theory_document", "theory_documents", "write_theory", "sampled_lines", "sampled_observer_table", "speed_table",
-           "GENERATED_SECTIONS", "ReproductionPage", "reproduction_pages", "stale_pages", "write_reproductions"]
+           "GENERATED_SECTIONS", "ReproductionPage", "reproduction_pages", "stale_pages", "write_reproductions",
+           "BoxRun", "EncoderComparison", "encoder_comparison", "synthesis_evidence", "two_axle_box_check"]
