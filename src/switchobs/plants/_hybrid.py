@@ -234,6 +234,18 @@ class HybridRun:
     wall_time_s: float
 
 
+def check_run_size(plant: HybridPlant, t_end: float, name: str) -> None:
+    """Refuse, before any work, a time bound that is not finite and positive or that implies more than
+    :data:`MAX_STEPS` stored steps (``t_end`` over the initial step): the Python loop and the compiled
+    loop both store every step."""
+    if not (isinstance(t_end, (int, float)) and math.isfinite(t_end) and t_end > 0.0):
+        raise SimulationError(f"scenario {name!r}: the time bound must be finite and > 0 s, got {t_end!r}")
+    h0 = plant.step_size(0.0, plant.initial_state())
+    check_work(f"scenario {name!r}: integration steps of {h0:g} s over {t_end:g} s (each one stored)",
+               t_end / h0, MAX_STEPS,
+               "use a larger step or a shorter time bound", error=SimulationError)
+
+
 def integrate(plant: HybridPlant, t_end: float, *, name: str) -> HybridRun:
     """Integrate ``plant`` from ``t = 0`` to ``t_end`` or to a terminal event (module notes).
 
@@ -257,12 +269,7 @@ def integrate(plant: HybridPlant, t_end: float, *, name: str) -> HybridRun:
         When phase changes cascade more than :data:`MAX_CASCADE` rounds at one instant, or when
         ``t_end`` over the initial step exceeds :data:`MAX_STEPS` (refused before the first step).
     """
-    if not (isinstance(t_end, (int, float)) and math.isfinite(t_end) and t_end > 0.0):
-        raise SimulationError(f"scenario {name!r}: the time bound must be finite and > 0 s, got {t_end!r}")
-    h0 = plant.step_size(0.0, plant.initial_state())
-    check_work(f"scenario {name!r}: integration steps of {h0:g} s over {t_end:g} s (each one stored)",
-               t_end / h0, MAX_STEPS,
-               "use a larger step or a shorter time bound", error=SimulationError)
+    check_run_size(plant, t_end, name)
     wall0 = time.perf_counter()
     # bound methods as locals: this loop runs once per step, in plain Python
     rhs, step_size, breakpoint, crossings = plant.rhs, plant.step_size, plant.breakpoint, plant.crossings

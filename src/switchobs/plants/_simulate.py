@@ -38,7 +38,7 @@ from ..exceptions import SimulationError
 from ._controllers import ContinuousXbsControl, Controller, FivePhaseABS, TwoPhaseABS
 from ._compiled import compiled_support, compiler_available, run_compiled
 from ._estimator import TrueXbs, X2Measurement, XbsEstimator
-from ._hybrid import Crossing, HybridPlant, HybridRun, integrate
+from ._hybrid import Crossing, HybridPlant, HybridRun, check_run_size, integrate
 from ._metrics import BrakingMetrics, braking_metrics, diverged
 from ._road import RoadSchedule, _RoadState
 from ._tyre import Burckhardt
@@ -456,6 +456,7 @@ class _QuarterCar(HybridPlant):
 
     def run(self, compiled: bool | None) -> BrakingResult:
         sc = self.sc
+        check_run_size(self, sc.duration_s, sc.name)
         run: HybridRun | None = None
         if compiled is not False:
             obs, reason = compiled_support(self)
