@@ -37,7 +37,8 @@ from ..model import Model
 from ..spec import (METHODS, SCALE, STEP_METHODS, Guard, ObserverSpec, StepStatus, affine_jacobian,
                     implicit_increment)
 
-__all__ = ["Translation", "to_casadi", "translate_original", "translate_switched", "translate_adaptive", "translate_super_twisting"]
+__all__ = ["Translation", "to_casadi", "translate_original", "translate_switched", "translate_adaptive",
+           "translate_super_twisting"]
 
 #: Guard kinds and the C comparison that holds when the guard is satisfied (NaN fails every one).
 GUARD_TESTS: Mapping[str, str] = {
