@@ -5,6 +5,7 @@ Model.from_toml and dphi/dx (f + g u) = s(h)(A phi + d(h)) + b(h) u is simplifie
 """
 
 import ast
+import ctypes
 import json
 import pathlib
 import re
@@ -15,8 +16,9 @@ import pytest
 import sympy as sp
 
 from switchobs.cli.main import main
-from switchobs.codegen._build import find_compiler
-from switchobs.design import design_gains
+from switchobs.codegen import generate_observer
+from switchobs.codegen._build import BUILD_FLAGS, compile_shared, find_compiler
+from switchobs.design import design, design_gains
 from switchobs.exceptions import DimensionError, ExpressionError, ModelError, TransformError
 from switchobs.model import Model, builtin_model
 from switchobs.transform import System, check_transformation, search_transformation
@@ -188,11 +190,36 @@ def test_an_input_that_is_not_output_dependent_is_named():
     assert not result.exists and "[ad^0 tau~, g_1]" in result.failing
 
 
-def test_a_polynomial_system_of_dimension_three_with_parameters(tmp_path):
-    sys_ = system("poly3")
+def test_a_polynomial_system_with_parameters(tmp_path):
+    """poly2 has the property of poly3 and poly4 (symbolic k, q; s = 1 + y^2) at a fraction of the time; the larger
+    ones are timed in benchmarks/transform.py."""
+    sys_ = system("poly2")
     result = search_transformation(sys_)
     assert sp.expand(result.time_scale - (1 + sys_.output_symbol ** 2)) == 0
     assert_normal_form(sys_, result, tmp_path)
+
+
+def test_several_inputs_each_output_dependent_in_z(tmp_path):
+    """g = dphi^-1 b(y) for b = [[0, 1], [1, y]] in the coordinates of time-scaled.toml (x2 = z2 + z1^2)."""
+    sys_ = System.from_dict({"name": "two-inputs", "states": ["x1", "x2"],
+                             "f": ["x1*(x2 - x1^2)", "-x1^2 + 2*x1^2*(x2 - x1^2)"],
+                             "g": [["0", "1"], ["1", "3*x1"]], "h": "x1", "inputs": ["u1", "u2"]})
+    result = search_transformation(sys_)
+    model = assert_normal_form(sys_, result, tmp_path)
+    assert model.inputs == ("u1", "u2") and model.b == sp.ImmutableMatrix([[0, 1], [1, model.symbol("y")]])
+    assert result.time_scale == sys_.output_symbol
+
+
+def test_an_output_that_is_not_a_single_state(tmp_path):
+    """y = x1 + x2: the normal form z1' = z2 + z1^2, z2' = -z1 with x1 = z1 - z2, x2 = z2."""
+    sys_ = System.from_dict({"name": "sum-output", "states": ["x1", "x2"],
+                             "f": ["x2 + (x1 + x2)^2 + x1 + x2", "-(x1 + x2)"], "h": "x1 + x2"})
+    result = search_transformation(sys_)
+    model = assert_normal_form(sys_, result, tmp_path)
+    y = model.symbol("y")
+    assert result.time_scale == 1 and list(model.d) == [y**2, -y]
+    back = dict(zip(sys_.state_symbols, (e for _, e in model.original)))          # x = phi^-1(z), substituted
+    assert [sp.simplify(e.subs(back)) for e in result.phi] == [model.symbol(z) for z in model.states]
 
 
 def test_kappa_is_the_coefficient_of_the_time_scale_equation():
@@ -245,6 +272,63 @@ def test_cli_search_writes_model_and_theory_and_the_model_goes_to_c(tmp_path, ca
     cc = subprocess.run([find_compiler(), "-std=c99", "-Wall", "-Werror", "-c", str(source), "-o",
                          str(tmp_path / "o.o")], capture_output=True, text=True)
     assert cc.returncode == 0, cc.stderr
+
+
+STRICT = ("-Wall", "-Wextra", "-Wpedantic", "-Wconversion", "-Wfloat-conversion", "-Wdouble-promotion", "-Werror")
+
+
+def test_the_generated_c_reads_the_estimate_back_in_the_original_coordinates(wheel_search, tmp_path):
+    """Seed 000's wheel: <prefix>_original(z) = phi^-1(z) = x on points phi(x), an error code outside the domain."""
+    model = written_model(wheel_search, tmp_path)
+    assert [k for k, _ in model.original] == ["x1", "x2", "x3"]
+    gen = generate_observer(model, design(model.numeric(), "-10,-20,-20"))
+    assert gen.original_names == ("x1", "x2", "x3") and f"{gen.prefix}_original(" in gen.readme
+    lib = ctypes.CDLL(str(compile_shared(gen, flags=(*BUILD_FLAGS, *STRICT))))
+    original = getattr(lib, f"{gen.prefix}_original")
+    vec = ctypes.POINTER(ctypes.c_double)
+    original.argtypes, original.restype = [vec, vec, vec, vec], ctypes.c_int32
+
+    def call(z, params=None, signals=(1.0, 20.0, 0.0)):
+        arr = lambda v: None if v is None else (ctypes.c_double * len(v))(*v)  # noqa: E731
+        out = (ctypes.c_double * 3)(7.0, 7.0, 7.0)
+        return original(arr(z), arr(signals), arr(params), out), list(out)
+
+    sys_ = system("wheel-burckhardt")
+    values = {sys_.symbols[k]: v for k, v in sys_.values.items()}
+    phi = [e.subs(values) for e in wheel_search.phi]
+    numeric = model.numeric()
+    zs = [model.symbol(z) for z in model.states]
+    inverse = sp.lambdify(zs, [e for _, e in numeric.original], "math")     # phi^-1 in Python, from the file
+    for x in [(0.05, -3.0, 0.4), (0.2, 1.5, 0.1), (0.01, 0.0, 1.0)]:
+        z = [float(e.subs(dict(zip(sys_.state_symbols, map(sp.Rational, x))))) for e in phi]
+        status, out = call(z)
+        assert status == 0
+        assert out == pytest.approx(inverse(*z), rel=1e-12, abs=1e-12) and out == pytest.approx(x, abs=1e-9)
+    c2 = -34.0
+    assert call([0.0, 1.0, c2]) == (5, [7.0] * 3)            # c2^2 z1 - c2 z2 + z3 = 0: NONFINITE_RESULT, x unchanged
+    assert call([0.0, 1.0, 0.0])[0] == 5                      # log of a negative number (a c1 c2^2 < 0)
+    assert call([0.0, float("nan"), 0.0])[0] == 2             # NONFINITE_STATE
+    bad_a = list(gen.params_with({"a": -1.0}))
+    assert call(z, params=bad_a)[0] == 6                      # a is declared positive: BAD_PARAM
+    assert original(None, None, None, None) == 7              # BAD_ARGUMENT
+
+
+@pytest.mark.parametrize("original, error, match", [
+    ({"states": ["x1", "x2"], "inverse": ["z1"]}, DimensionError, "needs 2 states and 2 inverse"),
+    ({"states": ["x1", "x2"], "inverse": ["z1", "__import__('os')"]}, ExpressionError, "not allowed"),
+    ({"states": ["x1", "x2"], "inverse": ["z1", "u + z2"]}, ExpressionError, "unknown name 'u'"),
+    ({"states": ["x1", "x2"], "inverse": ["z1", "t"]}, ExpressionError, "unknown name 't'"),
+    ({"states": ["x1", "z2"], "inverse": ["z1", "z2"]}, ModelError, "clash with the model's names"),
+    ({"states": ["x1", "x2"]}, ModelError, "exactly the keys 'states' and 'inverse'"),
+])
+def test_the_original_table_of_a_model_file_is_validated(original, error, match):
+    base = {"name": "m", "states": ["z1", "z2"], "A": [["0", "1"], ["0", "0"]], "C": ["1", "0"], "time_scale": "y",
+            "inputs": ["u"], "parameters": ["k"], "external": ["vx"]}
+    with pytest.raises(error, match=match):
+        Model.from_dict({**base, "original": original})
+    ok = Model.from_dict({**base, "original": {"states": ["x1", "x2"], "inverse": ["z1/vx", "k*z2 + y"]}})
+    assert Model.from_json(ok.to_json()) == ok and ok.with_values({"k": 2}).original[1][1] == 2 * ok.symbol("z2") + \
+        ok.symbol("y")
 
 
 def test_cli_check_mode_json_and_negative_verdict(tmp_path, capsys):

@@ -52,7 +52,8 @@ from ..model import Model, numeric, rational_value
 from ..spec import METHODS, STATUS_TEXT, STEP_METHODS, Guard, ObserverSpec, StepStatus, require_explicit
 from ._emit import CFunction, float_literal, kernel
 from ._readme import readme
-from ._translate import GUARD_TESTS, Translation, translate_adaptive, translate_super_twisting, translate_switched
+from ._translate import (GUARD_TESTS, Translation, translate_adaptive, translate_original, translate_super_twisting,
+                         translate_switched)
 
 __all__ = ["GeneratedObserver", "generate_observer", "generate_super_twisting", "default_prefix", "REALS", "METHODS"]
 
@@ -146,6 +147,9 @@ class GeneratedObserver:
     certificate : str or None
         The statement of the discrete certificate proved for this design and method (``--h-max auto``),
         recorded in the header and README; None: none was checked.
+    original_names : tuple of str
+        The original coordinates ``x = phi^{-1}(xhat)`` that ``<prefix>_original`` returns (the model's
+        ``[original]`` table, written by ``switchobs transform``); empty: no such function.
     step_function : casadi.Function
         One step *without* sub-stepping as a casadi Function ``(x, signals, params, dt) -> x_next``
         (not compared, not in JSON).
@@ -175,6 +179,7 @@ class GeneratedObserver:
     h_max_c: float | None = None
     max_substeps: int | None = None
     certificate: str | None = None
+    original_names: tuple[str, ...] = ()
     step_function: ca.Function | None = field(default=None, repr=False, compare=False)
 
     @property
@@ -233,7 +238,7 @@ class GeneratedObserver:
             "h_max": None if self.h_max is None else str(self.h_max), "h_max_c": self.h_max_c,
             "max_substeps": self.max_substeps, "certificate": self.certificate,
             "files": sorted(self.files), "casadi_version": self.casadi_version,
-            "references": dict(self.references),
+            "references": dict(self.references), "original": list(self.original_names),
         }
 
     def __str__(self) -> str:
@@ -252,6 +257,9 @@ class GeneratedObserver:
             lines.append(f"  sub-steps: |s|*dt <= H_MAX = {self.h_max_c!r} (certified h_max = {self.h_max}) per step, "
                          f"at most MAX_SUBSTEPS = {self.max_substeps}, else SUBSTEP_LIMIT = "
                          f"{int(StepStatus.SUBSTEP_LIMIT)}")
+        if self.original_names:
+            lines.append(f"  original coordinates: {', '.join(self.original_names)} = phi^-1(xhat) "
+                         f"({self.prefix}_original)")
         return "\n".join(lines)
 
 
@@ -380,7 +388,8 @@ def _substep_check(tr: Translation, real: str, P: str) -> list[str]:
 
 def _assemble(tr: Translation, *, info: _Info, kind: str, real: str, method: str, prefix: str,
               command: str | None, bound: tuple[Fraction, int] | None = None,
-              certificate: str | None = None) -> GeneratedObserver:
+              certificate: str | None = None,
+              original: tuple[tuple[str, ...], ca.SX] | None = None) -> GeneratedObserver:
     if kind == "adaptive":
         require_explicit(method, "the adaptive observer's right-hand side", CodegenError)
     if method not in tr.methods:
@@ -411,6 +420,7 @@ def _assemble(tr: Translation, *, info: _Info, kind: str, real: str, method: str
         scale_check += _substep_check(tr, real, P)
         h_max_c = round_down(bound[0], real, error=CodegenError)
     checks: list[str] = []
+    param_checks: list[str] = []  # the original coordinates use the parameters too: the same sign checks
     scale_done = False
     for i, (guard, expr) in enumerate(tr.guards):
         if guard.status != StepStatus.UNDEFINED_TIME_SCALE and guard.status != StepStatus.BAD_PARAM \
@@ -423,6 +433,8 @@ def _assemble(tr: Translation, *, info: _Info, kind: str, real: str, method: str
             checks.append("    " + k.call("&g", sig="sig", par="par"))
         test = GUARD_TESTS[guard.kind].format(g=value)
         checks.append(f"    if (!({test})) return {P}_ERR_{guard.status.name};  /* {_comment(guard.reason)} */")
+        if guard.status == StepStatus.BAD_PARAM:
+            param_checks += checks[-2:] if k is not None else checks[-1:]
     if not scale_done:
         checks += scale_check
 
@@ -434,12 +446,17 @@ def _assemble(tr: Translation, *, info: _Info, kind: str, real: str, method: str
         stack_reals += 1
     if bound is not None:  # the sub-step's input state, a, q, h
         stack_reals += len(tr.state_names) + 3
+    original_names = () if original is None else original[0]
+    original_k = None if original is None else kernel(
+        f"{prefix}_original_kernel", [("x", tr.x), ("sig", tr.signals), ("par", tr.params)], original[1], real=real,
+        prefix=prefix)
     text_args = dict(tr=tr, info=info, kind=kind, real=real, method=method, prefix=prefix, P=P,
+                     original_names=original_names, o_macros=_macro_names("original state", original_names),
                      x_macros=x_macros, s_macros=s_macros, p_macros=p_macros, command=command,
                      temporaries=step_k.temporaries, stack_reals=stack_reals, bound=bound, h_max_c=h_max_c,
                      certificate=certificate)
     header = _header(**text_args)
-    source = _source(kernels=kernels, checks=checks, **text_args)
+    source = _source(kernels=kernels, checks=checks, original_k=original_k, param_checks=param_checks, **text_args)
     gen = GeneratedObserver(
         prefix=prefix, real=real, method=method, kind=kind, model_name=info.name, state_names=tr.state_names,
         signal_names=tr.signal_names, param_names=tr.param_names, default_params=tr.default_params,
@@ -447,7 +464,7 @@ def _assemble(tr: Translation, *, info: _Info, kind: str, real: str, method: str
         header=header, source=source, readme="", casadi_version=ca.__version__, description=info.description,
         equations=info.equations, signal_roles=info.signal_roles, references=dict(info.references),
         h_max=None if bound is None else bound[0], h_max_c=h_max_c, max_substeps=None if bound is None else bound[1],
-        certificate=certificate, step_function=step_fn)
+        certificate=certificate, original_names=tuple(original_names), step_function=step_fn)
     return dataclasses.replace(gen, readme=readme(gen, command=command))
 
 
@@ -546,14 +563,17 @@ def generate_observer(model: Model, gains: GainDesign | tuple[Sequence[float], S
         G = ()
     spec = ObserverSpec(model, tuple(map(float, Kp)), tuple(map(float, Km)), values=defaults, unknown=unknown,
                         Gamma=G)
+    original = None
     if unknown:
         tr = translate_adaptive(spec)
         kind = "adaptive"
     else:
         tr = translate_switched(spec)
         kind = "switched"
+        if model.original:
+            original = (tuple(name for name, _ in model.original), translate_original(model, tr))
     return _assemble(tr, info=_model_info(model, kind), kind=kind, real=real, method=method, prefix=prefix,
-                     command=command, bound=bound, certificate=certificate)
+                     command=command, bound=bound, certificate=certificate, original=original)
 
 
 def generate_super_twisting(lam: float, alpha: float, *, real: str = "double",
@@ -598,7 +618,7 @@ def generate_super_twisting(lam: float, alpha: float, *, real: str = "double",
 def _header(*, tr: Translation, info: _Info, kind: str, real: str, method: str, prefix: str, P: str,
             x_macros: Sequence[str], s_macros: Sequence[str], p_macros: Sequence[str], command: str | None,
             temporaries: int, stack_reals: int, bound: tuple[Fraction, int] | None, h_max_c: float | None,
-            certificate: str | None) -> str:
+            certificate: str | None, original_names: Sequence[str], o_macros: Sequence[str]) -> str:
     guard = f"{P}_H"
     scheme = _SCHEMES[method][0] + ", signals held over the step (zero-order hold)"
     lines = [
@@ -632,6 +652,10 @@ def _header(*, tr: Translation, info: _Info, kind: str, real: str, method: str, 
     lines += ["", "/* Signals, one row per step. */"]
     lines += [f"#define {P}_S_{m} {i}  /* {role} */" for i, (m, role) in
               enumerate(zip(s_macros, info.signal_roles))]
+    if original_names:
+        lines += ["", f"/* Original coordinates x = phi^-1(xhat) of the system file ({prefix}_original). */",
+                  f"#define {P}_NO {len(original_names)}"]
+        lines += [f"#define {P}_O_{m} {i}" for i, m in enumerate(o_macros)]
     lines += ["", "/* Parameters (index into params; default in <prefix>_default_params). */"]
     lines += [f"#define {P}_P_{m} {i}  /* default {float_literal(v, 'double')} */"
               for i, (m, v) in enumerate(zip(p_macros, tr.default_params))]
@@ -656,6 +680,13 @@ def _header(*, tr: Translation, info: _Info, kind: str, real: str, method: str, 
         f"int32_t {prefix}_run({real} *xhat, const {real} *signals, int32_t n_steps, const {real} *params,",
         f"    {real} dt, {real} *trajectory);",
         "",
+        *([] if not original_names else [
+            f"/* The estimate in the original coordinates: x[{P}_NO] = phi^-1(xhat[{P}_NX]), with the step's",
+            f" * signals[{P}_NS] (phi^-1 may use the external signals); params may be NULL.  Returns {P}_OK, or",
+            f" * an error code with x unchanged: NULL pointers, non-finite inputs, a parameter of the wrong sign, or",
+            f" * {P}_ERR_NONFINITE_RESULT where phi^-1 is undefined (log of a non-positive number, ...). */",
+            f"int32_t {prefix}_original(const {real} *xhat, const {real} *signals, const {real} *params, {real} *x);",
+            ""]),
         "/* A static description of a status code. */",
         f"const char *{prefix}_status_message(int32_t status);",
         "", "#ifdef __cplusplus", "}", "#endif", "", f"#endif /* {guard} */", ""]
@@ -664,9 +695,10 @@ def _header(*, tr: Translation, info: _Info, kind: str, real: str, method: str, 
 
 def _source(*, tr: Translation, info: _Info, kind: str, real: str, method: str, prefix: str, P: str,
             kernels: Sequence[CFunction], checks: Sequence[str], command: str | None,
-            bound: tuple[Fraction, int] | None, **_: Any) -> str:
+            bound: tuple[Fraction, int] | None, original_k: CFunction | None, param_checks: Sequence[str],
+            **_: Any) -> str:
     nx = f"{P}_NX"
-    used = "\n".join(k.body for k in kernels)
+    used = "\n".join(k.body for k in (*kernels, *([original_k] if original_k else [])))
     helpers = []
     zero, one = float_literal(0.0, real), float_literal(1.0, real)
     if f"{prefix}_sq(" in used:
@@ -767,6 +799,7 @@ def _source(*, tr: Translation, info: _Info, kind: str, real: str, method: str, 
         "    return 0;",
         "}",
         "",
+        *_original_function(original_k, param_checks, real=real, prefix=prefix, P=P),
         f"const char *{prefix}_status_message(int32_t status)",
         "{",
         "    switch (status) {",
@@ -777,3 +810,30 @@ def _source(*, tr: Translation, info: _Info, kind: str, real: str, method: str, 
         "",
     ]
     return "\n".join(line for line in body if line is not None)
+
+
+def _original_function(original_k: CFunction | None, param_checks: Sequence[str], *, real: str, prefix: str,
+                       P: str) -> list[str | None]:
+    """``<prefix>_original``: the checks of the step's inputs and parameters, phi^-1, then its finiteness."""
+    if original_k is None:
+        return []
+    return [
+        f"int32_t {prefix}_original(const {real} *xhat, const {real} *signals, const {real} *params, {real} *x)",
+        "{",
+        f"    {real} out[{P}_NO];",
+        f"    {real} g;" if any("&g" in c for c in param_checks) else None,
+        f"    const {real} *sig = signals, *par = params != NULL ? params : {prefix}_default_params;",
+        "    int32_t i;",
+        f"    if (xhat == NULL || signals == NULL || x == NULL) return {P}_ERR_BAD_ARGUMENT;",
+        f"    for (i = 0; i < {P}_NX; ++i) if (!isfinite(xhat[i])) return {P}_ERR_NONFINITE_STATE;",
+        f"    for (i = 0; i < {P}_NS; ++i) if (!isfinite(sig[i])) return {P}_ERR_NONFINITE_SIGNAL;",
+        f"    for (i = 0; i < {P}_NP; ++i) if (!isfinite(par[i])) return {P}_ERR_BAD_PARAM;",
+        *param_checks,
+        "    " + original_k.call("out", x="xhat", sig="sig", par="par"),
+        f"    for (i = 0; i < {P}_NO; ++i) if (!isfinite(out[i])) return {P}_ERR_NONFINITE_RESULT;  "
+        "/* phi^-1 undefined here */",
+        f"    for (i = 0; i < {P}_NO; ++i) x[i] = out[i];",
+        "    return 0;",
+        "}",
+        "",
+    ]

@@ -107,6 +107,18 @@ def _certificate_section(gen: "GeneratedObserver") -> list[str]:
     return out
 
 
+def _original_section(gen: "GeneratedObserver") -> list[str]:
+    if not gen.original_names:
+        return []
+    P, p = gen.prefix.upper(), gen.prefix
+    return [f"`{p}_original` writes the estimate in the original coordinates of the system file, "
+            f"x = phi^-1(xhat) (`{P}_NO` = {len(gen.original_names)}: "
+            + ", ".join(f"`{P}_O_{n.upper()}` = {i} `{n}`" for i, n in enumerate(gen.original_names)) + "), ",
+            "with the step's signals row (phi^-1 may use the external signals).  It checks its inputs as the "
+            "step does",
+            f"and returns `{P}_ERR_NONFINITE_RESULT`, with `x` unchanged, where phi^-1 is undefined.", ""]
+
+
 def readme(gen: "GeneratedObserver", *, command: str | None) -> str:
     P, p, real = gen.prefix.upper(), gen.prefix, gen.real
     method = {"rk4": "classic fourth-order Runge-Kutta (RK4)", "euler": "forward Euler"}.get(
@@ -146,6 +158,8 @@ def readme(gen: "GeneratedObserver", *, command: str | None) -> str:
         f"int32_t {p}_step({real} *xhat, const {real} *signals, const {real} *params, {real} dt);",
         f"int32_t {p}_run({real} *xhat, const {real} *signals, int32_t n_steps, const {real} *params,",
         f"    {real} dt, {real} *trajectory);",
+        *([f"int32_t {p}_original(const {real} *xhat, const {real} *signals, const {real} *params, {real} *x);"]
+          if gen.original_names else []),
         f"const char *{p}_status_message(int32_t status);",
         "```",
         "",
@@ -155,6 +169,7 @@ def readme(gen: "GeneratedObserver", *, command: str | None) -> str:
         "step leaves `xhat` unchanged (for `_run`: `xhat` holds the state after the steps that succeeded).",
         "Status and counts are `int32_t` (`<stdint.h>`), the same width on every target.",
         "",
+        *_original_section(gen),
         *_bound_section(gen),
         *([] if gen.kind == "super-twisting" else _certificate_section(gen)),
         f"## State (`{P}_NX` = {gen.nx})",

@@ -37,7 +37,8 @@ from ..model import Model
 from ..spec import (METHODS, SCALE, STEP_METHODS, Guard, ObserverSpec, StepStatus, affine_jacobian,
                     implicit_increment)
 
-__all__ = ["Translation", "to_casadi", "translate_switched", "translate_adaptive", "translate_super_twisting"]
+__all__ = ["Translation", "to_casadi", "translate_original", "translate_switched", "translate_adaptive",
+           "translate_super_twisting"]
 
 #: Guard kinds and the C comparison that holds when the guard is satisfied (NaN fails every one).
 GUARD_TESTS: Mapping[str, str] = {
@@ -271,6 +272,14 @@ def _gain_parameters(spec: ObserverSpec, par: ca.SX, index: Mapping[str, int], s
 
 def _gain_names(spec: ObserverSpec) -> list[str]:
     return [f"K_plus_{z}" for z in spec.model.states] + [f"K_minus_{z}" for z in spec.model.states]
+
+
+def translate_original(model: Model, tr: Translation) -> ca.SX:
+    """``x = phi^{-1}(xhat)`` (the model's ``[original]`` table) in the step's state, signals and parameters."""
+    env = {model.symbols[name]: tr.signals[i] for i, name in enumerate(model.signals)}
+    env.update({model.symbols[name]: tr.params[i] for i, name in enumerate(model.parameters)})
+    env.update({model.symbols[name]: tr.x[i] for i, name in enumerate(model.states)})
+    return ca.vertcat(*[to_casadi(e, env, what=f"original {name}") for name, e in model.original])
 
 
 def translate_switched(spec: ObserverSpec) -> Translation:

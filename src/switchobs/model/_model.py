@@ -89,6 +89,10 @@ class Model:
     description : str
     references : mapping str -> str
         Seed equation numbers, e.g. ``{"model": "seed 000 eq. (7)"}``.
+    original : tuple of (str, sympy.Expr)
+        The original coordinates ``x = phi^{-1}(z)`` of a model written by ``switchobs transform``
+        (key ``[original]``): each name with its expression in the states, ``y``, the parameters and
+        the external signals; empty when unknown.  The generated C evaluates it on the estimate.
     """
 
     name: str
@@ -106,6 +110,7 @@ class Model:
     symbols: Mapping[str, sp.Symbol] = field(default_factory=dict)
     description: str = ""
     references: Mapping[str, str] = field(default_factory=dict)
+    original: tuple[tuple[str, sp.Expr], ...] = ()
 
     # ------------------------------------------------------------------ build
     @classmethod
@@ -120,7 +125,7 @@ class Model:
         if not isinstance(data, Mapping):
             raise ModelError(f"{source}: expected a table of keys, got {type(data).__name__}")
         known = {"name", "description", "states", "output", "A", "C", "d", "b", "time_scale",
-                 "parameters", "external", "inputs", "values", "positive", "negative", "references"}
+                 "parameters", "external", "inputs", "values", "positive", "negative", "references", "original"}
         unknown = sorted(set(data) - known)
         if unknown:
             raise ModelError(f"{source}: unknown key(s) {unknown}; known keys are {sorted(known)}")
@@ -191,10 +196,12 @@ class Model:
             values[key] = rational_value(val, what=f"values.{key}")
             _check_sign(key, values[key], symbols[key])
         refs = data.get("references", {}) or {}
+        original = _original(data.get("original"), declared, {**s_names, **{k: symbols[k] for k in states}},
+                             n, source)
         return cls(name=name, states=states, output=output, A=A, C=C, d=d, b=b,
                    time_scale=time_scale, parameters=parameters, external=external, inputs=inputs,
                    values=values, symbols=symbols, description=str(data.get("description", "")),
-                   references=dict(refs))
+                   references=dict(refs), original=original)
 
     @classmethod
     def from_statespace(cls, sys: Any, *, time_scale: str | Any, name: str = "statespace",
@@ -309,7 +316,8 @@ class Model:
                      b=self.b.subs(subs), time_scale=self.time_scale.subs(subs),
                      parameters=remaining, external=self.external, inputs=self.inputs,
                      values={k: v for k, v in self.values.items() if k in remaining},
-                     symbols=self.symbols, description=self.description, references=self.references)
+                     symbols=self.symbols, description=self.description, references=self.references,
+                     original=tuple((k, e.subs(subs)) for k, e in self.original))
 
     def numeric(self) -> "Model":
         """The model with all its stored :attr:`values` substituted."""
@@ -330,6 +338,8 @@ class Model:
             "external": list(self.external),
             "inputs": list(self.inputs),
             "values": {k: str(v) for k, v in self.values.items()},
+            **({"original": {"states": [k for k, _ in self.original], "inverse": [str(e) for _, e in self.original]}}
+               if self.original else {}),
         }
 
     def to_json(self) -> dict[str, Any]:
@@ -383,6 +393,27 @@ class Model:
                              else f"${sp.latex(self.symbols[k])}$" for k in self.parameters)
             rows[-1] += f"; parameters: {vals}"
         return "\n".join(rows)
+
+
+def _original(data: Any, declared: list[str], names: Mapping[str, sp.Symbol], n: int,
+              source: str) -> tuple[tuple[str, sp.Expr], ...]:
+    """The ``[original]`` table: ``states`` (n new names) and ``inverse`` (n expressions of the model's names)."""
+    if data is None:
+        return ()
+    if not isinstance(data, Mapping) or set(data) != {"states", "inverse"}:
+        raise ModelError(f"{source}: 'original' must be a table with exactly the keys 'states' and 'inverse', "
+                         f"got {data!r}")
+    states = _names(data["states"], "original.states")
+    inverse = data["inverse"]
+    if not isinstance(inverse, list) or len(states) != n or len(inverse) != n:
+        raise DimensionError(f"{source}: 'original' needs {n} states and {n} inverse expressions (phi is a "
+                             f"diffeomorphism of the {n} states), got {data['states']!r} and {inverse!r}")
+    clash = sorted(set(states) & set(declared))
+    if clash:
+        raise ModelError(f"{source}: original.states {clash} clash with the model's names; rename them")
+    exprs = [parse_expression(e, {k: v for k, v in names.items() if k != "t"}, what=f"original.inverse[{i + 1}]")
+             for i, e in enumerate(inverse)]
+    return tuple(zip(states, exprs))
 
 
 def _sign_name(symbol: sp.Symbol) -> str:

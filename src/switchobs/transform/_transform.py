@@ -20,7 +20,7 @@ from typing import Any
 import sympy as sp
 
 from .._progress import progress
-from ..exceptions import TransformError
+from ..exceptions import ExpressionError, TransformError
 from ..model import Model
 from ._lie import as_output_function, bracket, integrate_exact, kappa, lie, simp
 from ._system import System
@@ -145,6 +145,9 @@ class Transformation:
                     "external", "inputs"):
             lines.append(f"{key} = {_toml_value(data[key])}")
         lines += [f"positive = {_toml_value(positive)}", f"negative = {_toml_value(negative)}"]
+        if "original" in data:
+            lines += ["", "[original]  # x = phi^-1(z): the generated C reads the estimate back in these coordinates"]
+            lines += [f"{k} = {_toml_value(v)}" for k, v in data["original"].items()]
         if data["values"]:
             lines += ["", "[values]"] + [f"{k} = {_toml_value(v)}" for k, v in data["values"].items()]
         if self.system.references:
@@ -274,7 +277,7 @@ class _Derivation:
         inverse = self.inverse(phi, zs)
         self.step("Inverse coordinates", [(str(x), e) for x, e in zip(xs, inverse)] if inverse else
                   [("x = phi^-1(z):", "no unique closed form found")])
-        model = self.model(A, d, b, s_y, zs)
+        model = self.model(A, d, b, s_y, zs, inverse)
         return Transformation(system, self.mode, True, None, tuple(self.steps), s_y, tuple(phi), det,
                               tuple(zeros or ()), model, inverse)
 
@@ -290,9 +293,21 @@ class _Derivation:
             return None
         return inverse
 
-    def model(self, A: sp.Matrix, d: sp.Matrix, b: sp.Matrix, s_y: sp.Expr, zs: Sequence[sp.Symbol]) -> Model:
+    def model(self, A: sp.Matrix, d: sp.Matrix, b: sp.Matrix, s_y: sp.Expr, zs: Sequence[sp.Symbol],
+              inverse: tuple[sp.Expr, ...] | None) -> Model:
+        """The model; with ``[original]`` (and the parameters phi^-1 uses) when a model file can hold phi^-1
+        (only its safe functions), so that the generated C reads the estimate back in x."""
+        if inverse is not None:
+            try:
+                return self._model(A, d, b, s_y, zs, inverse)
+            except ExpressionError:
+                pass
+        return self._model(A, d, b, s_y, zs, None)
+
+    def _model(self, A: sp.Matrix, d: sp.Matrix, b: sp.Matrix, s_y: sp.Expr, zs: Sequence[sp.Symbol],
+               inverse: tuple[sp.Expr, ...] | None) -> Model:
         system = self.system
-        used = set().union(*(e.free_symbols for e in (*A, *d, *b, s_y)))
+        used = set().union(*(e.free_symbols for e in (*A, *d, *b, s_y, *(inverse or ()))))
         parameters = [p for p in system.parameters if system.symbols[p] in used]
         signed = set(parameters) | set(system.external)
         data = {
@@ -309,6 +324,8 @@ class _Derivation:
             "values": {k: str(v) for k, v in system.values.items() if k in parameters},
             "references": dict(system.references),
         }
+        if inverse is not None:
+            data["original"] = {"states": list(system.states), "inverse": [str(e) for e in inverse]}
         return Model.from_dict(data, source=f"normal form of {system.name}")
 
 
