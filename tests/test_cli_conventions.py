@@ -69,6 +69,26 @@ def test_every_command_of_the_table_has_a_module_that_registers_it(name):
     assert hasattr(importlib.import_module(f"switchobs.cli._{name}"), "register")
 
 
+#: What a chosen command's --help or argparse error must not import (numpy and sympy are cheap next to these).
+SLOW_TO_IMPORT = ("scipy", "cvxpy", "casadi", "matplotlib", "control", "dask", "distributed")
+
+
+def test_a_commands_help_and_its_argparse_errors_import_none_of_the_slow_packages():
+    """Every command's module imports its heavy dependencies only when it runs (one process for all commands)."""
+    probe = ("import sys\nfrom switchobs.cli.main import COMMANDS, main\n"
+             f"slow = set({SLOW_TO_IMPORT!r})\n"
+             "for name in COMMANDS:\n"
+             "    for argv in ([name, '--help'], [name, '--no-such-option']):\n"
+             "        try:\n            main(argv)\n        except SystemExit as exc:\n            code = exc.code\n"
+             "        loaded = sorted({m.split('.')[0] for m in sys.modules} & slow)\n"
+             "        print('SLOW', name, argv[1], code, loaded, file=sys.stderr)\n")
+    proc = subprocess.run([sys.executable, "-c", probe], capture_output=True, text=True, timeout=300)
+    lines = [line for line in proc.stderr.splitlines() if line.startswith("SLOW ")]
+    expected = [f"SLOW {name} {option} {code} []" for name in COMMANDS
+                for option, code in (("--help", 0), ("--no-such-option", 2))]
+    assert lines == expected, proc.stderr[-3000:]
+
+
 def test_version_is_single_sourced(capsys):
     with pytest.raises(SystemExit):
         main(["--version"])

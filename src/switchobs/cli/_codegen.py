@@ -9,7 +9,6 @@ from typing import Any
 
 import sympy as sp
 
-from ..codegen import generate_observer, generate_super_twisting
 from ..design import GainDesign, design
 from ..exceptions import CodegenError, FreeSymbolError, PrerequisiteError, SpectrumError
 from ..model import Model, load_model, rational_value
@@ -109,6 +108,8 @@ def _discrete_certificate(model: Model, gains: GainDesign, values: dict[str, str
 
 
 def run(args: argparse.Namespace) -> int:
+    from ..codegen import generate_observer, generate_super_twisting
+
     values = parse_params(args.param)
     command = _command(args)
     if args.model == SUPER_TWISTING:

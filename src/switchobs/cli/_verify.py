@@ -4,7 +4,6 @@ from __future__ import annotations
 
 import argparse
 
-from ..certify import verify_certificate
 from ._common import emit_json
 
 __all__ = ["register"]
@@ -23,6 +22,8 @@ def register(sub: argparse._SubParsersAction) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
+    from ..certify import verify_certificate
+
     report = verify_certificate(args.certificate)
     if args.json:
         emit_json(report.to_json())

@@ -104,9 +104,13 @@ def _install_hint(module: str | None) -> str:
     return "reinstall with `make install` (or pip install -e .)"
 
 
-def _register_unavailable(sub: argparse._SubParsersAction, name: str, exc: ImportError) -> None:
+def _unavailable(name: str, exc: ImportError) -> str:
     what = f"importing {exc.name} failed" if exc.name else "a dependency failed to import"
-    message = f"command {name!r} cannot run: {what} ({exc}); {_install_hint(exc.name)}"
+    return f"command {name!r} cannot run: {what} ({exc}); {_install_hint(exc.name)}"
+
+
+def _register_unavailable(sub: argparse._SubParsersAction, name: str, exc: ImportError) -> None:
+    message = _unavailable(name, exc)
 
     def unavailable(args: argparse.Namespace) -> int:
         raise PrerequisiteError(message)
@@ -182,11 +186,17 @@ def main(argv: Sequence[str] | None = None) -> int:
         hint = "; give values with --param NAME=VALUE" if isinstance(exc, FreeSymbolError) else ""
         print(f"switchobs {args.command}: error: {exc}{hint}", file=sys.stderr)
         return 2
-    except ModuleNotFoundError as exc:
-        if (exc.name or "").split(".")[0] not in EXTRAS:
+    except ImportError as exc:
+        # A command imports cvxpy, casadi, scipy or matplotlib when it runs, not when it is registered
+        # (so that its --help and argparse errors stay fast): a missing or broken one surfaces here.
+        top = (exc.name or "").split(".")[0]
+        if top == "switchobs":  # an import bug of ours: keep its traceback
             raise
-        print(f"switchobs {args.command}: error: this needs {exc.name}, which is not installed; "
-              f"{_install_hint(exc.name)}", file=sys.stderr)
+        if isinstance(exc, ModuleNotFoundError) and top in EXTRAS:
+            print(f"switchobs {args.command}: error: this needs {exc.name}, which is not installed; "
+                  f"{_install_hint(exc.name)}", file=sys.stderr)
+        else:
+            print(f"switchobs {args.command}: error: {_unavailable(args.command, exc)}", file=sys.stderr)
         return 2
     except BrokenPipeError:  # output piped into `head`: not an error of ours
         sys.stdout = open(os.devnull, "w")
