@@ -8,7 +8,8 @@ import numpy as np
 import pytest
 import sympy as sp
 
-from switchobs.certify import PlanarClassification, VerificationReport, certify, classify_planar
+from switchobs.certify import (DualCertificate, DwellTimeResult, LyapunovResult, PlanarClassification,
+                              VerificationReport, certify, classify_planar, dwell_time, strict_common_lyapunov)
 from switchobs.design import GainDesign, design_gains
 from switchobs.exceptions import CertificateError, ModelError, SimulationError
 from switchobs.model import Model, builtin_model
@@ -69,6 +70,21 @@ def test_certification_report_markdown_repr_numpy_and_json_parts():
     with pytest.raises(CertificateError, match="planar"):
         PlanarClassification.from_json({"case": "iv"})
 
+
+def test_lyapunov_dual_and_dwell_results_round_trip_through_json():
+    """A result read back from its JSON writes the same JSON, with the exact matrices and the solver record."""
+    no_cqlf = strict_common_lyapunov([[[-1, 0], [10, -1]], [[-1, 10], [0, -1]]])
+    assert not no_cqlf.certified and no_cqlf.dual is not None and no_cqlf.dual.certified
+    back = LyapunovResult.from_json(_through_json(no_cqlf))
+    assert back.to_json() == no_cqlf.to_json()
+    assert (back.family.names, back.family.exact, back.solver, back.dual) == (
+        no_cqlf.family.names, no_cqlf.family.exact, no_cqlf.solver, no_cqlf.dual)
+    assert DualCertificate.from_json(_through_json(no_cqlf.dual)) == no_cqlf.dual
+    dwell = dwell_time([[[-1, 0], [10, -1]], [[-1, 10], [0, -1]]])
+    again = DwellTimeResult.from_json(_through_json(dwell))
+    assert again.to_json() == dwell.to_json() and (again.tau_D, again.P) == (dwell.tau_D, dwell.P)
+    with pytest.raises(CertificateError, match="dwell-time result"):
+        DwellTimeResult.from_json({k: v for k, v in dwell.to_json().items() if k != "family"})
 
 def test_simulation_results_markdown_numpy_and_json_round_trip():
     res = simulate(BrakingScenario("dry-asphalt", speed_m_s=15.0, duration_s=0.2))
