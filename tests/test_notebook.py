@@ -13,7 +13,7 @@ from switchobs.certify import (DualCertificate, DwellTimeResult, LyapunovResult,
 from switchobs.design import GainDesign, design_gains
 from switchobs.exceptions import CertificateError, ModelError, SimulationError
 from switchobs.model import Model, builtin_model
-from switchobs.plants import BrakingScenario, simulate
+from switchobs.plants import BrakingScenario, TwoAxleScenario, simulate, simulate_two_axle, table41
 from switchobs.sensors import ChainResult, ChainSettings, Encoder, compare_estimators, constant_speed
 
 
@@ -102,3 +102,18 @@ def test_simulation_results_markdown_numpy_and_json_round_trip():
     assert back.summary() == chain.summary() and back.settings == chain.settings
     with pytest.raises(SimulationError, match="arrays"):
         ChainResult.from_json(chain.to_json())
+
+
+def test_table41_and_two_axle_markdown_show_the_numbers_of_their_text():
+    table = table41(roads=("dry-asphalt",), speeds_kmh=(60.0,))
+    row = table.rows[0]
+    md = table._repr_markdown_()
+    assert r"$v_x(0)^2 / (2 g \bar\mu)$" in md
+    assert f"| 60 | dry-asphalt | {row.five_phase_m:.2f} ({row.seed_five_phase_m:.2f}) |" in md
+    assert f"**{table.two_phase_always_shorter}**" in md
+    run = simulate_two_axle(TwoAxleScenario("dry-asphalt", speed_m_s=10.0, duration_s=0.5))
+    md = run._repr_markdown_()
+    m = run.metrics
+    assert f"status: **{run.status}**; stopping distance {m['stopping_distance_m']:.2f} m" in md
+    assert f"| front | {m['front']['load_min_n']:.0f}–{m['front']['load_max_n']:.0f} | {m['front']['abs_cycles']} |" in md
+    assert "$(\\hat v_x - v_x)/v_x$" in md
