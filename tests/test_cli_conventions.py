@@ -19,7 +19,7 @@ from switchobs._progress import listening, progress
 from switchobs.cli import main as cli
 from switchobs.cli._status import StatusLine
 from switchobs.cli.main import COMMANDS, QUIET, VERBOSE, build_parser, main
-from switchobs.plants import table41
+from switchobs.plants import BrakingScenario, simulate, table41
 from switchobs.sensors import compare_estimators, constant_speed
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -67,6 +67,26 @@ def test_every_command_of_the_table_has_a_module_that_registers_it(name):
     subparsers = next(a for a in parser._actions if a.dest == "command")
     assert list(subparsers.choices) == [name]
     assert hasattr(importlib.import_module(f"switchobs.cli._{name}"), "register")
+
+
+#: What a chosen command's --help or argparse error must not import (numpy and sympy are cheap next to these).
+SLOW_TO_IMPORT = ("scipy", "cvxpy", "casadi", "matplotlib", "control", "dask", "distributed")
+
+
+def test_a_commands_help_and_its_argparse_errors_import_none_of_the_slow_packages():
+    """Every command's module imports its heavy dependencies only when it runs (one process for all commands)."""
+    probe = ("import sys\nfrom switchobs.cli.main import COMMANDS, main\n"
+             f"slow = set({SLOW_TO_IMPORT!r})\n"
+             "for name in COMMANDS:\n"
+             "    for argv in ([name, '--help'], [name, '--no-such-option']):\n"
+             "        try:\n            main(argv)\n        except SystemExit as exc:\n            code = exc.code\n"
+             "        loaded = sorted({m.split('.')[0] for m in sys.modules} & slow)\n"
+             "        print('SLOW', name, argv[1], code, loaded, file=sys.stderr)\n")
+    proc = subprocess.run([sys.executable, "-c", probe], capture_output=True, text=True, timeout=300)
+    lines = [line for line in proc.stderr.splitlines() if line.startswith("SLOW ")]
+    expected = [f"SLOW {name} {option} {code} []" for name in COMMANDS
+                for option, code in (("--help", 0), ("--no-such-option", 2))]
+    assert lines == expected, proc.stderr[-3000:]
 
 
 def test_version_is_single_sourced(capsys):
@@ -150,12 +170,21 @@ def test_long_library_loops_count_their_steps():
     with listening(notes.append):
         table41(roads=("dry-asphalt",), speeds_kmh=(60.0,))
         compare_estimators(constant_speed(600.0, 1.2), estimators=("tsa", "notch"))
-    assert notes[:2] == ["simulate: Table 4.1 [1/2] five-phase, dry-asphalt, 60 km/h",
-                         "simulate: Table 4.1 [2/2] two-phase, dry-asphalt, 60 km/h"]
+    table = [n for n in notes if n.startswith("simulate: Table 4.1")]   # the Python loop adds its own notes
+    assert table == ["simulate: Table 4.1 [1/2] five-phase, dry-asphalt, 60 km/h",
+                     "simulate: Table 4.1 [2/2] two-phase, dry-asphalt, 60 km/h"]
     assert [n for n in notes if n.startswith("encoder: [")] == [
         "encoder: [1/2] tsa estimator" + notes[-2].split("tsa estimator")[1],
         "encoder: [2/2] notch estimator" + notes[-1].split("notch estimator")[1]]
 
+
+
+def test_the_python_simulation_loop_counts_tenths_of_its_time_bound():
+    notes: list[str] = []
+    with listening(notes.append):
+        simulate(BrakingScenario("dry-asphalt", speed_m_s=15.0, duration_s=0.2), compiled=False)
+    assert [n.split(" t = ")[0] for n in notes] == [f"simulate: braking [{k}/10]" for k in range(1, 11)]
+    assert notes[-1].endswith("t = 0.2 s of 0.2 s")
 
 def test_the_status_line_draws_a_bar_keeps_it_for_the_steps_notes_and_fits_the_terminal():
     status = StatusLine("simulate", Terminal())

@@ -8,11 +8,12 @@ import numpy as np
 import pytest
 import sympy as sp
 
-from switchobs.certify import PlanarClassification, VerificationReport, certify, classify_planar
+from switchobs.certify import (DualCertificate, DwellTimeResult, LyapunovResult, PlanarClassification,
+                              VerificationReport, certify, classify_planar, dwell_time, strict_common_lyapunov)
 from switchobs.design import GainDesign, design_gains
 from switchobs.exceptions import CertificateError, ModelError, SimulationError
 from switchobs.model import Model, builtin_model
-from switchobs.plants import BrakingScenario, simulate
+from switchobs.plants import BrakingScenario, TwoAxleScenario, simulate, simulate_two_axle, table41
 from switchobs.sensors import ChainResult, ChainSettings, Encoder, compare_estimators, constant_speed
 
 
@@ -70,6 +71,21 @@ def test_certification_report_markdown_repr_numpy_and_json_parts():
         PlanarClassification.from_json({"case": "iv"})
 
 
+def test_lyapunov_dual_and_dwell_results_round_trip_through_json():
+    """A result read back from its JSON writes the same JSON, with the exact matrices and the solver record."""
+    no_cqlf = strict_common_lyapunov([[[-1, 0], [10, -1]], [[-1, 10], [0, -1]]])
+    assert not no_cqlf.certified and no_cqlf.dual is not None and no_cqlf.dual.certified
+    back = LyapunovResult.from_json(_through_json(no_cqlf))
+    assert back.to_json() == no_cqlf.to_json()
+    assert (back.family.names, back.family.exact, back.solver, back.dual) == (
+        no_cqlf.family.names, no_cqlf.family.exact, no_cqlf.solver, no_cqlf.dual)
+    assert DualCertificate.from_json(_through_json(no_cqlf.dual)) == no_cqlf.dual
+    dwell = dwell_time([[[-1, 0], [10, -1]], [[-1, 10], [0, -1]]])
+    again = DwellTimeResult.from_json(_through_json(dwell))
+    assert again.to_json() == dwell.to_json() and (again.tau_D, again.P) == (dwell.tau_D, dwell.P)
+    with pytest.raises(CertificateError, match="dwell-time result"):
+        DwellTimeResult.from_json({k: v for k, v in dwell.to_json().items() if k != "family"})
+
 def test_simulation_results_markdown_numpy_and_json_round_trip():
     res = simulate(BrakingScenario("dry-asphalt", speed_m_s=15.0, duration_s=0.2))
     md = res._repr_markdown_()
@@ -86,3 +102,18 @@ def test_simulation_results_markdown_numpy_and_json_round_trip():
     assert back.summary() == chain.summary() and back.settings == chain.settings
     with pytest.raises(SimulationError, match="arrays"):
         ChainResult.from_json(chain.to_json())
+
+
+def test_table41_and_two_axle_markdown_show_the_numbers_of_their_text():
+    table = table41(roads=("dry-asphalt",), speeds_kmh=(60.0,))
+    row = table.rows[0]
+    md = table._repr_markdown_()
+    assert r"$v_x(0)^2 / (2 g \bar\mu)$" in md
+    assert f"| 60 | dry-asphalt | {row.five_phase_m:.2f} ({row.seed_five_phase_m:.2f}) |" in md
+    assert f"**{table.two_phase_always_shorter}**" in md
+    run = simulate_two_axle(TwoAxleScenario("dry-asphalt", speed_m_s=10.0, duration_s=0.5))
+    md = run._repr_markdown_()
+    m = run.metrics
+    assert f"status: **{run.status}**; stopping distance {m['stopping_distance_m']:.2f} m" in md
+    assert f"| front | {m['front']['load_min_n']:.0f}–{m['front']['load_max_n']:.0f} | {m['front']['abs_cycles']} |" in md
+    assert "$(\\hat v_x - v_x)/v_x$" in md

@@ -20,7 +20,7 @@ from __future__ import annotations
 
 import math
 import time
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 from fractions import Fraction
 from typing import Any
@@ -31,6 +31,7 @@ import scipy.linalg
 from .._progress import progress
 from ._exact import Matrix, matrix_strings
 from ._family import Family, FamilyLike, as_family
+from ._lyapunov import _matrices, _reading
 from ._lmi import DEFAULT_SOLVERS, SolveInfo, balance, solve
 from ._rounding import dyadic
 from ._schema import DwellTimeEntry
@@ -99,7 +100,20 @@ class DwellTimeResult:
                 "P": None if self.P is None else [matrix_strings(P) for P in self.P],
                 "margin": self.margin, "iterations": self.iterations, "solve_s": self.solve_s,
                 "exact_s": self.exact_s, "detail": self.detail,
-                "solver": None if self.solver is None else f"{self.solver.solver} ({self.solver.status})"}
+                "solver": None if self.solver is None else f"{self.solver.solver} ({self.solver.status})",
+                "family": self.family.to_json(), "solve_info": None if self.solver is None else self.solver.to_json()}
+
+    @classmethod
+    def from_json(cls, data: Mapping[str, Any]) -> "DwellTimeResult":
+        """The result of :meth:`to_json`: ``tau_D``, the ``P_p`` and the family exact.
+
+        ``family.numeric`` holds NumPy arrays, so compare two results by their :meth:`to_json`.
+        """
+        with _reading("dwell-time result"):
+            return cls(Family.from_json(data["family"]), None if data["tau_D"] is None else Fraction(data["tau_D"]),
+                       bool(data["certified"]), float(data["tau_lower"]), float(data["tau_numeric"]),
+                       _matrices(data["P"]), float(data["margin"]), SolveInfo.from_json(data["solve_info"]),
+                       int(data["iterations"]), float(data["solve_s"]), float(data["exact_s"]), str(data["detail"]))
 
     def __str__(self) -> str:
         if self.certified and self.tau_D is not None:

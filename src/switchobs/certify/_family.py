@@ -53,6 +53,19 @@ class Family:
     def to_json(self) -> dict[str, Any]:
         return {"names": list(self.names), "matrices": [matrix_strings(M) for M in self.exact]}
 
+    @classmethod
+    def from_json(cls, data: Mapping[str, Any]) -> "Family":
+        """The family of :meth:`to_json` (exact entries read back, nothing re-validated but the shapes)."""
+        try:
+            names = tuple(str(nm) for nm in data["names"])
+            exact = tuple(fraction_matrix(M, what=f"family matrix {nm}") for nm, M in zip(names, data["matrices"]))
+        except (KeyError, TypeError) as exc:
+            raise CertificateError(f"not a family JSON ({type(exc).__name__}: {exc})") from None
+        if len(exact) != len(names) or not exact:
+            raise CertificateError(f"a family JSON needs one matrix per name, got {len(names)} names and "
+                                   f"{len(data['matrices'])} matrices")
+        return cls(names, exact, tuple(np.array([[float(x) for x in row] for row in M]) for M in exact))
+
     def __str__(self) -> str:
         return f"family of {len(self)} matrices of size {self.n}: {', '.join(self.names)}"
 

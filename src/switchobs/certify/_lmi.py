@@ -16,9 +16,9 @@ from __future__ import annotations
 
 import time
 import warnings
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 import scipy.linalg
@@ -71,6 +71,18 @@ class SolveInfo:
     attempts: tuple[str, ...]
     build_s: float
     solve_s: float
+
+    def to_json(self) -> dict[str, Any]:
+        return {"solver": self.solver, "status": self.status, "attempts": list(self.attempts),
+                "build_s": self.build_s, "solve_s": self.solve_s}
+
+    @classmethod
+    def from_json(cls, data: Mapping[str, Any] | None) -> "SolveInfo | None":
+        """The record of :meth:`to_json` (``None`` stays ``None``)."""
+        if data is None:
+            return None
+        return cls(str(data["solver"]), str(data["status"]), tuple(str(a) for a in data["attempts"]),
+                   float(data["build_s"]), float(data["solve_s"]))
 
     @property
     def accurate(self) -> bool:

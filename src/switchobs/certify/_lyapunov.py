@@ -9,7 +9,8 @@ from __future__ import annotations
 
 import math
 import time
-from collections.abc import Sequence
+from collections.abc import Iterator, Mapping, Sequence
+from contextlib import contextmanager
 from dataclasses import dataclass
 from fractions import Fraction
 from typing import Any
@@ -17,6 +18,7 @@ from typing import Any
 import numpy as np
 
 from .._progress import progress
+from ..exceptions import CertificateError
 from ._exact import Matrix, fraction_matrix, lyapunov_form, matrix_strings
 from ._family import Family, FamilyLike, as_family, user_matrix
 from ._lmi import DEFAULT_SOLVERS, SolveInfo, balance, dual_margin, primal_margin
@@ -42,6 +44,19 @@ def _fmt(M: Matrix | None) -> str:
 
 def _solver_text(info: SolveInfo | None) -> str:
     return "-" if info is None else f"{info.solver} ({info.status})"
+
+
+def _matrices(data: Sequence[Any] | None) -> tuple[Matrix, ...] | None:
+    return None if data is None else tuple(fraction_matrix(M) for M in data)
+
+
+@contextmanager
+def _reading(what: str) -> Iterator[None]:
+    """Turn a missing key or a wrong type in a ``to_json`` document into a :class:`CertificateError`."""
+    try:
+        yield
+    except (KeyError, TypeError, ValueError, IndexError) as exc:
+        raise CertificateError(f"not a {what} JSON ({type(exc).__name__}: {exc})") from None
 
 
 @dataclass(frozen=True)
@@ -86,7 +101,16 @@ class DualCertificate:
         return {"kind": self.kind, "certified": self.certified,
                 "R": None if self.R is None else [matrix_strings(R) for R in self.R],
                 "margin": self.margin, "solver": _solver_text(self.solver), "method": self.method,
-                "exact_s": self.exact_s, "detail": self.detail}
+                "exact_s": self.exact_s, "detail": self.detail,
+                "solve_info": None if self.solver is None else self.solver.to_json()}
+
+    @classmethod
+    def from_json(cls, data: Mapping[str, Any]) -> "DualCertificate":
+        """The certificate of :meth:`to_json` (``R`` read back exactly)."""
+        with _reading("dual certificate"):
+            return cls(str(data["kind"]), bool(data["certified"]), _matrices(data["R"]), float(data["margin"]),
+                       SolveInfo.from_json(data["solve_info"]), str(data["method"]), float(data["exact_s"]),
+                       str(data["detail"]))
 
     def __str__(self) -> str:
         if not self.certified:
@@ -223,7 +247,22 @@ class LyapunovResult:
                 "solver": _solver_text(self.solver),
                 "attempts": [] if self.solver is None else list(self.solver.attempts),
                 "method": self.method, "exact_s": self.exact_s, "detail": self.detail,
-                "dual": None if self.dual is None else self.dual.to_json()}
+                "dual": None if self.dual is None else self.dual.to_json(),
+                "family": self.family.to_json(), "solve_info": None if self.solver is None else self.solver.to_json()}
+
+    @classmethod
+    def from_json(cls, data: Mapping[str, Any]) -> "LyapunovResult":
+        """The result of :meth:`to_json`: ``P``, ``C`` and the family exact, a margin of ``None`` as NaN.
+
+        ``family.numeric`` holds NumPy arrays, so compare two results by their :meth:`to_json`.
+        """
+        with _reading("Lyapunov result"):
+            P = None if data["P"] is None else fraction_matrix(data["P"], what="P")
+            return cls(str(data["kind"]), Family.from_json(data["family"]), bool(data["feasible"]),
+                       bool(data["certified"]), math.nan if data["margin"] is None else float(data["margin"]),
+                       float(data["eps"]), P, _matrices(data["C"]), SolveInfo.from_json(data["solve_info"]),
+                       str(data["method"]), float(data["exact_s"]), str(data["detail"]),
+                       None if data["dual"] is None else DualCertificate.from_json(data["dual"]))
 
     def __str__(self) -> str:
         title = {"hespanha": "Hespanha non-strict common Lyapunov P",

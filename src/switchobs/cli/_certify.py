@@ -6,7 +6,6 @@ import argparse
 import math
 
 from .._atomic import check_output_file
-from ..certify import certify_model
 from ..spec import STEP_METHODS
 from ..exceptions import CertificateError, SpectrumError
 from ..model import load_model
@@ -61,6 +60,8 @@ def register(sub: argparse._SubParsersAction) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
+    from ..certify import certify_model
+
     if args.gains_minus is not None and args.gains_plus is None:
         raise SpectrumError("--gains-minus needs --gains-plus")
     if (args.spectrum is None) == (args.gains_plus is None):

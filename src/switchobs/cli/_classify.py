@@ -7,7 +7,6 @@ import json
 import re
 from typing import Any
 
-from ..certify import classify_planar
 from ..exceptions import DimensionError
 from ._common import emit_json
 
@@ -45,6 +44,8 @@ def register(sub: argparse._SubParsersAction) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
+    from ..certify import classify_planar
+
     A1, A2 = parse_matrix(args.A1, name="A1"), parse_matrix(args.A2, name="A2")
     res = classify_planar(A1, A2)
     if args.plot:

@@ -10,7 +10,6 @@ from typing import Any
 import sympy as sp
 
 from .._atomic import check_output_directory
-from ..codegen import generate_observer, generate_super_twisting
 from ..design import GainDesign, design
 from ..exceptions import CodegenError, FreeSymbolError, PrerequisiteError, SpectrumError
 from ..model import Model, load_model, rational_value
@@ -111,6 +110,8 @@ def _discrete_certificate(model: Model, gains: GainDesign, values: dict[str, str
 
 def run(args: argparse.Namespace) -> int:
     check_output_directory(args.out, what="the generated C into")
+    from ..codegen import generate_observer, generate_super_twisting
+
     values = parse_params(args.param)
     command = _command(args)
     if args.model == SUPER_TWISTING:

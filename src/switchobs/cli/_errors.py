@@ -27,7 +27,7 @@ from collections.abc import Callable
 from ..exceptions import FreeSymbolError, SwitchobsError
 
 __all__ = ["EXIT_OK", "EXIT_FAILED", "EXIT_BAD_INPUT", "EXIT_INTERRUPTED", "DEBUG_ENV", "EXTRAS", "guarded",
-           "install_hint"]
+           "install_hint", "unavailable_message"]
 
 EXIT_OK = 0
 EXIT_FAILED = 1
@@ -47,19 +47,31 @@ def install_hint(module: str | None) -> str:
     return "reinstall with `make install` (or pip install -e .)"
 
 
+def unavailable_message(command: str, exc: ImportError) -> str:
+    """Why ``command`` cannot run when a third-party package it imports is missing or broken."""
+    what = f"importing {exc.name} failed" if exc.name else "a dependency failed to import"
+    return f"command {command!r} cannot run: {what} ({exc}); {install_hint(exc.name)}"
+
+
 def _one_line(text: str, limit: int = 500) -> str:
     line = " ".join(str(text).split())
     return line if len(line) <= limit else line[:limit] + " ..."
 
 
-def _message(exc: BaseException) -> str:
+def _message(exc: BaseException, command: str) -> str:
     """The one line for an exception that escaped a command, without the ``switchobs CMD: error:`` prefix."""
     if isinstance(exc, SwitchobsError):
         # The library names what has no value; only here is the way to give it a command-line flag.
         hint = "; give values with --param NAME=VALUE" if isinstance(exc, FreeSymbolError) else ""
         return f"{exc}{hint}"
-    if isinstance(exc, ModuleNotFoundError) and (exc.name or "").split(".")[0] in EXTRAS:
+    # A command imports cvxpy, casadi, scipy or matplotlib when it runs, not when it is registered (so that
+    # its --help and argparse errors stay fast): a missing or broken one surfaces here.  An import error of
+    # switchobs itself is a bug, reported as one below.
+    top = (getattr(exc, "name", None) or "").split(".")[0]
+    if isinstance(exc, ModuleNotFoundError) and top in EXTRAS:
         return f"this needs {exc.name}, which is not installed; {install_hint(exc.name)}"
+    if isinstance(exc, ImportError) and top and top != "switchobs":
+        return unavailable_message(command, exc)
     if isinstance(exc, RecursionError):
         return "the input is nested too deeply to process (RecursionError); simplify it"
     if isinstance(exc, MemoryError):
@@ -86,5 +98,5 @@ def guarded(command: str, run: Callable[[], int | None]) -> int:
     except Exception as exc:
         if os.environ.get(DEBUG_ENV, "") not in ("", "0"):
             traceback.print_exc()
-        print(f"switchobs {command}: error: {_one_line(_message(exc))}", file=sys.stderr)
+        print(f"switchobs {command}: error: {_one_line(_message(exc, command))}", file=sys.stderr)
         return EXIT_BAD_INPUT

@@ -6,7 +6,6 @@ import argparse
 import math
 
 from .._atomic import check_output_file
-from ..certify import certify_model, synthesize, synthesize_box
 from ..exceptions import ModelError
 from ..model import load_model
 from ._common import STDIO, add_model_arguments, emit_json, parse_params, summary_stream, write_certificate
@@ -43,6 +42,8 @@ def register(sub: argparse._SubParsersAction) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
+    from ..certify import certify_model, synthesize, synthesize_box
+
     if not (math.isfinite(args.noise_weight) and args.noise_weight >= 0):
         raise ModelError(f"--noise-weight must be a finite number >= 0, got {args.noise_weight!r}")
     if args.out == STDIO and args.json:

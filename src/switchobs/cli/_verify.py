@@ -6,7 +6,6 @@ from __future__ import annotations
 import argparse
 import sys
 
-from ..certify import verify_certificate
 from ..model import load_model
 from ._common import emit_json
 
@@ -36,6 +35,8 @@ def register(sub: argparse._SubParsersAction) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
+    from ..certify import verify_certificate
+
     report = verify_certificate(args.certificate, model=load_model(args.model) if args.model else None,
                                 arithmetic=args.arithmetic)
     if args.json:

@@ -31,7 +31,7 @@ from contextlib import contextmanager
 from .. import __version__
 from .._progress import listening
 from ..exceptions import PrerequisiteError
-from ._errors import guarded, install_hint
+from ._errors import guarded, unavailable_message
 from ._status import StatusLine, is_terminal
 
 __all__ = ["main", "build_parser"]
@@ -96,8 +96,7 @@ def build_parser(only: str | None = None) -> argparse.ArgumentParser:
 
 
 def _register_unavailable(sub: argparse._SubParsersAction, name: str, exc: ImportError) -> None:
-    what = f"importing {exc.name} failed" if exc.name else "a dependency failed to import"
-    message = f"command {name!r} cannot run: {what} ({exc}); {install_hint(exc.name)}"
+    message = unavailable_message(name, exc)
 
     def unavailable(args: argparse.Namespace) -> int:
         raise PrerequisiteError(message)

@@ -47,6 +47,7 @@ from typing import Any, Protocol
 import numpy as np
 import numpy.typing as npt
 
+from .._progress import progress
 from .._validate import check_work
 from ..exceptions import SimulationError
 
@@ -255,7 +256,7 @@ def integrate(plant: HybridPlant, t_end: float, *, name: str) -> HybridRun:
     t_end : float
         Time bound [s].
     name : str
-        The scenario's name, for error messages.
+        The scenario's name, for error messages and the progress notes (one per tenth of ``t_end``).
 
     Returns
     -------
@@ -289,6 +290,8 @@ def integrate(plant: HybridPlant, t_end: float, *, name: str) -> HybridRun:
     g_old = [guard_values(k) for k in range(len(automata))]
     status, message = "duration", f"reached the time bound {t_end:g} s"
     steps = 0
+    # a counted note per tenth of the time bound: one comparison a step, and a bar on the terminal
+    tenths, next_note = 0, 0.1 * t_end
     while True:
         h = step_size(t, y)
         tb = min(t_end, breakpoint(t))
@@ -317,6 +320,10 @@ def integrate(plant: HybridPlant, t_end: float, *, name: str) -> HybridRun:
         if y is not y1:
             k_end = rhs(t, y)
         steps += 1
+        if t >= next_note:
+            tenths = min(10, int(10.0 * t / t_end))
+            next_note = (tenths + 1) * 0.1 * t_end
+            progress(f"simulate: {name} [{tenths}/10] t = {t:.3g} s of {t_end:g} s")
         failure = after_step(t, y, h)
         rows.append(row(t, y))
         if len(rows) == _BLOCK:

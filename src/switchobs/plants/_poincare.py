@@ -24,9 +24,6 @@ from dataclasses import asdict, dataclass
 from typing import Any
 
 import numpy as np
-from scipy.integrate import solve_ivp
-from scipy.optimize import brentq
-from scipy.special import lambertw
 
 from ..exceptions import SimulationError, SolverFailure
 
@@ -34,6 +31,9 @@ __all__ = ["PoincareMap", "PoincareFixedPoint", "simulate_return_map"]
 
 
 def _w0(x: float) -> float:
+    # scipy is imported where it is used, so that the command line's --help and errors never load it
+    from scipy.special import lambertw
+
     w = lambertw(x, 0)
     return float(w.real)
 
@@ -201,6 +201,8 @@ class PoincareMap:
         if not (f_lo >= 0.0 >= f_hi):
             raise SolverFailure(f"P(ζ) - ζ does not change sign on (-1, 0) ({f_lo:.3g}, {f_hi:.3g}); "
                                 f"no fixed point for {self}")
+        from scipy.optimize import brentq
+
         zeta = lo if f_lo == 0.0 else brentq(lambda z: self(z) - z, lo, hi, xtol=1e-15,
                                              rtol=4 * np.finfo(float).eps, maxiter=200)
         deriv, factors = self.derivative(zeta)
@@ -230,6 +232,8 @@ def simulate_return_map(z1_start: float, *, kp: float, z_ref: float, chi_a: floa
     SolverFailure
         If a phase does not end within a generous time.
     """
+    from scipy.integrate import solve_ivp
+
     if not z1_start < 0:
         raise SimulationError(f"the return map starts with z1 < 0 on the section z2 = chi_a, got {z1_start}")
 

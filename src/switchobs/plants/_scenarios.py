@@ -213,6 +213,21 @@ class Table41Result:
                 "two_phase": self.two_phase.to_json(), "observer": self.observer,
                 "two_phase_always_shorter": self.two_phase_always_shorter, "wall_time_s": self.wall_time_s}
 
+    def _repr_markdown_(self) -> str:
+        """The table in a notebook: braking distance :math:`v_x(0)^2 / (2 g \\bar\\mu)` per road and speed."""
+        def cell(ours: float, seed: float | None) -> str:
+            return f"{ours:.2f}" + ("" if seed is None else f" ({seed:.2f})")
+        lines = [r"**Seed 001 Table 4.1**: braking distance $v_x(0)^2 / (2 g \bar\mu)$ [m], ours (seed)", "",
+                 "| speed [km/h] | road | five-phase | two-phase | $\\Delta$ |", "|---:|---|---:|---:|---:|"]
+        for r in self.rows:
+            sd = None if r.seed_five_phase_m is None else r.seed_two_phase_m - r.seed_five_phase_m
+            flag = "" if r.complete else f" (runs: {r.five_phase_status}, {r.two_phase_status})"
+            lines.append(f"| {r.speed_kmh:.0f} | {r.road}{flag} | {cell(r.five_phase_m, r.seed_five_phase_m)} | "
+                         f"{cell(r.two_phase_m, r.seed_two_phase_m)} | {cell(r.difference_m, sd)} |")
+        lines += ["", f"two-phase shorter on every road and speed: **{self.two_phase_always_shorter}** "
+                      f"(observer: {self.observer})"]
+        return "\n".join(lines)
+
     def __str__(self) -> str:
         def seed(v: float | None) -> str:
             return "   n/a" if v is None else f"{v:7.2f}"

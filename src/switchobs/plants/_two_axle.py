@@ -265,6 +265,26 @@ class TwoAxleResult:
             out["series"] = {k: [None if math.isnan(v) else float(v) for v in a] for k, a in self.series.items()}
         return out
 
+    def _repr_markdown_(self) -> str:
+        """The run in a notebook: status, the vehicle figures and one row per axle."""
+        m = self.metrics
+        status = self.status + (f" ({self.message})" if self.status == "observer-failed" else "")
+        lines = [f"**Two-axle braking**: {self.scenario}", "",
+                 f"status: **{status}**; stopping distance {m['stopping_distance_m']:.2f} m, mean deceleration "
+                 f"{m['mean_deceleration_m_s2']:.2f} m/s²; speed estimate error "
+                 f"$(\\hat v_x - v_x)/v_x$: mean {m['speed_error_mean_pct']:.1f} %, worst "
+                 f"{m['speed_error_max_pct']:.1f} %", "",
+                 "| axle | load $F_z$ [N] | ABS cycles | mean slip $\\lambda$ | XBS RMS error |", "|---|---|---:|---:|---:|"]
+        for axle in ("front", "rear"):
+            a = m[axle]
+            xbs = "–" if a["xbs_rms_error"] is None else f"{a['xbs_rms_error']:.3g}"
+            if a["observer_failure"]:
+                xbs += f" (observer failed at {a['observer_failure'].split(':')[0]})"
+            lines.append(f"| {axle} | {a['load_min_n']:.0f}–{a['load_max_n']:.0f} | {a['abs_cycles']} | "
+                         f"{a['slip_mean']:.3f} | {xbs} |")
+        lines += ["", f"series (NumPy, `result.series[...]`): {', '.join(f'`{k}`' for k in self.series)}"]
+        return "\n".join(lines)
+
     def __str__(self) -> str:
         m = self.metrics
         status = self.status + (f" ({self.message})" if self.status == "observer-failed" else "")

@@ -21,7 +21,6 @@ from typing import Any
 
 import numpy as np
 import numpy.typing as npt
-from scipy.signal import lfilter
 
 from ..exceptions import SimulationError
 from ._validate import as_signal, check_increasing, check_positive
@@ -244,5 +243,8 @@ def low_pass(x: npt.ArrayLike, dt_s: float, tau_s: float) -> Array:
     """
     xs = as_signal(x, "signal")
     a = math.exp(-check_positive(dt_s, "dt_s") / check_positive(tau_s, "tau_s"))
+    # imported here: scipy.signal alone takes about a second, which `switchobs <cmd> --help` must not pay
+    from scipy.signal import lfilter
+
     y, _ = lfilter([1.0 - a], [1.0, -a], xs, zi=[a * xs[0]] if xs.size else [0.0])
     return y

@@ -15,7 +15,6 @@ from dataclasses import dataclass, field
 
 import numpy as np
 import numpy.typing as npt
-from scipy.interpolate import BPoly, CubicHermiteSpline, CubicSpline, PchipInterpolator
 
 from ..exceptions import SimulationError
 from ._validate import as_signal, check_increasing, check_positive
@@ -181,6 +180,9 @@ class AngleTrajectory:
                for k, v in (("theta", theta), ("omega", omega), ("alpha", alpha))}
         if sig["theta"] is None and sig["omega"] is None:
             raise SimulationError("from_samples needs theta or omega (or both)")
+        # scipy is imported where it is used, so that the command line's --help and errors never load it
+        from scipy.interpolate import BPoly, CubicHermiteSpline, CubicSpline, PchipInterpolator
+
         if sig["theta"] is not None:
             derivs = [d for d in (sig["theta"], sig["omega"], sig["alpha"]) if d is not None]
             if sig["omega"] is None:
