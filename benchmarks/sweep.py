@@ -11,7 +11,8 @@ design-space sweep runs by the thousand.  Measured in the same run:
   before timing): wall time of the sweep, runs/s, and the CPU time the workers spent (summed over them);
   the parallel efficiency is ``rate(2 workers) / (2 rate(1 worker))``;
 * one 10 s braking on a drum (seed 001 Sec. 3.4 roads: dry asphalt, wet asphalt at 3 s, dry concrete at
-  6 s; 1.96 m/s²) as a sweep case with the Python and the generated C observer: simulated time / CPU time.
+  6 s; 1.96 m/s²) as a sweep case with the Python and the generated C observer (the compiled loop), and with
+  the C observer fed by a 60-ppr encoder (the Python loop): simulated time / CPU time.
 
 Run: ``python benchmarks/sweep.py [--quick] [--repeats 5]``.
 """
@@ -91,11 +92,13 @@ def main() -> None:
               "| --- | --- | ---: | ---: |"]
     drum = BrakingCase(road="dry-asphalt", changes=(("wet-asphalt", 3.0), ("dry-concrete", 6.0)), speed_kmh=90.0,
                        decel_m_s2=1.96, duration_s=10.0, observer="xbs4")
-    for impl in (("python",) if args.quick else ("python", "c")):
-        case = replace(drum, impl=impl)
+    # the C observer runs in the compiled loop; an encoder in the loop keeps the Python loop (its chain is Python)
+    for impl, ppr in ((("python", 0),) if args.quick else (("python", 0), ("c", 0), ("c", 60))):
+        case = replace(drum, impl=impl, encoder_ppr=ppr, method="radau3" if ppr else drum.method)
         sim = run_case(case).metrics["simulated_s"]  # also compiles the C observer once (cached)
         t = cpu(lambda: run_case(case), repeats)
-        single.append(f"| `run_case`, five-phase ABS | xbs4 ({impl}) | {t.show()} | {number(sim / t.median)} |")
+        loop = f"xbs4 ({impl}), {ppr}-ppr encoder" if ppr else f"xbs4 ({impl})"
+        single.append(f"| `run_case`, five-phase ABS | {loop} | {t.show()} | {number(sim / t.median)} |")
     notes = [f"Parallel efficiency from 1 to 2 workers: {100 * efficiency:.0f} % "
              f"({number(rates[1])} → {number(rates[2])} runs/s, wall time, on a machine shared with other jobs: "
              f"the workers' CPU time shows the work itself). Engine overhead in-process: "
