@@ -70,7 +70,7 @@ def _message(exc: BaseException, command: str) -> str:
     top = (getattr(exc, "name", None) or "").split(".")[0]
     if isinstance(exc, ModuleNotFoundError) and top in EXTRAS:
         return f"this needs {exc.name}, which is not installed; {install_hint(exc.name)}"
-    if isinstance(exc, ImportError) and top and top != "switchobs":
+    if isinstance(exc, ImportError) and top != "switchobs":
         return unavailable_message(command, exc)
     if isinstance(exc, RecursionError):
         return "the input is nested too deeply to process (RecursionError); simplify it"

@@ -30,7 +30,6 @@ from typing import Any
 
 import numpy as np
 import numpy.typing as npt
-import scipy.linalg
 
 __all__ = ["EncoderComparison", "encoder_comparison", "BoxRun", "two_axle_box_check", "synthesis_evidence",
            "FLOOR_WINDOW_S", "LOAD_BOX", "DEMO_BOX"]
@@ -259,6 +258,8 @@ def two_axle_box_check(*, duration_s: float = 2.45, beta: int = 100,
     box = cert.requested
     inside = float(box.lower[0]) <= lo and hi <= float(box.upper[0])
     # the error equation along the run
+    import scipy.linalg  # not at import: the CLI's --help must not load scipy through report
+
     C = np.array([[1.0, 0.0, 0.0]])
     Kp = np.array([[float(Fraction(k))] for k in K_plus])
     Km = np.array([[float(Fraction(k))] for k in K_minus])
