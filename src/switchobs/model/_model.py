@@ -11,7 +11,7 @@ import dataclasses
 import re
 import sys
 import tomllib
-from collections.abc import Mapping
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 from fractions import Fraction
 from pathlib import Path
@@ -185,16 +185,7 @@ class Model:
         if time_scale == 0:
             raise ModelError(f"{source}: 'time_scale' is identically zero; the observer would never move")
 
-        values_raw = data.get("values", {}) or {}
-        if not isinstance(values_raw, Mapping):
-            raise ModelError(f"{source}: 'values' must be a table name = number, got {values_raw!r}")
-        values = {}
-        for key, val in values_raw.items():
-            if key not in parameters:
-                raise ModelError(f"{source}: 'values' gives {key!r}, which is not a parameter "
-                                 f"(parameters: {list(parameters)})")
-            values[key] = rational_value(val, what=f"values.{key}")
-            _check_sign(key, values[key], symbols[key])
+        values = read_values(data.get("values"), parameters, symbols, source)
         refs = data.get("references", {}) or {}
         original = _original(data.get("original"), declared, {**s_names, **{k: symbols[k] for k in states}},
                              n, source)
@@ -475,6 +466,22 @@ def _check_number_size(expr: sp.Basic, name: str) -> None:
             raise ModelError(f"'{name}' holds an exact number of about {max(digits(int(atom.p)), digits(int(atom.q)))} "
                              f"digits at these values (limit {MAX_NUMBER_DIGITS}); give smaller values or "
                              "rescale the model")
+
+
+def read_values(values_raw: Any, parameters: Sequence[str], symbols: Mapping[str, sp.Symbol],
+                source: str) -> dict[str, sp.Rational]:
+    """The ``[values]`` table of a model or system file: exact values of declared parameters, signs checked."""
+    values_raw = values_raw or {}
+    if not isinstance(values_raw, Mapping):
+        raise ModelError(f"{source}: 'values' must be a table name = number, got {values_raw!r}")
+    values = {}
+    for key, val in values_raw.items():
+        if key not in parameters:
+            raise ModelError(f"{source}: 'values' gives {key!r}, which is not a parameter "
+                             f"(parameters: {list(parameters)})")
+        values[key] = rational_value(val, what=f"values.{key}")
+        _check_sign(key, values[key], symbols[key])
+    return values
 
 
 def _check_sign(name: str, value: sp.Rational, symbol: sp.Symbol) -> None:

@@ -15,8 +15,8 @@ from typing import Any
 import sympy as sp
 
 from ..exceptions import DimensionError, ModelError
-from ..model import make_symbol, parse_expression, rational_value
-from ..model._model import _check_sign, _names
+from ..model import make_symbol, parse_expression
+from ..model._model import _names, read_values
 
 __all__ = ["System"]
 
@@ -132,16 +132,7 @@ class System:
         h = parse_expression(data["h"], {k: symbols[k] for k in (*states, *parameters)}, what="h")
         if not h.free_symbols & {symbols[k] for k in states}:
             raise ModelError(f"{source}: the output h = {h} does not depend on the states")
-        values_raw = data.get("values", {}) or {}
-        if not isinstance(values_raw, Mapping):
-            raise ModelError(f"{source}: 'values' must be a table name = number, got {values_raw!r}")
-        values = {}
-        for key, val in values_raw.items():
-            if key not in parameters:
-                raise ModelError(f"{source}: 'values' gives {key!r}, which is not a parameter "
-                                 f"(parameters: {list(parameters)})")
-            values[key] = rational_value(val, what=f"values.{key}")
-            _check_sign(key, values[key], symbols[key])
+        values = read_values(data.get("values"), parameters, symbols, source)
         references = data.get("references", {}) or {}
         if not isinstance(references, Mapping):
             raise ModelError(f"{source}: 'references' must be a table name = text, got {references!r}")
