@@ -122,19 +122,9 @@ class Model:
         ModelError, ExpressionError, DimensionError
             Naming the key and the offending value.
         """
-        if not isinstance(data, Mapping):
-            raise ModelError(f"{source}: expected a table of keys, got {type(data).__name__}")
         known = {"name", "description", "states", "output", "A", "C", "d", "b", "time_scale",
                  "parameters", "external", "inputs", "values", "positive", "negative", "references", "original"}
-        unknown = sorted(set(data) - known)
-        if unknown:
-            raise ModelError(f"{source}: unknown key(s) {unknown}; known keys are {sorted(known)}")
-        for key in ("name", "states", "A", "C", "time_scale"):
-            if key not in data:
-                raise ModelError(f"{source}: missing required key {key!r}")
-        name = data["name"]
-        if not isinstance(name, str) or not name.strip():
-            raise ModelError(f"{source}: 'name' must be a non-empty string, got {name!r}")
+        name = check_keys(data, known, ("name", "states", "A", "C", "time_scale"), source)
         states = _names(data["states"], "states")
         if not states:
             raise ModelError(f"{source}: 'states' is empty; a model needs at least one state")
@@ -466,6 +456,23 @@ def _check_number_size(expr: sp.Basic, name: str) -> None:
             raise ModelError(f"'{name}' holds an exact number of about {max(digits(int(atom.p)), digits(int(atom.q)))} "
                              f"digits at these values (limit {MAX_NUMBER_DIGITS}); give smaller values or "
                              "rescale the model")
+
+
+def check_keys(data: Any, known: set[str], required: Sequence[str], source: str) -> str:
+    """The ``name`` of a model or system file's table, after checking it is a table with only ``known``
+    keys and every ``required`` one."""
+    if not isinstance(data, Mapping):
+        raise ModelError(f"{source}: expected a table of keys, got {type(data).__name__}")
+    unknown = sorted(set(data) - known)
+    if unknown:
+        raise ModelError(f"{source}: unknown key(s) {unknown}; known keys are {sorted(known)}")
+    for key in required:
+        if key not in data:
+            raise ModelError(f"{source}: missing required key {key!r}")
+    name = data["name"]
+    if not isinstance(name, str) or not name.strip():
+        raise ModelError(f"{source}: 'name' must be a non-empty string, got {name!r}")
+    return name
 
 
 def read_values(values_raw: Any, parameters: Sequence[str], symbols: Mapping[str, sp.Symbol],

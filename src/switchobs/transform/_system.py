@@ -16,7 +16,7 @@ import sympy as sp
 
 from ..exceptions import DimensionError, ModelError
 from ..model import make_symbol, parse_expression
-from ..model._model import _names, read_values
+from ..model._model import _names, check_keys, read_values
 
 __all__ = ["System"]
 
@@ -78,17 +78,7 @@ class System:
         ModelError, ExpressionError, DimensionError
             Naming the key and the offending value.
         """
-        if not isinstance(data, Mapping):
-            raise ModelError(f"{source}: expected a table of keys, got {type(data).__name__}")
-        unknown = sorted(set(data) - _KNOWN)
-        if unknown:
-            raise ModelError(f"{source}: unknown key(s) {unknown}; known keys are {sorted(_KNOWN)}")
-        for key in ("name", "states", "f", "h"):
-            if key not in data:
-                raise ModelError(f"{source}: missing required key {key!r}")
-        name = data["name"]
-        if not isinstance(name, str) or not name.strip():
-            raise ModelError(f"{source}: 'name' must be a non-empty string, got {name!r}")
+        name = check_keys(data, _KNOWN, ("name", "states", "f", "h"), source)
         states = _names(data["states"], "states")
         if len(states) < 2:
             raise ModelError(f"{source}: 'states' has {len(states)} name(s); the normal form needs at least 2 states")
