@@ -15,7 +15,7 @@ from switchobs.design import GainDesign, design_gains
 from switchobs.exceptions import CertificateError, ModelError, SimulationError
 from switchobs.model import Model, builtin_model
 from switchobs.plants import (BrakingResult, BrakingScenario, PrescribedSpeed, RoadChange, RoadSchedule, TwoAxleScenario,
-                              TwoPhaseABS, simulate, simulate_two_axle, table41)
+                              Table41Result, TwoPhaseABS, simulate, simulate_two_axle, table41)
 from switchobs.sensors import ChainResult, ChainSettings, Encoder, compare_estimators, constant_speed
 
 
@@ -125,6 +125,9 @@ def test_table41_and_two_axle_markdown_show_the_numbers_of_their_text():
     assert r"$v_x(0)^2 / (2 g \bar\mu)$" in md
     assert f"| 60 | dry-asphalt | {row.five_phase_m:.2f} ({row.seed_five_phase_m:.2f}) |" in md
     assert f"**{table.two_phase_always_shorter}**" in md
+    assert Table41Result.from_json(json.loads(json.dumps(table.to_json()))) == table
+    with pytest.raises(SimulationError, match="Table 4.1 row"):
+        Table41Result.from_json({**table.to_json(), "rows": [{"road": "dry-asphalt"}]})
     run = simulate_two_axle(TwoAxleScenario("dry-asphalt", speed_m_s=10.0, duration_s=0.5))
     md = run._repr_markdown_()
     m = run.metrics
