@@ -15,7 +15,7 @@ from switchobs.design import GainDesign, design_gains
 from switchobs.exceptions import CertificateError, ModelError, SimulationError
 from switchobs.model import Model, builtin_model
 from switchobs.plants import (BrakingResult, BrakingScenario, PrescribedSpeed, RoadChange, RoadSchedule, TwoAxleScenario,
-                              Table41Result, TwoPhaseABS, simulate, simulate_two_axle, table41)
+                              Table41Result, TwoAxleResult, TwoPhaseABS, simulate, simulate_two_axle, table41)
 from switchobs.sensors import ChainResult, ChainSettings, Encoder, compare_estimators, constant_speed
 
 
@@ -129,6 +129,13 @@ def test_table41_and_two_axle_markdown_show_the_numbers_of_their_text():
     with pytest.raises(SimulationError, match="Table 4.1 row"):
         Table41Result.from_json({**table.to_json(), "rows": [{"road": "dry-asphalt"}]})
     run = simulate_two_axle(TwoAxleScenario("dry-asphalt", speed_m_s=10.0, duration_s=0.5))
+    back = TwoAxleResult.from_json(json.loads(json.dumps(run.to_json(include_series=True))))
+    assert back.to_json(include_series=True) == run.to_json(include_series=True)
+    assert (back.scenario, back.metrics, back.events) == (run.scenario, run.metrics, run.events)
+    for name, arr in run.series.items():
+        np.testing.assert_array_equal(back.series[name], arr)
+    with pytest.raises(SimulationError, match="front"):
+        TwoAxleScenario.from_json({**run.scenario.to_json(), "front": None})
     md = run._repr_markdown_()
     m = run.metrics
     assert f"status: **{run.status}**; stopping distance {m['stopping_distance_m']:.2f} m" in md

@@ -38,7 +38,7 @@ from ..exceptions import SimulationError
 from ._controllers import ContinuousXbsControl, Controller, FivePhaseABS, TwoPhaseABS
 from ._compiled import compiled_support, compiler_available, run_compiled
 from ._estimator import TrueXbs, X2Measurement, XbsEstimator
-from ._json import from_fields
+from ._json import controller_from_json, from_fields, run_from_json
 from ._hybrid import Crossing, HybridPlant, HybridRun, check_run_size, integrate
 from ._metrics import BrakingMetrics, braking_metrics, diverged
 from ._road import RoadSchedule, _RoadState
@@ -156,14 +156,9 @@ class BrakingScenario:
         """
         if not isinstance(data, dict):
             raise SimulationError(f"a braking scenario JSON must be an object, got {data!r}")
-        ctrl = data.get("controller")
-        kinds = {c.name: c for c in (FivePhaseABS, TwoPhaseABS, ContinuousXbsControl)}
-        if not isinstance(ctrl, dict) or ctrl.get("name") not in kinds:
-            raise SimulationError(f"a braking scenario JSON needs a controller named one of {', '.join(kinds)}, "
-                                  f"got {ctrl!r}")
         profile = data.get("speed_profile")
         return from_fields(cls, data, "braking scenario", roads=RoadSchedule.from_json(data.get("roads")),
-                           controller=from_fields(kinds[ctrl["name"]], ctrl, f"{ctrl['name']} controller"),
+                           controller=controller_from_json(data.get("controller"), "a braking scenario JSON"),
                            vehicle=from_fields(QuarterCar, data.get("vehicle"), "vehicle"),
                            actuator=from_fields(BrakeActuator, data.get("actuator"), "actuator"),
                            speed_profile=None if profile is None else from_fields(PrescribedSpeed, profile,
@@ -265,13 +260,8 @@ class BrakingResult:
         SimulationError
             No ``series`` (written without ``include_series=True``), a missing key or a malformed part.
         """
-        if not isinstance(data, dict) or not isinstance(data.get("series"), dict):
-            raise SimulationError("a braking result JSON needs the series arrays; write it with "
-                                  "to_json(include_series=True)")
+        series, events = run_from_json(data, "braking result")
         try:
-            series = {str(k): np.array([math.nan if v is None else float(v) for v in col], dtype=np.float64)
-                      for k, col in data["series"].items()}
-            events = tuple((float(e["t"]), str(e["event"])) for e in data["events"])
             cost = data["cost"]
             return cls(BrakingScenario.from_json(data["scenario"]), str(data["status"]), str(data["message"]),
                        series, events, BrakingMetrics.from_json(data["metrics"]), str(data["observer"]),
