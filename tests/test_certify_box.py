@@ -3,17 +3,18 @@
 from __future__ import annotations
 
 import copy
+import json
 from fractions import Fraction
 
 import numpy as np
 import pytest
 
-from switchobs.certify import certify_box, certify_model, parse_box, verify_certificate
-from switchobs.certify._box import model_terms
+from switchobs.certify import CertificationReport, certify_box, certify_model, parse_box, verify_certificate
+from switchobs.certify._box import BoxCertificate, model_terms
 from switchobs.certify._box_check import check_box_data, evaluate_terms
 from switchobs.cli.main import main
 from switchobs.design import design_gains
-from switchobs.exceptions import ModelError
+from switchobs.exceptions import CertificateError, ModelError
 from switchobs.model import Model, builtin_model
 
 XBS3 = builtin_model("abs-xbs3")
@@ -42,6 +43,11 @@ def test_box_certificate_of_the_demo_design_is_rechecked_exactly_and_by_verify()
     box = rep.box
     assert box.certified and box.kind == "dwell-time" and box.vertices == 4
     assert check_box_data(box.data, rep.family.exact) == ""
+    assert BoxCertificate.from_json(json.loads(json.dumps(box.to_json()))) == box
+    back = CertificationReport.from_json(json.loads(json.dumps(rep.to_json())))
+    assert back.to_json() == rep.to_json() and back.box == box and back.document == rep.document
+    with pytest.raises(CertificateError, match="parameter box"):
+        BoxCertificate.from_json({**box.to_json(), "requested": {"a": ["1"]}})
     check = verify_certificate(rep.document)
     assert check.holds and any(c.name == "box" and c.holds for c in check.checks)
     tampered = copy.deepcopy(rep.document)

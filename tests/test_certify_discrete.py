@@ -1,5 +1,6 @@
 """Discrete certificates of the sampled observer e+ = R(h A_pm) e, for every step length h (issue: certify what ships)."""
 
+from dataclasses import replace
 from fractions import Fraction
 
 import numpy as np
@@ -241,3 +242,29 @@ def test_docs_sampled_observer_table_is_a_fresh_run():
                        re.S).group(1)
     fresh = sampled_observer_table([("abs-xbs3", "-beta1,-beta2,-beta2"), ("abs-xbs4", "-beta1,-beta1,-beta2,-beta2")])
     assert quoted == fresh
+
+
+def test_discrete_certificate_and_certification_report_round_trip_through_json(xbs3_discrete):
+    """SOS proofs (radau3) and witnesses (rk4) read back exactly; a report writes the same JSON again."""
+    import json
+
+    from switchobs.certify import CertificationReport, DiscreteCertificate
+
+    for method, rep in xbs3_discrete.items():
+        cert = rep.discrete
+        assert DiscreteCertificate.from_json(json.loads(json.dumps(cert.to_json()))) == cert
+        assert "reasons" not in rep.document["discrete"]  # the document's section is unchanged
+        section = DiscreteCertificate.from_json(rep.document["discrete"])
+        assert section == replace(cert, reasons=())
+        back = CertificationReport.from_json(json.loads(json.dumps(rep.to_json())))
+        assert back.to_json() == rep.to_json()
+        assert (back.family.exact, back.discrete, back.discrete_method, back.verification, back.verdict,
+                back.document) == (rep.family.exact, rep.discrete, method, rep.verification, rep.verdict,
+                                   rep.document)
+    bad = xbs3_discrete["rk4"].discrete.to_json()
+    with pytest.raises(CertificateError, match="'P_d' as a list"):
+        DiscreteCertificate.from_json({**bad, "P_d": "nope"})
+    with pytest.raises(CertificateError, match="malformed witness"):
+        DiscreteCertificate.from_json({**bad, "modes": [{"name": "A_plus", "h_rho": None, "witness": {"u": []}}]})
+    with pytest.raises(CertificateError, match="certification report"):
+        CertificationReport.from_json({k: v for k, v in xbs3_discrete["rk4"].to_json().items() if k != "hespanha"})

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import json
+from dataclasses import replace
 
 import numpy as np
 import pytest
@@ -13,7 +14,8 @@ from switchobs.certify import (DualCertificate, DwellTimeResult, LyapunovResult,
 from switchobs.design import GainDesign, design_gains
 from switchobs.exceptions import CertificateError, ModelError, SimulationError
 from switchobs.model import Model, builtin_model
-from switchobs.plants import BrakingScenario, TwoAxleScenario, simulate, simulate_two_axle, table41
+from switchobs.plants import (BrakingResult, BrakingScenario, PrescribedSpeed, RoadChange, RoadSchedule, TwoAxleScenario,
+                              Table41Result, TwoAxleResult, TwoPhaseABS, simulate, simulate_two_axle, table41)
 from switchobs.sensors import ChainResult, ChainSettings, Encoder, compare_estimators, constant_speed
 
 
@@ -93,6 +95,18 @@ def test_simulation_results_markdown_numpy_and_json_round_trip():
     assert "\n" not in repr(res) and len(repr(res)) < 150
     table = res.to_numpy()
     np.testing.assert_array_equal(table["vx"], res.series["vx"])
+    back = BrakingResult.from_json(_through_json(res, include_series=True))
+    assert back.to_json(include_series=True) == res.to_json(include_series=True)
+    assert (back.scenario, back.metrics, back.events, back.steps) == (res.scenario, res.metrics, res.events, res.steps)
+    for name, arr in res.series.items():
+        np.testing.assert_array_equal(back.series[name], arr)
+    with pytest.raises(SimulationError, match="include_series"):
+        BrakingResult.from_json(res.to_json())
+    with pytest.raises(SimulationError, match="controller named"):
+        BrakingScenario.from_json({**res.scenario.to_json(), "controller": {"name": "bang-bang"}})
+    two = replace(res.scenario, controller=TwoPhaseABS(), speed_profile=PrescribedSpeed(),
+                  roads=RoadSchedule("dry-asphalt", [RoadChange("wet-asphalt", at_time_s=0.1)]))
+    assert BrakingScenario.from_json(json.loads(json.dumps(two.to_json()))) == two
     comparison = compare_estimators(constant_speed(1020.0, 0.5), Encoder(ppr=60, seed=1),
                                     settings=ChainSettings(warmup_s=0.1), estimators=("tsa",))
     chain = comparison.results[0]
@@ -111,7 +125,17 @@ def test_table41_and_two_axle_markdown_show_the_numbers_of_their_text():
     assert r"$v_x(0)^2 / (2 g \bar\mu)$" in md
     assert f"| 60 | dry-asphalt | {row.five_phase_m:.2f} ({row.seed_five_phase_m:.2f}) |" in md
     assert f"**{table.two_phase_always_shorter}**" in md
+    assert Table41Result.from_json(json.loads(json.dumps(table.to_json()))) == table
+    with pytest.raises(SimulationError, match="Table 4.1 row"):
+        Table41Result.from_json({**table.to_json(), "rows": [{"road": "dry-asphalt"}]})
     run = simulate_two_axle(TwoAxleScenario("dry-asphalt", speed_m_s=10.0, duration_s=0.5))
+    back = TwoAxleResult.from_json(json.loads(json.dumps(run.to_json(include_series=True))))
+    assert back.to_json(include_series=True) == run.to_json(include_series=True)
+    assert (back.scenario, back.metrics, back.events) == (run.scenario, run.metrics, run.events)
+    for name, arr in run.series.items():
+        np.testing.assert_array_equal(back.series[name], arr)
+    with pytest.raises(SimulationError, match="front"):
+        TwoAxleScenario.from_json({**run.scenario.to_json(), "front": None})
     md = run._repr_markdown_()
     m = run.metrics
     assert f"status: **{run.status}**; stopping distance {m['stopping_distance_m']:.2f} m" in md

@@ -49,7 +49,7 @@ from ._box_check import Interval, check_dwell, check_strict, vertex_matrices
 from ._exact import Matrix, fraction_matrix, matrix_strings, to_fraction
 from ._lmi import DEFAULT_SOLVERS, SolveInfo, balance, primal_margin, solve
 from ._dwell import _round_up
-from ._lyapunov import DEFAULT_EPS
+from ._lyapunov import DEFAULT_EPS, _reading
 from ._rounding import dyadic
 from ._synthesis import _floats
 
@@ -86,6 +86,21 @@ class ParameterBox:
 
     def to_json(self) -> dict[str, list[str]]:
         return {nm: [str(lo), str(hi)] for nm, lo, hi in zip(self.names, self.lower, self.upper)}
+
+    @classmethod
+    def from_json(cls, data: Mapping[str, Any]) -> "ParameterBox":
+        """The box of :meth:`to_json` (``{name: [lower, upper]}``, exact).
+
+        Raises
+        ------
+        CertificateError
+            Not a mapping of names to two rationals.
+        """
+        if not isinstance(data, Mapping) or not all(isinstance(v, list) and len(v) == 2 for v in data.values()):
+            raise CertificateError(f"a parameter box must map names to [lower, upper], got {data!r}")
+        return cls(tuple(str(nm) for nm in data), tuple(to_fraction(v[0], what=f"box {nm} lower")
+                                                        for nm, v in data.items()),
+                   tuple(to_fraction(v[1], what=f"box {nm} upper") for nm, v in data.items()))
 
     def __str__(self) -> str:
         return ", ".join(f"{nm} in [{_num(lo)}, {_num(hi)}]" for nm, lo, hi in zip(self.names, self.lower, self.upper))
@@ -241,7 +256,25 @@ class BoxCertificate:
         return {"requested": self.requested.to_json(), "box": None if self.box is None else self.box.to_json(),
                 "scale": str(self.scale), "certified": self.certified, "kind": self.kind,
                 "tau_D": None if self.tau_D is None else str(self.tau_D), "vertices": self.vertices,
-                "inactive": list(self.inactive), "detail": self.detail, "timings": self.timings}
+                "inactive": list(self.inactive), "detail": self.detail, "timings": self.timings,
+                "data": self.data}
+
+    @classmethod
+    def from_json(cls, data: Mapping[str, Any]) -> "BoxCertificate":
+        """The certificate of :meth:`to_json` (boxes, scale and ``tau_D`` exact; ``data`` as stored).
+
+        Raises
+        ------
+        CertificateError
+            A missing key or a malformed box or number; the message names it.
+        """
+        with _reading("box certificate"):
+            box = None if data["box"] is None else ParameterBox.from_json(data["box"])
+            return cls(ParameterBox.from_json(data["requested"]), box, to_fraction(data["scale"], what="scale"),
+                       str(data["kind"]), None if data["tau_D"] is None else to_fraction(data["tau_D"], what="tau_D"),
+                       int(data["vertices"]), tuple(str(x) for x in data["inactive"]),
+                       None if data["data"] is None else dict(data["data"]), str(data["detail"]),
+                       {str(k): float(v) for k, v in data["timings"].items()})
 
     def __str__(self) -> str:
         if self.data is None or self.box is None:

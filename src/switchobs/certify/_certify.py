@@ -37,8 +37,8 @@ from ._family import Family, FamilyLike, as_family, format_spectrum, user_matrix
 from ._discrete import DiscreteCertificate, discrete_certificate, stability_function
 from ._dwell import DwellTimeResult, dwell_time
 from ._lmi import DEFAULT_SOLVERS
-from ._lyapunov import (DEFAULT_EPS, LyapunovResult, SingularSum, common_lyapunov, infeasibility_certificate,
-                        strict_common_lyapunov)
+from ._lyapunov import (DEFAULT_EPS, LyapunovResult, SingularSum, _reading, common_lyapunov,
+                        infeasibility_certificate, strict_common_lyapunov)
 from ._planar import PlanarClassification, classify_planar
 from ._rounding import short_sqrt_lower
 from ._schema import (ANY_DWELL, ArbitrarySwitching, BoxSection, CertificateDocument, CertificateKind,
@@ -158,7 +158,37 @@ class CertificationReport:
                 "discrete": None if self.discrete is None else self.discrete.to_json(),
                 "box": None if self.box is None else self.box.to_json(),
                 "spectra": {nm: format_spectrum(M) for nm, M in zip(self.family.names, self.family.numeric)},
-                "certificate": self.document}
+                "certificate": self.document, "discrete_method": self.discrete_method}
+
+    @classmethod
+    def from_json(cls, data: Mapping[str, Any]) -> "CertificationReport":
+        """The report of :meth:`to_json`; the family is the one the strict check ran on.
+
+        The family holds NumPy arrays, so compare two reports by their
+        :meth:`to_json` (the exact family, certificates, document and check
+        are all in it).  ``certified`` and ``spectra`` are derived, not read.
+
+        Raises
+        ------
+        CertificateError
+            A missing key or a malformed part; the message names the part.
+        """
+        if not isinstance(data, Mapping):
+            raise CertificateError(f"a certification report must be an object, got {type(data).__name__}")
+        with _reading("certification report"):
+            strict = LyapunovResult.from_json(data["strict"])
+            document = data["certificate"]
+            if not isinstance(document, Mapping):
+                raise CertificateError(f"a certification report's 'certificate' must be an object, got {document!r}")
+            return cls(strict.family, strict, LyapunovResult.from_json(data["hespanha"]),
+                       None if data["dwell_time"] is None else DwellTimeResult.from_json(data["dwell_time"]),
+                       None if data["planar"] is None else PlanarClassification.from_json(data["planar"]),
+                       dict(document), VerificationReport.from_json(data["verification"]),
+                       Verdict.from_json(data["verdict"]), str(data["text"]),
+                       {str(k): float(v) for k, v in data["timings"].items()},
+                       None if data["discrete"] is None else DiscreteCertificate.from_json(data["discrete"]),
+                       data.get("discrete_method"),
+                       None if data["box"] is None else BoxCertificate.from_json(data["box"]))
 
     def __repr__(self) -> str:
         return (f"<CertificationReport: {self.family}, certified={self.certified}, "
@@ -366,7 +396,7 @@ def _certify(fam: Family, output: Any, dwell: bool | str, eps: float, solvers: S
         t0 = time.perf_counter()
         disc = discrete_certificate(fam.exact[0], fam.exact[1], user_matrix(output, what="output C", part="C"), common.P,
                                     method=discrete)
-        sections[DiscreteSection.KEY] = DiscreteSection(disc.to_json())
+        sections[DiscreteSection.KEY] = DiscreteSection(disc.to_json(reasons=False))
         timings["discrete"] = time.perf_counter() - t0
     if box is not None and box.data is not None:
         sections[BoxSection.KEY] = BoxSection(box.data)

@@ -279,6 +279,33 @@ class ModeProof:
                               "coefficient": str(self.witness_value)}
         return out
 
+    @classmethod
+    def from_json(cls, data: Mapping[str, Any], n: int) -> ModeProof:
+        """The proof of :meth:`to_json` for a model with ``n`` states (SOS terms and witness exact).
+
+        Raises
+        ------
+        CertificateError
+            A missing key or a malformed term, witness or ``h_rho``.
+        """
+        if not isinstance(data, Mapping) or not isinstance(data.get("name"), str):
+            raise CertificateError(f"a discrete mode proof needs a 'name', got {data!r}")
+        rho = data.get("h_rho")
+        if rho is not None and (isinstance(rho, bool) or not isinstance(rho, (int, float))):
+            raise CertificateError(f"{data['name']}: h_rho must be a number or null, got {rho!r}")
+        sos = tuple(SosTerm.from_json(t, n) for t in data.get("sos", ()))
+        witness = data.get("witness")
+        if witness is None:
+            return cls(data["name"], None if rho is None else float(rho), sos)
+        try:
+            u = tuple(to_fraction(x, what="witness entry") for x in witness["u"])
+            power, value = witness["power"], to_fraction(witness["coefficient"], what="witness coefficient")
+        except (KeyError, TypeError) as exc:
+            raise CertificateError(f"{data['name']}: malformed witness ({type(exc).__name__}: {exc})") from None
+        if not isinstance(power, int) or isinstance(power, bool):
+            raise CertificateError(f"{data['name']}: witness power must be an integer, got {power!r}")
+        return cls(data["name"], None if rho is None else float(rho), sos, u, power, value)
+
 
 @dataclass(frozen=True)
 class DiscreteCertificate:
@@ -331,10 +358,48 @@ class DiscreteCertificate:
             return "none"
         return "inf" if self.h_max is None else str(self.h_max)
 
-    def to_json(self) -> dict[str, Any]:
-        return {"method": self.method, "verdict": self.verdict.value, "h_max": self.h_max_text(),
-                "strict": self.strict, "statement": self.statement, "P_d": matrix_strings(self.P_d),
-                "C": matrix_strings(self.C), "modes": [m.to_json() for m in self.modes]}
+    def to_json(self, *, reasons: bool = True) -> dict[str, Any]:
+        """The certificate as JSON types; ``reasons=False`` leaves out ``reasons`` (the document's section)."""
+        out = {"method": self.method, "verdict": self.verdict.value, "h_max": self.h_max_text(),
+               "strict": self.strict, "statement": self.statement, "P_d": matrix_strings(self.P_d),
+               "C": matrix_strings(self.C), "modes": [m.to_json() for m in self.modes]}
+        if reasons:
+            out["reasons"] = list(self.reasons)
+        return out
+
+    @classmethod
+    def from_json(cls, data: Mapping[str, Any]) -> DiscreteCertificate:
+        """The certificate of :meth:`to_json`, exact (nothing re-checked: :func:`check_discrete` does that).
+
+        A document's ``discrete`` section (no ``reasons``) reads back with ``reasons = ()``.
+
+        Raises
+        ------
+        CertificateError
+            A missing key, an unknown method or verdict, or a malformed matrix, ``h_max`` or mode.
+        """
+        if not isinstance(data, Mapping):
+            raise CertificateError(f"a discrete certificate must be an object, got {data!r}")
+        for key, kind in (("method", str), ("verdict", str), ("h_max", str), ("strict", bool), ("statement", str),
+                          ("P_d", list), ("C", list), ("modes", list)):
+            if not isinstance(data.get(key), kind):
+                raise CertificateError(f"a discrete certificate needs {key!r} as a {kind.__name__}, "
+                                       f"got {data.get(key)!r}")
+        method = _method(data["method"]).name
+        try:
+            verdict = DiscreteVerdict(data["verdict"])
+        except ValueError:
+            raise CertificateError(f"unknown discrete verdict {data['verdict']!r}; choose one of "
+                                   f"{', '.join(v.value for v in DiscreteVerdict)}") from None
+        h_max = None if data["h_max"] in ("inf", "none") else to_fraction(data["h_max"], what="h_max")
+        P_d = fraction_matrix(data["P_d"], what="P_d")
+        C = fraction_matrix(data["C"], what="C", cols=len(P_d)) if data["C"] else []
+        reasons = data.get("reasons", [])
+        if not isinstance(reasons, list) or not all(isinstance(r, str) for r in reasons):
+            raise CertificateError(f"a discrete certificate's 'reasons' must be a list of strings, got {reasons!r}")
+        return cls(method, verdict, h_max, data["strict"], P_d,
+                   tuple(ModeProof.from_json(m, len(P_d)) for m in data["modes"]), data["statement"],
+                   tuple(reasons), C)
 
     def __str__(self) -> str:
         rho = self.h_rho

@@ -156,9 +156,30 @@ class SingularSum:
         return {"kind": self.kind, "certified": self.certified, "v": [str(x) for x in self.v],
                 "method": self.method, "exact_s": self.exact_s}
 
+    @classmethod
+    def from_json(cls, data: Mapping[str, Any]) -> "SingularSum":
+        """The proof of :meth:`to_json` (``v`` exact).
+
+        Raises
+        ------
+        CertificateError
+            A missing key or a malformed entry of ``v``.
+        """
+        with _reading("singular-sum proof"):
+            return cls(tuple(Fraction(str(x)) for x in data["v"]), float(data["exact_s"]), str(data["method"]))
+
     def __str__(self) -> str:
         return (f"no strict CQLF [{self.kind}]: (sum_p A_p) v = 0 for v = [{', '.join(str(x) for x in self.v)}], "
                 "verified exactly")
+
+
+def _dual_from_json(data: Mapping[str, Any] | None) -> DualCertificate | SingularSum | None:
+    """The ``dual`` of a :class:`LyapunovResult` JSON: a :class:`SingularSum` (``kind`` singular-sum) or a dual LMI."""
+    if data is None:
+        return None
+    if isinstance(data, Mapping) and data.get("kind") == SingularSum.kind:
+        return SingularSum.from_json(data)
+    return DualCertificate.from_json(data)
 
 
 def singular_sum(family: FamilyLike, *, names: Sequence[str] | None = None) -> SingularSum | None:
@@ -262,7 +283,7 @@ class LyapunovResult:
                        bool(data["certified"]), math.nan if data["margin"] is None else float(data["margin"]),
                        float(data["eps"]), P, _matrices(data["C"]), SolveInfo.from_json(data["solve_info"]),
                        str(data["method"]), float(data["exact_s"]), str(data["detail"]),
-                       None if data["dual"] is None else DualCertificate.from_json(data["dual"]))
+                       _dual_from_json(data["dual"]))
 
     def __str__(self) -> str:
         title = {"hespanha": "Hespanha non-strict common Lyapunov P",

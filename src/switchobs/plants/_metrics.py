@@ -30,6 +30,8 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 import numpy.typing as npt
 
+from ..exceptions import SimulationError
+from ._json import from_fields
 from ._vehicle import GRAVITY
 
 if TYPE_CHECKING:
@@ -178,6 +180,23 @@ class BrakingMetrics:
         out["reconvergence"] = [r.to_json() for r in self.reconvergence]
         out["assumption1"] = None if self.assumption1 is None else self.assumption1.to_json()
         return out
+
+    @classmethod
+    def from_json(cls, data: Any) -> BrakingMetrics:
+        """The metrics of :meth:`to_json` (re-convergences and Assumption 1 included).
+
+        Raises
+        ------
+        SimulationError
+            A missing key or a malformed part; the message names it.
+        """
+        if not isinstance(data, dict) or not isinstance(data.get("reconvergence"), list):
+            raise SimulationError(f"a braking metrics JSON needs 'reconvergence' as a list, got {data!r}")
+        a1 = data.get("assumption1")
+        return from_fields(cls, data, "braking metrics",
+                           reconvergence=tuple(from_fields(Reconvergence, r, "re-convergence")
+                                               for r in data["reconvergence"]),
+                           assumption1=None if a1 is None else from_fields(Assumption1Status, a1, "Assumption 1"))
 
     def __str__(self) -> str:
         distance = ("not reached, distance travelled" if self.stop_time_s is None else

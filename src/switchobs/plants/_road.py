@@ -15,6 +15,7 @@ from dataclasses import dataclass
 from typing import Any
 
 from ..exceptions import SimulationError
+from ._json import from_fields
 from ._tyre import Burckhardt, road
 
 __all__ = ["RoadChange", "RoadSchedule"]
@@ -108,6 +109,21 @@ class RoadSchedule:
 
     def to_json(self) -> dict[str, Any]:
         return {"initial": self.initial.name, "changes": [c.to_json() for c in self.changes]}
+
+    @classmethod
+    def from_json(cls, data: Any) -> RoadSchedule:
+        """The schedule of :meth:`to_json` (roads by name).
+
+        Raises
+        ------
+        SimulationError
+            A missing key, an unknown road or a change the schedule rejects.
+        """
+        if not isinstance(data, dict) or not isinstance(data.get("changes", []), list):
+            raise SimulationError(f"a road schedule JSON needs 'initial' and a list of 'changes', got {data!r}")
+        if "initial" not in data:
+            raise SimulationError("a road schedule JSON needs 'initial'")
+        return cls(data["initial"], [from_fields(RoadChange, c, "road change") for c in data.get("changes", [])])
 
     def __str__(self) -> str:
         parts = [self.initial.name]

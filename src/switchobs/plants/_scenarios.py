@@ -20,6 +20,7 @@ from .._progress import progress
 from ..exceptions import SimulationError
 from ._controllers import FivePhaseABS, TwoPhaseABS
 from ._estimator import XbsEstimator
+from ._json import from_fields
 from ._road import RoadChange, RoadSchedule
 from ._simulate import BrakingResult, BrakingScenario, simulate
 from ._two_axle import TwoAxleScenario
@@ -193,6 +194,17 @@ class Table41Row:
                 "two_phase_stopping_m": self.two_phase_stopping_m, "five_phase_status": self.five_phase_status,
                 "two_phase_status": self.two_phase_status, "two_phase_shorter": self.two_phase_shorter}
 
+    @classmethod
+    def from_json(cls, data: Any) -> Table41Row:
+        """The row of :meth:`to_json` (the derived differences and flags are not read).
+
+        Raises
+        ------
+        SimulationError
+            A missing key or a value the row rejects.
+        """
+        return from_fields(cls, data, "Table 4.1 row")
+
 
 @dataclass(frozen=True)
 class Table41Result:
@@ -212,6 +224,21 @@ class Table41Result:
         return {"rows": [r.to_json() for r in self.rows], "five_phase": self.five_phase.to_json(),
                 "two_phase": self.two_phase.to_json(), "observer": self.observer,
                 "two_phase_always_shorter": self.two_phase_always_shorter, "wall_time_s": self.wall_time_s}
+
+    @classmethod
+    def from_json(cls, data: Any) -> Table41Result:
+        """The table of :meth:`to_json`: rows and both controllers' settings (compares with ``==``).
+
+        Raises
+        ------
+        SimulationError
+            A missing key or a malformed row or controller; the message names it.
+        """
+        if not isinstance(data, dict) or not isinstance(data.get("rows"), list):
+            raise SimulationError(f"a Table 4.1 JSON needs 'rows' as a list, got {data!r}")
+        return from_fields(cls, data, "Table 4.1", rows=tuple(Table41Row.from_json(r) for r in data["rows"]),
+                           five_phase=from_fields(FivePhaseABS, data.get("five_phase"), "five-phase controller"),
+                           two_phase=from_fields(TwoPhaseABS, data.get("two_phase"), "two-phase controller"))
 
     def _repr_markdown_(self) -> str:
         """The table in a notebook: braking distance :math:`v_x(0)^2 / (2 g \\bar\\mu)` per road and speed."""

@@ -38,6 +38,7 @@ from ..exceptions import SimulationError
 from ._controllers import ContinuousXbsControl, Controller, FivePhaseABS, TwoPhaseABS
 from ._compiled import compiled_support, compiler_available, run_compiled
 from ._estimator import TrueXbs, X2Measurement, XbsEstimator
+from ._json import controller_from_json, from_fields, run_from_json
 from ._hybrid import Crossing, HybridPlant, HybridRun, check_run_size, integrate
 from ._metrics import BrakingMetrics, braking_metrics, diverged
 from ._road import RoadSchedule, _RoadState
@@ -144,6 +145,25 @@ class BrakingScenario:
                 "duration_s": self.duration_s, "stop_speed_m_s": self.stop_speed_m_s, "dt_s": self.dt_s,
                 "low_speed_m_s": self.low_speed_m_s}
 
+    @classmethod
+    def from_json(cls, data: Any) -> BrakingScenario:
+        """The scenario of :meth:`to_json`: roads by name, the controller by its ``name``.
+
+        Raises
+        ------
+        SimulationError
+            A missing key, an unknown controller or road, or a value the scenario rejects.
+        """
+        if not isinstance(data, dict):
+            raise SimulationError(f"a braking scenario JSON must be an object, got {data!r}")
+        profile = data.get("speed_profile")
+        return from_fields(cls, data, "braking scenario", roads=RoadSchedule.from_json(data.get("roads")),
+                           controller=controller_from_json(data.get("controller"), "a braking scenario JSON"),
+                           vehicle=from_fields(QuarterCar, data.get("vehicle"), "vehicle"),
+                           actuator=from_fields(BrakeActuator, data.get("actuator"), "actuator"),
+                           speed_profile=None if profile is None else from_fields(PrescribedSpeed, profile,
+                                                                                   "speed profile"))
+
     def __str__(self) -> str:
         profile = "free vehicle (2.1b)" if self.speed_profile is None else \
             f"prescribed deceleration {self.speed_profile.decel_m_s2:g} m/s²"
@@ -221,12 +241,36 @@ class BrakingResult:
             "metrics": self.metrics.to_json(),
             "cost": {"steps": self.steps, "wall_time_s": self.wall_time_s, "observer_time_s": self.observer_time_s,
                      "simulated_time_s": float(self.series["t"][-1])},
-            "events": [{"t": t, "event": e} for t, e in self.events],
+            "events": [{"t": t, "event": e} for t, e in self.events], "compiled": self.compiled,
         }
         if include_series:
             out["series"] = {k: [None if math.isnan(v) else float(v) for v in arr]
                              for k, arr in self.series.items()}
         return out
+
+    @classmethod
+    def from_json(cls, data: Any) -> BrakingResult:
+        """The result of ``to_json(include_series=True)``: the series as float arrays (``null`` as NaN).
+
+        The series are NumPy arrays, so compare two results by their
+        ``to_json(include_series=True)`` (scenario, metrics and events compare with ``==``).
+
+        Raises
+        ------
+        SimulationError
+            No ``series`` (written without ``include_series=True``), a missing key or a malformed part.
+        """
+        series, events = run_from_json(data, "braking result")
+        try:
+            cost = data["cost"]
+            return cls(BrakingScenario.from_json(data["scenario"]), str(data["status"]), str(data["message"]),
+                       series, events, BrakingMetrics.from_json(data["metrics"]), str(data["observer"]),
+                       bool(data["observer_in_loop"]), float(cost["wall_time_s"]), float(cost["observer_time_s"]),
+                       int(cost["steps"]), bool(data.get("compiled", False)))
+        except (KeyError, TypeError, ValueError) as exc:
+            if isinstance(exc, SimulationError):
+                raise
+            raise SimulationError(f"not a braking result JSON ({type(exc).__name__}: {exc})") from None
 
     def __repr__(self) -> str:
         return (f"<BrakingResult {self.scenario.name!r}: {self.status}, {self.steps} steps to "

@@ -36,6 +36,7 @@ from ..exceptions import SimulationError
 from ._controllers import FivePhaseABS, TwoPhaseABS
 from ._estimator import XbsEstimator
 from ._hybrid import Crossing, HybridPlant, integrate
+from ._json import controller_from_json, from_fields, run_from_json
 from ._metrics import _cumtrapz, diverged
 from ._road import RoadSchedule, _RoadState
 from ._vehicle import GRAVITY, BrakeActuator, QuarterCar, check_speed
@@ -105,6 +106,17 @@ class TwoAxleVehicle:
     def to_json(self) -> dict[str, Any]:
         return {**asdict(self), "static_loads_n": list(self.static_loads), "load_transfer_n_per_m_s2":
                 self.load_transfer}
+
+    @classmethod
+    def from_json(cls, data: Any) -> TwoAxleVehicle:
+        """The vehicle of :meth:`to_json` (the derived loads are not read).
+
+        Raises
+        ------
+        SimulationError
+            A missing key or a value the vehicle rejects.
+        """
+        return from_fields(cls, data, "two-axle vehicle")
 
 
 @dataclass(frozen=True)
@@ -205,7 +217,25 @@ class TwoAxleScenario:
                 "actuator": self.actuator.to_json(), "accelerometer": asdict(self.accelerometer),
                 "brake_start_s": self.brake_start_s, "speed_filter_q": self.speed_filter_q,
                 "speed_filter_r": self.speed_filter_r, "duration_s": self.duration_s,
-                "stop_speed_m_s": self.stop_speed_m_s, "dt_s": self.dt_s}
+                "stop_speed_m_s": self.stop_speed_m_s, "dt_s": self.dt_s, "low_speed_m_s": self.low_speed_m_s}
+
+    @classmethod
+    def from_json(cls, data: Any) -> TwoAxleScenario:
+        """The scenario of :meth:`to_json` (roads by name, the controllers by their ``name``).
+
+        Raises
+        ------
+        SimulationError
+            A missing key, an unknown controller or road, or a value the scenario rejects.
+        """
+        if not isinstance(data, dict):
+            raise SimulationError(f"a two-axle scenario JSON must be an object, got {data!r}")
+        return from_fields(cls, data, "two-axle scenario", roads=RoadSchedule.from_json(data.get("roads")),
+                           front=controller_from_json(data.get("front"), "a two-axle scenario JSON (front)"),
+                           rear=controller_from_json(data.get("rear"), "a two-axle scenario JSON (rear)"),
+                           vehicle=TwoAxleVehicle.from_json(data.get("vehicle")),
+                           actuator=from_fields(BrakeActuator, data.get("actuator"), "actuator"),
+                           accelerometer=from_fields(Accelerometer, data.get("accelerometer"), "accelerometer"))
 
     def __str__(self) -> str:
         return (f"two-axle scenario {self.name}: {self.roads}, {self.speed_m_s * 3.6:.0f} km/h, "
@@ -264,6 +294,28 @@ class TwoAxleResult:
         if include_series:
             out["series"] = {k: [None if math.isnan(v) else float(v) for v in a] for k, a in self.series.items()}
         return out
+
+    @classmethod
+    def from_json(cls, data: Any) -> TwoAxleResult:
+        """The result of ``to_json(include_series=True)``: the series as float arrays (``null`` as NaN).
+
+        The series are NumPy arrays, so compare two results by their
+        ``to_json(include_series=True)`` (scenario, metrics and events compare with ``==``).
+
+        Raises
+        ------
+        SimulationError
+            No ``series``, a missing key or a malformed part; the message names it.
+        """
+        series, events = run_from_json(data, "two-axle result")
+        try:
+            cost = data["cost"]
+            return cls(TwoAxleScenario.from_json(data["scenario"]), str(data["status"]), str(data["message"]),
+                       series, events, dict(data["metrics"]), float(cost["wall_time_s"]), int(cost["steps"]))
+        except (KeyError, TypeError, ValueError) as exc:
+            if isinstance(exc, SimulationError):
+                raise
+            raise SimulationError(f"not a two-axle result JSON ({type(exc).__name__}: {exc})") from None
 
     def _repr_markdown_(self) -> str:
         """The run in a notebook: status, the vehicle figures and one row per axle."""
