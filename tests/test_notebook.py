@@ -138,6 +138,9 @@ def test_table41_and_two_axle_markdown_show_the_numbers_of_their_text():
         TwoAxleScenario.from_json({**run.scenario.to_json(), "front": None})
     md = run._repr_markdown_()
     m = run.metrics
-    assert f"status: **{run.status}**; stopping distance {m['stopping_distance_m']:.2f} m" in md
+    assert run.status == "duration"  # 0.5 s from 36 km/h: the run did not stop, so no "stopping distance"
+    for r, words in ((run, "distance travelled"), (replace(run, status="stopped"), "stopping distance")):
+        line = f"{words} {m['stopping_distance_m']:.2f} m"
+        assert f"status: **{r.status}**; {line}" in r._repr_markdown_() and f"status: {r.status}; {line}" in str(r)
     assert f"| front | {m['front']['load_min_n']:.0f}–{m['front']['load_max_n']:.0f} | {m['front']['abs_cycles']} |" in md
     assert "$(\\hat v_x - v_x)/v_x$" in md

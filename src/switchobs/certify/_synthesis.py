@@ -57,6 +57,7 @@ from sympy.polys.matrices import DomainMatrix
 if TYPE_CHECKING:  # imported where an LMI is built (see _lmi)
     import cvxpy as cp
 
+from .._json import JsonRecord, fields_from_json
 from .._limits import check_double
 from ..exceptions import CertificateError, DimensionError, ModelError
 from ..model import Model
@@ -157,7 +158,22 @@ class GainSynthesis:
                 "noise_gain": dict(self.noise_gain),
                 "solver": None if self.solver is None else f"{self.solver.solver} ({self.solver.status})",
                 "detail": self.detail, "solve_s": self.solve_s, "exact_s": self.exact_s,
-                "box": None if self.box is None else self.box.to_json(), "vertices": self.vertices}
+                "box": None if self.box is None else self.box.to_json(), "vertices": self.vertices,
+                "solve_info": None if self.solver is None else self.solver.to_json()}
+
+    @classmethod
+    def from_json(cls, data: Any) -> GainSynthesis:
+        """The synthesis of :meth:`to_json`: gains, ``P`` and ``X`` exact, the solver record from ``solve_info``.
+
+        Raises
+        ------
+        CertificateError
+            A missing key or a malformed matrix or number; the message names it.
+        """
+        if not isinstance(data, Mapping) or "solve_info" not in data:
+            raise CertificateError(f"a gain synthesis JSON needs 'solve_info', got {data!r:.80}")
+        return fields_from_json(cls, data, error=CertificateError, what="gain synthesis",
+                                solver=SolveInfo.from_json(data["solve_info"]))
 
     def __str__(self) -> str:
         head = f"LMI synthesis ({self.formulation}), decay rate {self.decay_rate} in tau, noise weight {self.noise_weight:g}"
@@ -436,7 +452,7 @@ def state_rows(model: Model, estimate: Sequence[str] | None) -> list[int] | None
 
 
 @dataclass(frozen=True)
-class FrontPoint:
+class FrontPoint(JsonRecord, error=CertificateError):
     """One design on the noise-gain / decay-rate plane (:func:`noise_decay_front`).
 
     Attributes

@@ -29,6 +29,7 @@ import scipy.integrate
 import scipy.optimize
 import sympy as sp
 
+from .._json import JsonRecord
 from ..exceptions import DimensionError, ModelError, SimulationError
 from ..model import Model
 
@@ -102,7 +103,7 @@ def pe_level(t: Any, y: Any, window: float) -> float:
 
 
 @dataclass(frozen=True)
-class ZeroCrossing:
+class ZeroCrossing(JsonRecord, error=SimulationError):
     """A zero of the output: time, slope ``dy/dt`` there, and the rescaled time ``tau``."""
 
     t: float
@@ -194,7 +195,7 @@ def regressor_excitation(t: Any, psi: Any, window: float) -> tuple[np.ndarray, n
 
 
 @dataclass(frozen=True)
-class TrajectoryReport:
+class TrajectoryReport(JsonRecord, error=SimulationError):
     """Assumption 1 (seed 001 (3.17)-(3.19), seed 004 (6)-(7)) measured on a record.
 
     Attributes
@@ -323,7 +324,7 @@ def trajectory_conditions(t: Any, y: Any, *, window: float, s: Any | None = None
 
 # ----------------------------------------------------------------- Theorem 3
 @dataclass(frozen=True)
-class AdmissibleConstants:
+class AdmissibleConstants(JsonRecord, error=SimulationError):
     """Constants of Theorem 3 (seed 004) on ``Sigma = Omega ∩ {|Cz| <= epsilon}``.
 
     Attributes

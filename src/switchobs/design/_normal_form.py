@@ -8,14 +8,16 @@ superdiagonal, and ``C T^-1 = (1, 0, ..., 0)``.  Then
 
 from __future__ import annotations
 
+from collections.abc import Mapping
 from dataclasses import dataclass
+from typing import Any
 
 import sympy as sp
 from sympy import QQ
 from sympy.polys.matrices import DomainMatrix
 
-from ..exceptions import NotObservableError
-from ..model import Model
+from ..exceptions import ModelError, NotObservableError
+from ..model import Model, parse_expression, symbols_from_json, symbols_to_json
 
 __all__ = ["ObserverNormalForm", "observer_normal_form", "normal_form_matrix", "is_rational", "rational_matrix"]
 
@@ -120,14 +122,51 @@ class ObserverNormalForm:
         """The normal-form matrix ``T A T^-1``."""
         return normal_form_matrix(list(self.a))
 
-    def to_json(self) -> dict:
+    def to_json(self) -> dict[str, Any]:
+        def rows(M: sp.ImmutableMatrix) -> list[list[str]]:
+            return [[str(x) for x in M.row(i)] for i in range(M.rows)]
+
         return {
             "a": [str(x) for x in self.a],
-            "T": [[str(x) for x in self.T.row(i)] for i in range(self.T.rows)],
-            "T_inv": [[str(x) for x in self.T_inv.row(i)] for i in range(self.T_inv.rows)],
+            "T": rows(self.T),
+            "T_inv": rows(self.T_inv),
+            "observability_matrix": rows(self.observability_matrix),
             "observability_determinant": str(self.observability_determinant),
             "observability_conditions": [str(c) for c in self.observability_conditions],
+            "symbols": symbols_to_json(self.a, self.T, self.T_inv, self.observability_matrix,
+                                       self.observability_determinant),
         }
+
+    @classmethod
+    def from_json(cls, data: Any) -> ObserverNormalForm:
+        """The normal form of :meth:`to_json`, its entries parsed over its ``symbols``.
+
+        Raises
+        ------
+        ModelError
+            A missing key, an entry that does not parse, or a condition not of the form ``Ne(factor, 0)``.
+        """
+        if not isinstance(data, Mapping):
+            raise ModelError(f"an observer normal form JSON must be an object, got {data!r:.80}")
+        names = symbols_from_json(data.get("symbols", {}), what="observer normal form")
+
+        def expr(text: Any, what: str) -> sp.Expr:
+            return parse_expression(text, names, what=f"observer normal form {what}")
+
+        def matrix(key: str) -> sp.ImmutableMatrix:
+            return sp.ImmutableMatrix([[expr(x, key) for x in row] for row in data[key]])
+
+        def condition(text: Any) -> sp.Basic:  # every condition is Ne(factor, 0) (observer_normal_form)
+            if not (isinstance(text, str) and text.startswith("Ne(") and text.endswith(", 0)")):
+                raise ModelError(f"an observability condition must read 'Ne(factor, 0)', got {text!r}")
+            return sp.Ne(expr(text[3:-4], "condition"), 0, evaluate=False)
+
+        try:
+            return cls(sp.ImmutableMatrix([expr(x, "a") for x in data["a"]]), matrix("T"), matrix("T_inv"),
+                       matrix("observability_matrix"), expr(data["observability_determinant"], "determinant"),
+                       tuple(condition(c) for c in data["observability_conditions"]))
+        except (KeyError, TypeError) as exc:
+            raise ModelError(f"not an observer normal form JSON ({type(exc).__name__}: {exc})") from None
 
 
 def observer_normal_form(model: Model) -> ObserverNormalForm:

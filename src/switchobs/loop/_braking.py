@@ -17,6 +17,7 @@ from typing import Any
 import numpy as np
 import numpy.typing as npt
 
+from .._json import fields_from_json
 from ..exceptions import SimulationError
 from ..plants import (BrakingMetrics, BrakingScenario, ContinuousXbsControl, FivePhaseABS, QuarterCar, RoadSchedule,
                       TwoPhaseABS, simulate)
@@ -77,6 +78,22 @@ class BrakingRun:
         if include_series and self.series is not None:
             out["series"] = {k: [None if math.isnan(v) else float(v) for v in arr] for k, arr in self.series.items()}
         return out
+
+    @classmethod
+    def from_json(cls, data: Any) -> BrakingRun:
+        """The run of :meth:`to_json` (its series only if written with ``include_series=True``).
+
+        Raises
+        ------
+        SimulationError
+            A missing key or a malformed part; the message names it.
+        """
+        try:
+            flat = {**data, **data["cost"], "events": [(e["t"], e["event"]) for e in data["events"]]}
+        except (KeyError, TypeError) as exc:
+            raise SimulationError(f"a braking run JSON needs 'cost' and 'events' with 't' and 'event' ({exc!r})") \
+                from None
+        return fields_from_json(cls, flat, error=SimulationError, what="braking run")
 
     def __str__(self) -> str:
         loop = "compiled loop" if self.compiled else "Python loop"

@@ -19,6 +19,8 @@ from typing import Any
 import numpy as np
 import numpy.typing as npt
 
+from .._json import JsonRecord
+from ..exceptions import SimulationError
 from ..plants import BrakingResult, BrakingScenario, FivePhaseABS, QuarterCar, RoadChange, RoadSchedule, simulate
 from ..sensors import Encoder
 from ._adapter import ObserverXbsEstimator, SteppingObserver
@@ -35,7 +37,7 @@ SETTLE_S = 0.25
 
 
 @dataclass(frozen=True)
-class DemoSettings:
+class DemoSettings(JsonRecord, error=SimulationError):
     """The braking scenario and chain of the demo (defaults: the full run; :meth:`fast` for CI).
 
     Attributes
@@ -84,7 +86,7 @@ class DemoSettings:
 
 
 @dataclass(frozen=True)
-class ErrorRow:
+class ErrorRow(JsonRecord, error=SimulationError):
     """RMS / median / 90th percentile of ``|XBS estimate - XBS|`` on one road segment."""
 
     estimator: str
@@ -103,7 +105,7 @@ class ErrorRow:
 
 
 @dataclass(frozen=True)
-class BrakingSummary:
+class BrakingSummary(JsonRecord, error=SimulationError):
     """What the braking stage measured."""
 
     scenario: str

@@ -45,6 +45,7 @@ from typing import Any
 import numpy as np
 import numpy.typing as npt
 
+from .._json import JsonRecord
 from ..exceptions import SimulationError
 from ..sensors import Encoder, NotchFilter, ThreeStageEstimator, TimeStamper
 from ._adapter import ObserverXbsEstimator, SteppingObserver, check_xbs_signals, initial_xbs_state
@@ -57,7 +58,7 @@ X2_MEASUREMENTS: tuple[str, ...] = ("tsa", "notch", "three-stage")
 Array = npt.NDArray[np.float64]
 
 @dataclass(frozen=True, eq=False)
-class EncoderLoopRecord:
+class EncoderLoopRecord(JsonRecord, error=SimulationError):
     """What the encoder chain and the observers saw.
 
     Attributes

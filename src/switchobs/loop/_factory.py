@@ -15,6 +15,7 @@ from collections.abc import Mapping
 from dataclasses import dataclass
 from typing import Any
 
+from .._json import JsonRecord
 from ..exceptions import SimulationError
 from ..plants import Burckhardt, QuarterCar, XbsEstimator, road
 from ._adapter import ObserverXbsEstimator
@@ -34,7 +35,7 @@ IMPLEMENTATIONS = ("python", "c")
 
 
 @dataclass(frozen=True)
-class EstimatorSpec:
+class EstimatorSpec(JsonRecord, error=SimulationError):
     """Which XBS observer closes the loop, and how it is built.
 
     Parameters

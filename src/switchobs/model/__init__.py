@@ -4,8 +4,8 @@ from ._builtin import builtin_model, builtin_names, load_model
 from ._expr import FUNCTIONS as EXPRESSION_FUNCTIONS
 from ._expr import exact_number, free_names, parse_expression
 from ._interop import entries, is_statespace, matrix_rows, statespace_matrices
-from ._model import Model, make_symbol, numeric, rational_value, read_toml
+from ._model import Model, make_symbol, numeric, rational_value, read_toml, symbols_from_json, symbols_to_json
 
 __all__ = ["EXPRESSION_FUNCTIONS", "Model", "entries", "exact_number", "is_statespace", "matrix_rows",
            "statespace_matrices", "free_names", "builtin_model", "builtin_names", "load_model", "make_symbol", "numeric",
-           "parse_expression", "rational_value", "read_toml"]
+           "parse_expression", "rational_value", "read_toml", "symbols_to_json", "symbols_from_json"]

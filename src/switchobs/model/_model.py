@@ -40,6 +40,35 @@ def make_symbol(name: str, *, positive: bool = False, negative: bool = False) ->
     return sp.Symbol(name, real=True)
 
 
+_SIGNS = ("positive", "negative", "real")
+
+
+def symbols_to_json(*exprs: Any) -> dict[str, str]:
+    """``{name: "positive" | "negative" | "real"}`` for the free symbols of ``exprs`` (expressions or matrices).
+
+    With an expression's text, what :func:`symbols_from_json` needs to rebuild it equal: to sympy, symbols of
+    one name with other assumptions are other symbols.
+    """
+    out = {}
+    for expr in exprs:
+        for s in getattr(expr, "free_symbols", ()):
+            out[s.name] = "positive" if s.is_positive else "negative" if s.is_negative else "real"
+    return dict(sorted(out.items()))
+
+
+def symbols_from_json(data: Any, *, what: str) -> dict[str, sp.Symbol]:
+    """The symbols of :func:`symbols_to_json`, made by :func:`make_symbol`, by name (for :func:`parse_expression`).
+
+    Raises
+    ------
+    ModelError
+        Not a mapping of names to ``positive``, ``negative`` or ``real``; the message names ``what``.
+    """
+    if not isinstance(data, Mapping) or any(v not in _SIGNS for v in data.values()):
+        raise ModelError(f"{what}: 'symbols' must map names to one of {', '.join(_SIGNS)}, got {data!r:.80}")
+    return {str(k): make_symbol(str(k), positive=v == "positive", negative=v == "negative") for k, v in data.items()}
+
+
 def _names(value: Any, key: str) -> tuple[str, ...]:
     if value is None:
         return ()

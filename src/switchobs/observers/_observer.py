@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 from collections.abc import Mapping, Sequence
+from fractions import Fraction
 from typing import Any
 
 import numpy as np
@@ -256,7 +257,26 @@ class _Observer:
             "h_max": None if self.h_max is None else str(self.h_max),
             "max_substeps": self.max_substeps,
             "error_codes": {c.name: int(c) for c in REFERENCE_STATUSES},
+            "spec": self.spec.to_json(),
         }
+
+    @classmethod
+    def from_json(cls, data: Any) -> "_Observer":
+        """The observer of :meth:`to_json`, rebuilt from its ``spec`` (model, gains and values exact), its
+        method, readout and sub-step bound, as an unpickled observer is.
+
+        Raises
+        ------
+        SimulationError
+            Another observer class, or no ``spec``.
+        ModelError
+            A spec the model rejects.
+        """
+        if not isinstance(data, Mapping) or data.get("kind") != cls.__name__ or "spec" not in data:
+            raise SimulationError(f"a {cls.__name__} JSON needs kind {cls.__name__!r} and its 'spec' "
+                                  f"({cls.__name__}.to_json writes them), got {data!r:.80}")
+        bound = None if data.get("h_max") is None else (Fraction(data["h_max"]), int(data["max_substeps"]))
+        return cls._from_spec(ObserverSpec.from_json(data["spec"]), str(data["method"]), data.get("readout"), bound)
 
     def __str__(self) -> str:
         lines = [f"{type(self).__name__} of model {self.model.name!r} ({self.method}, ZOH signals "

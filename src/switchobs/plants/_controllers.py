@@ -30,6 +30,7 @@ import math
 from dataclasses import asdict, dataclass
 from typing import Any
 
+from .._json import JsonRecord
 from ..exceptions import SimulationError
 from ._vehicle import BrakeActuator, QuarterCar
 
@@ -53,7 +54,7 @@ def _positive(owner: str, **values: float) -> None:
 
 
 @dataclass(frozen=True)
-class FivePhaseABS:
+class FivePhaseABS(JsonRecord, error=SimulationError):
     """Five-phase hybrid ABS on wheel-acceleration thresholds (seed 000 Fig. 5, seed 001 Fig. 6.6).
 
     Phases and transitions (``x2`` the wheel-acceleration offset)::
@@ -285,7 +286,7 @@ class _FivePhaseRuntime:
 
 
 @dataclass(frozen=True)
-class TwoPhaseABS:
+class TwoPhaseABS(JsonRecord, error=SimulationError):
     """Two-phase XBS-based hybrid ABS (seed 001 Fig. 4.3, law (4.3) without ``dz1*/dt``).
 
     Phase 1 tracks ``z1* = +z_ref`` until the XBS exceeds ``chi_b``; phase 2
@@ -388,7 +389,7 @@ class _TwoPhaseRuntime:
 
 
 @dataclass(frozen=True)
-class ContinuousXbsControl:
+class ContinuousXbsControl(JsonRecord, error=SimulationError):
     """Continuous XBS regulation of seed 001 Sec. 4.1, eqs. (4.2)-(4.3).
 
     ``z1* = -kr z2 / (c z2 + d)`` and

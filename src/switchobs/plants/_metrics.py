@@ -30,6 +30,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 import numpy.typing as npt
 
+from .._json import JsonRecord
 from ..exceptions import SimulationError
 from ._json import from_fields
 from ._vehicle import GRAVITY
@@ -54,7 +55,7 @@ def _cumtrapz(t: npt.NDArray[np.float64], f: npt.NDArray[np.float64]) -> npt.NDA
 
 
 @dataclass(frozen=True)
-class Assumption1Status:
+class Assumption1Status(JsonRecord, error=SimulationError):
     """Assumption 1 of seed 001 (Sec. 3.2) measured on a trajectory.
 
     Attributes
@@ -143,7 +144,7 @@ def assumption1(t: npt.ArrayLike, y: npt.ArrayLike, vx: npt.ArrayLike, u: npt.Ar
 
 
 @dataclass(frozen=True)
-class Reconvergence:
+class Reconvergence(JsonRecord, error=SimulationError):
     """Re-convergence of the XBS estimate after a road change (or after the ABS activation)."""
 
     label: str

@@ -25,6 +25,7 @@ from typing import Any
 
 import numpy as np
 
+from .._json import JsonRecord
 from ..exceptions import SimulationError, SolverFailure
 
 __all__ = ["PoincareMap", "PoincareFixedPoint", "simulate_return_map"]
@@ -39,7 +40,7 @@ def _w0(x: float) -> float:
 
 
 @dataclass(frozen=True)
-class PoincareFixedPoint:
+class PoincareFixedPoint(JsonRecord, error=SimulationError):
     """Fixed point ``ζ1°`` of the map and its stability figures.
 
     Attributes
@@ -80,7 +81,7 @@ class PoincareFixedPoint:
 
 
 @dataclass(frozen=True)
-class PoincareMap:
+class PoincareMap(JsonRecord, error=SimulationError):
     """The return map (4.13)-(4.14) of the two-phase ABS.
 
     Parameters

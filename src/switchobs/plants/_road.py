@@ -14,6 +14,7 @@ from collections.abc import Sequence
 from dataclasses import dataclass
 from typing import Any
 
+from .._json import JsonRecord
 from ..exceptions import SimulationError
 from ._json import from_fields
 from ._tyre import Burckhardt, road
@@ -22,7 +23,7 @@ __all__ = ["RoadChange", "RoadSchedule"]
 
 
 @dataclass(frozen=True)
-class RoadChange:
+class RoadChange(JsonRecord, error=SimulationError):
     """A change to ``road`` starting at a time or when the wheel reaches a position.
 
     Parameters

@@ -317,12 +317,21 @@ class TwoAxleResult:
                 raise
             raise SimulationError(f"not a two-axle result JSON ({type(exc).__name__}: {exc})") from None
 
+    @property
+    def _status_text(self) -> str:
+        return self.status + (f" ({self.message})" if self.status == "observer-failed" else "")
+
+    @property
+    def _distance_text(self) -> str:
+        """The distance metric under the name it deserves: a run that did not stop only travelled it."""
+        what = "stopping distance" if self.status == "stopped" else "distance travelled"
+        return f"{what} {self.metrics['stopping_distance_m']:.2f} m"
+
     def _repr_markdown_(self) -> str:
         """The run in a notebook: status, the vehicle figures and one row per axle."""
         m = self.metrics
-        status = self.status + (f" ({self.message})" if self.status == "observer-failed" else "")
         lines = [f"**Two-axle braking**: {self.scenario}", "",
-                 f"status: **{status}**; stopping distance {m['stopping_distance_m']:.2f} m, mean deceleration "
+                 f"status: **{self._status_text}**; {self._distance_text}, mean deceleration "
                  f"{m['mean_deceleration_m_s2']:.2f} m/s²; speed estimate error "
                  f"$(\\hat v_x - v_x)/v_x$: mean {m['speed_error_mean_pct']:.1f} %, worst "
                  f"{m['speed_error_max_pct']:.1f} %", "",
@@ -339,9 +348,7 @@ class TwoAxleResult:
 
     def __str__(self) -> str:
         m = self.metrics
-        status = self.status + (f" ({self.message})" if self.status == "observer-failed" else "")
-        distance = "stopping distance" if self.status == "stopped" else "distance travelled"
-        lines = [str(self.scenario), f"  status: {status}; {distance} {m['stopping_distance_m']:.2f} m,"
+        lines = [str(self.scenario), f"  status: {self._status_text}; {self._distance_text},"
                  f" mean deceleration {m['mean_deceleration_m_s2']:.2f} m/s²",
                  f"  speed estimate error: mean {m['speed_error_mean_pct']:.1f} %, worst "
                  f"{m['speed_error_max_pct']:.1f} %"]

@@ -27,6 +27,7 @@ from typing import Any
 import numpy as np
 import numpy.typing as npt
 
+from .._json import JsonRecord
 from ..exceptions import SimulationError
 
 __all__ = ["Burckhardt", "ExponentialTyre", "ROADS", "road", "road_names", "fit_exponential",
@@ -38,7 +39,7 @@ D2_HOANG = 52.0
 
 
 @dataclass(frozen=True)
-class Burckhardt:
+class Burckhardt(JsonRecord, error=SimulationError):
     """Burckhardt's tyre characteristic with its odd extension to braking.
 
     Parameters
@@ -185,7 +186,7 @@ def road(name: str | Burckhardt) -> Burckhardt:
 
 
 @dataclass(frozen=True)
-class ExponentialTyre:
+class ExponentialTyre(JsonRecord, error=SimulationError):
     """The linearly parametrised approximation (18) of seed 000, for ``lambda <= 0``.
 
     Parameters

@@ -6,6 +6,7 @@ import math
 from dataclasses import asdict, dataclass
 from typing import Any
 
+from .._json import JsonRecord
 from ..exceptions import SimulationError
 
 __all__ = ["QuarterCar", "BrakeActuator", "PrescribedSpeed", "GRAVITY", "MAX_SPEED_KMH", "MAX_DELAY_S",
@@ -34,7 +35,7 @@ def _positive(owner: str, **values: float) -> None:
 
 
 @dataclass(frozen=True)
-class QuarterCar:
+class QuarterCar(JsonRecord, error=SimulationError):
     """Wheel and corner mass of the quarter-car model (seed 001 eq. (2.1))::
 
         J dω/dt = -R Fx - γ_b P_b,    m dvx/dt = Fx,    Fx = Fz mu(lambda)
@@ -94,7 +95,7 @@ class QuarterCar:
 
 
 @dataclass(frozen=True)
-class BrakeActuator:
+class BrakeActuator(JsonRecord, error=SimulationError):
     """Brake-pressure actuator: rate limit, pressure range and an optional transport delay.
 
     Parameters
@@ -124,7 +125,7 @@ class BrakeActuator:
 
 
 @dataclass(frozen=True)
-class PrescribedSpeed:
+class PrescribedSpeed(JsonRecord, error=SimulationError):
     """Vehicle speed imposed from outside (a drum test rig): ``vx(t) = vx(0) - decel t``.
 
     Seed 001 Sec. 3.4 drives the wheel with ``vx(0) = 25 m/s`` and a constant

@@ -39,6 +39,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from .._atomic import staged_directory
+from .._json import JsonRecord, fields_from_json
 from ..exceptions import SimulationError
 from ._progress import Progress, Stage, check_prerequisites
 
@@ -70,7 +71,7 @@ STAGES: tuple[Stage, ...] = (
 
 
 @dataclass(frozen=True)
-class ModelResult:
+class ModelResult(JsonRecord, error=SimulationError):
     """Design, certificate and C code of one model."""
 
     model: str
@@ -108,7 +109,7 @@ class ModelResult:
 
 
 @dataclass(frozen=True)
-class DemoReport:
+class DemoReport(JsonRecord, error=SimulationError):
     """Everything the demo produced (``report.md`` is its readable form)."""
 
     out_dir: str
@@ -128,6 +129,23 @@ class DemoReport:
         return {"out_dir": self.out_dir, "ok": self.ok, "settings": self.settings.to_json(),
                 "models": [m.to_json() for m in self.models], "braking": self.braking.to_json(),
                 "files": list(self.files), "timings": dict(self.timings)}
+
+    @classmethod
+    def from_json(cls, data: Any) -> DemoReport:
+        """The report of :meth:`to_json`.
+
+        Raises
+        ------
+        SimulationError
+            A missing key or a malformed part; the message names it.
+        """
+        from ..loop import BrakingSummary, DemoSettings  # the parts' types are imported only when needed (top)
+
+        if not isinstance(data, Mapping):
+            raise SimulationError(f"a demo report JSON must be an object, got {data!r:.80}")
+        return fields_from_json(cls, data, error=SimulationError, what="demo report",
+                                settings=DemoSettings.from_json(data.get("settings")),
+                                braking=BrakingSummary.from_json(data.get("braking")))
 
     def __str__(self) -> str:
         lines = [f"switchobs demo ({'fast' if self.settings.fast else 'full'}): report in {self.out_dir}"]

@@ -31,6 +31,9 @@ from typing import Any
 import numpy as np
 import numpy.typing as npt
 
+from .._json import JsonRecord
+from ..exceptions import SimulationError
+
 __all__ = ["EncoderComparison", "encoder_comparison", "BoxRun", "two_axle_box_check", "synthesis_evidence",
            "FLOOR_WINDOW_S", "LOAD_BOX", "DEMO_BOX"]
 
@@ -45,7 +48,7 @@ LOAD_BOX = ("a=250:450",)
 
 
 @dataclass(frozen=True)
-class EncoderComparison:
+class EncoderComparison(JsonRecord, error=SimulationError):
     """Errors of the seed's design and the synthesised pair on the demo braking with the 60-ppr encoder.
 
     Attributes
@@ -163,7 +166,7 @@ def encoder_comparison(*, fast: bool = True, noise_weight: float = 0.1) -> Encod
 
 
 @dataclass(frozen=True)
-class BoxRun:
+class BoxRun(JsonRecord, error=SimulationError):
     """The box certificate of the front wheel's 3D observer against a two-axle braking (:func:`two_axle_box_check`).
 
     Attributes

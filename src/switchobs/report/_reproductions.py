@@ -20,8 +20,9 @@ import numpy as np
 
 from .._atomic import write_files
 from .._figures import panels, save_figure
+from .._json import JsonRecord
 from .._progress import progress
-from ..exceptions import PrerequisiteError
+from ..exceptions import PrerequisiteError, SimulationError
 from ..loop import X2_MEASUREMENTS, EncoderX2, EstimatorSpec, xbs_estimator
 from ..plants import (GRAVITY, TABLE41_SEED, BrakingResult, BrakingScenario, FivePhaseABS, PoincareMap, Table41Result,
                       TwoAxleResult, TwoPhaseABS,
@@ -47,7 +48,7 @@ def _end(name: str) -> str:
 
 
 @dataclass(frozen=True)
-class ReproductionPage:
+class ReproductionPage(JsonRecord, error=SimulationError):
     """One page to write: its path relative to the repository root and its full text."""
 
     path: str

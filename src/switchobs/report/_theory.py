@@ -17,8 +17,10 @@ from pathlib import Path
 import sympy as sp
 
 from .._atomic import write_files
+from .._json import JsonRecord
 from .._progress import progress
 from ..design import GainDesign, design
+from ..exceptions import ModelError
 from ..model import Model, builtin_model
 
 __all__ = ["THEORY_MODELS", "TheoryDocument", "theory_document", "theory_documents", "write_theory"]
@@ -39,7 +41,7 @@ _MINUS = re.compile(r"^([A-Za-z]+)(\d+)_minus$")
 
 
 @dataclass(frozen=True)
-class TheoryDocument:
+class TheoryDocument(JsonRecord, error=ModelError):
     """One generated document: its file name and Markdown text."""
 
     name: str

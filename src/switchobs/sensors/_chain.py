@@ -18,6 +18,7 @@ import numpy as np
 import numpy.typing as npt
 
 from .._progress import progress
+from .._json import JsonRecord
 from .._validate import check_work
 from ..exceptions import SimulationError
 from ._encoder import Encoder, EncoderEvents
@@ -220,7 +221,7 @@ class ChainResult:
 
 
 @dataclass(frozen=True, eq=False)
-class EstimatorComparison:
+class EstimatorComparison(JsonRecord, error=SimulationError):
     """Several estimators on the same events: our counterpart of seed 001 Table 6.1."""
 
     trajectory: str
@@ -248,11 +249,12 @@ class EstimatorComparison:
         return (f"no finite RMS error for {', '.join(bad)}: no estimate after the warm-up "
                 f"({self.results[0].settings.warmup_s:g} s), or the estimate diverged")
 
-    def to_json(self) -> dict[str, Any]:
+    def to_json(self, *, arrays: bool = False) -> dict[str, Any]:
+        """The figures of each estimator (its whole :meth:`ChainResult.to_json` with the arrays if ``arrays``)."""
         enc = {k: v for k, v in asdict(self.encoder).items() if not k.startswith("_")}
         return {"trajectory": self.trajectory, "encoder": enc, "failure": self.failure,
                 "settings": self.results[0].settings.to_json() if self.results else None,
-                "results": [r.summary() for r in self.results]}
+                "results": [r.to_json(arrays=True) if arrays else r.summary() for r in self.results]}
 
     def __str__(self) -> str:
         e = self.encoder

@@ -17,6 +17,7 @@ from typing import Any
 import numpy as np
 import numpy.typing as npt
 
+from .._json import JsonRecord
 from ..exceptions import SimulationError
 from ._trajectory import AngleTrajectory
 from ._validate import check_int, check_positive, check_range
@@ -190,7 +191,7 @@ class Encoder:
 
 
 @dataclass(frozen=True, eq=False)
-class EncoderEvents:
+class EncoderEvents(JsonRecord, error=SimulationError):
     """Time-stamped encoder events.
 
     Attributes

@@ -24,6 +24,7 @@ from typing import Any
 import numpy as np
 import numpy.typing as npt
 
+from .._json import JsonRecord, array_to_json
 from ..exceptions import SimulationError
 from ._super_twisting import low_pass
 from ._validate import as_signal, check_increasing, check_positive, check_range
@@ -34,7 +35,7 @@ Array = npt.NDArray[np.float64]
 
 
 @dataclass(frozen=True, eq=False)
-class StiffnessEstimate:
+class StiffnessEstimate(JsonRecord, error=SimulationError):
     """Result of the RLS identification (27)-(30).
 
     Attributes
@@ -69,10 +70,14 @@ class StiffnessEstimate:
         """Longitudinal stiffness ``C_x = (R C_x) / R`` (N per unit slip)."""
         return self.stiffness_radius / self.radius_m
 
-    def to_json(self) -> dict[str, Any]:
-        return {"stiffness_radius_nm": self.stiffness_radius, "radius_m": self.radius_m,
-                "radius_identified": self.given_radius_m is None, "stiffness_n": self.stiffness_n,
-                "updates": int(self.t.size)}
+    def to_json(self, *, arrays: bool = False) -> dict[str, Any]:
+        """The identified figures (with the update times and the estimate history if ``arrays``)."""
+        out: dict[str, Any] = {"stiffness_radius_nm": self.stiffness_radius, "radius_m": self.radius_m,
+                               "radius_identified": self.given_radius_m is None, "stiffness_n": self.stiffness_n,
+                               "updates": int(self.t.size), "given_radius_m": self.given_radius_m}
+        if arrays:
+            out.update(t=array_to_json(self.t), history=array_to_json(self.history))
+        return out
 
     def __str__(self) -> str:
         how = "identified" if self.given_radius_m is None else "given"

@@ -9,13 +9,16 @@ from typing import Any
 import numpy as np
 import numpy.typing as npt
 
+from .._json import JsonRecord
+from ..exceptions import SimulationError
+
 __all__ = ["SpeedEstimate", "rms_error", "estimate_lag"]
 
 Array = npt.NDArray[np.float64]
 
 
 @dataclass(frozen=True, eq=False)
-class SpeedEstimate:
+class SpeedEstimate(JsonRecord, error=SimulationError):
     """Wheel speed and acceleration estimated at the controller samples.
 
     Attributes

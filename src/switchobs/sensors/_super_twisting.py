@@ -22,6 +22,7 @@ from typing import Any
 import numpy as np
 import numpy.typing as npt
 
+from .._json import JsonRecord, array_to_json
 from ..exceptions import SimulationError
 from ._validate import as_signal, check_increasing, check_positive
 
@@ -33,7 +34,7 @@ KnownAcceleration = Callable[[float, float], float]
 
 
 @dataclass(frozen=True)
-class SuperTwistingGains:
+class SuperTwistingGains(JsonRecord, error=SimulationError):
     """Gains ``(lambda, alpha)`` of (9) and the data of the rule (12) they were drawn from.
 
     Attributes
@@ -158,7 +159,7 @@ class SuperTwistingObserver:
 
 
 @dataclass(frozen=True, eq=False)
-class SuperTwistingRun:
+class SuperTwistingRun(JsonRecord, error=SimulationError):
     """Estimates of the discrete observer (13) at the measurement times.
 
     Attributes
@@ -178,9 +179,13 @@ class SuperTwistingRun:
     z2: Array
     gains: SuperTwistingGains
 
-    def to_json(self) -> dict[str, Any]:
-        return {"gains": self.gains.to_json(), "samples": int(self.t.size),
-                "x2_hat_final": float(self.x2_hat[-1])}
+    def to_json(self, *, arrays: bool = False) -> dict[str, Any]:
+        """The gains and the final estimate (with the time series if ``arrays``)."""
+        out: dict[str, Any] = {"gains": self.gains.to_json(), "samples": int(self.t.size),
+                               "x2_hat_final": float(self.x2_hat[-1])}
+        if arrays:
+            out.update({k: array_to_json(getattr(self, k)) for k in ("t", "x1_hat", "x2_hat", "z2")})
+        return out
 
     def __str__(self) -> str:
         return f"SuperTwistingRun: {self.t.size} steps, x2_hat(end) = {self.x2_hat[-1]:.6g}; {self.gains}"

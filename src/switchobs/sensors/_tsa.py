@@ -17,6 +17,7 @@ from typing import Any
 import numpy as np
 import numpy.typing as npt
 
+from .._json import JsonRecord, array_to_json
 from ..exceptions import SimulationError
 from ._validate import as_signal, check_increasing, check_int, check_positive
 
@@ -64,7 +65,7 @@ def _fit(tw: Array, thw: Array, t_eval: Array, order: int) -> tuple[Array, Array
 
 
 @dataclass(frozen=True, eq=False)
-class TsaEstimate:
+class TsaEstimate(JsonRecord, error=SimulationError):
     """Position, speed and acceleration from the TSA at the controller sample times.
 
     Attributes
@@ -96,11 +97,8 @@ class TsaEstimate:
     def to_json(self, *, arrays: bool = False) -> dict[str, Any]:
         out: dict[str, Any] = {"order": self.order, "window": self.window, "samples": int(self.t.size),
                                "valid_samples": int(np.count_nonzero(self.valid))}
-        if arrays:
-            out.update({k: np.where(self.valid, getattr(self, k), np.nan).tolist()
-                        for k in ("theta", "omega", "alpha")}, t=self.t.tolist())
-            out = {k: ([None if isinstance(x, float) and math.isnan(x) else x for x in v]
-                       if isinstance(v, list) else v) for k, v in out.items()}
+        if arrays:  # NaN (null) where fewer than `window` events were available
+            out.update({k: array_to_json(getattr(self, k)) for k in ("t", "theta", "omega", "alpha", "last_event")})
         return out
 
     def __str__(self) -> str:

@@ -26,8 +26,9 @@ from typing import Any
 
 import sympy as sp
 
+from .._json import fields_from_json
 from ..exceptions import ModelError
-from ..model import Model
+from ..model import Model, parse_expression, rational_value, symbols_from_json, symbols_to_json
 
 __all__ = ["SCALE", "STATUS_TEXT", "REFERENCE_STATUSES", "StepStatus", "Guard", "domain_guards",
            "ObserverSpec"]
@@ -97,9 +98,24 @@ class Guard:
     status: StepStatus
     reason: str
 
-    def to_json(self) -> dict[str, str | int]:
+    def to_json(self) -> dict[str, Any]:
         return {"expr": str(self.expr), "kind": self.kind, "status": int(self.status),
-                "status_name": self.status.name, "reason": self.reason}
+                "status_name": self.status.name, "reason": self.reason, "symbols": symbols_to_json(self.expr)}
+
+    @classmethod
+    def from_json(cls, data: Any) -> Guard:
+        """The guard of :meth:`to_json` (``expr`` parsed over its ``symbols``).
+
+        Raises
+        ------
+        ModelError
+            A missing key, an expression that does not parse, or an unknown status.
+        """
+        if not isinstance(data, Mapping) or not isinstance(data.get("expr"), str):
+            raise ModelError(f"a guard JSON needs its 'expr' text, got {data!r:.80}")
+        names = symbols_from_json(data.get("symbols", {}), what="guard")
+        return fields_from_json(cls, data, error=ModelError, what="guard",
+                                expr=parse_expression(data["expr"], names, what="guard expression"))
 
     def __str__(self) -> str:
         sym = {"positive": "> 0", "negative": "< 0", "nonzero": "!= 0", "nonnegative": ">= 0"}[self.kind]
@@ -312,7 +328,26 @@ class ObserverSpec:
                 "values": {k: str(v) for k, v in self.values.items()}, "unknown": list(self.unknown),
                 "Gamma": [list(r) for r in self.Gamma], "drift": [str(c) for c in self.drift],
                 "regressor": [[str(q) for q in row] for row in self.regressor],
-                "state_names": list(self.state_names), "signal_names": list(self.signal_names)}
+                "state_names": list(self.state_names), "signal_names": list(self.signal_names),
+                "model_definition": self.model.to_json()}
+
+    @classmethod
+    def from_json(cls, data: Any) -> ObserverSpec:
+        """The spec of :meth:`to_json`: the model from ``model_definition``, the values exact (``drift`` and
+        ``regressor`` are derived again).
+
+        Raises
+        ------
+        ModelError
+            No ``model_definition``, a malformed value or key, or a spec the model rejects.
+        """
+        if not isinstance(data, Mapping) or not isinstance(data.get("values"), Mapping) \
+                or "model_definition" not in data:
+            raise ModelError(f"an observer spec JSON needs 'values' and 'model_definition', got {data!r:.80}")
+        return fields_from_json(cls, data, error=ModelError, what="observer spec",
+                                model=Model.from_json(data["model_definition"]),
+                                values={str(k): rational_value(v, what=f"value of {k}")
+                                        for k, v in data["values"].items()})
 
     def __str__(self) -> str:
         lines = [f"observer spec of model {self.model.name!r}: state {', '.join(self.state_names)}; "

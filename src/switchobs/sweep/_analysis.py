@@ -18,6 +18,7 @@ from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from typing import Any
 
+from .._json import JsonRecord, fields_from_json
 from ..exceptions import SimulationError
 from ._case import BrakingCase
 from ._run import CaseResult
@@ -44,7 +45,7 @@ def _mean(values: Sequence[Any]) -> float | None:
 
 
 @dataclass(frozen=True)
-class SummaryTable:
+class SummaryTable(JsonRecord, error=SimulationError):
     """The mean of ``metric`` over the cases of each (row, column) cell (None: no number in the cell).
 
     A true/false metric (``certified``) counts 1/0: its mean is the share of the cell's cases where it holds.
@@ -144,6 +145,23 @@ class TunedDesign:
                 "pairs": [{"beta1": b1, "beta2": b2, "reconvergence_s": num(r), "noise_rms": num(n), "cases": c}
                           for b1, b2, r, n, c in self.pairs],
                 "front": list(self.front), "command": self.command}
+
+    @classmethod
+    def from_json(cls, data: Any) -> TunedDesign:
+        """The design of :meth:`to_json` (a ``null`` cost of a pair, never re-converged, is ``inf`` again).
+
+        Raises
+        ------
+        SimulationError
+            A missing key or a malformed pair.
+        """
+        try:
+            pairs = [[p["beta1"], p["beta2"], *(math.inf if p[k] is None else p[k] for k in ("reconvergence_s", "noise_rms")),
+                      p["cases"]] for p in data["pairs"]]
+        except (KeyError, TypeError) as exc:
+            raise SimulationError(f"a tuned design JSON needs 'pairs' with beta1, beta2, reconvergence_s, noise_rms "
+                                  f"and cases ({exc!r})") from None
+        return fields_from_json(cls, {**data, "pairs": pairs}, error=SimulationError, what="tuned design")
 
     def __str__(self) -> str:
         lines = [f"Pareto front of {self.observer} gains (worst re-convergence after a road change vs settled "

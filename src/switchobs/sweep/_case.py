@@ -65,6 +65,20 @@ class _CaseBase:
                 else value
         return out
 
+    @classmethod
+    def from_json(cls, data: dict[str, Any]) -> Case:
+        """The case of :meth:`to_json` (:func:`case_from_json`, which must give this class).
+
+        Raises
+        ------
+        SimulationError
+            Another kind of case, an unknown key or a value the case rejects.
+        """
+        case = case_from_json(data)
+        if not isinstance(case, cls):
+            raise SimulationError(f"a {cls.__name__} JSON needs kind {getattr(cls, 'kind', '?')!r}, got {case.kind!r}")
+        return case
+
     @property
     def case_id(self) -> str:
         """16 hex digits of the SHA-256 of the canonical JSON: equal specs, equal ids, on any machine."""

@@ -25,6 +25,7 @@ from dataclasses import dataclass, replace
 from pathlib import Path
 from typing import Any
 
+from .._json import fields_from_json
 from .._progress import CountedProgress, progress
 from ..exceptions import PrerequisiteError, SimulationError
 from ._case import Case
@@ -69,6 +70,23 @@ class SweepResult:
         return {"cases": len(self.results), "failed": len(self.failed), "resumed": self.resumed,
                 "engine": self.engine, "path": None if self.path is None else str(self.path),
                 "wall_time_s": self.wall_time_s, "rows": [r.to_json() for r in self.results]}
+
+    @classmethod
+    def from_json(cls, data: Any) -> SweepResult:
+        """The sweep of :meth:`to_json` (its ``rows`` read by :meth:`CaseResult.from_json`).
+
+        Raises
+        ------
+        SimulationError
+            No ``rows`` or a malformed row or key.
+        """
+        if not isinstance(data, dict) or not isinstance(data.get("rows"), list):
+            raise SimulationError(f"a sweep result JSON needs a list of 'rows', got {data!r:.80}")
+        try:
+            rows = tuple(CaseResult.from_json(r) for r in data["rows"])
+        except (KeyError, TypeError) as exc:
+            raise SimulationError(f"a sweep result JSON has a malformed row ({exc!r})") from None
+        return fields_from_json(cls, data, error=SimulationError, what="sweep result", results=rows)
 
     def __str__(self) -> str:
         ran = len(self.results) - self.resumed

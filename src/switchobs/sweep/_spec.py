@@ -23,8 +23,9 @@ from dataclasses import dataclass, fields
 from pathlib import Path
 from typing import Any
 
+from .._json import fields_from_json
 from ..exceptions import SimulationError
-from ._case import BrakingCase, Case, CertifyCase
+from ._case import BrakingCase, Case, CertifyCase, case_from_json
 from ._grid import (Choice, Distribution, Integers, RoadChanges, Uniform, a_of_load, arange, certify_grid, grid,
                     linspace, monte_carlo)
 
@@ -63,10 +64,28 @@ class SweepSpec:
     heatmaps: tuple[HeatmapSpec, ...]
     tune: bool
 
-    def to_json(self) -> dict[str, Any]:
-        return {"name": self.name, "description": self.description, "kind": self.kind, "cases": len(self.cases),
-                "tables": [vars(t) for t in self.tables], "heatmaps": [vars(h) for h in self.heatmaps],
-                "tune": self.tune}
+    def to_json(self, *, include_cases: bool = False) -> dict[str, Any]:
+        """The spec with its number of cases (and every case's :meth:`~BrakingCase.to_json` if ``include_cases``)."""
+        out: dict[str, Any] = {"name": self.name, "description": self.description, "kind": self.kind,
+                               "cases": len(self.cases), "tables": [vars(t) for t in self.tables],
+                               "heatmaps": [vars(h) for h in self.heatmaps], "tune": self.tune}
+        if include_cases:
+            out["case_specs"] = [c.to_json() for c in self.cases]
+        return out
+
+    @classmethod
+    def from_json(cls, data: Any) -> SweepSpec:
+        """The spec of ``to_json(include_cases=True)``.
+
+        Raises
+        ------
+        SimulationError
+            No ``case_specs``, or a malformed case or key.
+        """
+        if not isinstance(data, dict) or not isinstance(data.get("case_specs"), list):
+            raise SimulationError("a sweep spec JSON needs its 'case_specs'; write it with to_json(include_cases=True)")
+        return fields_from_json(cls, data, error=SimulationError, what="sweep spec",
+                                cases=tuple(case_from_json(c) for c in data["case_specs"]))
 
     def __str__(self) -> str:
         return f"sweep {self.name!r}: {len(self.cases)} {self.kind} cases" + (
