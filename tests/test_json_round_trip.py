@@ -74,10 +74,14 @@ def _public_writers() -> dict[str, type]:
 # ------------------------------------------------------------------ equality
 def same(a: Any, b: Any) -> bool:
     """Equal as values: dataclasses field by field (fields with ``compare=False`` skipped), arrays by shape,
-    dtype kind and entries (NaN equal to NaN), floats with NaN equal to NaN, containers item by item.
+    dtype kind and entries (NaN equal to NaN), floats with NaN equal to NaN, containers item by item, and
+    the live objects (observers) by what they pickle as (their ``__reduce__`` arguments: spec, method...).
 
     ``==`` of a dataclass holding NaN or arrays is no test: ``nan != nan``, and arrays compare elementwise.
     """
+    if type(a).__module__.startswith("switchobs") and not dataclasses.is_dataclass(a) and "__reduce__" in {
+            k for klass in type(a).__mro__ if klass is not object for k in vars(klass)}:
+        return type(a) is type(b) and same(a.__reduce__()[1], b.__reduce__()[1])
     if dataclasses.is_dataclass(a) and not isinstance(a, type):
         return type(a) is type(b) and all(same(getattr(a, f.name), getattr(b, f.name))
                                            for f in dataclasses.fields(a) if f.compare)
@@ -146,6 +150,28 @@ def _sweep():
              CertifyCase(model="abs-xbs3", spectrum="-beta1,-beta2,-beta2", betas=(("beta1", 50.0), ("beta2", 60.0)),
                          dwell=False)]
     return run_sweep(cases, scheduler="none")
+
+
+@functools.cache
+def _c_observer():
+    """The C twin of a reference observer, without its readout (a Python callable, not JSON)."""
+    from switchobs.codegen import CObserver
+    from switchobs.observers import xbs3_observer
+
+    twin = CObserver.like(xbs3_observer(40.0, 60.0, method="radau3"))
+    return CObserver(twin.generated, params={twin.generated.param_names[0]: 0.5})
+
+
+@functools.cache
+def _transformations():
+    """One found by search, one refused in check mode (its candidate read back from its steps)."""
+    from switchobs.transform import System, check_transformation, search_transformation
+
+    systems = SRC.parents[1] / "examples" / "systems"
+    found = search_transformation(System.from_toml(systems / "time-scaled.toml"))
+    refused = check_transformation(System.from_toml(systems / "xbs-aguado.toml"), "y/vx", ["x2", "x1"])
+    assert found.exists and not refused.exists
+    return found, refused
 
 
 def _demo_report():
@@ -227,6 +253,20 @@ def _samples() -> dict[str, Callable[[], tuple[Any, dict[str, Any]]]]:
         plants.simulate(sc, estimator=est)
         return est.record()
 
+    def observer():
+        return xbs4_observer(100.0, 60.0, method="radau3")
+
+    def adaptive():
+        from switchobs.observers import adaptive_xbs_observer
+        return adaptive_xbs_observer(50.0, [[2.0, 0.0], [0.0, 3.0]])
+
+    def normal_form():  # a model not in normal form already: T is not the identity
+        from switchobs.design import observer_normal_form
+        from switchobs.model import Model
+        return observer_normal_form(Model.from_dict({"name": "chain", "states": ["z1", "z2"], "parameters": ["k"],
+                                                     "positive": ["k"], "A": [[0, "k"], [1, 0]],
+                                                     "C": [1, 1], "time_scale": "y"}))
+
     def tuned():
         def row(b1, b2, rec, noise):
             return sweep.CaseResult(sweep.BrakingCase(observer="xbs4", beta1=b1, beta2=b2), "stopped",
@@ -234,6 +274,15 @@ def _samples() -> dict[str, Callable[[], tuple[Any, dict[str, Any]]]]:
         return sweep.tune_betas([row(25, 25, 1.0, 0.1), row(50, 50, 0.5, 0.2), row(200, 200, None, 0.05)])
 
     return {
+        # design, spec, observers, codegen, transform
+        "ObserverNormalForm": lambda: plain(normal_form()),
+        "ObserverSpec": lambda: plain(adaptive().spec),
+        "Guard": lambda: plain(_c_observer().generated.guards[0]),
+        "SwitchedObserver": lambda: plain(observer()),
+        "AdaptiveSwitchedObserver": lambda: plain(adaptive()),
+        "GeneratedObserver": lambda: (_c_observer().generated, {"sources": True}),
+        "CObserver": lambda: (_c_observer(), {"sources": True}),
+        "Transformation": lambda: plain(_transformations()[0]),
         # plants
         "FivePhaseABS": lambda: plain(plants.FivePhaseABS(tracking=True, stall_timeout_s=None)),
         "TwoPhaseABS": lambda: plain(plants.TwoPhaseABS(start_decel_m_s2=None)),
@@ -324,3 +373,46 @@ def test_round_trip(name):
     back = cls.from_json(json.loads(text))
     assert same(back, x), f"{name}: {back!r} != {x!r}"
     assert json.dumps(back.to_json(**options)) == text
+
+
+def _through_json(x: Any, **options: Any) -> Any:
+    return json.loads(json.dumps(x.to_json(**options)))
+
+
+def test_a_refused_candidate_and_a_c_observer_with_its_readout_round_trip():
+    from switchobs.codegen import CObserver
+    from switchobs.exceptions import TransformError
+    from switchobs.observers import xbs3_observer
+    from switchobs.transform import Transformation
+
+    refused = _transformations()[1]
+    assert same(Transformation.from_json(_through_json(refused)), refused)
+    edited = {**_through_json(refused), "failing": "nothing"}
+    with pytest.raises(TransformError, match="differs from the stored one"):
+        Transformation.from_json(edited)
+    ref = xbs3_observer(40.0, 60.0, method="radau3")
+    twin = CObserver.like(ref)
+    back = CObserver.from_json(_through_json(twin, sources=True), readout=ref.readout)
+    assert same(back, twin) and back.readout(np.array([0.1, 0.2, 0.3])) == ref.readout(np.array([0.1, 0.2, 0.3]))
+
+
+def test_a_json_without_its_parts_or_of_another_class_is_refused_by_name():
+    """What to_json leaves out by default is asked for by name; one class's JSON is not read as another's."""
+    from switchobs.codegen import GeneratedObserver
+    from switchobs.plants import FivePhaseABS, TwoPhaseABS
+    from switchobs.sensors import EncoderEvents
+    from switchobs.sweep import BrakingCase, SweepSpec
+
+    with pytest.raises(SwitchobsError, match=r"EncoderEvents JSON needs 'times'; write it with to_json\(arrays=True\)"):
+        EncoderEvents.from_json(_encoder_events().to_json())
+    with pytest.raises(SwitchobsError, match=r"to_json\(sources=True\)"):
+        GeneratedObserver.from_json(_c_observer().generated.to_json())
+    x, options = SAMPLES["SweepSpec"]()
+    with pytest.raises(SwitchobsError, match=r"to_json\(include_cases=True\)"):
+        SweepSpec.from_json(x.to_json())
+    with pytest.raises(SwitchobsError, match="has name 'five-phase', got 'two-phase'"):
+        FivePhaseABS.from_json(TwoPhaseABS().to_json())
+    with pytest.raises(SwitchobsError, match="needs kind 'braking', got 'certify'"):
+        BrakingCase.from_json(_sweep().results[1].case.to_json())
+    with pytest.raises(SwitchobsError, match="needs 6 thresholds"):  # the class judges the values
+        FivePhaseABS.from_json({**FivePhaseABS().to_json(), "eps": "fast"})

@@ -352,10 +352,34 @@ class CObserver:
         return getattr(getattr(self._readout, "__self__", None), "readout_code", None)
 
     # ------------------------------------------------------------------ output
-    def to_json(self) -> dict[str, Any]:
-        return {"kind": "CObserver", "library": str(self.library_path),
-                "params": dict(zip(self.generated.param_names, self.params.tolist())),
-                **{k: v for k, v in self.generated.to_json().items() if k != "parameters"}}
+    def to_json(self, *, sources: bool = False) -> dict[str, Any]:
+        """The library, the runtime parameters and what the C means (and, if ``sources``, the whole
+        :meth:`GeneratedObserver.to_json` with the files: what :meth:`from_json` reads)."""
+        out = {"kind": "CObserver", "library": str(self.library_path),
+               "params": dict(zip(self.generated.param_names, self.params.tolist())),
+               **{k: v for k, v in self.generated.to_json().items() if k != "parameters"}}
+        if sources:
+            out["generated"] = self.generated.to_json(sources=True)
+        return out
+
+    @classmethod
+    def from_json(cls, data: Any, *, readout: Callable[[Any], Any] | None = None, compiler: str | None = None,
+                  cache_dir: str | Path | None = None) -> "CObserver":
+        """The observer of ``to_json(sources=True)``, compiled again (from the cache when it holds the library).
+
+        A readout is a Python callable, not JSON: give it again as ``readout``.
+
+        Raises
+        ------
+        ModelError
+            Written without ``sources=True``, or a malformed part.
+        CodegenError, PrerequisiteError
+            As the constructor: the C does not compile, or there is no compiler.
+        """
+        if not isinstance(data, Mapping) or not isinstance(data.get("params"), Mapping) or "generated" not in data:
+            raise ModelError("a CObserver JSON needs 'params' and 'generated'; write it with to_json(sources=True)")
+        return cls(GeneratedObserver.from_json(data["generated"]), params=data["params"], readout=readout,
+                   compiler=compiler, cache_dir=cache_dir)
 
     def __str__(self) -> str:
         return f"compiled {self.generated}\n  library: {self.library_path}"

@@ -47,6 +47,7 @@ import sympy as sp
 from ..design import GainDesign
 from .._validate import adaptation_gain, round_down, substep_bound
 from .._atomic import write_files
+from .._json import fields_from_json
 from ..exceptions import CodegenError, DimensionError, ModelError
 from ..model import Model, numeric, rational_value
 from ..spec import METHODS, STATUS_TEXT, STEP_METHODS, Guard, ObserverSpec, StepStatus, require_explicit
@@ -226,8 +227,9 @@ class GeneratedObserver:
         """
         return write_files(directory, self.files, what="the generated C into")
 
-    def to_json(self) -> dict[str, Any]:
-        return {
+    def to_json(self, *, sources: bool = False) -> dict[str, Any]:
+        """What the files hold and mean (and the files' text if ``sources``: what :meth:`from_json` reads)."""
+        out = {
             "prefix": self.prefix, "real": self.real, "method": self.method, "kind": self.kind,
             "model": self.model_name, "nx": self.nx, "ns": self.ns, "np": self.np,
             "states": list(self.state_names), "signals": list(self.signal_names),
@@ -239,7 +241,33 @@ class GeneratedObserver:
             "max_substeps": self.max_substeps, "certificate": self.certificate,
             "files": sorted(self.files), "casadi_version": self.casadi_version,
             "references": dict(self.references), "original": list(self.original_names),
+            "description": self.description, "equations": list(self.equations),
+            "signal_roles": list(self.signal_roles),
         }
+        if sources:
+            out.update(header=self.header, source=self.source, readme=self.readme)
+        return out
+
+    @classmethod
+    def from_json(cls, data: Any) -> GeneratedObserver:
+        """The generated observer of ``to_json(sources=True)`` (without ``step_function``, the casadi function
+        the C was generated from: the files do not need it).
+
+        Raises
+        ------
+        ModelError
+            No sources, a missing key or a malformed part; the message names it.
+        """
+        if not isinstance(data, Mapping) or "source" not in data:
+            raise ModelError("a generated observer JSON needs its files; write it with to_json(sources=True)")
+        try:
+            flat = {**data, "model_name": data["model"], "state_names": data["states"],
+                    "signal_names": data["signals"], "param_names": list(data["parameters"]),
+                    "default_params": list(data["parameters"].values()), "original_names": data["original"],
+                    "guards": [Guard.from_json(g) for g in data["guards"]]}
+        except (KeyError, TypeError, AttributeError) as exc:
+            raise ModelError(f"not a generated observer JSON ({type(exc).__name__}: {exc})") from None
+        return fields_from_json(cls, flat, error=ModelError, what="generated observer")
 
     def __str__(self) -> str:
         params = ", ".join(f"{n}={v:.6g}" for n, v in zip(self.param_names, self.default_params))

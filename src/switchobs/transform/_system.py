@@ -131,6 +131,15 @@ class System:
                    values=values, symbols=symbols, description=str(data.get("description", "")),
                    references={str(k): str(v) for k, v in references.items()})
 
+    def to_dict(self) -> dict[str, Any]:
+        """The keys of the TOML format that :meth:`from_dict` reads back into an equal system (numbers exact)."""
+        return {"name": self.name, "description": self.description, "states": list(self.states),
+                "f": [str(e) for e in self.f], "g": [[str(e) for e in self.g.row(i)] for i in range(self.g.rows)],
+                "h": str(self.h), "output": self.output, "inputs": list(self.inputs),
+                "parameters": list(self.parameters), "external": list(self.external),
+                "positive": list(self.positive), "negative": list(self.negative),
+                "values": {k: str(v) for k, v in self.values.items()}, "references": dict(self.references)}
+
     @classmethod
     def from_toml(cls, path: str | Path) -> "System":
         """Read a system from a TOML file (keys as in :meth:`from_dict`)."""

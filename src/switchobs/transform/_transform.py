@@ -13,7 +13,7 @@ from __future__ import annotations
 
 import json
 import re
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 from typing import Any
 
@@ -89,7 +89,40 @@ class Transformation:
                         "model": self.model.to_dict()})
         out["steps"] = [{"title": s.title, "items": {label: _text(v) for label, v in s.items}, "note": s.note}
                         for s in self.steps]
+        out["system_definition"] = self.system.to_dict()
         return out
+
+    @classmethod
+    def from_json(cls, data: Any) -> Transformation:
+        """The transformation of :meth:`to_json`, derived again from ``system_definition`` (in check mode, with
+        the candidate of its "Candidate" step) and compared with the stored JSON.
+
+        Raises
+        ------
+        TransformError
+            No ``system_definition``, an unknown mode, or a derivation that differs from the stored one (a
+            file edited by hand, or written by another version).
+        ModelError
+            A system definition that does not read.
+        """
+        if not isinstance(data, Mapping) or not isinstance(data.get("system_definition"), Mapping):
+            raise TransformError("a transformation JSON needs its 'system_definition' (Transformation.to_json "
+                                 "writes it)")
+        system = System.from_dict(data["system_definition"], source="transformation JSON")
+        if data.get("mode") == "search":
+            again = search_transformation(system)
+        elif data.get("mode") == "check":
+            candidate = next((list(s.get("items", {}).values()) for s in data.get("steps", [])
+                              if s.get("title") == "Candidate"), None)
+            if not candidate:
+                raise TransformError("a check-mode transformation JSON needs its 'Candidate' step")
+            again = check_transformation(system, candidate[0], candidate[1:])
+        else:
+            raise TransformError(f"a transformation JSON needs mode 'check' or 'search', got {data.get('mode')!r}")
+        if json.loads(json.dumps(again.to_json())) != json.loads(json.dumps(dict(data))):
+            raise TransformError(f"the derivation of {system.name!r} differs from the stored one: the JSON was "
+                                 "edited or written by another version; derive it again")
+        return again
 
     def __str__(self) -> str:
         lines = [f"switchobs transform: {self.system.name} ({self.mode} mode)"]
