@@ -156,8 +156,9 @@ class TunedDesign:
             A missing key or a malformed pair.
         """
         try:
-            pairs = [[p["beta1"], p["beta2"], *(math.inf if p[k] is None else p[k] for k in ("reconvergence_s", "noise_rms")),
-                      p["cases"]] for p in data["pairs"]]
+            costs = ("reconvergence_s", "noise_rms")
+            pairs = [[p["beta1"], p["beta2"], *(math.inf if p[k] is None else p[k] for k in costs), p["cases"]]
+                     for p in data["pairs"]]
         except (KeyError, TypeError) as exc:
             raise SimulationError(f"a tuned design JSON needs 'pairs' with beta1, beta2, reconvergence_s, noise_rms "
                                   f"and cases ({exc!r})") from None
