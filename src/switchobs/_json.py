@@ -89,7 +89,7 @@ def fields_from_json(cls: type[T], data: Any, *, error: type[SwitchobsError], wh
     """
     what = what or cls.__name__
     if not isinstance(data, Mapping):
-        raise error(f"a {what} JSON must be an object, got {data!r}")
+        raise error(f"a {what} JSON must be an object, got {data!r:.80}")
     for key, value in data.items():
         constant = getattr(cls, key, None) if key not in _hints(cls) else None
         if isinstance(constant, str) and value != constant:
