@@ -124,7 +124,7 @@ def _steps(t: npt.ArrayLike, x2: npt.ArrayLike, vx: npt.ArrayLike, u: npt.ArrayL
             raise SimulationError(f"{name} has shape {a.shape}; give one value per step ({tt.size - 1})")
     for name, a in (("t", tt), ("x2", arrays[1]), ("vx", arrays[2]), ("u", uu), ("dt", hh)):
         if not np.all(np.isfinite(a)):
-            raise SimulationError(f"{name} holds {a[~np.isfinite(a)][0]!r}; the run's arrays must be finite")
+            raise SimulationError(f"{name} holds {float(a[~np.isfinite(a)][0])!r}; the run's arrays must be finite")
     keep = np.concatenate([[True], hh > 0.0])
     return tt[keep], arrays[1][keep], arrays[2][keep], uu[keep[1:]], hh[keep[1:]]
 
