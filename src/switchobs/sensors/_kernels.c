@@ -25,8 +25,8 @@ int switchobs_three_stage_run(const double *cfg, double *state, int64_t n, const
                               const double *omega, const double *alpha, double *out_omega, double *out_alpha);
 int switchobs_three_stage_update(const double *cfg, double *state, double theta, double omega, double alpha,
                                  double *out);
-int switchobs_notch_run(double *state, double dt, double damping, int64_t n, const double *u,
-                        const double *centre, double *out);
+void switchobs_notch_run(double *state, double dt, double damping, int64_t n, const double *u,
+                         const double *centre, double *out);
 
 /* (Phi_w, Phi_a, |Phi_w|^2, |Phi_a|^2): ThreeStageEstimator.regressors */
 static void regressors(const double *cfg, double th, double om, double al, double *pw, double *pa, double *nw,
@@ -131,7 +131,8 @@ static int detrend(const double *cfg, double *state, double th, double om, doubl
     return 1;
 }
 
-/* ThreeStageEstimator.update: out = (omega_r_hat, alpha_r_hat) */
+/* ThreeStageEstimator.update: out = (omega_r_hat, alpha_r_hat); 1 (nothing done) for more harmonics than
+   the buffers hold */
 int switchobs_three_stage_update(const double *cfg, double *state, double theta, double omega, double alpha,
                                  double *out) {
     int d = 2 * (int)cfg[CFG_M];
@@ -170,8 +171,8 @@ int switchobs_three_stage_run(const double *cfg, double *state, int64_t n, const
 }
 
 /* NotchFilter.update over n samples; state = (started, z1, z2, u_prev) */
-int switchobs_notch_run(double *state, double dt, double damping, int64_t n, const double *u,
-                        const double *centre, double *out) {
+void switchobs_notch_run(double *state, double dt, double damping, int64_t n, const double *u,
+                         const double *centre, double *out) {
     double xi2 = 2.0 * damping;
     for (int64_t i = 0; i < n; ++i) {
         double arg = fabs(centre[i]) * dt / 2.0;
@@ -190,5 +191,4 @@ int switchobs_notch_run(double *state, double dt, double damping, int64_t n, con
         state[3] = u[i];
         out[i] = u[i] - xi2 * state[2];
     }
-    return 0;
 }

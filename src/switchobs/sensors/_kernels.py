@@ -15,7 +15,7 @@ from typing import Any
 import numpy as np
 import numpy.typing as npt
 
-from ..exceptions import CodegenError
+from ..exceptions import CodegenError, SimulationError
 
 __all__ = ["use_kernels", "three_stage_layout", "three_stage_run", "three_stage_update", "notch_run"]
 
@@ -37,8 +37,9 @@ def _library() -> Any:
         lib.switchobs_three_stage_run.argtypes = [vp, vp, i64, vp, vp, vp, vp, vp]
         lib.switchobs_three_stage_update.argtypes = [vp, vp, dbl, dbl, dbl, vp]
         lib.switchobs_notch_run.argtypes = [vp, dbl, dbl, i64, vp, vp, vp]
-        for fn in (lib.switchobs_three_stage_run, lib.switchobs_three_stage_update, lib.switchobs_notch_run):
+        for fn in (lib.switchobs_three_stage_run, lib.switchobs_three_stage_update):
             fn.restype = ctypes.c_int
+        lib.switchobs_notch_run.restype = None
         _LIBRARY.append(lib)
     return _LIBRARY[0]
 
@@ -80,17 +81,22 @@ def _ptr(a: Array) -> int:
     return a.ctypes.data
 
 
+def _check(code: int, cfg: Array) -> None:
+    if code:   # the kernel's buffers hold MAX_HARMONICS harmonics, which ThreeStageEstimator checks first
+        raise SimulationError(f"the three-stage kernel refused {int(cfg[0])} harmonics")
+
+
 def three_stage_update(cfg: Array, state: Array, out: Array, theta: float, omega: float, alpha: float) -> None:
     """One sample; ``out`` (2,) receives ``(omega_r_hat, alpha_r_hat)``."""
-    _library().switchobs_three_stage_update(_ptr(cfg), _ptr(state), theta, omega, alpha, _ptr(out))
+    _check(_library().switchobs_three_stage_update(_ptr(cfg), _ptr(state), theta, omega, alpha, _ptr(out)), cfg)
 
 
 def three_stage_run(cfg: Array, state: Array, theta: Array, omega: Array, alpha: Array) -> tuple[Array, Array]:
     """The samples in order (contiguous float64 arrays); the compensated speed and acceleration."""
     th, om, al = (np.ascontiguousarray(v, dtype=float) for v in (theta, omega, alpha))
     out_om, out_al = np.empty(th.size), np.empty(th.size)
-    _library().switchobs_three_stage_run(_ptr(cfg), _ptr(state), th.size, _ptr(th), _ptr(om), _ptr(al),
-                                         _ptr(out_om), _ptr(out_al))
+    _check(_library().switchobs_three_stage_run(_ptr(cfg), _ptr(state), th.size, _ptr(th), _ptr(om), _ptr(al),
+                                                _ptr(out_om), _ptr(out_al)), cfg)
     return out_om, out_al
 
 
