@@ -60,7 +60,8 @@ def loop_table(repeats: int) -> tuple[list[str], str]:
                              compiled=compiled)
 
     meas = encoder_measurements(t, x2, vx, u[1:], dt[1:], encoder=encoder, radius_m=vehicle.radius_m)
-    timed = [("per step: `EncoderLoopEstimator.update`, Python three-stage (before)", cpu(lambda: per_step(False), repeats)),
+    timed = [("per step: `EncoderLoopEstimator.update`, Python three-stage (before)",
+              cpu(lambda: per_step(False), repeats)),
              ("per step: `EncoderLoopEstimator.update`, C three-stage", cpu(lambda: per_step(True), repeats)),
              ("whole run: `encoder_measurements`, Python three-stage", cpu(lambda: at_once(False), repeats)),
              ("whole run: `encoder_measurements`, C three-stage", cpu(lambda: at_once(True), repeats))]
@@ -68,10 +69,11 @@ def loop_table(repeats: int) -> tuple[list[str], str]:
     table = ["| encoder chain of the ABS loop | CPU [ms] | µs/sample | × real time | against before |",
              "| --- | ---: | ---: | ---: | --- |"]
     for name, st in timed:
+        against = ratio(st.median, before) if st.median != before else "–"
         table.append(f"| {name} | {st.show(1e3)} | {number(1e6 * st.median / meas.t.size)} "
-                     f"| {number(DURATION_S / st.median)} | {ratio(st.median, before) if st.median != before else '–'} |")
-    method = (f"The chain inside the ABS loop: {DURATION_S:g} s of five-phase ABS braking from 180 km/h, dry asphalt then "
-              f"snow from 1 s ({t.size - 1} plant steps, {meas.events} edges, {meas.t.size} controller samples), "
+                     f"| {number(DURATION_S / st.median)} | {against} |")
+    method = (f"The chain inside the ABS loop: {DURATION_S:g} s of five-phase ABS braking from 180 km/h, dry asphalt "
+              f"then snow from 1 s ({t.size - 1} plant steps, {meas.events} edges, {meas.t.size} controller samples), "
               "recorded once; then the chain on the recorded steps (wheel reconstruction, edges, TSA, three-stage, "
               "notch, the plant's history at the window centres), without observers. Per step is what the loop "
               "runs when the controller reads the estimate; whole run is `switchobs.loop.encoder_measurements` after "

@@ -23,7 +23,7 @@ import numpy as np
 import numpy.typing as npt
 
 from ..exceptions import SimulationError
-from ._kernels import three_stage_layout, three_stage_run, three_stage_update, notch_run, use_kernels
+from ._kernels import notch_run, three_stage_layout, three_stage_run, three_stage_update, use_kernels
 from ._series import SpeedEstimate
 from ._tsa import TsaEstimate
 from ._validate import check_int, check_positive, check_range
@@ -171,10 +171,10 @@ class ThreeStageEstimator:
         with a +-40 rad/s swing at 1 Hz it makes the estimate six times worse
         than the raw TSA.
     compiled : bool or None
-        Run the C port of the estimator (``_kernels.c``, some 30 times faster): ``None`` (default)
-        when a C compiler is installed, ``True`` always, ``False`` never (the Python reference).  The
-        two agree to rounding: the C sums its dot products left to right, numpy's BLAS does not
-        (``tests/test_sensors_kernels.py`` bounds the difference).
+        Run the C port of the estimator (``_kernels.c``; ``benchmarks/encoder_chain.py`` times both):
+        ``None`` (default) when a C compiler is installed, ``True`` always, ``False`` never (the Python
+        reference).  The two agree to rounding: the C sums its dot products left to right, numpy's
+        BLAS does not (``tests/test_sensors_kernels.py`` bounds the difference).
 
     Raises
     ------
