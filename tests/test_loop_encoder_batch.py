@@ -89,18 +89,24 @@ def braking():
     rec = Recorder(chain([("xbs4", observer, initial)], compiled=False))
     res = simulate(sc, estimator=rec, observer_in_loop=False)
     assert res.status == "duration" and res.metrics.abs_cycles >= 2
-    return rec.arrays(), rec.inner.record(), observer, initial
+    return rec.arrays(), rec.inner.record(), observer, initial, res.series["xbs_hat"]
 
 
 def test_batch_equals_the_per_step_chain_bit_for_bit_with_the_python_estimator(braking):
-    arrays, record, observer, initial = braking
+    arrays, record, observer, initial, xbs_hat = braking
     meas = batch(arrays, compiled=False)
     for name in RECORD:
         assert np.array_equal(getattr(meas, name), getattr(record, name), equal_nan=True), name
     assert meas.events == record.events > 500
     assert np.array_equal(meas.steps_t, record.steps_t) and np.array_equal(meas.omega_steps, record.omega_steps)
     # the observer stepped as observer_steps says gives the per-step chain's estimates
-    assert np.array_equal(estimates(meas, observer, initial), record.estimates["xbs4"], equal_nan=True)
+    ours = estimates(meas, observer, initial)
+    assert np.array_equal(ours, record.estimates["xbs4"], equal_nan=True)
+    # and sample_step puts them on the plant's steps: what the per-step chain handed simulate at each
+    last = np.searchsorted(meas.sample_step, np.arange(xbs_hat.size), side="right") - 1
+    on_steps = np.where(last >= 0, ours[np.maximum(last, 0)], np.nan)
+    on_steps = np.where(np.isnan(on_steps), 0.5, on_steps)       # initial_xbs before the first measurement
+    assert np.array_equal(on_steps[1:], xbs_hat[1:])      # the series' first row is before any update()
     # measured from the sample at which the TSA window first holds its 15 edges on
     first = int(np.argmax(np.isfinite(meas.x2_measured)))
     assert 0 < first and np.all(np.isfinite(meas.x2_measured[first:]))
@@ -108,7 +114,7 @@ def test_batch_equals_the_per_step_chain_bit_for_bit_with_the_python_estimator(b
 
 @needs_compiler
 def test_batch_with_the_c_kernel_equals_the_python_specification_to_rounding(braking):
-    arrays, record, _, _ = braking
+    arrays, record, _, _, _ = braking
     meas = batch(arrays, compiled=True)
     for name in RECORD:
         ours, spec = getattr(meas, name), getattr(record, name)
@@ -124,7 +130,7 @@ def test_batch_with_the_c_kernel_equals_the_python_specification_to_rounding(bra
 
 @needs_compiler
 def test_batch_equals_the_per_step_chain_bit_for_bit_with_the_c_kernel(braking):
-    arrays, _, _, _ = braking
+    arrays = braking[0]
     record = drive(chain(compiled=True), arrays).record()
     meas = batch(arrays, compiled=True)
     for name in RECORD:
@@ -153,6 +159,7 @@ def test_a_locked_wheel_and_skipped_steps_give_the_per_step_numbers(compiled):
     for name in RECORD:
         assert np.array_equal(getattr(meas, name), getattr(record, name), equal_nan=True), name
     assert np.array_equal(meas.omega_steps, record.omega_steps) and meas.events == record.events
+    assert np.all(np.diff(meas.sample_step) >= 0) and 101 not in meas.sample_step    # the skipped step
 
 
 def test_two_edges_on_one_timer_tick_raise_the_per_step_chains_error():

@@ -39,10 +39,15 @@ class EncoderMeasurements:
         Vehicle speed at ``t_measured`` [m/s] (interpolated in the plant's steps).
     pressure_measured : ndarray
         ``∫ u dt`` from the start to ``t_measured`` [bar]: the brake pressure change.
+    sample_step : ndarray of int
+        For each sample, the index in the run's arrays (``t``, ``x2``, ``vx`` of
+        :func:`encoder_measurements`) of the step end whose ``update()`` processes it: the estimate
+        that call hands back already includes the sample.
     events : int
         Encoder edges generated.
     steps_t, omega_steps : ndarray
-        Plant step ends (the start first) and the wheel speed reconstructed there [rad/s].
+        Plant step ends (the start first, without the skipped steps) and the wheel speed
+        reconstructed there [rad/s].
     """
 
     t: Array
@@ -55,6 +60,7 @@ class EncoderMeasurements:
     vx: Array
     vx_measured: Array
     pressure_measured: Array
+    sample_step: npt.NDArray[np.int_]
     events: int
     steps_t: Array
     omega_steps: Array
@@ -97,7 +103,7 @@ class EncoderMeasurements:
         out: dict[str, Any] = {k: clean(getattr(self, k)) for k in (
             "t", "t_measured", "x2_tsa", "x2_notch", "x2_measured", "omega_tsa", "omega_measured", "vx",
             "vx_measured", "pressure_measured", "steps_t", "omega_steps")}
-        out["events"] = self.events
+        out.update(sample_step=self.sample_step.tolist(), events=self.events)
         return out
 
     def __str__(self) -> str:
@@ -108,8 +114,9 @@ class EncoderMeasurements:
 
 
 def _steps(t: npt.ArrayLike, x2: npt.ArrayLike, vx: npt.ArrayLike, u: npt.ArrayLike,
-           dt: npt.ArrayLike | None) -> tuple[Array, Array, Array, Array, Array]:
-    """The run's arrays, checked, without the steps of non-positive length (``update`` ignores them)."""
+           dt: npt.ArrayLike | None) -> tuple[Array, Array, Array, Array, Array, npt.NDArray[np.int_]]:
+    """The run's arrays, checked, without the steps of non-positive length (``update`` ignores them), and the
+    indices of the step ends kept."""
     arrays = [np.asarray(a, dtype=float) for a in (t, x2, vx)]
     tt = arrays[0]
     if tt.ndim != 1 or tt.size < 1:
@@ -126,7 +133,7 @@ def _steps(t: npt.ArrayLike, x2: npt.ArrayLike, vx: npt.ArrayLike, u: npt.ArrayL
         if not np.all(np.isfinite(a)):
             raise SimulationError(f"{name} holds {float(a[~np.isfinite(a)][0])!r}; the run's arrays must be finite")
     keep = np.concatenate([[True], hh > 0.0])
-    return tt[keep], arrays[1][keep], arrays[2][keep], uu[keep[1:]], hh[keep[1:]]
+    return tt[keep], arrays[1][keep], arrays[2][keep], uu[keep[1:]], hh[keep[1:]], np.flatnonzero(keep)
 
 
 def _wheel(x2: Array, vx: Array, h: Array, radius: float) -> tuple[Array, Array]:
@@ -226,7 +233,7 @@ def encoder_measurements(t: npt.ArrayLike, x2: npt.ArrayLike, vx: npt.ArrayLike,
         raise SimulationError(f"rate_hz must be finite and > 0, got {rate_hz!r}")
     rate, radius = float(rate_hz), float(radius_m)
     comp = ThreeStageEstimator(harmonics, dt_s=1.0 / rate, compiled=compiled)
-    tt, yy, vv, uu, hh = _steps(t, x2, vx, u, dt)
+    tt, yy, vv, uu, hh, kept = _steps(t, x2, vx, u, dt)
     om, theta = _wheel(yy, vv, hh, radius)
     stamps, angles, edge_step = _edges(encoder, tt, hh, om, theta)
     pressure = np.cumsum(np.concatenate([[0.0], uu * hh]))
@@ -278,4 +285,4 @@ def encoder_measurements(t: npt.ArrayLike, x2: npt.ArrayLike, vx: npt.ArrayLike,
         t=ts, t_measured=tc, x2_tsa=at_samples(radius * al_m - ax_c), x2_notch=at_samples(radius * notched - ax_c),
         x2_measured=at_samples(radius * al_c - ax_c), omega_tsa=at_samples(om_m), omega_measured=at_samples(om_c),
         vx=history(ts, step)[0], vx_measured=at_samples(vx_c), pressure_measured=at_samples(p_c),
-        events=int(stamps.size), steps_t=tt, omega_steps=om)
+        sample_step=kept[step], events=int(stamps.size), steps_t=tt, omega_steps=om)
