@@ -3,7 +3,10 @@
 CPU time (``time.process_time``), median [min–max] of 5 runs, per encoder event and per controller
 sample for every stage, and the real-time factor (simulated seconds per CPU second); beside it the whole
 ``switchobs encoder`` process as a user runs it (interpreter, imports, simulation, all estimators).
-Goal of issue 5: the three-stage estimator at least 10x faster than real time.
+Goal of issue 5: the three-stage estimator at least 10x faster than real time.  Then the chain inside
+the ABS loop (issue 14): the per-step ``EncoderLoopEstimator`` against ``encoder_measurements`` on the
+same recorded 10 s braking, each with the Python three-stage estimator and with its C kernel; goal: the
+chain of a 10 s braking well under 0.1 s CPU.
 Run: ``.venv/bin/python benchmarks/encoder_chain.py [--quick] [--repeats 5]``.
 """
 
@@ -13,12 +16,70 @@ import argparse
 import time
 
 import numpy as np
-from _harness import MIN_REPEATS, cli_cpu, cpu, number, publish
+from _harness import MIN_REPEATS, cli_cpu, cpu, number, publish, ratio
 
+from switchobs.loop import EncoderLoopEstimator, encoder_measurements
+from switchobs.plants import BrakingScenario, FivePhaseABS, QuarterCar, RoadChange, RoadSchedule, simulate
 from switchobs.sensors import (ChainSettings, Encoder, ThreeStageEstimator, TimeStamper, braking_trajectory,
                                controller_times, encoder_chain, notch, three_stage, time_stamping)
 
 DURATION_S = 10.0
+
+
+class _Recorder:
+    """An estimator that keeps what the plant hands it: the arrays of ``encoder_measurements``."""
+
+    def reset(self, t0: float, y0: float, vx0: float) -> None:
+        self.rows = [(t0, y0, vx0, 0.0, 0.0)]
+
+    def update(self, t: float, y: float, vx: float, u: float, dt: float) -> float:
+        self.rows.append((t, y, vx, u, dt))
+        return 0.5
+
+
+def loop_table(repeats: int) -> tuple[list[str], str]:
+    """The chain of the ABS loop on one recorded 10 s braking: per step and at once, Python and C estimator."""
+    vehicle = QuarterCar()
+    roads = RoadSchedule("dry-asphalt", [RoadChange("snow", at_time_s=1.0)])
+    sc = BrakingScenario(roads, speed_m_s=50.0, controller=FivePhaseABS(), vehicle=vehicle, duration_s=DURATION_S,
+                         stop_speed_m_s=10.0 / 3.6)
+    rec = _Recorder()
+    simulate(sc, estimator=rec, observer_in_loop=False)
+    rows = np.array(rec.rows)
+    t, x2, vx, u, dt = rows.T
+    encoder = Encoder(ppr=60, dnl_cycles=0.01, eccentricity=0.003, clock_hz=1e6, seed=1)
+
+    def per_step(compiled: bool) -> None:
+        chain = EncoderLoopEstimator((), encoder=encoder, radius_m=vehicle.radius_m, compiled=compiled)
+        chain.reset(t[0], x2[0], vx[0])
+        for i in range(1, t.size):
+            chain.update(t[i], x2[i], vx[i], u[i], dt[i])
+
+    def at_once(compiled: bool) -> None:
+        encoder_measurements(t, x2, vx, u[1:], dt[1:], encoder=encoder, radius_m=vehicle.radius_m,
+                             compiled=compiled)
+
+    meas = encoder_measurements(t, x2, vx, u[1:], dt[1:], encoder=encoder, radius_m=vehicle.radius_m)
+    timed = [("per step: `EncoderLoopEstimator.update`, Python three-stage (before)",
+              cpu(lambda: per_step(False), repeats)),
+             ("per step: `EncoderLoopEstimator.update`, C three-stage", cpu(lambda: per_step(True), repeats)),
+             ("whole run: `encoder_measurements`, Python three-stage", cpu(lambda: at_once(False), repeats)),
+             ("whole run: `encoder_measurements`, C three-stage", cpu(lambda: at_once(True), repeats))]
+    before = timed[0][1].median
+    table = ["| encoder chain of the ABS loop | CPU [ms] | µs/sample | × real time | against before |",
+             "| --- | ---: | ---: | ---: | --- |"]
+    for name, st in timed:
+        against = ratio(st.median, before) if st.median != before else "–"
+        table.append(f"| {name} | {st.show(1e3)} | {number(1e6 * st.median / meas.t.size)} "
+                     f"| {number(DURATION_S / st.median)} | {against} |")
+    method = (f"The chain inside the ABS loop: {DURATION_S:g} s of five-phase ABS braking from 180 km/h, dry asphalt "
+              f"then snow from 1 s ({t.size - 1} plant steps, {meas.events} edges, {meas.t.size} controller samples), "
+              "recorded once; then the chain on the recorded steps (wheel reconstruction, edges, TSA, three-stage, "
+              "notch, the plant's history at the window centres), without observers. Per step is what the loop "
+              "runs when the controller reads the estimate; whole run is `switchobs.loop.encoder_measurements` after "
+              "the plant (the same numbers bit for bit). Before: the per-step chain as it was, the Python "
+              "three-stage estimator.")
+    return table, method
 
 
 def main() -> None:
@@ -47,19 +108,24 @@ def main() -> None:
                 k += 1
             stamper.estimate(float(t))
 
-    def streaming_three_stage() -> None:
-        est = ThreeStageEstimator(5)
+    def streaming_three_stage(compiled: bool) -> None:
+        est = ThreeStageEstimator(5, compiled=compiled)
         for i in np.flatnonzero(tsa.valid):
             est.update(float(tsa.theta[i]), float(tsa.omega[i]), float(tsa.alpha[i]))
 
+    ThreeStageEstimator(compiled=True)     # builds or loads the C kernels before anything is timed
     rows = [
         ("encoder events (simulation side)", cpu(lambda: encoder.events(traj), args.repeats)),
         ("TSA, batch", cpu(lambda: time_stamping(events.times, events.angles, ts), args.repeats)),
         ("TSA, streaming (push + estimate)", cpu(streaming_tsa, args.repeats)),
-        ("notch stage only", cpu(lambda: notch(tsa), args.repeats)),
-        ("three-stage stage only", cpu(lambda: three_stage(tsa), args.repeats)),
-        ("three-stage, streaming `update()`", cpu(streaming_three_stage, args.repeats)),
     ]
+    for label, compiled in (("Python", False), ("C", True)):
+        rows += [
+            (f"notch stage only, {label}", cpu(lambda c=compiled: notch(tsa, compiled=c), args.repeats)),
+            (f"three-stage stage only, {label}", cpu(lambda c=compiled: three_stage(tsa, compiled=c), args.repeats)),
+            (f"three-stage, streaming `update()`, {label}",
+             cpu(lambda c=compiled: streaming_three_stage(c), args.repeats)),
+        ]
     chains = () if args.quick else ("tsa", "notch", "three-stage", "super-twisting")
     for name in chains:
         rows.append((f"chain `{name}` (events → $x_2$)",
@@ -69,6 +135,7 @@ def main() -> None:
     for name, t in rows:
         table.append(f"| {name} | {t.show(1e3)} | {number(1e6 * t.median / n_ev)} | {number(1e6 * t.median / n_s)} "
                      f"| {number(DURATION_S / t.median)} |")
+    loop, loop_method = loop_table(args.repeats)
     cli = ["| command (whole process) | CPU [s] | × real time |", "| --- | ---: | ---: |"]
     for argv in (["encoder", "--duration", "10"], ["encoder", "--profile", "braking", "--estimator", "three-stage"]):
         t = cli_cpu(argv, args.repeats)
@@ -78,8 +145,10 @@ def main() -> None:
             f"controller samples at 1 kHz (the plant simulation, {plant_s:.2f} s CPU, not counted); CPU time "
             f"(`time.process_time`), median [min–max] of {args.repeats} runs; × real time = simulated time / "
             "median CPU time. The whole `switchobs encoder` process (`RUSAGE_CHILDREN`) adds the interpreter, "
-            "the imports and the simulation of the wheel: what a user waits for.",
-            [table, cli], write=not args.quick)
+            "the imports and the simulation of the wheel: what a user waits for. Python and C: the three-stage "
+            "estimator and the notch in Python (the reference) or their C port (`compiled=True`, the default with a "
+            "C compiler); the chains run the default.",
+            [table, cli, [loop_method], loop], write=not args.quick)
 
 
 if __name__ == "__main__":

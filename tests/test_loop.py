@@ -177,7 +177,7 @@ def test_library_code_never_selects_a_matplotlib_backend():
 
 
 @pytest.mark.parametrize("module", ["switchobs.loop", "switchobs.loop._factory", "switchobs.loop._adapter",
-                                    "switchobs.loop._braking"])
+                                    "switchobs.loop._braking", "switchobs.loop._encoder_batch"])
 def test_loop_docstring_examples(module):
     import doctest
     import importlib

@@ -16,6 +16,8 @@ SteppingObserver            -- what it needs (Python reference observers and com
 EncoderLoopEstimator        -- XBS observers fed by a simulated encoder with three-stage compensation
 EncoderLoopRecord           -- what the encoder chain and the observers saw
 EncoderX2, X2_MEASUREMENTS  -- the chain's measured x2 (TSA, notch, three-stage) as the controller's input
+encoder_measurements, EncoderMeasurements -- the same chain over a whole recorded run at once (after the plant,
+                            when the controller does not read the estimate), with the observer's steps
 run_braking, BrakingRun, CONTROLLER_NAMES -- one braking case from plain values (road, speed, controller,
                             observer), compiled to C when possible, metrics back (what a sweep calls)
 DemoSettings, demo_scenario, demo_braking -- the braking of ``switchobs demo``
@@ -36,11 +38,12 @@ from ._adapter import ObserverXbsEstimator, SteppingObserver
 from ._braking import CONTROLLER_NAMES, BrakingRun, run_braking
 from ._demo import (SETTLE_S, BrakingSummary, DemoSettings, ErrorRow, demo_braking, demo_scenario, road_segments,
                     segment_errors, summarise_braking)
+from ._encoder_batch import EncoderMeasurements, encoder_measurements
 from ._encoder_loop import X2_MEASUREMENTS, EncoderLoopEstimator, EncoderLoopRecord, EncoderX2
 from ._factory import DEFAULT_BETA, DEFAULT_GAMMA, INITIAL_STATE, OBSERVER_KINDS, EstimatorSpec, xbs_estimator
 
 __all__ = ["EstimatorSpec", "xbs_estimator", "OBSERVER_KINDS", "DEFAULT_BETA", "DEFAULT_GAMMA", "INITIAL_STATE",
            "ObserverXbsEstimator", "SteppingObserver", "run_braking", "BrakingRun", "CONTROLLER_NAMES", "EncoderLoopEstimator", "EncoderLoopRecord",
-           "EncoderX2", "X2_MEASUREMENTS",
+           "EncoderX2", "X2_MEASUREMENTS", "encoder_measurements", "EncoderMeasurements",
            "DemoSettings", "demo_scenario", "demo_braking", "road_segments", "segment_errors", "ErrorRow",
            "summarise_braking", "BrakingSummary", "SETTLE_S"]

@@ -38,7 +38,7 @@ from __future__ import annotations
 import bisect
 import math
 from collections import deque
-from collections.abc import Sequence
+from collections.abc import Iterable, Sequence
 from dataclasses import dataclass
 from typing import Any
 
@@ -126,6 +126,15 @@ class EncoderLoopRecord(JsonRecord, error=SimulationError):
                 f"observers {', '.join(self.estimates)}" + (f"; beside {', '.join(self.beside)}" if self.beside else ""))
 
 
+def window_mean(stamps: Iterable[float]) -> float:
+    """Mean of the TSA window's time stamps, summed left to right (:func:`encoder_measurements` sums alike)."""
+    total, count = 0.0, 0
+    for s in stamps:
+        total += s
+        count += 1
+    return total / count
+
+
 class EncoderLoopEstimator:
     """XBS observers fed by a simulated wheel encoder with three-stage compensation, inside the ABS loop.
 
@@ -153,6 +162,8 @@ class EncoderLoopEstimator:
         Damping ratio of the notch baseline (seed 001 Sec. 6.3: 0.5).
     beside : sequence of (label, ObserverXbsEstimator)
         Observers stepped with the plant's exact signals, for comparison.
+    compiled : bool or None
+        Run the three-stage estimator's C kernel (see :class:`switchobs.sensors.ThreeStageEstimator`).
 
     Raises
     ------
@@ -165,7 +176,8 @@ class EncoderLoopEstimator:
     def __init__(self, observers: Sequence[tuple[str, SteppingObserver, dict[str, float]]], *,
                  encoder: Encoder, radius_m: float, rate_hz: float = 1000.0,
                  order: int = 2, window: int = 15, harmonics: int = 5, initial_xbs: float = 0.5,
-                 notch_damping: float = 0.5, beside: Sequence[tuple[str, ObserverXbsEstimator]] = ()):
+                 notch_damping: float = 0.5, beside: Sequence[tuple[str, ObserverXbsEstimator]] = (),
+                 compiled: bool | None = None):
         for label, obs, _ in observers:
             check_xbs_signals(obs, f"the encoder loop's observer {label!r}")
         for name, value in (("rate_hz", rate_hz), ("radius_m", radius_m)):
@@ -179,11 +191,12 @@ class EncoderLoopEstimator:
         self._order, self._window, self._harmonics = order, window, harmonics
         self._initial_xbs = float(initial_xbs)
         self._damping = notch_damping
+        self._compiled = compiled
         self._base = encoder.rotation_angles()
         self._nominal = encoder.nominal_angles()
         # validate the chain settings now rather than at the first sample
         TimeStamper(order=order, window=window)
-        ThreeStageEstimator(harmonics, dt_s=1.0 / rate_hz)
+        ThreeStageEstimator(harmonics, dt_s=1.0 / rate_hz, compiled=compiled)
         NotchFilter(dt_s=1.0 / rate_hz, damping=notch_damping)
 
     def describe(self) -> str:
@@ -204,7 +217,7 @@ class EncoderLoopEstimator:
         self._pending: deque[tuple[float, float]] = deque()
         self._stamps: deque[float] = deque(maxlen=self._window)
         self._tsa = TimeStamper(order=self._order, window=self._window)
-        self._comp = ThreeStageEstimator(self._harmonics, dt_s=1.0 / self._rate)
+        self._comp = ThreeStageEstimator(self._harmonics, dt_s=1.0 / self._rate, compiled=self._compiled)
         self._notch = NotchFilter(dt_s=1.0 / self._rate, damping=self._damping)
         #: the latest measured x2 of each kind of X2_MEASUREMENTS (0, free rolling, before the first)
         self.latest_x2 = dict.fromkeys(X2_MEASUREMENTS, 0.0)
@@ -288,7 +301,7 @@ class EncoderLoopEstimator:
                                *(math.nan for _ in self._observers)))
             return
         om_c, al_c = self._comp.update(th_m, om_m, al_m)
-        tc = sum(self._stamps) / len(self._stamps)
+        tc = window_mean(self._stamps)
         vx_c, U_c, ax_c = self._history(tc)
         y_meas = self._R * al_c - ax_c
         x2_tsa, x2_notch = self._R * al_m - ax_c, self._R * self._notch.update(al_m, om_m) - ax_c

@@ -12,7 +12,7 @@ Encoder
 Time-stamping algorithm
     time_stamping, TsaEstimate, tsa_condition_number, controller_times, TimeStamper
 Harmonic compensation
-    ThreeStageEstimator, three_stage, NotchFilter, notch, SpeedEstimate
+    ThreeStageEstimator, three_stage, NotchFilter, notch, notch_series, SpeedEstimate
 Super-twisting observer and identification
     SuperTwistingGains, super_twisting_gains, SuperTwistingObserver, super_twisting,
     SuperTwistingRun, low_pass, StiffnessEstimate, identify_stiffness
@@ -34,7 +34,7 @@ from ._quarter_car import WheelRun, braking_trajectory, burckhardt_tyre, linear_
 from ._series import SpeedEstimate, estimate_lag, rms_error
 from ._super_twisting import (SuperTwistingGains, SuperTwistingObserver, SuperTwistingRun, low_pass,
                               super_twisting, super_twisting_gains)
-from ._three_stage import NotchFilter, ThreeStageEstimator, notch, three_stage
+from ._three_stage import NotchFilter, ThreeStageEstimator, notch, notch_series, three_stage
 from ._trajectory import AngleTrajectory, constant_speed, rpm_to_rad_s, trapezoid_speed, varying_speed
 from ._tsa import TimeStamper, TsaEstimate, controller_times, time_stamping, tsa_condition_number
 
@@ -42,7 +42,7 @@ __all__ = [
     "AngleTrajectory", "constant_speed", "varying_speed", "trapezoid_speed", "rpm_to_rad_s",
     "Encoder", "EncoderEvents",
     "time_stamping", "TsaEstimate", "tsa_condition_number", "controller_times", "TimeStamper",
-    "ThreeStageEstimator", "three_stage", "NotchFilter", "notch", "SpeedEstimate",
+    "ThreeStageEstimator", "three_stage", "NotchFilter", "notch", "notch_series", "SpeedEstimate",
     "SuperTwistingGains", "super_twisting_gains", "SuperTwistingObserver", "super_twisting",
     "SuperTwistingRun", "low_pass", "StiffnessEstimate", "identify_stiffness",
     "WheelRun", "simulate_wheel", "braking_trajectory", "linear_tyre", "burckhardt_tyre",

@@ -23,11 +23,13 @@ import numpy as np
 import numpy.typing as npt
 
 from ..exceptions import SimulationError
+from ._kernels import notch_run, three_stage_layout, three_stage_run, three_stage_update, use_kernels
 from ._series import SpeedEstimate
 from ._tsa import TsaEstimate
 from ._validate import check_int, check_positive, check_range
 
-__all__ = ["ThreeStageEstimator", "NotchFilter", "three_stage", "notch", "MAX_HARMONICS", "check_harmonics"]
+__all__ = ["ThreeStageEstimator", "NotchFilter", "three_stage", "notch", "notch_series", "MAX_HARMONICS",
+           "check_harmonics"]
 
 Array = npt.NDArray[np.float64]
 
@@ -51,13 +53,13 @@ class _HighPass:
 
     def __init__(self, cutoff_hz: float, dt_s: float) -> None:
         tau = 1.0 / (2.0 * math.pi * cutoff_hz)
-        self._a = tau / (tau + dt_s)
+        self.a = tau / (tau + dt_s)
         self._x: float | None = None
         self._y = 0.0
 
     def __call__(self, x: float) -> float:
         # starts at rest on the first sample, so the mean speed never enters the regression
-        self._y = 0.0 if self._x is None else self._a * (self._y + x - self._x)
+        self._y = 0.0 if self._x is None else self.a * (self._y + x - self._x)
         self._x = x
         return self._y
 
@@ -82,15 +84,15 @@ class _RevolutionDetrend:
 
     def __init__(self, dt_s: float, max_revolution_s: float = 0.25, curvature: float = 0.03) -> None:
         self._dt = dt_s
-        self._curvature = curvature
-        self._size = max(8, 2 * int(math.ceil(max_revolution_s / dt_s)) + 6)
-        self._rows = np.zeros((self._size, 3))     # theta, omega, alpha
-        self._sums = np.zeros((self._size, 2))     # running sums of omega and alpha
+        self.curvature = curvature
+        self.size = max(8, 2 * int(math.ceil(max_revolution_s / dt_s)) + 6)
+        self._rows = np.zeros((self.size, 3))     # theta, omega, alpha
+        self._sums = np.zeros((self.size, 2))     # running sums of omega and alpha
         self._k = -1
 
     def __call__(self, theta: float, omega: float, alpha: float) -> tuple[float, float, float, float, float] | None:
         """Push a sample; return ``(theta, omega, alpha, zeta_omega, zeta_alpha)`` of the centre sample, if any."""
-        k, n = self._k + 1, self._size
+        k, n = self._k + 1, self.size
         self._k = k
         self._rows[k % n] = theta, omega, alpha
         self._sums[k % n] = self._sums[(k - 1) % n] + (omega, alpha) if k else (omega, alpha)
@@ -110,7 +112,7 @@ class _RevolutionDetrend:
         two = (integral(centre + 2.0 * half) - integral(centre - 2.0 * half)) / (4.0 * half)
         row = self._rows[centre % n]
         # where the T^2 f'' term is large against the speed the expansion is not to be trusted
-        if abs(one[0] - two[0]) > self._curvature * abs(omega):
+        if abs(one[0] - two[0]) > self.curvature * abs(omega):
             return None
         mean = (4.0 * one - two) / 3.0
         return (float(row[0]), float(row[1]), float(row[2]), float(row[1] - mean[0]), float(row[2] - mean[1]))
@@ -130,12 +132,12 @@ class _Rls:
         self.gamma = np.diag(gamma0).astype(float)
         self.theta = np.zeros(gamma0.size)
         self._kappa, self._dt = kappa, dt_s
-        self._decay = 1.0 / (1.0 - beta * dt_s)
+        self.decay = 1.0 / (1.0 - beta * dt_s)
 
     def step(self, phi: Array, phi_sq: float, zeta: float) -> None:
         # phi_sq = Phi' Phi from the closed form of Section 6.2 (no dot product needed)
         w = self._dt / (1.0 + self._kappa * phi_sq)
-        g = self.gamma * self._decay
+        g = self.gamma * self.decay
         gphi = g @ phi
         self.gamma = g - np.outer(gphi, gphi) * (w / (1.0 + w * float(phi @ gphi)))
         err = float(phi @ self.theta) - zeta
@@ -168,12 +170,19 @@ class ThreeStageEstimator:
         swing near the revolution frequency into the regression: at 600 rpm
         with a +-40 rad/s swing at 1 Hz it makes the estimate six times worse
         than the raw TSA.
+    compiled : bool or None
+        Run the C port of the estimator (``_kernels.c``; ``benchmarks/encoder_chain.py`` times both):
+        ``None`` (default) when a C compiler is installed, ``True`` always, ``False`` never (the Python
+        reference).  The two agree to rounding: the C sums its dot products left to right, numpy's
+        BLAS does not (``tests/test_sensors_kernels.py`` bounds the difference).
 
     Raises
     ------
     SimulationError
         ``harmonics < 1``, non-positive constants, ``beta * dt_s >= 1`` or a
         ``gamma0`` of the wrong length or not decreasing.
+    CodegenError
+        ``compiled=True`` without a working C compiler.
 
     References
     ----------
@@ -189,6 +198,7 @@ class ThreeStageEstimator:
         beta: float = 0.1,
         gamma0: float | Sequence[float] = 1e5,
         highpass_hz: float | None = None,
+        compiled: bool | None = None,
     ) -> None:
         self.harmonics = check_harmonics(harmonics)
         self.dt_s = check_positive(dt_s, "dt_s")
@@ -212,24 +222,51 @@ class ThreeStageEstimator:
         self._sigma2 = float(np.sum(k**2))
         self._sigma4 = float(np.sum(k**4))
         g0 = np.repeat(gam, 2)
-        self._rls_w = _Rls(g0, kappa, beta, self.dt_s)
-        self._rls_a = _Rls(g0, kappa, beta, self.dt_s)
-        if highpass_hz is None:
-            self._detrend: _RevolutionDetrend | None = _RevolutionDetrend(self.dt_s)
+        rls = (_Rls(g0, kappa, beta, self.dt_s), _Rls(g0, kappa, beta, self.dt_s))
+        detrend = _RevolutionDetrend(self.dt_s) if highpass_hz is None else None
+        highpass = None if highpass_hz is None else (_HighPass(highpass_hz, self.dt_s),
+                                                     _HighPass(highpass_hz, self.dt_s))
+        self._cfg: Array | None = None
+        if use_kernels(compiled):
+            # the C kernel runs alone on the initial state of the Python stages, laid out as _kernels.c reads it
+            size = 0 if detrend is None else detrend.size
+            self._cfg = np.array([self.harmonics, self.dt_s, kappa, rls[0].decay, self._sigma2, self._sigma4,
+                                  0.0 if detrend is None else detrend.curvature, size, float(detrend is None),
+                                  0.0 if highpass is None else highpass[0].a])
+            length, gw, ga = three_stage_layout(self.harmonics, size)
+            self._state = np.zeros(length)
+            self._state[0] = -1.0          # the detrend's sample counter before the first sample
+            d = 2 * self.harmonics
+            for at, r in zip((gw, ga), rls):
+                self._state[at:at + d * d] = r.gamma.ravel()
+            self._theta_at = (gw + d * d, ga + d * d)
+            self._out = np.empty(2)
         else:
-            self._detrend = None
-            self._hp_w = _HighPass(highpass_hz, self.dt_s)
-            self._hp_a = _HighPass(highpass_hz, self.dt_s)
+            self._rls_w, self._rls_a = rls
+            self._detrend = detrend
+            if highpass is not None:
+                self._hp_w, self._hp_a = highpass
+
+    @property
+    def compiled(self) -> bool:
+        """Whether the C kernel runs the estimator."""
+        return self._cfg is not None
+
+    def _coefficients(self, which: int) -> Array:
+        if self._cfg is None:
+            return (self._rls_w, self._rls_a)[which].theta.copy()
+        start = self._theta_at[which]
+        return self._state[start:start + 2 * self.harmonics].copy()
 
     @property
     def coefficients_velocity(self) -> Array:
         """Current ``theta'_hat = [a'_1, b'_1, a'_2, b'_2, ...]`` of (6.5)."""
-        return self._rls_w.theta.copy()
+        return self._coefficients(0)
 
     @property
     def coefficients_acceleration(self) -> Array:
         """Current ``theta''_hat = [a''_1, b''_1, ...]`` of (6.6)."""
-        return self._rls_a.theta.copy()
+        return self._coefficients(1)
 
     def regressors(self, theta_m: float, omega_m: float, alpha_m: float) -> tuple[Array, Array, float, float]:
         """``(Phi_w, Phi_a, |Phi_w|^2, |Phi_a|^2)`` of (6.5)-(6.6), the norms in closed form.
@@ -260,6 +297,9 @@ class ThreeStageEstimator:
         theta_m, omega_m, alpha_m : float
             TSA angle (rad), speed (rad/s) and acceleration (rad/s^2), (5.1), (5.4), (5.5).
         """
+        if self._cfg is not None:
+            three_stage_update(self._cfg, self._state, self._out, theta_m, omega_m, alpha_m)
+            return float(self._out[0]), float(self._out[1])
         phi_w, phi_a, nw, na = self.regressors(theta_m, omega_m, alpha_m)
         if self._detrend is None:
             self._rls_w.step(phi_w, nw, self._hp_w(omega_m))
@@ -270,6 +310,23 @@ class ThreeStageEstimator:
             self._rls_w.step(cw, cnw, zeta_w)
             self._rls_a.step(ca, cna, zeta_a)
         return (omega_m - float(phi_w @ self._rls_w.theta), alpha_m - float(phi_a @ self._rls_a.theta))
+
+    def run(self, theta_m: npt.ArrayLike, omega_m: npt.ArrayLike, alpha_m: npt.ArrayLike) -> tuple[Array, Array]:
+        """Feed the samples in order (as :meth:`update` one at a time); return the compensated series.
+
+        Parameters
+        ----------
+        theta_m, omega_m, alpha_m : array_like
+            TSA samples of equal length, all finite (the valid samples of a :class:`TsaEstimate`).
+        """
+        th, om, al = (np.asarray(v, dtype=float).ravel() for v in (theta_m, omega_m, alpha_m))
+        if not th.size == om.size == al.size:
+            raise SimulationError(f"theta_m, omega_m and alpha_m have {th.size}, {om.size} and {al.size} samples; "
+                                  "give one of each per sample")
+        if self._cfg is not None:
+            return three_stage_run(self._cfg, self._state, th, om, al)
+        out = np.array([self.update(a, b, c) for a, b, c in zip(th.tolist(), om.tolist(), al.tolist())])
+        return out.reshape(-1, 2)[:, 0].copy(), out.reshape(-1, 2)[:, 1].copy()
 
 
 class NotchFilter:
@@ -332,6 +389,7 @@ def three_stage(
     beta: float = 0.1,
     gamma0: float | Sequence[float] = 1e5,
     highpass_hz: float | None = None,
+    compiled: bool | None = None,
 ) -> SpeedEstimate:
     """Run the three-stage estimator over a TSA record (seed 001, Fig. 6.2).
 
@@ -349,23 +407,38 @@ def three_stage(
     True
     """
     est = ThreeStageEstimator(harmonics, dt_s=_dt(tsa), kappa=kappa, beta=beta, gamma0=gamma0,
-                              highpass_hz=highpass_hz)
+                              highpass_hz=highpass_hz, compiled=compiled)
     om, al = np.full(tsa.t.size, np.nan), np.full(tsa.t.size, np.nan)
-    for i in np.flatnonzero(tsa.valid):
-        om[i], al[i] = est.update(float(tsa.theta[i]), float(tsa.omega[i]), float(tsa.alpha[i]))
+    ok = tsa.valid
+    om[ok], al[ok] = est.run(tsa.theta[ok], tsa.omega[ok], tsa.alpha[ok])
     return SpeedEstimate(t=tsa.t, omega=om, alpha=al, method="three-stage")
 
 
-def notch(tsa: TsaEstimate, *, damping: float = 0.5) -> SpeedEstimate:
+def notch(tsa: TsaEstimate, *, damping: float = 0.5, compiled: bool | None = None) -> SpeedEstimate:
     """Notch-filter baseline: TSA speed and acceleration through a notch tuned to ``omega_m``.
 
     The centre follows the measured speed, i.e. the wheel's revolution
-    frequency in rad/s (dynamic notch of seed 001, Section 6.3).
+    frequency in rad/s (dynamic notch of seed 001, Section 6.3).  ``compiled``
+    as in :class:`ThreeStageEstimator`; here the C port gives the same numbers bit for bit.
     """
     dt = _dt(tsa)
-    fw, fa = NotchFilter(dt_s=dt, damping=damping), NotchFilter(dt_s=dt, damping=damping)
     om, al = np.full(tsa.t.size, np.nan), np.full(tsa.t.size, np.nan)
-    for i in np.flatnonzero(tsa.valid):
-        w = float(tsa.omega[i])
-        om[i], al[i] = fw.update(w, w), fa.update(float(tsa.alpha[i]), w)
+    ok = tsa.valid
+    om[ok], al[ok] = (notch_series(tsa.omega[ok], tsa.omega[ok], dt_s=dt, damping=damping, compiled=compiled),
+                      notch_series(tsa.alpha[ok], tsa.omega[ok], dt_s=dt, damping=damping, compiled=compiled))
     return SpeedEstimate(t=tsa.t, omega=om, alpha=al, method="notch")
+
+
+def notch_series(u: npt.ArrayLike, centre_rad_s: npt.ArrayLike, *, dt_s: float, damping: float = 0.5,
+                 compiled: bool | None = None) -> Array:
+    """A fresh :class:`NotchFilter` over the samples ``u``, centred at ``centre_rad_s`` at each (equal lengths).
+
+    ``compiled`` as in :class:`ThreeStageEstimator`: the C port gives the same numbers bit for bit.
+    """
+    filt = NotchFilter(dt_s=dt_s, damping=damping)
+    uu, cc = np.asarray(u, dtype=float).ravel(), np.asarray(centre_rad_s, dtype=float).ravel()
+    if uu.size != cc.size:
+        raise SimulationError(f"u has {uu.size} samples and centre_rad_s {cc.size}; give one centre per sample")
+    if use_kernels(compiled):
+        return notch_run(filt.dt_s, filt.damping, uu, cc)
+    return np.array([filt.update(a, b) for a, b in zip(uu.tolist(), cc.tolist())], dtype=float)

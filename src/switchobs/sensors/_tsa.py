@@ -162,16 +162,26 @@ def time_stamping(
     ts = as_signal(sample_times, "sample times")
     check_increasing(ts, "sample times")
     last = np.searchsorted(tt, ts, side="right") - 1
-    out = np.full((3, ts.size), np.nan)
-    ok = last >= n - 1
-    rows = np.flatnonzero(ok)
+    out = fit_windows(tt, th, last, ts, m, n)
+    return TsaEstimate(t=ts, theta=out[0], omega=out[1], alpha=out[2], last_event=last, order=m, window=n)
+
+
+def fit_windows(times: Array, angles: Array, last: npt.NDArray[np.int_], sample_times: Array, order: int,
+                window: int) -> Array:
+    """``(theta, omega, alpha)`` rows (3 x samples) of the fits of the events ``last - window + 1 .. last``.
+
+    NaN where ``last < window - 1``.  Each window's numbers are those of :meth:`TimeStamper.estimate`
+    on the same events (the batched factorisations run the same LAPACK calls matrix by matrix).
+    """
+    out = np.full((3, sample_times.size), np.nan)
+    rows = np.flatnonzero(last >= window - 1)
     # the batched matrices hold rows x n x (m + 1) numbers: a chunk of rows at a time keeps memory bounded
-    chunk = max(1, _FIT_CHUNK // (n * (m + 1)))
+    chunk = max(1, _FIT_CHUNK // (window * (order + 1)))
     for start in range(0, rows.size, chunk):
         sel = rows[start:start + chunk]
-        idx = last[sel, None] + np.arange(-n + 1, 1)
-        out[:, sel] = _fit(tt[idx], th[idx], ts[sel], m)
-    return TsaEstimate(t=ts, theta=out[0], omega=out[1], alpha=out[2], last_event=last, order=m, window=n)
+        idx = last[sel, None] + np.arange(-window + 1, 1)
+        out[:, sel] = _fit(times[idx], angles[idx], sample_times[sel], order)
+    return out
 
 
 def tsa_condition_number(times: npt.ArrayLike, *, order: int = 2, scaled: bool = True) -> float:

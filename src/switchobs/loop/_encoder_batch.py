@@ -1,0 +1,288 @@
+"""The encoder chain over a whole recorded run at once: what :class:`EncoderLoopEstimator` measures step by step.
+
+When the controller does not read the estimate, the plant's trajectory does not depend on the
+encoder chain, so the chain can run after the plant (e.g. after the compiled loop) on the recorded
+steps: :func:`encoder_measurements` reconstructs the wheel, generates the edges, fits the TSA windows
+and compensates the samples in a few array operations and one call of the three-stage kernel, and
+gives the numbers the per-step :class:`EncoderLoopEstimator` gives (the same floating-point
+operations on the same values; ``tests/test_loop_encoder_batch.py`` checks them bit for bit).
+:meth:`EncoderMeasurements.observer_steps` lists the observer steps the per-step estimator takes.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+import numpy.typing as npt
+
+from ..exceptions import SimulationError
+from ..sensors import Encoder, ThreeStageEstimator, notch_series
+from ..sensors._tsa import check_order_window, fit_windows
+
+__all__ = ["EncoderMeasurements", "encoder_measurements"]
+
+Array = npt.NDArray[np.float64]
+
+
+@dataclass(frozen=True, eq=False)
+class EncoderMeasurements:
+    """The encoder chain's measurements at the controller samples of a run.
+
+    Attributes
+    ----------
+    t, t_measured, x2_tsa, x2_notch, x2_measured, omega_tsa, omega_measured, vx : ndarray
+        As :class:`EncoderLoopRecord` (NaN where the TSA window is not full yet).
+    vx_measured : ndarray
+        Vehicle speed at ``t_measured`` [m/s] (interpolated in the plant's steps).
+    pressure_measured : ndarray
+        ``∫ u dt`` from the start to ``t_measured`` [bar]: the brake pressure change.
+    sample_step : ndarray of int
+        For each sample, the index in the run's arrays (``t``, ``x2``, ``vx`` of
+        :func:`encoder_measurements`) of the step end whose ``update()`` processes it: the estimate
+        that call hands back already includes the sample.
+    events : int
+        Encoder edges generated.
+    steps_t, omega_steps : ndarray
+        Plant step ends (the start first, without the skipped steps) and the wheel speed
+        reconstructed there [rad/s].
+    """
+
+    t: Array
+    t_measured: Array
+    x2_tsa: Array
+    x2_notch: Array
+    x2_measured: Array
+    omega_tsa: Array
+    omega_measured: Array
+    vx: Array
+    vx_measured: Array
+    pressure_measured: Array
+    sample_step: npt.NDArray[np.int_]
+    events: int
+    steps_t: Array
+    omega_steps: Array
+
+    def observer_steps(self) -> tuple[int, npt.NDArray[np.int_], Array, Array]:
+        """The observer steps of :class:`EncoderLoopEstimator` on these measurements.
+
+        Returns
+        -------
+        first : int
+            Sample of the first measurement (-1 if none): the observers start there,
+            their first state at ``x2_measured[first]`` (``initial_xbs_state``).
+        at : ndarray of int
+            Samples at which the observers take a step: those whose ``t_measured`` is later than
+            every earlier one.  From ``at[i]`` on (up to ``at[i + 1]``), the estimate is the readout
+            of the state after step ``i``.
+        span : ndarray
+            Step lengths ``t_measured[at[i]] - t_measured[previous]`` [s].
+        signals : ndarray (steps x 3)
+            ``(y, vx, u)`` held over each step: the means of the bounding measurements of ``x2`` and
+            ``vx``, and ``u`` the mean pressure rate of the interval.
+        """
+        ok = np.flatnonzero(np.isfinite(self.t_measured))
+        if ok.size == 0:
+            return -1, np.zeros(0, dtype=np.int_), np.zeros(0), np.zeros((0, 3))
+        tc = self.t_measured[ok]
+        newer = np.concatenate([[True], tc[1:] > np.maximum.accumulate(tc)[:-1]])
+        taken = ok[newer]
+        cur, prev = taken[1:], taken[:-1]
+        span = self.t_measured[cur] - self.t_measured[prev]
+        y, vx, p = self.x2_measured, self.vx_measured, self.pressure_measured
+        signals = np.column_stack([0.5 * (y[prev] + y[cur]), 0.5 * (vx[prev] + vx[cur]),
+                                   (p[cur] - p[prev]) / span])
+        return int(taken[0]), cur, span, signals
+
+    def to_json(self) -> dict[str, Any]:
+        """Arrays as lists (NaN as None)."""
+        def clean(a: Array) -> list[float | None]:
+            return [None if math.isnan(v) else float(v) for v in np.asarray(a, dtype=float)]
+        out: dict[str, Any] = {k: clean(getattr(self, k)) for k in (
+            "t", "t_measured", "x2_tsa", "x2_notch", "x2_measured", "omega_tsa", "omega_measured", "vx",
+            "vx_measured", "pressure_measured", "steps_t", "omega_steps")}
+        out.update(sample_step=self.sample_step.tolist(), events=self.events)
+        return out
+
+    def __str__(self) -> str:
+        ok = np.isfinite(self.t_measured)
+        lag = f"{1e3 * float(np.mean((self.t - self.t_measured)[ok])):.1f} ms" if np.any(ok) else "n/a"
+        return (f"encoder measurements: {self.t.size} samples ({int(np.count_nonzero(ok))} measured), "
+                f"{self.events} edges, mean measurement lag {lag}")
+
+
+def _steps(t: npt.ArrayLike, x2: npt.ArrayLike, vx: npt.ArrayLike, u: npt.ArrayLike,
+           dt: npt.ArrayLike | None) -> tuple[Array, Array, Array, Array, Array, npt.NDArray[np.int_]]:
+    """The run's arrays, checked, without the steps of non-positive length (``update`` ignores them), and the
+    indices of the step ends kept."""
+    arrays = [np.asarray(a, dtype=float) for a in (t, x2, vx)]
+    tt = arrays[0]
+    if tt.ndim != 1 or tt.size < 1:
+        raise SimulationError(f"t must be a 1-D array of step ends with the start first, got shape {tt.shape}")
+    for name, a in zip(("x2", "vx"), arrays[1:]):
+        if a.shape != tt.shape:
+            raise SimulationError(f"{name} has shape {a.shape}, t {tt.shape}: give one value per step end")
+    uu = np.asarray(u, dtype=float)
+    hh = np.diff(tt) if dt is None else np.asarray(dt, dtype=float)
+    for name, a in (("u", uu), ("dt", hh)):
+        if a.shape != (tt.size - 1,):
+            raise SimulationError(f"{name} has shape {a.shape}; give one value per step ({tt.size - 1})")
+    for name, a in (("t", tt), ("x2", arrays[1]), ("vx", arrays[2]), ("u", uu), ("dt", hh)):
+        if not np.all(np.isfinite(a)):
+            raise SimulationError(f"{name} holds {float(a[~np.isfinite(a)][0])!r}; the run's arrays must be finite")
+    keep = np.concatenate([[True], hh > 0.0])
+    return tt[keep], arrays[1][keep], arrays[2][keep], uu[keep[1:]], hh[keep[1:]], np.flatnonzero(keep)
+
+
+def _wheel(x2: Array, vx: Array, h: Array, radius: float) -> tuple[Array, Array]:
+    """Wheel speed and angle at the step ends, as :meth:`EncoderLoopEstimator.update` reconstructs them."""
+    inc = ((vx[1:] - vx[:-1]) + 0.5 * (x2[:-1] + x2[1:]) * h) / radius
+    om = np.cumsum(np.concatenate([[vx[0] / radius], inc]))
+    # the running sum is update()'s sum while the clamp at 0 does not act; from its first action, a loop
+    low = np.flatnonzero(0.0 > om[1:])
+    if low.size:
+        w, out = float(om[low[0]]), om.tolist()
+        for i in range(int(low[0]) + 1, om.size):
+            w = max(w + float(inc[i - 1]), 0.0)
+            out[i] = w
+        om = np.array(out)
+    theta = np.cumsum(np.concatenate([[0.0], 0.5 * (om[:-1] + om[1:]) * h]))
+    return om, theta
+
+
+def _edges(encoder: Encoder, t: Array, h: Array, om: Array, theta: Array) -> tuple[Array, Array, npt.NDArray[np.int_]]:
+    """Time stamps, assigned angles and generating steps of the edges, as ``EncoderLoopEstimator._edges``."""
+    two_pi = 2.0 * math.pi
+    base, nominal = encoder.rotation_angles(), encoder.nominal_angles()
+    revs = np.arange(int(theta[-1] // two_pi) + 2, dtype=float)
+    levels = (base[None, :] + two_pi * revs[:, None]).ravel()
+    angles = (nominal[None, :] + two_pi * revs[:, None]).ravel()
+    fired = (levels > 0.0) & (levels <= theta[-1])
+    levels, angles = levels[fired], angles[fired]
+    step = np.searchsorted(theta, levels, side="left")       # first step end at or past the level
+    t0, hs, om0, om1, th0 = t[step - 1], h[step - 1], om[step - 1], om[step], theta[step - 1]
+    k = 0.5 * (om1 - om0) / hs
+    d = levels - th0
+    disc = om0 * om0 + 4.0 * k * d
+    root = om0 + np.sqrt(np.where(0.0 > disc, 0.0, disc))
+    with np.errstate(divide="ignore", invalid="ignore"):
+        tau = 2.0 * d / root
+    tau = np.where(root > 0.0, np.where(hs < tau, hs, tau), hs)
+    stamps = t0 + tau
+    if encoder.clock_hz is not None:
+        stamps = np.floor(stamps * encoder.clock_hz) / encoder.clock_hz
+    return stamps, angles, step
+
+
+def encoder_measurements(t: npt.ArrayLike, x2: npt.ArrayLike, vx: npt.ArrayLike, u: npt.ArrayLike,
+                         dt: npt.ArrayLike | None = None, *, encoder: Encoder, radius_m: float,
+                         rate_hz: float = 1000.0, order: int = 2, window: int = 15, harmonics: int = 5,
+                         notch_damping: float = 0.5, compiled: bool | None = None) -> EncoderMeasurements:
+    """The encoder chain of :class:`EncoderLoopEstimator` run over a whole recorded run at once.
+
+    The arguments are those the plant hands the estimator: ``reset(t[0], x2[0], vx[0])``, then
+    ``update(t[i], x2[i], vx[i], u[i - 1], dt[i - 1])`` for each step ``i >= 1``.  The wheel is
+    reconstructed from them (seed 001 eq. (2.1)-(2.2)), the edges generated, the TSA fitted at each
+    controller sample on the edges the per-step chain has at that sample (seed 001 (5.1)-(5.5)), and
+    the samples compensated (Fig. 6.2) and notch-filtered; the numbers equal those of the
+    per-step estimator with the same ``compiled`` (bit for bit: the same operations on the same values).
+
+    Parameters
+    ----------
+    t, x2, vx : array_like
+        Step ends with the start first (``N + 1`` values): time [s], ``x2`` [m/s²], vehicle speed [m/s].
+    u : array_like
+        Pressure rate over each step (``N`` values) [bar/s]: ``simulate`` hands the estimator the
+        step's mean, ``(P_b[i] - P_b[i - 1]) / dt[i - 1]``.
+    dt : array_like, optional
+        Step lengths (``N`` values) [s]; ``np.diff(t)`` if omitted.  ``simulate`` hands the estimator the
+        integrator's step ``h``, which ``np.diff(t)`` reproduces only to rounding: pass it for equality
+        bit for bit.  Steps with ``dt <= 0`` are skipped, as :meth:`EncoderLoopEstimator.update` skips them.
+    encoder, radius_m, rate_hz, order, window, harmonics, notch_damping, compiled
+        As :class:`EncoderLoopEstimator`.
+
+    Returns
+    -------
+    EncoderMeasurements
+        Per controller sample; :meth:`EncoderMeasurements.observer_steps` gives the observer's steps.
+
+    Raises
+    ------
+    SimulationError
+        Arrays of the wrong shapes or not finite, bad chain settings, or two edges on one timer tick
+        (the error the per-step chain raises).
+    CodegenError
+        ``compiled=True`` without a working C compiler.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from switchobs.sensors import Encoder
+    >>> t = np.linspace(0.0, 1.0, 1001)                      # free rolling at 20 m/s for 1 s
+    >>> m = encoder_measurements(t, np.zeros(t.size), np.full(t.size, 20.0), np.zeros(1000),
+    ...                          encoder=Encoder(ppr=60), radius_m=0.3)
+    >>> m.events, round(float(np.nanmean(m.omega_measured)), 6)
+    (636, 66.666667)
+    """
+    m, n = check_order_window(order, window)
+    if not (isinstance(radius_m, (int, float)) and math.isfinite(radius_m) and radius_m > 0):
+        raise SimulationError(f"radius_m must be finite and > 0, got {radius_m!r}")
+    if not (isinstance(rate_hz, (int, float)) and math.isfinite(rate_hz) and rate_hz > 0):
+        raise SimulationError(f"rate_hz must be finite and > 0, got {rate_hz!r}")
+    rate, radius = float(rate_hz), float(radius_m)
+    comp = ThreeStageEstimator(harmonics, dt_s=1.0 / rate, compiled=compiled)
+    tt, yy, vv, uu, hh, kept = _steps(t, x2, vx, u, dt)
+    om, theta = _wheel(yy, vv, hh, radius)
+    stamps, angles, edge_step = _edges(encoder, tt, hh, om, theta)
+    pressure = np.cumsum(np.concatenate([[0.0], uu * hh]))
+
+    # controller samples k / rate, each processed by the first step whose end reaches it
+    k0 = math.floor(tt[0] * rate + 1e-9) + 1
+    reach = tt[1:] + 1e-12
+    k1 = k0 if reach.size == 0 else max(k0, math.floor(reach[-1] * rate) + 2)
+    ts = np.arange(k0, k1, dtype=float) / rate
+    ts = ts[ts <= reach[-1]] if reach.size else ts[:0]
+    step = np.searchsorted(reach, ts, side="left") + 1
+    # edges pushed by each sample: those generated by then, up to the first stamped after it
+    pushed = np.minimum(np.searchsorted(edge_step, step, side="right"),
+                        np.searchsorted(stamps, ts, side="right"))
+    if pushed.size:
+        clash = np.flatnonzero(np.diff(stamps[:int(pushed[-1])]) <= 0.0)
+        if clash.size:
+            i = int(clash[0])
+            raise SimulationError(f"event time stamps must be strictly increasing: {float(stamps[i + 1])!r} "
+                                  f"after {float(stamps[i])!r}")
+
+    def history(tq: Array, at_step: npt.NDArray[np.int_]) -> tuple[Array, Array, Array]:
+        # EncoderLoopEstimator._history on the steps recorded by then
+        i = np.minimum(np.maximum(np.searchsorted(tt, tq, side="right") - 1, 0), at_step - 1)
+        span = tt[i + 1] - tt[i]
+        w = (tq - tt[i]) / span
+        dv = vv[i + 1] - vv[i]
+        return vv[i] + w * dv, pressure[i] + w * (pressure[i + 1] - pressure[i]), dv / span
+
+    fits = fit_windows(stamps, angles, pushed - 1, ts, m, n)
+    ok = np.flatnonzero(pushed >= n)
+    win = stamps[pushed[ok, None] + np.arange(-n, 0)]
+    total = np.zeros(ok.size)
+    for j in range(n):
+        total = total + win[:, j]
+    tc = np.full(ts.size, np.nan)
+    tc[ok] = total / n
+    th_m, om_m, al_m = fits[0, ok], fits[1, ok], fits[2, ok]
+    om_c, al_c = comp.run(th_m, om_m, al_m)
+    notched = notch_series(al_m, om_m, dt_s=1.0 / rate, damping=notch_damping, compiled=compiled)
+    vx_c, p_c, ax_c = history(tc[ok], step[ok])
+
+    def at_samples(values: Array) -> Array:
+        out = np.full(ts.size, np.nan)
+        out[ok] = values
+        return out
+
+    return EncoderMeasurements(
+        t=ts, t_measured=tc, x2_tsa=at_samples(radius * al_m - ax_c), x2_notch=at_samples(radius * notched - ax_c),
+        x2_measured=at_samples(radius * al_c - ax_c), omega_tsa=at_samples(om_m), omega_measured=at_samples(om_c),
+        vx=history(ts, step)[0], vx_measured=at_samples(vx_c), pressure_measured=at_samples(p_c),
+        sample_step=kept[step], events=int(stamps.size), steps_t=tt, omega_steps=om)
