@@ -24,8 +24,8 @@ SC = BrakingScenario(RoadSchedule("dry-asphalt", [RoadChange("snow", at_time_s=0
                      duration_s=1.5, stop_speed_m_s=10 / 3.6)
 
 
-def encoder_estimator(impl: str) -> EncoderLoopEstimator:
-    spec = EstimatorSpec("xbs4", impl=impl, method="radau3")
+def encoder_estimator(impl: str, method: str = "radau3", beta: float | None = None) -> EncoderLoopEstimator:
+    spec = EstimatorSpec("xbs4", impl=impl, method=method, beta=beta)
     est = xbs_estimator(spec, SC.vehicle, SC.roads.initial)
     return EncoderLoopEstimator([(str(spec), est.observer, dict(INITIAL_STATE["xbs4"]))],
                                 encoder=Encoder(ppr=60, seed=5), radius_m=SC.vehicle.radius_m)
@@ -68,6 +68,18 @@ def test_a_step_the_observer_refuses_ends_the_replay_where_it_ends_the_interleav
     ref, fast = simulate(sc, estimator=estimator(), compiled=False), simulate(sc, estimator=estimator())
     assert ref.status == "observer-failed" and "NONFINITE" in ref.message
     assert_same(ref, fast)
+
+
+@pytest.mark.parametrize("impl", ["python", "c"])
+def test_an_encoder_fed_observer_refusing_a_step_ends_the_replay_as_the_interleaved_run(impl):
+    # beta 3e4 in rk4 over a measurement interval of about 1 ms overflows: refused at a sample in mid-run
+    ref_est, fast_est = (encoder_estimator(impl, method="rk4", beta=3e4) for _ in range(2))
+    sc = replace(SC, duration_s=1.0)
+    ref = simulate(sc, estimator=ref_est, compiled=False)
+    fast = simulate(sc, estimator=fast_est)
+    assert ref.status == "observer-failed" and "NONFINITE_RESULT" in ref.message
+    assert_same(ref, fast)
+    assert ref_est.record().to_json() == fast_est.record().to_json()
 
 
 def test_the_controller_reading_the_estimate_keeps_the_interleaved_loop_and_the_replay_needs_no_compiler():

@@ -46,8 +46,10 @@ import numpy as np
 import numpy.typing as npt
 
 from ..exceptions import SimulationError
+from ..plants import Replay, replay_updates
 from ..sensors import Encoder, NotchFilter, ThreeStageEstimator, TimeStamper
 from ._adapter import ObserverXbsEstimator, SteppingObserver, check_xbs_signals, initial_xbs_state
+from ._stepping import step_through
 
 __all__ = ["EncoderLoopEstimator", "EncoderLoopRecord", "EncoderX2", "X2_MEASUREMENTS"]
 
@@ -319,6 +321,91 @@ class EncoderLoopEstimator:
             estimates={label: data[:, 8 + i] for i, (label, _, _) in enumerate(self._observers)},
             events=self._events, steps_t=np.array(self._hist_t), omega_steps=np.array(self._omega_steps),
             beside={label: beside[:, i] for i, (label, _) in enumerate(self._beside)})
+
+
+    # ------------------------------------------------------------------ ReplayEstimator protocol
+    def replay(self, t: Array, y: Array, vx: Array, u: Array, dt: Array) -> Replay:
+        """The run :func:`switchobs.plants.replay_updates` gives, the measurements first, the observers after.
+
+        When the controller does not read the estimate, :func:`switchobs.plants.simulate` records the
+        plant's run and hands it here whole (:class:`switchobs.plants.ReplayEstimator`).  The encoder chain
+        runs over it without the observers (:meth:`_measure`); then each observer steps from measurement to
+        measurement as :meth:`_sample` steps it, and the estimate after each plant step is that of the last
+        measurement taken by then.  Estimates, refusals and :meth:`record` are those of the interleaved run,
+        bit for bit.  With observers beside (on the exact signals) or a refused observer step, the
+        interleaved :func:`~switchobs.plants.replay_updates` runs instead.
+        """
+        if self._beside or not self._observers:
+            return replay_updates(self, t, y, vx, u, dt)
+        t_, y_, vx_, u_, dt_ = (np.asarray(a, dtype=float).tolist() for a in (t, y, vx, u, dt))
+        try:
+            self._measure(t_, y_, vx_, u_, dt_)
+        except SimulationError:
+            return replay_updates(self, t, y, vx, u, dt)
+        rows = np.array(self._rows, dtype=float).reshape(-1, 8)
+        ts = rows[:, 0]
+        # the plant step that took each sample, and how much history the chain had then (update() keeps
+        # only steps of positive length): _history() clamps its interval to that history
+        taken = np.searchsorted(np.asarray(t_) + 1e-12, ts, side="left")
+        known = 1 + np.cumsum(np.asarray(dt_) > 0.0)[taken] - (np.asarray(dt_)[0] > 0.0)
+        valid = np.flatnonzero(~np.isnan(rows[:, 5]))
+        tc = rows[valid, 1]
+        ht, hv, hU = (np.array(a) for a in (self._hist_t, self._hist_vx, self._hist_U))
+        i = np.clip(np.minimum(np.searchsorted(ht, tc, side="right"), known[valid]) - 1, 0, known[valid] - 2)
+        w = (tc - ht[i]) / (ht[i + 1] - ht[i])
+        vx_c = hv[i] + w * (hv[i + 1] - hv[i])
+        U_c = hU[i] + w * (hU[i + 1] - hU[i])
+        try:
+            stepped = [_observe(obs, init, tc, rows[valid, 4], vx_c, U_c) for _, obs, init in self._observers]
+        except SimulationError:
+            return replay_updates(self, t, y, vx, u, dt)
+        estimates = np.full((ts.size, len(self._observers)), np.nan)
+        for k, (states, _) in enumerate(stepped):
+            estimates[valid, k] = np.asarray(self._observers[k][1].readout(states), dtype=float)
+        self._rows = [tuple(r) for r in np.hstack([rows, estimates]).tolist()]
+        self._states = [states[-1] if len(states) else None for states, _ in stepped]
+        self._last = stepped[0][1]
+        # the estimate after each plant step: that of the last measurement taken by then
+        last = np.maximum.accumulate(np.where(np.isnan(rows[:, 5]), -1, np.arange(ts.size)))
+        upto = np.searchsorted(ts, np.asarray(t_) + 1e-12, side="right")
+        at = np.where(upto > 0, last[np.maximum(upto - 1, 0)], -1)
+        hat = np.where(at >= 0, estimates[np.maximum(at, 0), 0], self._initial_xbs)
+        hat[0] = math.nan
+        if valid.size:
+            self._estimate = float(estimates[valid[-1], 0])
+        return hat, None, ""
+
+    def _measure(self, t: list[float], y: list[float], vx: list[float], u: list[float], dt: list[float]) -> None:
+        """The chain alone over the run (the observers set aside): its sample rows, history and edges."""
+        observers, self._observers = self._observers, []
+        try:
+            self.reset(t[0], y[0], vx[0])
+            for k in range(1, len(t)):
+                self.update(t[k], y[k], vx[k], u[k], dt[k])
+        finally:
+            self._observers = observers
+
+
+def _observe(obs: SteppingObserver, init: dict[str, float], tc: Array, y: Array, vx: Array, U: Array
+             ) -> tuple[Array, tuple[float, float, float, float] | None]:
+    """One observer over the measurements ``(t_c, y, vx, ∫u)`` as :meth:`EncoderLoopEstimator._sample` steps it:
+    its state at each measurement and the last measurement it stepped to.
+
+    The first measurement starts the state; a later one is stepped to when its ``t_c`` is past the last
+    one stepped to (the largest so far), with the held signals of :meth:`_sample`.
+    """
+    if tc.size == 0:
+        return np.empty((0, len(obs.state_names))), None
+    later = np.zeros(tc.size, dtype=bool)
+    later[1:] = tc[1:] > np.maximum.accumulate(tc)[:-1]
+    to = np.flatnonzero(later)
+    start = np.concatenate([[0], to[:-1]]).astype(int)
+    span = tc[to] - tc[start]
+    rows = np.column_stack([0.5 * (y[start] + y[to]), 0.5 * (vx[start] + vx[to]), (U[to] - U[start]) / span])
+    x0 = initial_xbs_state(obs, float(y[0]), init)
+    states = np.vstack([x0, step_through(obs, x0, rows, span)])[np.cumsum(later)]
+    j = int(to[-1]) if to.size else 0
+    return states, (float(tc[j]), float(y[j]), float(vx[j]), float(U[j]))
 
 
 class EncoderX2:
