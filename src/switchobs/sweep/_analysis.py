@@ -230,7 +230,7 @@ def tune_betas(results: Sequence[CaseResult], *,
     """
     def metric(key: str) -> Callable[[CaseResult], float | None]:
         def get(r: CaseResult) -> float | None:
-            if key == "recovery_max_s" and r.ok and not r.metrics.get("recovery_s"):
+            if key == "recovery_max_s" and r.ok and r.metrics.get("recovery_s") == []:
                 return None  # no road change scored in this run: nothing to say about re-convergence
             v = r.metrics.get(key) if r.ok else None
             return math.inf if v is None else float(v)
