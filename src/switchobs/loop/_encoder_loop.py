@@ -40,7 +40,7 @@ import math
 from collections import deque
 from collections.abc import Sequence
 from dataclasses import dataclass
-from typing import Any
+from typing import Any, NamedTuple
 
 import numpy as np
 import numpy.typing as npt
@@ -329,61 +329,87 @@ class EncoderLoopEstimator:
 
         When the controller does not read the estimate, :func:`switchobs.plants.simulate` records the
         plant's run and hands it here whole (:class:`switchobs.plants.ReplayEstimator`).  The encoder chain
-        runs over it without the observers (:meth:`_measure`); then each observer steps from measurement to
-        measurement as :meth:`_sample` steps it, and the estimate after each plant step is that of the last
-        measurement taken by then.  Estimates, refusals and :meth:`record` are those of the interleaved run,
-        bit for bit.  With observers beside (on the exact signals) or a refused observer step, the
+        measures over it (:meth:`_measure`); then each observer steps from measurement to measurement as
+        :meth:`_sample` steps it, and the estimate after each plant step is that of the last measurement
+        taken by then.  Estimates, refusals and :meth:`record` are those of the interleaved run, bit for
+        bit; the estimator is left as after the run (:meth:`record`, no further :meth:`update`).  With
+        observers beside (on the exact signals), a refused observer step or an error of the chain, the
         interleaved :func:`~switchobs.plants.replay_updates` runs instead.
         """
         if self._beside or not self._observers:
             return replay_updates(self, t, y, vx, u, dt)
-        t_, y_, vx_, u_, dt_ = (np.asarray(a, dtype=float).tolist() for a in (t, y, vx, u, dt))
         try:
-            self._measure(t_, y_, vx_, u_, dt_)
+            m = self._measure(t, y, vx, u, dt)
+            ok = np.flatnonzero(np.isfinite(m.t_measured))
+            stepped = [_observe(obs, init, m.t_measured[ok], m.x2_measured[ok], m.vx_measured[ok],
+                                m.pressure_measured[ok]) for _, obs, init in self._observers]
         except SimulationError:
             return replay_updates(self, t, y, vx, u, dt)
-        rows = np.array(self._rows, dtype=float).reshape(-1, 8)
-        ts = rows[:, 0]
-        # the plant step that took each sample, and how much history the chain had then (update() keeps
-        # only steps of positive length): _history() clamps its interval to that history
-        taken = np.searchsorted(np.asarray(t_) + 1e-12, ts, side="left")
-        known = 1 + np.cumsum(np.asarray(dt_) > 0.0)[taken] - (np.asarray(dt_)[0] > 0.0)
-        valid = np.flatnonzero(~np.isnan(rows[:, 5]))
-        tc = rows[valid, 1]
-        ht, hv, hU = (np.array(a) for a in (self._hist_t, self._hist_vx, self._hist_U))
-        i = np.clip(np.minimum(np.searchsorted(ht, tc, side="right"), known[valid]) - 1, 0, known[valid] - 2)
-        w = (tc - ht[i]) / (ht[i + 1] - ht[i])
-        vx_c = hv[i] + w * (hv[i + 1] - hv[i])
-        U_c = hU[i] + w * (hU[i + 1] - hU[i])
-        try:
-            stepped = [_observe(obs, init, tc, rows[valid, 4], vx_c, U_c) for _, obs, init in self._observers]
-        except SimulationError:
-            return replay_updates(self, t, y, vx, u, dt)
-        estimates = np.full((ts.size, len(self._observers)), np.nan)
+        columns = (m.t, m.t_measured, m.x2_tsa, m.x2_notch, m.x2_measured, m.omega_tsa, m.omega_measured, m.vx)
+        estimates = np.full((m.t.size, len(self._observers)), np.nan)
         for k, (states, _) in enumerate(stepped):
-            estimates[valid, k] = np.asarray(self._observers[k][1].readout(states), dtype=float)
-        self._rows = [tuple(r) for r in np.hstack([rows, estimates]).tolist()]
+            estimates[ok, k] = np.asarray(self._observers[k][1].readout(states), dtype=float)
+        # what the interleaved run leaves for record()
+        self._rows = [tuple(r) for r in np.column_stack([*columns, estimates]).tolist()]
+        self._events, self._hist_t, self._omega_steps = m.events, m.steps_t.tolist(), m.omega_steps.tolist()
+        self._beside_rows = [[] for _ in self._hist_t]
         self._states = [states[-1] if len(states) else None for states, _ in stepped]
         self._last = stepped[0][1]
+        if ok.size:
+            j = ok[-1]
+            self.latest_x2 = {"tsa": float(m.x2_tsa[j]), "notch": float(m.x2_notch[j]),
+                              "three-stage": float(m.x2_measured[j])}
+            self._estimate = float(estimates[j, 0])
         # the estimate after each plant step: that of the last measurement taken by then
-        last = np.maximum.accumulate(np.where(np.isnan(rows[:, 5]), -1, np.arange(ts.size)))
-        upto = np.searchsorted(ts, np.asarray(t_) + 1e-12, side="right")
-        at = np.where(upto > 0, last[np.maximum(upto - 1, 0)], -1)
-        hat = np.where(at >= 0, estimates[np.maximum(at, 0), 0], self._initial_xbs)
+        last = np.maximum.accumulate(np.where(np.isfinite(m.t_measured), np.arange(m.t.size), -1))
+        upto = np.searchsorted(m.t, np.asarray(t, dtype=float) + 1e-12, side="right")
+        at = np.where(upto > 0, last[np.maximum(upto - 1, 0)], -1) if m.t.size else np.full(upto.size, -1)
+        hat = np.where(at >= 0, estimates[np.maximum(at, 0), 0] if m.t.size else 0.0, self._initial_xbs)
         hat[0] = math.nan
-        if valid.size:
-            self._estimate = float(estimates[valid[-1], 0])
         return hat, None, ""
 
-    def _measure(self, t: list[float], y: list[float], vx: list[float], u: list[float], dt: list[float]) -> None:
-        """The chain alone over the run (the observers set aside): its sample rows, history and edges."""
+    def _measure(self, t: Array, y: Array, vx: Array, u: Array, dt: Array) -> _Measurements:
+        """The chain alone over the run (the observers set aside), step by step as in the loop: the
+        measurements at the controller samples, with ``vx`` and ``∫u`` at the time each describes."""
+        t_, y_, vx_, u_, dt_ = (np.asarray(a, dtype=float).tolist() for a in (t, y, vx, u, dt))
         observers, self._observers = self._observers, []
+        taken = []
         try:
-            self.reset(t[0], y[0], vx[0])
-            for k in range(1, len(t)):
-                self.update(t[k], y[k], vx[k], u[k], dt[k])
+            self.reset(t_[0], y_[0], vx_[0])
+            for k in range(1, len(t_)):
+                before = len(self._rows)
+                self.update(t_[k], y_[k], vx_[k], u_[k], dt_[k])
+                taken += [len(self._hist_t)] * (len(self._rows) - before)
         finally:
             self._observers = observers
+        rows = np.array(self._rows, dtype=float).reshape(-1, 8)
+        # _history() at t_c on the steps the chain had when it took the sample
+        known = np.array(taken, dtype=int)
+        ht, hv, hU = (np.array(a) for a in (self._hist_t, self._hist_vx, self._hist_U))
+        tc = rows[:, 1]
+        i = np.clip(np.minimum(np.searchsorted(ht, tc, side="right"), known) - 1, 0, known - 2)
+        w = (tc - ht[i]) / (ht[i + 1] - ht[i])
+        return _Measurements(*rows.T, vx_measured=hv[i] + w * (hv[i + 1] - hv[i]),
+                             pressure_measured=hU[i] + w * (hU[i + 1] - hU[i]), events=self._events,
+                             steps_t=ht, omega_steps=np.array(self._omega_steps))
+
+
+class _Measurements(NamedTuple):
+    """The chain's measurements at the controller samples of a run (NaN before the TSA window is full)."""
+
+    t: Array
+    t_measured: Array
+    x2_tsa: Array
+    x2_notch: Array
+    x2_measured: Array
+    omega_tsa: Array
+    omega_measured: Array
+    vx: Array
+    vx_measured: Array
+    pressure_measured: Array
+    events: int
+    steps_t: Array
+    omega_steps: Array
 
 
 def _observe(obs: SteppingObserver, init: dict[str, float], tc: Array, y: Array, vx: Array, U: Array
