@@ -12,7 +12,8 @@ design-space sweep runs by the thousand.  Measured in the same run:
   the parallel efficiency is ``rate(2 workers) / (2 rate(1 worker))``;
 * one 10 s braking on a drum (seed 001 Sec. 3.4 roads: dry asphalt, wet asphalt at 3 s, dry concrete at
   6 s; 1.96 m/s²) as a sweep case with the Python and the generated C observer (the compiled loop), and with
-  the C observer fed by a 60-ppr encoder (the Python loop): simulated time / CPU time.
+  the C observer fed by a 60-ppr encoder (beside the loop: the plant compiled, the encoder chain and the
+  observer replayed over its run): simulated time / CPU time.
 
 Run: ``python benchmarks/sweep.py [--quick] [--repeats 5]``.
 """
@@ -92,7 +93,7 @@ def main() -> None:
               "| --- | --- | ---: | ---: |"]
     drum = BrakingCase(road="dry-asphalt", changes=(("wet-asphalt", 3.0), ("dry-concrete", 6.0)), speed_kmh=90.0,
                        decel_m_s2=1.96, duration_s=10.0, observer="xbs4")
-    # the C observer runs in the compiled loop; an encoder in the loop keeps the Python loop (its chain is Python)
+    # the C observer runs in the compiled loop; the encoder chain (Python) is replayed over the compiled run
     for impl, ppr in ((("python", 0),) if args.quick else (("python", 0), ("c", 0), ("c", 60))):
         case = replace(drum, impl=impl, encoder_ppr=ppr, method="radau3" if ppr else drum.method)
         sim = run_case(case).metrics["simulated_s"]  # also compiles the C observer once (cached)

@@ -78,9 +78,10 @@ def test_runs_the_compiled_loop_does_not_port_stay_in_python_or_are_refused_when
     sc = BrakingScenario("dry-asphalt", speed_m_s=20.0, duration_s=0.3)
     python_observer = ObserverXbsEstimator(xbs4_observer(100.0, 100.0, params={"a": sc.vehicle.a, "b": -sc.vehicle.b}),
                                            initial_state={"z2": 0.5})
+    # a Python observer the controller reads (beside the loop, it is replayed over the compiled run: test_replay)
     for changed, est in ((replace(sc, controller=ContinuousXbsControl()), None),
                          (replace(sc, actuator=BrakeActuator(delay_s=0.005)), None),
-                         (sc, python_observer)):
+                         (replace(sc, controller=TwoPhaseABS()), python_observer)):
         assert not simulate(changed, estimator=est).compiled
         with pytest.raises(SimulationError, match="cannot run in the compiled loop"):
             simulate(changed, estimator=est, compiled=True)

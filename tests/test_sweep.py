@@ -117,14 +117,18 @@ def test_serial_sweep_streams_rows_and_refuses_to_overwrite(tmp_path):
 
 
 def test_a_resumed_sweep_gives_the_same_file_as_an_uninterrupted_one(tmp_path):
+    # with encoder-fed cases, as in the robustness study: one finished before the kill, one after
+    encoder = grid(BrakingCase(road="wet-asphalt", speed_kmh=40.0, changes=(("snow", 0.4),), observer="xbs4",
+                               method="radau3", encoder_ppr=60, stop_kmh=10.0, duration_s=0.8), encoder_seed=[1, 2])
+    cases = [*QUICK, *encoder]
     whole = tmp_path / "whole.jsonl"
-    run_sweep(QUICK, path=whole, scheduler="none")
+    run_sweep(cases, path=whole, scheduler="none")
     killed = tmp_path / "killed.jsonl"
-    run_sweep([QUICK[2], QUICK[0]], path=killed, scheduler="none")
+    run_sweep([QUICK[2], QUICK[0], encoder[0]], path=killed, scheduler="none")
     with open(killed, "a", encoding="utf-8") as fh:  # a kill in the middle of a write
         fh.write(json.dumps(json.loads(whole.read_text().splitlines()[1]))[:40])
-    resumed = run_sweep(QUICK, path=killed, resume=True, scheduler="none")
-    assert resumed.resumed == 2
+    resumed = run_sweep(cases, path=killed, resume=True, scheduler="none")
+    assert resumed.resumed == 3 and resumed.results[-1].metrics["recovery_s"]
     assert killed.read_bytes() == whole.read_bytes()
 
 
@@ -136,7 +140,11 @@ def test_pareto_front_and_tuning_pick_a_non_dominated_pair():
                           {"recovery_max_s": rec, "xbs_rms_settled": noise})
     results = [row(25, 25, 1.0, 0.1), row(50, 50, 0.5, 0.2), row(100, 100, 0.2, 1.0), row(100, 50, 0.6, 0.3),
                row(200, 200, None, 0.05)]
-    tuned = tune_betas(results)
+    # a case whose road change came too late to score (no recovery_s) says nothing about re-convergence
+    late = CaseResult(BrakingCase(observer="xbs4", beta1=50, beta2=50), "stopped",
+                      {"recovery_s": [], "recovery_max_s": None, "xbs_rms_settled": 0.2})
+    tuned = tune_betas([*results, late])
+    assert tuned.pairs[1][2:] == (0.5, pytest.approx(0.2), 2)
     assert (tuned.beta1, tuned.beta2) == (50.0, 50.0)
     assert [tuned.pairs[i][:2] for i in tuned.front] == [(100.0, 100.0), (50.0, 50.0), (25.0, 25.0)]
     assert tuned.command.startswith("switchobs design abs-xbs4 --spectrum=-50,-50,-50,-50")
@@ -201,6 +209,7 @@ metric = "stopping_distance_m"
     ('[monte_carlo]\ncount = 2\n[monte_carlo.draw]\nspeed_kmh = {normal = [1, 2]}', "not an admissible draw"),
     ('colour = "red"', r"unknown key\(s\) \['colour'\]"),
     ('name = ', "is not valid TOML"),
+    ('[base]\nobserver = "xbs4"\n[tune]', r"tuning needs beta1 \(and beta2\) in every case"),  # before running
 ])
 def test_cli_sweep_refuses_bad_spec_files_in_one_line(tmp_path, capsys, text, match):
     spec = _write_spec(tmp_path, text)
@@ -248,10 +257,11 @@ def _table41_through_the_engine(client):
 
 
 def _a_killed_worker_does_not_lose_the_sweep(client, path):
-    # a Python observer keeps these brakings in the Python loop (a few tenths of a second each), so that a
-    # task is seen running before the sweep ends; without one the compiled loop finishes them in milliseconds
-    cases = grid(BrakingCase(speed_kmh=120.0, observer="xbs4", in_loop=False),
-                 road=["dry-asphalt", "wet-asphalt", "dry-concrete", "snow"], controller=["five-phase", "two-phase"])
+    # a Python observer that the two-phase ABS reads keeps these brakings in the Python loop (a few tenths of a
+    # second each), so that a task is seen running before the sweep ends; without one the compiled loop
+    # finishes them in milliseconds
+    cases = grid(BrakingCase(observer="xbs4", controller="two-phase"),
+                 road=["dry-asphalt", "wet-asphalt", "dry-concrete", "snow"], speed_kmh=[100.0, 120.0])
     pids = client.run(os.getpid)
     out: dict = {}
     runner = threading.Thread(target=lambda: out.setdefault("sweep", run_sweep(

@@ -14,7 +14,7 @@ from pathlib import Path
 
 from .._figures import save_figure
 from ..exceptions import SimulationError
-from ..sweep import (load_sweep_spec, plot_heatmap, plot_pareto, run_sweep, summary_table, tune_betas)
+from ..sweep import (check_tunable, load_sweep_spec, plot_heatmap, plot_pareto, run_sweep, summary_table, tune_betas)
 from ._common import emit_json
 
 __all__ = ["register"]
@@ -50,6 +50,8 @@ def run(args: argparse.Namespace) -> int:
         raise SimulationError(f"--plots {str(plots)!r} is not a directory; create it first")
     spec = load_sweep_spec(args.spec)
     out = Path(args.out) if args.out else Path(f"{spec.name}.jsonl")
+    if args.tune or spec.tune:
+        check_tunable(spec.cases)  # before the cases run, not after
     sweep = run_sweep(spec.cases, path=out, resume=args.resume, scheduler=args.scheduler, workers=args.workers,
                       batch_size=args.batch_size)
     tables = [summary_table(sweep.results, rows=t.rows, column=t.column, metric=t.metric) for t in spec.tables]

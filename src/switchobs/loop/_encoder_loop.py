@@ -40,15 +40,17 @@ import math
 from collections import deque
 from collections.abc import Iterable, Sequence
 from dataclasses import dataclass
-from typing import Any
+from typing import Any, NamedTuple
 
 import numpy as np
 import numpy.typing as npt
 
 from .._json import JsonRecord
 from ..exceptions import SimulationError
+from ..plants import Replay, replay_updates
 from ..sensors import Encoder, NotchFilter, ThreeStageEstimator, TimeStamper
 from ._adapter import ObserverXbsEstimator, SteppingObserver, check_xbs_signals, initial_xbs_state
+from ._stepping import step_through
 
 __all__ = ["EncoderLoopEstimator", "EncoderLoopRecord", "EncoderX2", "X2_MEASUREMENTS"]
 
@@ -333,6 +335,117 @@ class EncoderLoopEstimator:
             estimates={label: data[:, 8 + i] for i, (label, _, _) in enumerate(self._observers)},
             events=self._events, steps_t=np.array(self._hist_t), omega_steps=np.array(self._omega_steps),
             beside={label: beside[:, i] for i, (label, _) in enumerate(self._beside)})
+
+
+    # ------------------------------------------------------------------ ReplayEstimator protocol
+    def replay(self, t: Array, y: Array, vx: Array, u: Array, dt: Array) -> Replay:
+        """The run :func:`switchobs.plants.replay_updates` gives, the measurements first, the observers after.
+
+        When the controller does not read the estimate, :func:`switchobs.plants.simulate` records the
+        plant's run and hands it here whole (:class:`switchobs.plants.ReplayEstimator`).  The encoder chain
+        measures over it (:meth:`_measure`); then each observer steps from measurement to measurement as
+        :meth:`_sample` steps it, and the estimate after each plant step is that of the last measurement
+        taken by then.  Estimates, refusals and :meth:`record` are those of the interleaved run, bit for
+        bit; the estimator is left as after the run (:meth:`record`, no further :meth:`update`).  With
+        observers beside (on the exact signals), a refused observer step or an error of the chain, the
+        interleaved :func:`~switchobs.plants.replay_updates` runs instead.
+        """
+        if self._beside or not self._observers:
+            return replay_updates(self, t, y, vx, u, dt)
+        try:
+            m = self._measure(t, y, vx, u, dt)
+            ok = np.flatnonzero(np.isfinite(m.t_measured))
+            stepped = [_observe(obs, init, m.t_measured[ok], m.x2_measured[ok], m.vx_measured[ok],
+                                m.pressure_measured[ok]) for _, obs, init in self._observers]
+        except SimulationError:
+            return replay_updates(self, t, y, vx, u, dt)
+        columns = (m.t, m.t_measured, m.x2_tsa, m.x2_notch, m.x2_measured, m.omega_tsa, m.omega_measured, m.vx)
+        estimates = np.full((m.t.size, len(self._observers)), np.nan)
+        for k, (states, _) in enumerate(stepped):
+            estimates[ok, k] = np.asarray(self._observers[k][1].readout(states), dtype=float)
+        # what the interleaved run leaves for record()
+        self._rows = [tuple(r) for r in np.column_stack([*columns, estimates]).tolist()]
+        self._events, self._hist_t, self._omega_steps = m.events, m.steps_t.tolist(), m.omega_steps.tolist()
+        self._beside_rows = [[] for _ in self._hist_t]
+        self._states = [states[-1] if len(states) else None for states, _ in stepped]
+        self._last = stepped[0][1]
+        if ok.size:
+            j = ok[-1]
+            self.latest_x2 = {"tsa": float(m.x2_tsa[j]), "notch": float(m.x2_notch[j]),
+                              "three-stage": float(m.x2_measured[j])}
+            self._estimate = float(estimates[j, 0])
+        # the estimate after each plant step: that of the last measurement taken by then
+        last = np.maximum.accumulate(np.where(np.isfinite(m.t_measured), np.arange(m.t.size), -1))
+        upto = np.searchsorted(m.t, np.asarray(t, dtype=float) + 1e-12, side="right")
+        at = np.where(upto > 0, last[np.maximum(upto - 1, 0)], -1) if m.t.size else np.full(upto.size, -1)
+        hat = np.where(at >= 0, estimates[np.maximum(at, 0), 0] if m.t.size else 0.0, self._initial_xbs)
+        hat[0] = math.nan
+        return hat, None, ""
+
+    def _measure(self, t: Array, y: Array, vx: Array, u: Array, dt: Array) -> _Measurements:
+        """The chain alone over the run (the observers set aside), step by step as in the loop: the
+        measurements at the controller samples, with ``vx`` and ``∫u`` at the time each describes."""
+        t_, y_, vx_, u_, dt_ = (np.asarray(a, dtype=float).tolist() for a in (t, y, vx, u, dt))
+        observers, self._observers = self._observers, []
+        taken = []
+        try:
+            self.reset(t_[0], y_[0], vx_[0])
+            for k in range(1, len(t_)):
+                before = len(self._rows)
+                self.update(t_[k], y_[k], vx_[k], u_[k], dt_[k])
+                taken += [len(self._hist_t)] * (len(self._rows) - before)
+        finally:
+            self._observers = observers
+        rows = np.array(self._rows, dtype=float).reshape(-1, 8)
+        # _history() at t_c on the steps the chain had when it took the sample
+        known = np.array(taken, dtype=int)
+        ht, hv, hU = (np.array(a) for a in (self._hist_t, self._hist_vx, self._hist_U))
+        tc = rows[:, 1]
+        i = np.clip(np.minimum(np.searchsorted(ht, tc, side="right"), known) - 1, 0, known - 2)
+        w = (tc - ht[i]) / (ht[i + 1] - ht[i])
+        return _Measurements(*rows.T, vx_measured=hv[i] + w * (hv[i + 1] - hv[i]),
+                             pressure_measured=hU[i] + w * (hU[i + 1] - hU[i]), events=self._events,
+                             steps_t=ht, omega_steps=np.array(self._omega_steps))
+
+
+class _Measurements(NamedTuple):
+    """The chain's measurements at the controller samples of a run (NaN before the TSA window is full)."""
+
+    t: Array
+    t_measured: Array
+    x2_tsa: Array
+    x2_notch: Array
+    x2_measured: Array
+    omega_tsa: Array
+    omega_measured: Array
+    vx: Array
+    vx_measured: Array
+    pressure_measured: Array
+    events: int
+    steps_t: Array
+    omega_steps: Array
+
+
+def _observe(obs: SteppingObserver, init: dict[str, float], tc: Array, y: Array, vx: Array, U: Array
+             ) -> tuple[Array, tuple[float, float, float, float] | None]:
+    """One observer over the measurements ``(t_c, y, vx, ∫u)`` as :meth:`EncoderLoopEstimator._sample` steps it:
+    its state at each measurement and the last measurement it stepped to.
+
+    The first measurement starts the state; a later one is stepped to when its ``t_c`` is past the last
+    one stepped to (the largest so far), with the held signals of :meth:`_sample`.
+    """
+    if tc.size == 0:
+        return np.empty((0, len(obs.state_names))), None
+    later = np.zeros(tc.size, dtype=bool)
+    later[1:] = tc[1:] > np.maximum.accumulate(tc)[:-1]
+    to = np.flatnonzero(later)
+    start = np.concatenate([[0], to[:-1]]).astype(int)
+    span = tc[to] - tc[start]
+    rows = np.column_stack([0.5 * (y[start] + y[to]), 0.5 * (vx[start] + vx[to]), (U[to] - U[start]) / span])
+    x0 = initial_xbs_state(obs, float(y[0]), init)
+    states = np.vstack([x0, step_through(obs, x0, rows, span)])[np.cumsum(later)]
+    j = int(to[-1]) if to.size else 0
+    return states, (float(tc[j]), float(y[j]), float(vx[j]), float(U[j]))
 
 
 class EncoderX2:

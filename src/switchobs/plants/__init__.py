@@ -12,7 +12,9 @@ Observer port
     :class:`XbsEstimator` (the protocol the simulations call; observers are wired to it
     by :mod:`switchobs.loop`), :class:`TrueXbs` (oracle), :class:`X2Measurement` (a measured ``x2``
     the controller reads, seed 001 Figs. 6.7-6.9), :class:`CompiledEstimator` and
-    :class:`CompiledObserver` (an estimator's C step, run by the compiled braking loop)
+    :class:`CompiledObserver` (an estimator's C step, run by the compiled braking loop),
+    :class:`ReplayEstimator`, :data:`Replay` and :func:`replay_updates` (an estimator beside the loop,
+    run over the recorded run afterwards)
 Hybrid integrator (every simulated plant: quarter car, two-axle vehicle, the wheel of :mod:`switchobs.sensors`)
     :func:`integrate`, :class:`HybridPlant` (protocol), :class:`HybridRun`, :class:`Crossing`,
     :data:`MAX_CASCADE`
@@ -31,7 +33,7 @@ Limit cycle of the two-phase ABS
 
 from ._compiled import CompiledEstimator, CompiledObserver
 from ._controllers import ContinuousXbsControl, FivePhaseABS, TwoPhaseABS
-from ._estimator import TrueXbs, X2Measurement, XbsEstimator
+from ._estimator import Replay, ReplayEstimator, TrueXbs, X2Measurement, XbsEstimator, replay_updates
 from ._hybrid import MAX_CASCADE, Crossing, HybridPlant, HybridRun, integrate
 from ._plot import plot_braking, plot_table41, plot_two_axle
 from ._poincare import PoincareFixedPoint, PoincareMap, simulate_return_map
@@ -50,7 +52,8 @@ __all__ = [
     "D1_HOANG", "D2_HOANG", "RoadChange", "RoadSchedule",
     "QuarterCar", "BrakeActuator", "PrescribedSpeed", "GRAVITY",
     "FivePhaseABS", "TwoPhaseABS", "ContinuousXbsControl",
-    "XbsEstimator", "TrueXbs", "X2Measurement", "CompiledEstimator", "CompiledObserver", "integrate", "HybridPlant", "HybridRun", "Crossing", "MAX_CASCADE",
+    "XbsEstimator", "TrueXbs", "X2Measurement", "CompiledEstimator", "CompiledObserver",
+    "ReplayEstimator", "Replay", "replay_updates", "integrate", "HybridPlant", "HybridRun", "Crossing", "MAX_CASCADE",
     "BrakingScenario", "BrakingResult", "simulate", "SERIES",
     "BrakingMetrics", "Assumption1Status", "Reconvergence", "assumption1",
     "scenario", "scenario_names", "scenario_observer", "scenario_description", "table41", "Table41Result",

@@ -6,7 +6,9 @@
  * two-phase runtimes): the same floating-point operations in the same order (no contraction, the
  * system libm's exp and pow as Python's math), so that a run gives the same numbers as the Python loop.
  * Python prepends the index macros P_* (layout of the parameter vector), OUT_*, EV_*, ST_* and the
- * observer hooks OBS_NX, OBS_NS, OBS_STEP and OBS_READOUT (OBS_NX 0: no observer).
+ * observer hooks OBS_NX, OBS_NS, OBS_STEP and OBS_READOUT (OBS_NX 0: no observer); with RECORD_STEP a row
+ * also holds, after the columns of SERIES, the length of the step that ended there (0 in the first row), which
+ * an estimator replayed over the run afterwards needs bit for bit.
  */
 #include <math.h>
 #include <stdint.h>
@@ -32,6 +34,7 @@ typedef struct {
     /* estimator */
     int est, use_hat;
     double xbs_hat, est_y, est_vx, estimate;
+    double h_step;
     /* outputs of the last rhs evaluation */
     double o_lam, o_mu, o_xbs, o_omdot, o_ax, o_x2, o_u;
 } Loop;
@@ -255,6 +258,9 @@ static int record_row(Loop *L, Record *rec, double t, const double *y) {
     r[0] = t; r[1] = y[0]; r[2] = y[1]; r[3] = y[2]; r[4] = y[3];
     r[5] = L->o_lam; r[6] = L->o_mu; r[7] = L->o_xbs; r[8] = L->o_x2; r[9] = L->o_ax; r[10] = L->o_omdot;
     r[11] = L->o_u; r[12] = (double)L->phase; r[13] = L->xbs_hat; r[14] = ref; r[15] = dref;
+#ifdef RECORD_STEP
+    r[16] = L->h_step;
+#endif
     return 1;
 }
 
@@ -400,6 +406,7 @@ int32_t switchobs_braking_run(const double *p, const double *ch, int32_t n_ch, d
             rhs(L, t + h, y1, k_end);
         }
         t += h;
+        L->h_step = h;
         /* clamp: the state projected on its admissible set */
         clamped = y1[0] < 0.0 || y1[3] < 0.0 || y1[3] > p[P_P_MAX];
         y[1] = y1[1]; y[2] = y1[2];

@@ -11,8 +11,9 @@ library is built once per observer source with the system compiler and cached
 (:func:`switchobs.codegen.compile_sources`).
 
 Not compiled (the Python loop runs them): the continuous XBS law, an actuator delay, estimators
-without a C step (the Python reference observers, the encoder chain); :func:`compiled_support`
-names the reason.
+without a C step (the Python reference observers, the encoder chain) that the controller reads;
+:func:`compiled_support` names the reason.  An estimator without a C step that the controller does
+not read is replayed over the compiled run (``step_lengths``, :func:`switchobs.plants.simulate`).
 """
 
 from __future__ import annotations
@@ -101,9 +102,11 @@ class CompiledEstimator(Protocol):
     def compiled(self) -> CompiledObserver | None: ...
 
 
-def _defines(obs: CompiledObserver | None, n_series: int) -> str:
+def _defines(obs: CompiledObserver | None, n_series: int, step_lengths: bool) -> str:
     # clock_gettime under -std=c99
     lines = ["#define _POSIX_C_SOURCE 199309L"] + [f"#define P_{name} {i}" for i, name in enumerate(_P)]
+    if step_lengths:
+        lines.append("#define RECORD_STEP 1")
     lines += [f"#define CH_{name} {i}" for i, name in enumerate(_CH)]
     lines.append(f"#define CH_COLS {len(_CH)}")
     lines += [f"#define OUT_{name} {i}" for i, name in enumerate(_OUT[:-2])]
@@ -111,7 +114,7 @@ def _defines(obs: CompiledObserver | None, n_series: int) -> str:
     lines += [f"#define ST_{name.upper().replace('-', '_')} {i}" for i, name in enumerate(_STATUS)]
     lines += [f"#define EV_{name} {i}" for i, name in enumerate(_EVENTS)]
     # a recorded row holds the columns of SERIES in order (record_row)
-    lines += [f"#define EV_COLS {_EV_COLS}", f"#define N_SERIES {n_series}"]
+    lines += [f"#define EV_COLS {_EV_COLS}", f"#define N_SERIES {n_series + step_lengths}"]
     if obs is None:
         lines += ["#define OBS_NX 0", "#define OBS_NS 0"]
     else:
@@ -123,11 +126,11 @@ def _defines(obs: CompiledObserver | None, n_series: int) -> str:
 _LOADED: dict[Path, Any] = {}
 
 
-def _library(obs: CompiledObserver | None, n_series: int) -> Any:
+def _library(obs: CompiledObserver | None, n_series: int, step_lengths: bool) -> Any:
     from ..codegen import compile_sources
 
     source = resources.files(__package__).joinpath("_closed_loop.c").read_text(encoding="utf-8")
-    files = {"switchobs_braking.c": _defines(obs, n_series) + source}
+    files = {"switchobs_braking.c": _defines(obs, n_series, step_lengths) + source}
     sources = ["switchobs_braking.c"]
     if obs is not None:
         for ext in ("h", "c"):
@@ -145,8 +148,9 @@ def _library(obs: CompiledObserver | None, n_series: int) -> Any:
     return fn
 
 
-def compiled_support(plant: _QuarterCar) -> tuple[CompiledObserver | None, str | None]:
-    """The estimator's C step and ``None``, or ``None`` and why the compiled loop cannot run ``plant``."""
+def compiled_support(plant: _QuarterCar, *, estimator: bool = True) -> tuple[CompiledObserver | None, str | None]:
+    """The estimator's C step and ``None``, or ``None`` and why the compiled loop cannot run ``plant``
+    (``estimator=False``: ``plant`` without its estimator)."""
     sc = plant.sc
     # exact types: a subclass may change the runtime the C code ports
     if type(sc.controller) not in (FivePhaseABS, TwoPhaseABS):
@@ -156,7 +160,7 @@ def compiled_support(plant: _QuarterCar) -> tuple[CompiledObserver | None, str |
     if plant.x2_source is not None:
         return None, "a measured x2 (x2_source) runs in the Python loop only"
     est = plant.estimator
-    if est is None or (isinstance(est, TrueXbs) and getattr(est, "_truth", None) == plant.true_xbs):
+    if not estimator or est is None or (isinstance(est, TrueXbs) and getattr(est, "_truth", None) == plant.true_xbs):
         return None, None
     parts = est.compiled() if isinstance(est, CompiledEstimator) else None
     if parts is None:
@@ -202,11 +206,13 @@ def _event_text(code: int, a: float, b: float, roads: tuple[Any, ...]) -> str:
     return f"road -> {change.road.name} (x = {b:.2f} m)"
 
 
-def run_compiled(plant: _QuarterCar, obs: CompiledObserver | None) -> HybridRun:
+def run_compiled(plant: _QuarterCar, obs: CompiledObserver | None, *, step_lengths: bool = False) -> HybridRun:
     """Run ``plant`` (supported, :func:`compiled_support`) in the compiled loop; what :func:`integrate` returns.
 
     Also sets what the Python loop leaves on the plant and the estimator: the road changes' start times,
-    the observer's time and its final state.
+    the observer's time and its final state.  With ``step_lengths`` the series also hold ``dt``, the length
+    of the step that ended at each sample (0 at the first), exactly as the loop took it (``t`` differences
+    are rounded): what an estimator replayed over the run afterwards is handed.
 
     Raises
     ------
@@ -217,7 +223,8 @@ def run_compiled(plant: _QuarterCar, obs: CompiledObserver | None) -> HybridRun:
     """
     wall0 = time.perf_counter()
     sc = plant.sc
-    fn = _library(obs, len(plant.series))
+    fn = _library(obs, len(plant.series), step_lengths)
+    columns = (*plant.series, "dt") if step_lengths else plant.series
     params = _parameters(plant, obs)
     changes = sc.roads.changes
     ch = np.array([[1.0 if c.at_time_s is not None else 0.0,
@@ -232,7 +239,7 @@ def run_compiled(plant: _QuarterCar, obs: CompiledObserver | None) -> HybridRun:
     cap = min(int(2 * sc.duration_s / sc.dt_s) + 1024, _FIRST_ROWS)
     events_cap = _FIRST_EVENTS
     while True:
-        rows = np.empty((cap, len(plant.series)))
+        rows = np.empty((cap, len(columns)))
         events = np.empty((events_cap, _EV_COLS))
         if obs is not None:
             x = np.array(obs.initial, dtype=float)
@@ -268,7 +275,7 @@ def run_compiled(plant: _QuarterCar, obs: CompiledObserver | None) -> HybridRun:
                               float(out[idx["FAIL_DT"]]))
     if obs is not None:
         obs.finish(x, float(out[idx["ESTIMATE"]]), float(out[idx["EST_Y"]]), float(out[idx["EST_VX"]]))
-    series = {col: data[:, i].copy() for i, col in enumerate(plant.series)}
+    series = {col: data[:, i].copy() for i, col in enumerate(columns)}
     return HybridRun(series=series, events=event_list, status=status, message=message,
                      steps=int(out[idx["STEPS"]]), wall_time_s=time.perf_counter() - wall0)
 

@@ -10,10 +10,22 @@ Python reference observers, the compiled C observers and the encoder chain
 
 from __future__ import annotations
 
+import math
 from collections.abc import Callable
 from typing import Protocol, runtime_checkable
 
-__all__ = ["XbsEstimator", "TrueXbs", "X2Measurement"]
+import numpy as np
+import numpy.typing as npt
+
+from ..exceptions import SimulationError
+
+__all__ = ["XbsEstimator", "TrueXbs", "X2Measurement", "ReplayEstimator", "Replay", "replay_updates"]
+
+Array = npt.NDArray[np.float64]
+#: What a replay returns: the estimate after each sample (NaN at the first, as the loop records it), and the
+#: index of the sample whose update refused its step with the refusal's message (the run stops there; the
+#: estimates end at that sample, which holds the estimate from before), or ``None`` and ``""``.
+Replay = tuple[Array, "int | None", str]
 
 
 @runtime_checkable
@@ -103,3 +115,49 @@ class TrueXbs:
 
     def update(self, t: float, y: float, vx: float, u: float, dt: float) -> float:  # noqa: ARG002
         return float(self._truth())
+
+
+@runtime_checkable
+class ReplayEstimator(Protocol):
+    """An estimator that can run over a whole recorded run at once, as :func:`replay_updates` does step by step.
+
+    When the controller does not read the estimate, the plant's run does not depend on the estimator, so
+    :func:`switchobs.plants.simulate` runs the plant in the compiled loop first and replays the estimator
+    over the recorded steps afterwards; an estimator with :meth:`replay` does that in bulk (e.g. the
+    encoder chain of :class:`switchobs.loop.EncoderLoopEstimator`), any other one through
+    :func:`replay_updates`.  Either way the estimates are those the interleaved loop gives.
+    """
+
+    def replay(self, t: Array, y: Array, vx: Array, u: Array, dt: Array) -> Replay:
+        """:func:`replay_updates` on this estimator (same arguments, same result, same state left behind)."""
+        ...
+
+
+def replay_updates(estimator: XbsEstimator, t: Array, y: Array, vx: Array, u: Array, dt: Array) -> Replay:
+    """Feed a recorded run to ``estimator`` as the simulation loop does: ``reset`` at the first sample, then
+    ``update`` with each later sample and the step that ended there.
+
+    Parameters
+    ----------
+    estimator : XbsEstimator
+    t, y, vx, u, dt : ndarray
+        The run's samples (:class:`XbsEstimator`'s signals; ``u[k]`` and ``dt[k]`` belong to the step that
+        ended at sample ``k``, ``u[0]`` and ``dt[0]`` are not read).
+
+    Returns
+    -------
+    Replay
+        A :class:`switchobs.exceptions.SimulationError` raised by ``update`` ends the replay as it ends the
+        run (status ``observer-failed``).
+    """
+    t_, y_, vx_, u_, dt_ = (np.asarray(a, dtype=float).tolist() for a in (t, y, vx, u, dt))
+    estimator.reset(t_[0], y_[0], vx_[0])
+    out = [math.nan]
+    update = estimator.update
+    for k in range(1, len(t_)):
+        try:
+            out.append(update(t_[k], y_[k], vx_[k], u_[k], dt_[k]))
+        except SimulationError as exc:
+            out.append(out[-1])
+            return np.array(out, dtype=float), k, str(exc)
+    return np.array(out, dtype=float), None, ""

@@ -21,6 +21,17 @@ checked at the step ends, where the estimate changes.  The integrator and its
 rules (order of the transitions, guard cascades, an observer refusing a step)
 are those of :func:`switchobs.plants.integrate`, shared with the
 two-axle vehicle and the wheel of :mod:`switchobs.sensors`.
+
+Replay
+------
+When the controller does not read the estimate (the observer beside the loop, or a
+controller that needs no XBS), the plant's run does not depend on the estimator: the
+plant then runs in the compiled loop alone, recording the length of every step, and the
+estimator is fed the recorded samples afterwards, ``reset`` and one ``update`` per step
+with the same arguments as in the interleaved loop (:func:`replay_updates`, or the
+estimator's own :meth:`ReplayEstimator.replay`).  The run is cut where the estimator
+refuses a step, as the interleaved loop stops there; the result is that of the Python
+loop bit for bit.
 """
 
 from __future__ import annotations
@@ -37,7 +48,7 @@ import numpy.typing as npt
 from ..exceptions import SimulationError
 from ._controllers import ContinuousXbsControl, Controller, FivePhaseABS, TwoPhaseABS
 from ._compiled import compiled_support, compiler_available, run_compiled
-from ._estimator import TrueXbs, X2Measurement, XbsEstimator
+from ._estimator import ReplayEstimator, TrueXbs, X2Measurement, XbsEstimator, replay_updates
 from ._json import controller_from_json, from_fields, run_from_json
 from ._hybrid import Crossing, HybridPlant, HybridRun, check_run_size, integrate
 from ._metrics import BrakingMetrics, braking_metrics, diverged
@@ -498,16 +509,57 @@ class _QuarterCar(HybridPlant):
         return (t, y[0], y[1], y[2], y[3], self.o_lam, self.o_mu, self.o_xbs, self.o_x2, self.o_ax, self.o_omdot,
                 self.o_u, float(self.ctrl.phase), self.xbs_hat, *self.ctrl.reference(t))
 
+    def _replayed(self) -> HybridRun | None:
+        """The plant in the compiled loop without the estimator, then the estimator over the recorded samples
+        (:class:`ReplayEstimator` or :func:`replay_updates`): the run, samples and estimates of the Python
+        loop that interleaves them, cut where the estimator refuses a step.  ``None`` (run the Python loop)
+        when the compiled loop raises: the interleaved run may stop at a refused step before that point."""
+        est, self.estimator = self.estimator, None
+        try:
+            run = run_compiled(self, None, step_lengths=True)
+        except SimulationError:
+            return None
+        finally:
+            self.estimator = est
+        t_obs = time.perf_counter()
+        s = dict(run.series)
+        dt = s.pop("dt")
+        p = s["P_b"]
+        u = np.zeros_like(p)
+        u[1:] = (p[1:] - p[:-1]) / dt[1:]           # after_step's mean pressure rate over each step
+        if isinstance(est, ReplayEstimator):
+            hat, refused, message = est.replay(s["t"], s["x2"], s["vx"], u, dt)
+        else:
+            hat, refused, message = replay_updates(est, s["t"], s["x2"], s["vx"], u, dt)
+        self.observer_time_s = time.perf_counter() - t_obs
+        status, steps, events = run.status, run.steps, run.events
+        if refused is not None:
+            # the interleaved loop records the refused step's sample and stops before its events
+            t_stop = float(s["t"][refused])
+            s = {k: v[:refused + 1] for k, v in s.items()}
+            events = tuple(e for e in events if e[0] < t_stop)
+            self.road.starts = [t for t in self.road.starts if t < t_stop]
+            status, steps = "observer-failed", refused
+        else:
+            message = run.message
+        s["xbs_hat"] = np.asarray(hat, dtype=float)
+        return HybridRun(series=s, events=events, status=status, message=message, steps=steps,
+                         wall_time_s=run.wall_time_s + self.observer_time_s)
+
     def run(self, compiled: bool | None) -> BrakingResult:
         sc = self.sc
         run: HybridRun | None = None
         if compiled is not False:
             obs, reason = compiled_support(self)
-            if reason is not None and compiled:
+            # an estimator the controller does not read cannot change the plant's run: the plant runs
+            # compiled and the estimator over its samples afterwards (module notes)
+            replay = (reason is not None and self.estimator is not None and not self.use_hat
+                      and compiled_support(self, estimator=False)[1] is None)
+            if reason is not None and not replay and compiled:
                 raise SimulationError(f"scenario {sc.name!r} cannot run in the compiled loop: {reason}")
-            if reason is None and (compiled or compiler_available()):
+            if (reason is None or replay) and (compiled or compiler_available()):
                 check_run_size(self, sc.duration_s, sc.name)  # integrate() checks the Python loop's run
-                run = run_compiled(self, obs)
+                run = self._replayed() if replay else run_compiled(self, obs)
         ran_compiled = run is not None
         if run is None:
             run = integrate(self, sc.duration_s, name=sc.name)
@@ -541,7 +593,8 @@ def simulate(scenario: BrakingScenario, *, estimator: XbsEstimator | str | None 
         Run the loop compiled to C (:mod:`switchobs.plants._compiled`: the same operations as the
         Python loop, the same results, about 30 times faster): ``None`` (default) when the scenario
         and the estimator allow it (five- or two-phase ABS, no actuator delay, no estimator, the true
-        XBS or an estimator with a C step such as a compiled observer) and a C compiler is installed,
+        XBS, an estimator with a C step such as a compiled observer, or any estimator the controller
+        does not read, replayed over the compiled run: module notes) and a C compiler is installed,
         otherwise the Python loop; ``True`` requires it; ``False`` runs the Python loop.
     x2_source : X2Measurement, optional
         A measurement of ``x2`` that the controller reads instead of the exact one (seed 001

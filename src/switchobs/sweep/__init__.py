@@ -15,7 +15,8 @@ monte_carlo, monte_carlo_case, Uniform, Choice, Integers, RoadChanges
                                                       -- Monte-Carlo draws, per-case seeds from one root seed
 run_sweep, SweepResult, read_results, dask_client     -- the engine (Dask or ``scheduler="none"``)
 SweepSpec, load_sweep_spec                            -- sweep spec files (TOML)
-summary_table, pareto_front, tune_betas, TunedDesign  -- tables and gain tuning
+summary_table, pareto_front, tune_betas, TunedDesign, check_tunable
+                                                      -- tables and gain tuning
 plot_heatmap, plot_pareto                             -- figures
 
 Example::
@@ -26,7 +27,7 @@ Example::
     print(sweep)
 """
 
-from ._analysis import TunedDesign, pareto_front, summary_table, tune_betas
+from ._analysis import TunedDesign, check_tunable, pareto_front, summary_table, tune_betas
 from ._case import CONTROLLERS, BrakingCase, CertifyCase, case_from_json
 from ._engine import SweepResult, dask_client, read_results, run_sweep
 from ._grid import (Choice, Integers, RoadChanges, Uniform, a_of_load, arange, certify_grid, grid, linspace,
@@ -39,4 +40,4 @@ __all__ = ["BrakingCase", "CertifyCase", "CONTROLLERS", "case_from_json", "run_c
            "grid", "linspace", "arange", "certify_grid", "a_of_load", "monte_carlo", "monte_carlo_case",
            "Uniform", "Choice", "Integers", "RoadChanges", "run_sweep", "SweepResult", "read_results",
            "dask_client", "SweepSpec", "load_sweep_spec", "summary_table", "pareto_front", "tune_betas",
-           "TunedDesign", "plot_heatmap", "plot_pareto"]
+           "TunedDesign", "check_tunable", "plot_heatmap", "plot_pareto"]

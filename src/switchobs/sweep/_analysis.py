@@ -23,7 +23,8 @@ from ..exceptions import SimulationError
 from ._case import BrakingCase
 from ._run import CaseResult
 
-__all__ = ["SummaryTable", "summary_table", "pareto_front", "TunedDesign", "tune_betas", "design_command"]
+__all__ = ["SummaryTable", "summary_table", "pareto_front", "TunedDesign", "tune_betas", "check_tunable",
+           "design_command"]
 
 
 def _field(result: CaseResult, name: str) -> Any:
@@ -205,9 +206,29 @@ def design_command(case: BrakingCase, beta1: float, beta2: float) -> str:
     return f"switchobs design {obs.model.name} --spectrum={spectrum}{''.join(params)}"
 
 
+def check_tunable(cases: Sequence[Any]) -> list[str]:
+    """Refuse cases :func:`tune_betas` cannot tune, before they run: several observer kinds, or a case
+    without ``beta1``; returns the one observer kind.
+
+    Raises
+    ------
+    SimulationError
+        Naming the offending kinds or case.
+    """
+    braking = [c for c in cases if isinstance(c, BrakingCase) and c.observer != "none"]
+    kinds = sorted({c.observer for c in braking})
+    if len(kinds) != 1:
+        raise SimulationError(f"tuning needs braking results of one observer kind, got {kinds or 'none'}")
+    for case in braking:
+        if case.beta1 is None:
+            raise SimulationError(f"tuning needs beta1 (and beta2) in every case (a [grid] of them); {case} has "
+                                  "none")
+    return kinds
+
+
 def tune_betas(results: Sequence[CaseResult], *,
-               reconvergence: Callable[[CaseResult], float] | None = None,
-               noise: Callable[[CaseResult], float] | None = None) -> TunedDesign:
+               reconvergence: Callable[[CaseResult], float | None] | None = None,
+               noise: Callable[[CaseResult], float | None] | None = None) -> TunedDesign:
     """Pick the Pareto-optimal ``(beta1, beta2)`` from braking results run on a grid of observer gains.
 
     Parameters
@@ -217,33 +238,36 @@ def tune_betas(results: Sequence[CaseResult], *,
         re-converging.
     reconvergence, noise : callable, optional
         The two costs of a case (defaults: ``recovery_max_s``, ``xbs_rms_settled``; None or a failure
-        is ``inf``).  A pair's cost is the mean over its cases.
+        is ``inf``); a cost of None leaves the case out of that mean (the default re-convergence of a case
+        without a road change early enough to score, an empty ``recovery_s``).  A pair's cost is the mean
+        over its cases.
 
     Raises
     ------
     SimulationError
         No braking results with an observer and gains, several observer kinds, or no pair with finite costs.
     """
-    def metric(key: str) -> Callable[[CaseResult], float]:
-        def get(r: CaseResult) -> float:
+    def metric(key: str) -> Callable[[CaseResult], float | None]:
+        def get(r: CaseResult) -> float | None:
+            if key == "recovery_max_s" and r.ok and r.metrics.get("recovery_s") == []:
+                return None  # no road change scored in this run: nothing to say about re-convergence
             v = r.metrics.get(key) if r.ok else None
             return math.inf if v is None else float(v)
         return get
+
+    def mean(cost: Callable[[CaseResult], float | None], rs: list[CaseResult]) -> float:
+        scored = [v for v in map(cost, rs) if v is not None]
+        return sum(scored) / len(scored) if scored else math.inf
     reconvergence = reconvergence or metric("recovery_max_s")
     noise = noise or metric("xbs_rms_settled")
     braking = [r for r in results if isinstance(r.case, BrakingCase) and r.case.observer != "none"]
-    kinds = sorted({r.case.observer for r in braking})  # type: ignore[union-attr]
-    if len(kinds) != 1:
-        raise SimulationError(f"tuning needs braking results of one observer kind, got {kinds or 'none'}")
+    kinds = check_tunable([r.case for r in braking])
     groups: dict[tuple[float, float], list[CaseResult]] = {}
     for r in braking:
         case = r.case
-        assert isinstance(case, BrakingCase)
-        if case.beta1 is None:
-            raise SimulationError(f"tuning needs beta1 (and beta2) in every case; {case} has none")
+        assert isinstance(case, BrakingCase) and case.beta1 is not None
         groups.setdefault((case.beta1, case.beta2 if case.beta2 is not None else case.beta1), []).append(r)
-    pairs = tuple((b1, b2, sum(map(reconvergence, rs)) / len(rs), sum(map(noise, rs)) / len(rs), len(rs))
-                  for (b1, b2), rs in groups.items())
+    pairs = tuple((b1, b2, mean(reconvergence, rs), mean(noise, rs), len(rs)) for (b1, b2), rs in groups.items())
     front = pareto_front([(p[2], p[3]) for p in pairs])
     if not front:
         raise SimulationError("no gain pair re-converged after every road change in every case; widen the beta "

@@ -37,7 +37,7 @@ SCHEDULER_NONE = "none"
 SCHEDULER_LOCAL = "local"
 #: Batches per worker a sweep aims at: enough to balance the load, few enough to amortise the scheduling.
 BATCHES_PER_WORKER = 4
-MAX_BATCH = 64
+MAX_BATCH = 16  # an encoder-fed braking costs up to a second: a batch is also the loss of a kill and the tail
 
 
 @dataclass(frozen=True, eq=False)

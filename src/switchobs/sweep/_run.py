@@ -146,8 +146,8 @@ def _controller(case: BrakingCase) -> Any:
 def _braking(case: BrakingCase, series: bool) -> tuple[str, dict[str, Any], dict[str, Any] | None]:
     import numpy as np
 
-    from ..loop import INITIAL_STATE, EncoderLoopEstimator, EstimatorSpec, road_segments, segment_errors, \
-        xbs_estimator
+    from ..loop import INITIAL_STATE, SETTLE_S, EncoderLoopEstimator, EstimatorSpec, road_segments, \
+        segment_errors, xbs_estimator
     from ..plants import BrakingScenario, PrescribedSpeed, QuarterCar, RoadChange, RoadSchedule, simulate
     from ..sensors import Encoder
 
@@ -184,9 +184,10 @@ def _braking(case: BrakingCase, series: bool) -> tuple[str, dict[str, Any], dict
         # a road change never re-converged from makes the worst case infinite, which JSON writes as null
         out["reconvergence_max_s"] = max((math.inf if r.time_s is None else r.time_s for r in after),
                                          default=None)
+        # a change followed by less than SETTLE_S of its road has no noise floor to recover to: not scored
         recover = [_recovery(t, s["xbs_hat"] - s["xbs"], s["xbs"], c.at_time_s + c.duration_s, end)
                    for c, end in zip(roads.changes, [c.at_time_s for c in roads.changes[1:]] + [float(t[-1])])
-                   if c.at_time_s < float(t[-1])]
+                   if c.at_time_s + c.duration_s + SETTLE_S < end]
         out["recovery_s"] = recover
         out["recovery_max_s"] = max((math.inf if r is None else r for r in recover), default=None)
     kept = None

@@ -1,0 +1,92 @@
+"""The 1000-case Monte-Carlo robustness study (``examples/sweep_robustness.toml``) as a user runs it.
+
+Workload: ``switchobs sweep examples/sweep_robustness.toml --out <tmp>/robustness.jsonl --plots <tmp>`` (the
+4D XBS observer on a 60-ppr encoder beside the five-phase ABS, four (beta1, beta2) pairs × 250 random roads,
+road changes, speeds and encoder seeds, the heatmaps and the tuned pair) on the default local Dask cluster,
+one whole ``switchobs`` process from start to exit.  Measured:
+
+* its wall time and the CPU time of the process and its Dask workers (``RUSAGE_CHILDREN``, what
+  ``/usr/bin/time`` reports), once: the study is the repetition;
+* the CPU time per case, in-process on the first cases of the study (``run_case``, ``time.process_time``,
+  after one warm-up case that designs and compiles the observer), median [min–max].
+
+Run: ``python benchmarks/sweep_robustness.py [--quick] [--count N] [--sample K]`` (``--count``: draws per
+gain pair instead of the spec's 250; ``--quick``: 2 draws, 4 sampled cases, printed and not written).
+"""
+
+from __future__ import annotations
+
+import argparse
+import os
+import re
+import resource
+import subprocess
+import tempfile
+import time
+from pathlib import Path
+
+from _harness import Stats, cpu, number, publish, switchobs_exe
+
+from switchobs.sweep import load_sweep_spec, read_results, run_case
+
+ROOT = Path(__file__).resolve().parents[1]
+SPEC = ROOT / "examples" / "sweep_robustness.toml"
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--quick", action="store_true", help="2 draws per pair, 4 sampled cases; not written")
+    parser.add_argument("--count", type=int, help="draws per gain pair (default: the spec's)")
+    parser.add_argument("--sample", type=int, default=20, help="cases timed in-process (default 20)")
+    args = parser.parse_args()
+    count = 2 if args.quick else args.count
+    sample = 4 if args.quick else args.sample
+    with tempfile.TemporaryDirectory() as tmp:
+        spec_path = SPEC
+        if count is not None:
+            spec_path = Path(tmp) / "robustness.toml"
+            spec_path.write_text(re.sub(r"(?m)^count = \d+", f"count = {count}", SPEC.read_text()), encoding="utf-8")
+        cases = load_sweep_spec(spec_path).cases
+        out, plots = Path(tmp) / "robustness.jsonl", Path(tmp) / "plots"
+        plots.mkdir()
+        command = ["sweep", str(spec_path), "--out", str(out), "--plots", str(plots), "-q"]
+        before = resource.getrusage(resource.RUSAGE_CHILDREN)
+        load0 = os.getloadavg()[0]
+        t0 = time.perf_counter()
+        proc = subprocess.run([switchobs_exe(), *command], capture_output=True, text=True, check=False)
+        wall = time.perf_counter() - t0
+        after = resource.getrusage(resource.RUSAGE_CHILDREN)
+        if proc.returncode != 0:
+            raise SystemExit(f"switchobs {' '.join(command)} failed ({proc.returncode}): {proc.stderr.strip()}")
+        work = (after.ru_utime - before.ru_utime) + (after.ru_stime - before.ru_stime)
+        rows = read_results(out)
+        figures = sorted(p.name for p in plots.iterdir())
+        tuned = next((line.split(";")[0].removeprefix("chosen: ") for line in proc.stdout.splitlines()
+                      if line.startswith("chosen:")), "none")
+    simulated = sum(r.metrics.get("simulated_s") or 0.0 for r in rows)
+    statuses = {s: sum(r.status == s for r in rows) for s in sorted({r.status for r in rows})}
+    run_case(cases[0])  # the observer's design and C build, cached per process: not a case's cost
+    per_case = Stats(tuple(cpu(lambda c=c: run_case(c), 1).values[0] for c in cases[:sample]))
+    shown = "`switchobs sweep examples/sweep_robustness.toml --out robustness.jsonl --plots DIR`" if count is None \
+        else f"the same with `count = {count}` draws per pair"
+    table = ["| study | cases | wall [s] | CPU, process + workers [s] | CPU per case, in-process [s] | "
+             "simulated [s] | load average at the start |",
+             "| --- | ---: | ---: | ---: | ---: | ---: | ---: |",
+             f"| {shown} | {len(rows)} | {number(wall)} | {number(work)} | {per_case.show()} | {number(simulated)} | "
+             f"{load0:.1f} |"]
+    notes = [f"Statuses: {', '.join(f'{n} {s}' for s, n in statuses.items())}; figures: {', '.join(figures)}; "
+             f"tuned pair: {tuned}. The CPU per case is the median [min–max] over the first {len(per_case.values)} "
+             f"cases of the study ({number(sum(per_case.values) / len(per_case.values))} s on average). On a "
+             f"machine shared with other jobs (load average above its cores) the wall time measures the queue "
+             f"for the processors; the CPU time is the work."]
+    publish("sweep_robustness",
+            "The Monte-Carlo robustness study on the default local Dask cluster (one single-threaded worker "
+            "process per core), as one whole `switchobs` process from start to exit (interpreter start-up, "
+            "cluster start, the observer's design and C build on each worker, the cases, the tables, plots "
+            "and tuning), run once; the encoder chain runs over the compiled plant's run afterwards "
+            "(`switchobs.plants.simulate`, replay).",
+            [table], notes, write=not args.quick)
+
+
+if __name__ == "__main__":
+    main()
