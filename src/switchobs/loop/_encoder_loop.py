@@ -40,7 +40,7 @@ import math
 from collections import deque
 from collections.abc import Iterable, Sequence
 from dataclasses import dataclass
-from typing import Any, NamedTuple
+from typing import Any
 
 import numpy as np
 import numpy.typing as npt
@@ -50,6 +50,7 @@ from ..exceptions import SimulationError
 from ..plants import Replay, replay_updates
 from ..sensors import Encoder, NotchFilter, ThreeStageEstimator, TimeStamper
 from ._adapter import ObserverXbsEstimator, SteppingObserver, check_xbs_signals, initial_xbs_state
+from ._encoder_batch import EncoderMeasurements, encoder_measurements
 from ._stepping import step_through
 
 __all__ = ["EncoderLoopEstimator", "EncoderLoopRecord", "EncoderX2", "X2_MEASUREMENTS"]
@@ -382,48 +383,13 @@ class EncoderLoopEstimator:
         hat[0] = math.nan
         return hat, None, ""
 
-    def _measure(self, t: Array, y: Array, vx: Array, u: Array, dt: Array) -> _Measurements:
-        """The chain alone over the run (the observers set aside), step by step as in the loop: the
-        measurements at the controller samples, with ``vx`` and ``∫u`` at the time each describes."""
-        t_, y_, vx_, u_, dt_ = (np.asarray(a, dtype=float).tolist() for a in (t, y, vx, u, dt))
-        observers, self._observers = self._observers, []
-        taken = []
-        try:
-            self.reset(t_[0], y_[0], vx_[0])
-            for k in range(1, len(t_)):
-                before = len(self._rows)
-                self.update(t_[k], y_[k], vx_[k], u_[k], dt_[k])
-                taken += [len(self._hist_t)] * (len(self._rows) - before)
-        finally:
-            self._observers = observers
-        rows = np.array(self._rows, dtype=float).reshape(-1, 8)
-        # _history() at t_c on the steps the chain had when it took the sample
-        known = np.array(taken, dtype=int)
-        ht, hv, hU = (np.array(a) for a in (self._hist_t, self._hist_vx, self._hist_U))
-        tc = rows[:, 1]
-        i = np.clip(np.minimum(np.searchsorted(ht, tc, side="right"), known) - 1, 0, known - 2)
-        w = (tc - ht[i]) / (ht[i + 1] - ht[i])
-        return _Measurements(*rows.T, vx_measured=hv[i] + w * (hv[i + 1] - hv[i]),
-                             pressure_measured=hU[i] + w * (hU[i + 1] - hU[i]), events=self._events,
-                             steps_t=ht, omega_steps=np.array(self._omega_steps))
-
-
-class _Measurements(NamedTuple):
-    """The chain's measurements at the controller samples of a run (NaN before the TSA window is full)."""
-
-    t: Array
-    t_measured: Array
-    x2_tsa: Array
-    x2_notch: Array
-    x2_measured: Array
-    omega_tsa: Array
-    omega_measured: Array
-    vx: Array
-    vx_measured: Array
-    pressure_measured: Array
-    events: int
-    steps_t: Array
-    omega_steps: Array
+    def _measure(self, t: Array, y: Array, vx: Array, u: Array, dt: Array) -> EncoderMeasurements:
+        """The chain alone over the run (:func:`encoder_measurements`; ``u`` and ``dt`` as
+        :func:`~switchobs.plants.replay_updates` hands them, one per entry of ``t``, the first unused)."""
+        return encoder_measurements(t, y, vx, np.asarray(u, dtype=float)[1:], np.asarray(dt, dtype=float)[1:],
+                                    encoder=self._encoder, radius_m=self._R, rate_hz=self._rate,
+                                    order=self._order, window=self._window, harmonics=self._harmonics,
+                                    notch_damping=self._damping, compiled=self._compiled)
 
 
 def _observe(obs: SteppingObserver, init: dict[str, float], tc: Array, y: Array, vx: Array, U: Array
