@@ -154,3 +154,75 @@ def test_synthesised_pair_goes_through_codegen_and_the_c_observer_tracks_like_py
     got = c_obs.run(x0, rows, dt)
     assert np.all(np.isfinite(expected)) and np.any(x2 > 0) and np.any(x2 < 0)
     assert np.max(np.abs(got - expected)) <= 1e-9 * np.max(np.abs(expected))
+
+
+# ----------------------------------------------------------------------------- preconditioning (issue 19)
+XBS4 = builtin_model("abs-xbs4")
+
+
+def test_xbs4_at_decay_40_is_certified_exactly_and_its_gains_round_trip_through_verify(tmp_path, capsys):
+    """Before the Riccati coordinates the rounded gains of abs-xbs4 at rate 40 failed the exact check."""
+    out = tmp_path / "cert.json"
+    assert main(["synthesize", "abs-xbs4", "--decay", "40", "--out", str(out), "--json"]) == 0
+    data = json.loads(capsys.readouterr().out)
+    syn = data["synthesis"]
+    assert syn["feasible"] and syn["formulation"] == "hespanha" and data["certification"]["certified"]
+    K_plus, K_minus, P, X_plus, X_minus = (fraction_matrix(syn[k]) for k in ("K_plus", "K_minus", "P", "X_plus",
+                                                                             "X_minus"))
+    A = fraction_matrix(XBS4.numeric().A.tolist())
+    C = [[Fraction(1), Fraction(0), Fraction(0), Fraction(0)]]
+    Ap, Am = observer_pair(A, C, K_plus, K_minus)   # rebuilt here from the JSON alone
+    assert decay_holds(Ap, X_plus, Fraction(40)) == "" and decay_holds(Am, X_minus, Fraction(40)) == ""
+    assert hespanha_pair_holds(Ap, Am, P, C) == ""
+    assert max(np.linalg.eigvals(_floats(Ap)).real) < -40
+    assert main(["verify", str(out)]) == 0
+
+
+def test_riccati_scaling_puts_the_kalman_filters_at_the_identity():
+    from scipy.linalg import solve_continuous_are
+
+    from switchobs.certify._synthesis import riccati_scaling
+
+    A, C = _floats(XBS4.numeric().A) / 40, np.array([[1.0, 0, 0, 0]])
+    S = riccati_scaling(A, C, (1, -1))
+    X0 = sum(np.linalg.inv(solve_continuous_are((s * A + np.eye(4)).T, C.T, np.eye(4), np.eye(1))) for s in (1, -1))
+    assert np.allclose(np.linalg.solve(S.T, np.linalg.solve(S.T, X0).T), np.eye(4), atol=1e-8)
+    assert np.allclose(S, np.triu(S))
+    # a mode that no gain stabilises (an unobservable unstable state): no scaling, the LMI will say so
+    assert np.array_equal(riccati_scaling(np.diag([-1.0, 1.0]), np.array([[1.0, 0.0]]), (1,)), np.eye(2))
+
+
+def test_nominal_and_box_synthesis_share_the_preconditioning_and_need_it(monkeypatch):
+    """Both paths solve in the coordinates of ``riccati_scaling``; without them abs-xbs4 at rate 100 fails."""
+    from switchobs.certify import _synthesis
+
+    calls = []
+    real = _synthesis.riccati_scaling
+    monkeypatch.setattr(_synthesis, "riccati_scaling", lambda *a: calls.append(a[2]) or real(*a))
+    assert synthesize(XBS4, decay_rate=100).feasible
+    assert synthesize_box(XBS3, ["a=150:230"], decay_rate=10, noise_weight=0.1, estimate=["z2"]).feasible
+    assert calls == [(1,), (1,), (-1,)]     # the Hespanha K_plus; then one X per mode over the box
+    monkeypatch.setattr(_synthesis, "riccati_scaling", lambda A, C, signs: np.eye(len(A)))
+    assert not synthesize(XBS4, decay_rate=100).feasible
+
+
+def test_decay_certificate_re_solves_for_the_rounded_gains_and_never_certifies_a_slow_matrix():
+    from switchobs.certify._synthesis import decay_certificate
+
+    A = [[Fraction(-3), Fraction(1000)], [Fraction(0), Fraction(-4)]]   # strongly non-normal, decays at 3
+    bad_start = np.eye(2)                                                # He(A) + 4 I is not negative
+    X, why = decay_certificate([A], Fraction(2), np.eye(2), bad_start)
+    assert X is not None and why == "" and decay_holds(A, X, Fraction(2)) == ""
+    X, why = decay_certificate([A], Fraction(3), np.eye(2), None)        # rate 3 is the abscissa itself
+    assert X is None and why
+    both = [A, [[Fraction(-4), Fraction(1000)], [Fraction(0), Fraction(-5)]]]   # A - I: a common X exists
+    X, why = decay_certificate(both, Fraction(1), np.eye(2), bad_start)  # several matrices: the margin LMI
+    assert X is not None and all(decay_holds(M, X, Fraction(1)) == "" for M in both)
+
+
+def test_sixteen_states_normal_form_synthesis_is_certified():
+    """normal-form-16 (a chain of integrators, Gramian condition number 6e10) did not finish in 120 s."""
+    model = builtin_model("normal-form-16").with_values({f"a{i}": "0" for i in range(1, 17)})
+    res = synthesize(model, decay_rate="1/2", noise_weight=0.1)
+    assert res.feasible, res.detail
+    assert max(np.linalg.eigvals(_floats(model.numeric().A) - _floats(res.K_plus) @ np.eye(1, 16)).real) < -0.5

@@ -30,9 +30,7 @@ import time
 from collections.abc import Mapping, Sequence
 from typing import Any
 
-import cvxpy as cp
 import numpy as np
-import scipy.linalg
 
 from ..exceptions import ModelError
 from ..model import Model
@@ -40,8 +38,7 @@ from ._box import ParameterBox, model_terms, parse_box
 from ._box_check import evaluate_terms, vertex_matrices, vertex_values
 from ._exact import fraction_matrix, rank
 from ._lmi import DEFAULT_SOLVERS
-from ._rounding import dyadic
-from ._synthesis import (STRICT_IMPOSSIBLE, GainSynthesis, _floats, _lmi, check_synthesis_inputs, decay_holds,
+from ._synthesis import (STRICT_IMPOSSIBLE, GainSynthesis, _floats, _lmi, check_synthesis_inputs, decay_certificate,
                          noise_gain, state_rows)
 
 __all__ = ["synthesize_box"]
@@ -109,47 +106,30 @@ def synthesize_box(model: Model, box: ParameterBox | Sequence[str] | Mapping[str
     sigma = float(rate)
     E = np.eye(n)[list(rows)]
     t0 = time.perf_counter()
-    As, Cf, W = [_floats(A) / sigma for A in vertex_A], _floats(C), float(noise_weight) * sigma
-    # Jacobi preconditioning: the states' scales differ by orders of magnitude (abs-xbs3: X spans 1e-4..1e2),
-    # which makes the interior point fail on the polytope.  A Kalman filter of each mode at the nominal point
-    # that decays at the (scaled) rate 1 -- the Riccati equation of A + I, unit intensities -- gives the scales:
-    # z = D z~ with D = diag(X0)^(-1/2), X0 the sum of the inverse Riccati solutions, gives X~ = D X0 D a unit
-    # diagonal.
-    An = _floats(nominal_A) / sigma
-    try:
-        X0 = sum(np.linalg.inv(scipy.linalg.solve_continuous_are((sign * An + np.eye(n)).T, Cf.T, np.eye(n),
-                                                                  np.eye(len(Cf))))
-                 for sign in (1, -1))
-        D = np.diag(1 / np.sqrt(np.abs(np.diag(X0))))
-    except (np.linalg.LinAlgError, ValueError):
-        D = np.eye(n)   # not detectable at the nominal point: the LMIs will say so
-    v, info = _lmi([np.linalg.solve(D, A @ D) for A in As], Cf @ D, E @ D, 1.0, W, (1, -1), use_strict, solvers)
+    # solved in the coordinates of the modes' Kalman filters at the nominal point (riccati_scaling): the
+    # states' scales differ by orders of magnitude (abs-xbs3: X spans 1e-4..1e2)
+    point, info = _lmi([_floats(A) / sigma for A in vertex_A], _floats(C), E, float(noise_weight) * sigma, (1, -1),
+                       use_strict, solvers, nominal=_floats(nominal_A) / sigma)
     solve_s = time.perf_counter() - t0
-    if info.status == cp.INFEASIBLE or any(X.value is None for X in v["X"]):
+    if point is None:
         return fail(f"the polytopic LMIs are infeasible ({'; '.join(info.attempts)})", info, solve_s)
     t0 = time.perf_counter()
-    Dinv = np.linalg.inv(D)
-    X_nums = [Dinv @ np.asarray(X.value) @ Dinv for X in v["X"]] * (2 if use_strict else 1)
-    K_plus, K_minus = (dyadic(D @ np.linalg.solve(np.asarray(X.value), np.asarray(Y.value)) * sigma, 40)
-                       for X, Y in zip(v["X"] * (2 if use_strict else 1), v["Y"]))
-    X_plus, X_minus = (dyadic((X + X.T) / 2) for X in X_nums)
+    K_plus, K_minus = point.gain(0, rate), point.gain(1, rate)
     modes = vertex_matrices(terms, box.intervals, pieces, C, K_plus, K_minus)
-    reason = ""
-    for name, mats, X in zip(("A_plus", "A_minus"), modes, (X_plus, X_minus)):
-        for i, A in enumerate(mats):
-            if (why := decay_holds(A, X, rate)):
-                reason = f"{name} at vertex {i + 1}: {why}"
-                break
-        if reason:
-            break
+    if use_strict:
+        P, reason = decay_certificate(modes[0] + modes[1], rate, point.S[0], point.X_scaled[0], solvers)
+        X_plus = X_minus = P
+    else:
+        (X_plus, why_plus), (X_minus, why_minus) = (
+            decay_certificate(mats, rate, S, X, solvers) for mats, S, X in zip(modes, point.S, point.X_scaled))
+        reason = f"A_plus: {why_plus}" if X_plus is None else f"A_minus: {why_minus}" if X_minus is None else ""
     exact_s = time.perf_counter() - t0
     if reason:
         return fail(f"the rounded gains fail the exact vertex check: {reason}", info, solve_s)
     Af, Cf = _floats(nominal_A), _floats(C)
     Kp, Km = _floats(K_plus), _floats(K_minus)
     gains = {"A_plus": noise_gain(Af - Kp @ Cf, Kp, E), "A_minus": noise_gain(-Af + Km @ Cf, Km, E)}
-    scaled = max(float(np.trace(X)) + (noise_weight * sigma) ** 2 * float(np.trace(Z.value))
-                 for X, Z in zip(X_nums, v["Z"]))
+    scaled = max(tr_X + (noise_weight * sigma) ** 2 * tr_Z for tr_X, tr_Z in zip(point.trace_X, point.trace_Z))
     return GainSynthesis(formulation, rate, noise_weight, rows, True, K_plus, K_minus,
                          X_plus if use_strict else None, X_plus, X_minus, float(np.sqrt(max(scaled, 0.0) / sigma)),
                          gains, info, "", solve_s, exact_s, box=box, vertices=len(vertex_A))

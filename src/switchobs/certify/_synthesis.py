@@ -39,11 +39,19 @@ with ``He(X A_plus) + 2 rate X <= 0`` and the H2 bound of the plus mode, then
 sets ``K_minus`` from the exact ``P``: the pair has the non-strict common P
 (Hespanha: UES for every positive dwell time) and each mode decays at
 ``rate``, all checked exactly.
+
+Both formulations, and the polytopic ones of :mod:`._box_synthesis`, are
+solved in the coordinates of the modes' Kalman filters
+(:func:`riccati_scaling`, a change of variables that leaves the optimum
+unchanged), and the decay certificates of the rounded gains come from
+:func:`decay_certificate` (the LMI's point, else re-solved for the rounded
+gains, else the exact Lyapunov solution).
 """
 
 from __future__ import annotations
 
 import time
+import warnings
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 from fractions import Fraction
@@ -51,27 +59,25 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 import scipy.linalg
-import sympy as sp
-from sympy.polys.matrices import DomainMatrix
 
 if TYPE_CHECKING:  # imported where an LMI is built (see _lmi)
     import cvxpy as cp
 
 from .._json import JsonRecord, fields_from_json
 from .._limits import check_double
-from ..exceptions import CertificateError, DimensionError, ModelError
+from ..exceptions import CertificateError, DimensionError, ModelError, SolverFailure
 from ..model import Model
 from ._family import user_matrix
 from ._exact import (Matrix, add, definiteness, fraction_matrix, identity, lyapunov_form, matmul, matrix_strings,
                      rank, scale, sub, to_fraction, transpose)
-from ._lmi import DEFAULT_SOLVERS, SolveInfo, solve
+from ._lmi import DEFAULT_SOLVERS, SolveInfo, primal_margin, solve
 from ._rounding import dyadic
 
 if TYPE_CHECKING:   # _box imports this module
     from ._box import ParameterBox
 
-__all__ = ["GainSynthesis", "synthesize_gains", "synthesize", "noise_gain", "decay_holds", "STRICT_IMPOSSIBLE",
-           "RATE_MARGIN", "FrontPoint", "noise_decay_front"]
+__all__ = ["GainSynthesis", "synthesize_gains", "synthesize", "noise_gain", "decay_holds", "decay_certificate",
+           "riccati_scaling", "STRICT_IMPOSSIBLE", "RATE_MARGIN", "GAIN_BITS", "FrontPoint", "noise_decay_front"]
 
 #: The LMI is solved at ``rate * (1 + RATE_MARGIN)`` so that the rounded matrices keep ``rate`` exactly.
 RATE_MARGIN = 1e-2
@@ -204,7 +210,8 @@ class GainSynthesis:
 
 
 def _short(x: Fraction) -> str:
-    return str(x) if x.denominator <= 1000 else f"{float(x):.8g}"
+    # a rounded gain is a dyadic rational: as a fraction only when that is short (3/8), else in decimal
+    return str(x) if x.denominator <= 1000 and abs(x.numerator) < 10 ** 6 else f"{float(x):.8g}"
 
 
 # ----------------------------------------------------------------------------- exact helpers
@@ -218,10 +225,18 @@ def decay_holds(A: Matrix, X: Matrix, rate: Fraction) -> str:
 
 
 def _solve_exact(M: Matrix, rhs: Matrix) -> Matrix:
-    dm = DomainMatrix.from_Matrix(sp.Matrix(M)).convert_to(sp.QQ)
-    db = DomainMatrix.from_Matrix(sp.Matrix(rhs)).convert_to(sp.QQ)
-    sol = dm.lu_solve(db).to_Matrix()
-    return [[Fraction(int(sol[i, j].p), int(sol[i, j].q)) for j in range(sol.cols)] for i in range(sol.rows)]
+    """``X`` with ``M X = rhs`` exactly (python-flint's ``fmpq_mat``: fraction-free, in C; the Kronecker
+    system of an ``n = 16`` Lyapunov equation, 256 unknowns, takes milliseconds where sympy's took seconds).
+
+    Raises ``ZeroDivisionError`` if ``M`` is singular."""
+    import flint
+
+    def q(rows: Matrix) -> Any:
+        return flint.fmpq_mat(len(rows), len(rows[0]), [flint.fmpq(int(f.numerator), int(f.denominator))
+                                                        for row in rows for f in map(Fraction, row)])
+
+    sol = q(M).solve(q(rhs))
+    return [[Fraction(int(sol[i, j].p), int(sol[i, j].q)) for j in range(sol.ncols())] for i in range(sol.nrows())]
 
 
 def _lyapunov_exact(A: Matrix, Q: Matrix) -> Matrix:
@@ -240,19 +255,114 @@ def _lyapunov_exact(A: Matrix, Q: Matrix) -> Matrix:
     return [[vec[i * n + j][0] for j in range(n)] for i in range(n)]
 
 
-def _decay_certificate(A: Matrix, rate: Fraction, start: np.ndarray | None) -> Matrix | None:
-    """A rational ``X`` proving decay ``rate`` for ``A``: the rounded LMI point, else a shifted Lyapunov solution."""
-    if start is not None:
-        X = dyadic((start + start.T) / 2)
-        if not decay_holds(A, X, rate):
-            return X
-    Af = np.array([[float(x) for x in row] for row in A]) + float(rate) * np.eye(len(A))
+# ----------------------------------------------------------------------------- preconditioning
+def riccati_scaling(A: np.ndarray, C: np.ndarray, signs: Sequence[int]) -> np.ndarray:
+    """The change of coordinates ``z~ = S z`` in which the modes' Kalman filters have ``X~ = I``.
+
+    The LMIs of an observer are badly conditioned in the model's coordinates, so the interior point stops
+    early or reports infeasibility for problems that pole placement shows feasible: the states' scales
+    differ by orders of magnitude (abs-xbs4 at decay rate 10: the eigenvalues of ``X`` span ``4e-4 .. 9e5``,
+    the gain entries ``3e4 .. 3e7``), and the observability Gramian of a chain of integrators is nearly singular whatever
+    the diagonal scaling (``normal-form-16``: condition number ``6e10``).  The Kalman filter of each mode
+    ``sign * A - K C`` that decays at rate 1 (``A`` is given in the time scaled by the decay rate) -- the
+    Riccati equation of ``sign * A + I`` with unit intensities, covariance ``Sigma_p`` -- is a feasible
+    point of the decay LMI with ``X = Sigma_p^-1``; with ``X0 = sum_p Sigma_p^-1 = S' S`` (Cholesky),
+    ``X~ = S^-T X S^-1`` is the identity there, a point deep inside the cone.  Float entries of ``S`` are
+    exact dyadic rationals, so ``X = S' X~ S`` maps a rounded ``X~`` back exactly.
+
+    Parameters
+    ----------
+    A : n x n float array
+        The nominal ``A``, divided by the decay rate.
+    C : k x n float array
+    signs : ``+1`` for ``A - K_plus C``, ``-1`` for ``-A + K_minus C``
+
+    Returns
+    -------
+    numpy.ndarray
+        ``S``, upper triangular; the Jacobi part ``diag(X0)^(1/2)`` alone if ``X0`` is numerically not
+        definite, the identity if a mode is not detectable (the LMIs will then say so).
+    """
+    n = len(A)
     try:
-        X_num = scipy.linalg.solve_continuous_lyapunov(Af.T, -np.eye(len(A)))
+        X0 = sum(np.linalg.inv(scipy.linalg.solve_continuous_are((sign * A + np.eye(n)).T, C.T, np.eye(n),
+                                                                  np.eye(len(C))))
+                 for sign in signs)
     except (np.linalg.LinAlgError, ValueError):
-        return None
-    X = dyadic((X_num + X_num.T) / 2)
-    return None if decay_holds(A, X, rate) else X
+        return np.eye(n)
+    X0 = (X0 + X0.T) / 2
+    if not np.all(np.isfinite(X0)):
+        return np.eye(n)
+    try:
+        return np.linalg.cholesky(X0).T
+    except np.linalg.LinAlgError:
+        diag = np.abs(np.diag(X0))
+        return np.diag(np.sqrt(diag)) if np.all(diag > 0) else np.eye(n)
+
+
+def _unscale(M: Matrix, S: np.ndarray) -> Matrix:
+    """``S' M S`` exactly: a matrix of the coordinates ``z~ = S z`` back in the model's."""
+    S_ex = [[Fraction(float(x)) for x in row] for row in S]
+    return matmul(matmul(transpose(S_ex), M), S_ex)
+
+
+def decay_certificate(mats: Sequence[Matrix], rate: Fraction, S: np.ndarray, start: np.ndarray | None,
+                      solvers: Sequence[str] = DEFAULT_SOLVERS) -> tuple[Matrix | None, str]:
+    """A rational ``X > 0`` with ``A' X + X A + 2 rate X < 0`` exactly for every ``A`` of ``mats``.
+
+    ``mats`` are exact matrices of the rounded gains: one mode, the vertices of one mode, or both modes
+    for a common ``P``.  Candidates, each rounded in the coordinates ``z~ = S z`` of
+    :func:`riccati_scaling` (where it is well conditioned), mapped back exactly and checked exactly; the
+    first that holds is returned:
+
+    1. ``start``, the LMI's point ``X~``;
+    2. re-solved for the rounded gains: the Lyapunov equation ``He(X~ (A~ + rate I)) = -I`` (one matrix),
+       else the margin LMI of :func:`switchobs.certify._lmi.primal_margin` on the shifted matrices;
+    3. one matrix: the exact solution of ``He(X (A + rate I)) = -S' S``, which holds whenever
+       ``A + rate I`` is Hurwitz.
+
+    Returns
+    -------
+    X : Matrix or None
+    reason : str
+        Why the last candidate failed (empty with ``X``).
+    """
+    n = len(mats[0])
+    scaled = [S @ np.linalg.solve(S.T, (_floats(A) + float(rate) * np.eye(n)).T).T for A in mats]
+    reason = "no candidate"
+
+    def check(X: Matrix) -> bool:
+        nonlocal reason
+        reason = next((why for A in mats if (why := decay_holds(A, X, rate))), "")
+        return not reason
+
+    def rounded(X_scaled: np.ndarray) -> Matrix:
+        return _unscale(dyadic((X_scaled + X_scaled.T) / 2), S)
+
+    if start is not None and check(rounded(start)):
+        return rounded(start), ""
+    try:
+        if len(mats) == 1:
+            with warnings.catch_warnings():
+                # A + rate I close to singular (the rate at the abscissa): the exact check rejects the answer
+                warnings.simplefilter("ignore", RuntimeWarning)
+                X_num = scipy.linalg.solve_continuous_lyapunov(scaled[0].T, -np.eye(n))
+        else:
+            norm = max(np.linalg.norm(M, 2) for M in scaled) or 1.0
+            X_num, _, _ = primal_margin([M / norm for M in scaled], [np.eye(n)] * len(scaled), solvers=solvers,
+                                        what="decay certificate for the rounded gains")
+        if np.all(np.isfinite(X_num)) and check(X := rounded(X_num)):
+            return X, ""
+    except (np.linalg.LinAlgError, ValueError, SolverFailure):
+        pass
+    if len(mats) == 1:
+        try:
+            X = _lyapunov_exact(add(mats[0], scale(rate, identity(n))), _unscale(identity(n), S))
+        except ZeroDivisionError:
+            return None, "A + rate I is singular"
+        if check(X):
+            return X, ""
+    return None, reason
 
 
 def noise_gain(A_mode: np.ndarray, K: np.ndarray, E: np.ndarray) -> float:
@@ -268,43 +378,121 @@ def _he(M: cp.Expression) -> cp.Expression:
     return M + M.T
 
 
+#: Significant bits of each rounded gain entry.  Per entry, because the entries span orders of magnitude
+#: (abs-xbs4 at rate 40, W = 0: 3e7 .. 2e11); short, because the rate margin absorbs the rounding and short
+#: rationals keep the exact checks and the independent certify path (its face projection) robust: at 40
+#: bits relative to the largest entry one random pair of the tests lost its Hespanha certificate.
+GAIN_BITS = 24
+
 #: Weight on every state added to ``E'E`` in the LMI: keeps ``X`` definite (a decay certificate must be).
 STATE_REGULARISATION = 1e-3
 
 
-def _lmi(As: Sequence[np.ndarray], C: np.ndarray, E: np.ndarray, rate: float, W: float, signs: Sequence[int],
-         shared: bool, solvers: Sequence[str]) -> tuple[dict, SolveInfo]:
-    """The LMIs in the time scaled by ``rate`` (``A`` and ``rate`` divided by it, ``W`` multiplied: the
-    decay rate becomes about 1, which keeps the interior point well conditioned).
+@dataclass(frozen=True)
+class LmiPoint:
+    """The synthesis LMI's solution; ``X`` kept in the coordinates ``z~ = S z`` of :func:`riccati_scaling`.
+
+    Attributes
+    ----------
+    S : tuple of numpy.ndarray
+        The change of coordinates of each mode's ``X`` (the same for a shared ``X``; float entries taken
+        exactly).
+    X_scaled : tuple of numpy.ndarray
+        ``X~_p = S_p^-T X_p S_p^-1`` per mode (up to a positive factor: the certificates are homogeneous).
+    K : tuple of numpy.ndarray
+        ``K_p`` in the model's coordinates and the time scaled by the decay rate.
+    trace_X, trace_Z : tuple of float
+        ``tr X_p`` (the model's coordinates) and ``tr Z_p`` of the H2 bound.
+    """
+
+    S: tuple[np.ndarray, ...]
+    X_scaled: tuple[np.ndarray, ...]
+    K: tuple[np.ndarray, ...]
+    trace_X: tuple[float, ...]
+    trace_Z: tuple[float, ...]
+
+    def gain(self, i: int, rate: Fraction) -> Matrix:
+        """The ``i``-th gain in ``tau``, each entry rounded to :data:`GAIN_BITS` significant bits."""
+        return [[dyadic(np.array([[x]]), GAIN_BITS)[0][0] for x in row] for row in self.K[i] * float(rate)]
+
+
+@dataclass(frozen=True)
+class _Scaled:
+    """One ``X`` variable's coordinates: ``S``, ``A~ = S A S^-1``, ``C~ = C S^-1``, the weight and ``S S'``."""
+
+    S: np.ndarray
+    mats: list[np.ndarray]
+    C: np.ndarray
+    weight: np.ndarray
+    c: float
+    gram: np.ndarray
+
+    @classmethod
+    def of(cls, S: np.ndarray, As: Sequence[np.ndarray], C: np.ndarray, weight: np.ndarray) -> "_Scaled":
+        def tilde(M: np.ndarray) -> np.ndarray:   # M S^-1
+            return np.linalg.solve(S.T, M.T).T
+
+        w = np.linalg.solve(S.T, tilde(weight))
+        c = float(np.exp2(np.round(np.log2(np.max(np.abs(w))))))
+        return cls(S, [S @ tilde(A) for A in As], tilde(C), (w + w.T) / (2 * c), c, S @ S.T)
+
+
+def _lmi(As: Sequence[np.ndarray], C: np.ndarray, E: np.ndarray, W: float, signs: Sequence[int], shared: bool,
+         solvers: Sequence[str], nominal: np.ndarray) -> tuple[LmiPoint | None, SolveInfo]:
+    """The LMIs in the time scaled by the decay rate (``As`` divided by it, ``W`` multiplied: the decay
+    rate becomes 1), solved in the coordinates of :func:`riccati_scaling` at ``nominal``; ``None`` if the
+    solver proves them infeasible.
 
     One gain ``Y_p = X_p K_p`` per mode sign in ``signs`` (``+1``: ``A - K_plus C``, ``-1``:
     ``-A + K_minus C``), every inequality posed at every matrix of ``As`` (the nominal ``A``, or the
     vertices of a parameter box: the polytopic LMIs of Boyd et al. 1994, Sec. 5.1); ``shared``: one
     ``X`` for all modes (the strict common P), else one per mode.  H2 by the observability Gramian:
     ``||G_p||_2^2 <= tr X + W^2 tr(K_p' X K_p)`` when ``He(X A_p) + E'E <= 0``; with
-    ``[[Z_p, Y_p'], [Y_p, X]] >= 0`` all is linear."""
+    ``[[Z_p, Y_p'], [Y_p, X]] >= 0`` all is linear.
+
+    The scaling is a change of variables, not of the problem: ``X = c S' X~ S``, ``Y = c S' Y~``,
+    ``Z = c Z~``, ``A~ = S A S^-1``, ``C~ = C S^-1``, the weight ``S^-T (E'E + rI) S^-1 / c`` and the
+    objective ``tr X = c tr(X~ S S')``; ``c`` (a power of two, the largest entry of the scaled weight) is
+    the homogeneity of the LMIs in ``(X, Y, Z)`` and brings the weight to unit size.  A shared ``X`` gets
+    the ``S`` of all modes' filters; separate ones each their own (the modes' LMIs are then coupled only
+    through the objective, a sum, so each mode's part may be scaled on its own)."""
     import cvxpy as cp
 
     n, k = As[0].shape[0], C.shape[0]
-    lam = rate * (1 + RATE_MARGIN)
+    lam = 1 + RATE_MARGIN
     weight = E.T @ E + STATE_REGULARISATION * np.eye(n)
+    groups = [tuple(signs)] if shared else [(sign,) for sign in signs]
+    coords = [_Scaled.of(riccati_scaling(nominal, C, g), As, C, weight) for g in groups]
 
     def fn() -> tuple[cp.Problem, dict]:
-        Xs = [cp.Variable((n, n), symmetric=True) for _ in range(1 if shared else len(signs))]
+        Xs = [cp.Variable((n, n), symmetric=True) for _ in coords]
         Ys = [cp.Variable((n, k)) for _ in signs]
         Zs = [cp.Variable((k, k), symmetric=True) for _ in signs]
         cons = [X >> 0 for X in Xs]
+        objective = 0
         for i, (sign, Y, Z) in enumerate(zip(signs, Ys, Zs)):
-            X = Xs[0 if shared else i]
-            for A in As:
-                HeA = sign * (_he(X @ A) - _he(Y @ C))
-                cons += [-(HeA + 2 * lam * X) >> 0, -(HeA + weight) >> 0]
+            j = 0 if shared else i
+            X, sc = Xs[j], coords[j]
+            for A in sc.mats:
+                HeA = sign * (_he(X @ A) - _he(Y @ sc.C))
+                cons += [-(HeA + 2 * lam * X) >> 0, -(HeA + sc.weight) >> 0]
             cons.append(cp.bmat([[Z, Y.T], [Y, X]]) >> 0)
-        # normalised so that the objective stays of unit size whatever W
-        objective = (sum(cp.trace(X) for X in Xs) + W ** 2 * sum(cp.trace(Z) for Z in Zs)) / (1 + W ** 2)
+            # normalised so that the objective stays of unit size whatever W and S
+            objective += ((cp.sum(cp.multiply(sc.gram, X)) if i == j else 0) + W ** 2 * cp.trace(Z)) \
+                / (float(np.max(np.abs(sc.gram))) + W ** 2)
         return cp.Problem(cp.Minimize(objective), cons), {"X": Xs, "Y": Ys, "Z": Zs}
 
-    return solve(fn, solvers=solvers, what="gain synthesis LMI", infeasible_ok=True)
+    v, info = solve(fn, solvers=solvers, what="gain synthesis LMI", infeasible_ok=True)
+    if info.status == cp.INFEASIBLE or any(X.value is None for X in v["X"]):
+        return None, info
+    per_mode = [coords[0 if shared else i] for i in range(len(signs))]
+    X_of = [np.asarray(v["X"][0 if shared else i].value) for i in range(len(signs))]
+    # K = X^-1 Y = S^-1 X~^-1 Y~
+    Ks = tuple(np.linalg.solve(sc.S, np.linalg.solve(X, np.asarray(Y.value)))
+               for sc, X, Y in zip(per_mode, X_of, v["Y"]))
+    return LmiPoint(tuple(sc.S for sc in per_mode), tuple(X_of), Ks,
+                    tuple(sc.c * float(np.sum(sc.gram * X)) for sc, X in zip(per_mode, X_of)),
+                    tuple(sc.c * float(np.trace(Z.value)) for sc, Z in zip(per_mode, v["Z"]))), info
 
 
 def check_synthesis_inputs(decay_rate: Any, noise_weight: float, estimate: Sequence[int] | None,
@@ -373,38 +561,35 @@ def synthesize_gains(A: Any, C: Any, *, decay_rate: Any, noise_weight: float = 0
 
     if use_strict and not full_rank:
         return fail(STRICT_IMPOSSIBLE)
-    Af = np.array([[float(x) for x in r] for r in A_ex])
-    Cf = np.array([[float(x) for x in r] for r in C_ex])
+    Af, Cf = _floats(A_ex), _floats(C_ex)
     E = np.eye(n)[list(rows)]
     sigma = float(rate)
     t0 = time.perf_counter()
-    v, info = _lmi([Af / sigma], Cf, E, 1.0, float(noise_weight) * sigma, (1, -1) if use_strict else (1,), True,
-                   solvers)
+    point, info = _lmi([Af / sigma], Cf, E, float(noise_weight) * sigma, (1, -1) if use_strict else (1,), True,
+                       solvers, nominal=Af / sigma)
     solve_s = time.perf_counter() - t0
-    if info.status == "infeasible" or v["X"][0].value is None:
+    if point is None:
         return fail(f"the LMI is infeasible ({'; '.join(info.attempts)})", info, solve_s)
     t0 = time.perf_counter()
-    X_num = np.asarray(v["X"][0].value)
-    K_nums = [np.linalg.solve(X_num, np.asarray(Y.value)) * sigma for Y in v["Y"]]
-    K_plus = dyadic(K_nums[0], 40)
+    K_plus = point.gain(0, rate)
     A_plus = sub(A_ex, matmul(K_plus, C_ex))
     if use_strict:
-        K_minus = dyadic(K_nums[1], 40)
+        K_minus = point.gain(1, rate)
         A_minus = add(scale(-1, A_ex), matmul(K_minus, C_ex))
-        P = dyadic((X_num + X_num.T) / 2)
-        reason = decay_holds(A_plus, P, rate) or decay_holds(A_minus, P, rate)
+        P, why = decay_certificate([A_plus, A_minus], rate, point.S[0], point.X_scaled[0], solvers)
+        reason = f"no exact common decay certificate ({why})" if P is None else ""
         X_plus = X_minus = P
     else:
         try:
             P = _lyapunov_exact(A_plus, matmul(transpose(C_ex), C_ex))
-        except (ZeroDivisionError, ValueError, sp.polys.matrices.exceptions.DMError):
+            K_minus = sub(K_plus, _solve_exact(P, transpose(C_ex)))
+        except ZeroDivisionError:
             return fail("A_plus of the rounded gain is singular for the Lyapunov equation", info, solve_s)
-        K_minus = sub(K_plus, _solve_exact(P, transpose(C_ex)))
         A_minus = add(scale(-1, A_ex), matmul(K_minus, C_ex))
-        X_plus = _decay_certificate(A_plus, rate, X_num)
+        X_plus, why = decay_certificate([A_plus], rate, point.S[0], point.X_scaled[0], solvers)
         # A_minus = P^-1 A_plus' P, so X_minus = P X_plus^-1 P proves the same decay rate
         X_minus = None if X_plus is None else matmul(matmul(P, _solve_exact(X_plus, identity(n))), P)
-        reason = ("no exact decay certificate for A_plus" if X_minus is None else
+        reason = (f"no exact decay certificate for A_plus ({why})" if X_minus is None else
                   decay_holds(A_minus, X_minus, rate) or hespanha_pair_holds(A_plus, A_minus, P, C_ex))
     exact_s = time.perf_counter() - t0
     if reason:
@@ -412,7 +597,7 @@ def synthesize_gains(A: Any, C: Any, *, decay_rate: Any, noise_weight: float = 0
     fl = [_floats(M) for M in (A_plus, A_minus, K_plus, K_minus)]
     gains = {"A_plus": noise_gain(fl[0], fl[2], E), "A_minus": noise_gain(fl[1], fl[3], E)}
     # H2^2 in the scaled time is sigma times H2^2 in tau
-    scaled = np.trace(X_num) + (noise_weight * sigma) ** 2 * max(float(np.trace(Z.value)) for Z in v["Z"])
+    scaled = point.trace_X[0] + (noise_weight * sigma) ** 2 * max(point.trace_Z)
     bound = float(np.sqrt(max(scaled, 0.0) / sigma))
     return GainSynthesis(formulation, rate, noise_weight, rows, True, K_plus, K_minus, P, X_plus, X_minus, bound,
                          gains, info, "", solve_s, exact_s)
