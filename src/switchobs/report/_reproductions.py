@@ -29,7 +29,8 @@ from ..plants import (GRAVITY, TABLE41_SEED, Accelerometer, BrakingResult, Braki
 from ..plants._metrics import _reconvergence
 from ..observers import xbs3_observer
 from ..sensors import (ROBUSTNESS_PROFILES, TABLE61_ENCODER, TABLE61_PROFILES, TABLE61_SEED, AngleTrajectory,
-                       ChainSettings, Encoder, EstimatorComparison, braking_trajectory, compare_estimators,
+                       ChainSettings, Encoder, EstimatorComparison, NotchFilter, braking_trajectory,
+                       compare_estimators, controller_times, time_stamping,
                        constant_speed, encoder_chain, rpm_to_rad_s, super_twisting, super_twisting_gains, tsa_condition_number,
                        varying_speed)
 
@@ -467,6 +468,56 @@ def plot_fig67(runs: _Runs, path: Path) -> None:
 # ---------------------------------------------------------------- Table 6.1
 
 
+def notch_from_zero(profile: str, duration_s: float = 10.0) -> tuple[float, float]:
+    """RMS errors (velocity, acceleration) of the Table 6.1 notch when its state starts at zero and the whole
+    record is scored (no warm-up): our reading of the seed's notch row.
+
+    Our notch starts at its first input (no start-up transient) and Table 6.1 is scored after 1 s; a filter
+    whose state starts at 0 sees a step of the full speed at its first sample.  One zero sample fed before
+    the record gives that state.
+    """
+    traj = TABLE61_PROFILES[profile][1](duration_s)
+    events = TABLE61_ENCODER.events(traj)
+    ts = controller_times(0.0, duration_s, 1000.0)
+    tsa = time_stamping(events.times, events.angles, ts)
+    fw, fa = NotchFilter(dt_s=1e-3, damping=0.5), NotchFilter(dt_s=1e-3, damping=0.5)
+    valid = np.flatnonzero(tsa.valid)
+    fw.update(0.0, float(tsa.omega[valid[0]]))
+    fa.update(0.0, float(tsa.omega[valid[0]]))
+    om = np.array([fw.update(float(tsa.omega[i]), float(tsa.omega[i])) for i in valid])
+    al = np.array([fa.update(float(tsa.alpha[i]), float(tsa.omega[i])) for i in valid])
+    return (float(np.sqrt(np.mean((om - traj.omega(ts[valid])) ** 2))),
+            float(np.sqrt(np.mean((al - traj.alpha(ts[valid])) ** 2))))
+
+
+def _notch_section(runs: _Runs) -> list[str]:
+    """Why the notch row of Table 6.1 differs: a start-up transient in the seed's RMS, and the harmonic content."""
+    rows = [_row("profile", "velocity: ours (Table 6.1) / started at zero, whole record \\| seed",
+                 "acceleration: ours / started at zero \\| seed"), _row(*["---"] * 3)]
+    share = {}
+    for profile, cmp in runs.table61.items():
+        ours = cmp["notch"]
+        w0, a0 = notch_from_zero(profile)
+        seed_w, seed_a = TABLE61_SEED[profile]["notch"]
+        rows.append(_row(profile, f"{ours.rms_omega:.3f} / {w0:.3f} \\| {seed_w:.3f} ({_pct(w0, seed_w)})",
+                         f"{ours.rms_alpha:.2f} / {a0:.2f} \\| {seed_a:.2f} ({_pct(a0, seed_a)})"))
+        tsa_a, notch_a = cmp["tsa"].rms_alpha, ours.rms_alpha
+        share[profile] = (1 - (notch_a / tsa_a) ** 2, 1 - (seed_a / TABLE61_SEED[profile]["tsa"][1]) ** 2)
+    c = share["constant"]
+    return ["**The notch row.** A notch has unit gain at DC, so at constant speed it cannot add the seed's "
+            "3.07 rad/s of velocity error once it has settled; a start-up transient can. Started from a zero "
+            "state and scored over the whole 10 s (our reading of the seed's row; ours starts at its first "
+            "input and is scored after 1 s):", "", *rows, "",
+            "The start-up accounts for most of the constant profile's velocity error, not for the varying "
+            "profile's (whose first speed is three times lower, so its step is smaller), and it leaves the "
+            "acceleration unchanged. The acceleration row depends on the encoder: the notch removes the first "
+            f"harmonic only, which holds {100 * c[1]:.0f} % of the TSA acceleration error power in the seed's "
+            f"constant row ($1 - (7.95/30.09)^2$) but {100 * c[0]:.0f} % with our encoder, whose transition "
+            "noise (fitted to the TSA row alone) spreads over all harmonics. So the notch row is not matched "
+            "within 15 %: the seed's encoder and the notch's start are not given. "
+            "`test_table61_notch_row_start_up_transient` checks these numbers."]
+
+
 def _table61_section(runs: _Runs) -> list[str]:
     """Table 6.1: seed, ours and deviations per profile and estimator."""
     enc = TABLE61_ENCODER
@@ -488,7 +539,7 @@ def _table61_section(runs: _Runs) -> list[str]:
               f"clock {enc.clock_hz:g} Hz, noise seed {enc.seed}) were *fitted* so that the constant-speed TSA row "
               "matches the seed's; they are not predicted. The reference is the exact $\\theta(t)$ (the seed's is a "
               "1024-ppr encoder). Profiles: " + "; ".join(f"{name}: {desc}" for name, (desc, _) in TABLE61_PROFILES.items())
-              + "."]
+              + ".", "", *_notch_section(runs)]
     return lines
 
 
