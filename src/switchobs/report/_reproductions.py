@@ -256,7 +256,8 @@ def _sec36_section(runs: _Runs) -> list[str]:
              f"diverges within the first second (RMS error {_rms_text(diverged)}): its $a = R^2F_z/J$ is the "
              "largest of our runs and the discrete adaptation is unstable at 1 kHz.", "",
              "*Chosen by us (the seed does not give them):* that the six-phase ABS is the Bosch cycle of Sec. 2.2.3, "
-             "and all its values: " + str(sc.front) + "; rear thresholds × 0.6; its exits the description lacks "
+             "and all its values: " + str(sc.front) + "; rear thresholds × 0.6; the driver's build-up at "
+             f"{sc.front.initial_rate_bar_s:g} bar/s (chosen so that the ABS takes over at the seed's times); its exits the description lacks "
              "(hold time-out, lock release, re-release, shortest release; see [ABS plants](abs.md)); "
              f"$\\Gamma = {SEC36_OBSERVER.gamma:g}\\,I$ and $\\beta = 100$; the vehicle (mass, geometry, brakes), the "
              "scalar Kalman speed filter and the accelerometer's random walk; the observers keep the static-load "
