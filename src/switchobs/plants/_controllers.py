@@ -321,10 +321,11 @@ class SixPhaseABS:
       plane does not depend on the speed;
     * phase 7 as a continuous slow apply at the mean rate of the apply/hold pulse train (the seed's
       PWM remark): pulses would only add a ripple of the pulse period;
-    * the exits the description lacks (without them the cycle stalls): a hold 2 or 4 that lasts
-      ``hold_timeout_s`` goes on to the slow apply 5 (in hold 2 the ``-a`` crossing was a false alarm of
-      the stable zone, in hold 4 the wheel recovered without reaching ``+A``, as on ice or snow); a hold or
-      apply in which the slip passes ``-lock_slip`` releases (a locked wheel has ``dω/dt = 0``, so ``x2 =
+    * the exits the description lacks (without them the cycle stalls): a Bosch hold 2 or 4 (ours 6 or 2)
+      that lasts ``hold_timeout_s`` goes on to the slow apply (in hold 2 the ``-a`` crossing was a false
+      alarm of the stable zone, in hold 4 the wheel recovered without reaching ``+A``, as on ice or snow);
+      a hold 4 whose ``x2`` falls ``rerelease_margin`` below ``-a`` releases again; a release lasts at
+      least ``release_min_bar``; a hold or apply in which the slip passes ``-lock_slip`` releases (a locked wheel has ``dω/dt = 0``, so ``x2 =
       -a_x > -a`` and the deceleration thresholds alone never see it), and that release ends only when
       the slip is back above ``-lock_slip``.
 
@@ -382,8 +383,8 @@ class SixPhaseABS:
                   u_apply=self.u_apply, u_step=self.u_step, initial_rate_bar_s=self.initial_rate_bar_s,
                   hold_timeout_s=self.hold_timeout_s, rerelease_margin=self.rerelease_margin,
                   release_min_bar=self.release_min_bar)
-        for ok, text in ((self.a_big > self.a_plus, f"+A = {self.a_big} must exceed +a = {self.a_plus} (phase 5 "
-                                                    f"holds from +A down to +a)"),
+        for ok, text in ((self.a_big > self.a_plus, f"+A = {self.a_big} must exceed +a = {self.a_plus} (the hold "
+                                                    f"after +A lasts until +a)"),
                          (self.slip_threshold < self.lock_slip < 1.0,
                           f"need lambda1 < lock_slip < 1, got lambda1 = {self.slip_threshold}, lock_slip = "
                           f"{self.lock_slip}"),

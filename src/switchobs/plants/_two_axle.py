@@ -263,7 +263,7 @@ class TwoAxleResult:
     ``mean_deceleration_m_s2``, ``speed_error_mean_pct`` (mean of
     ``(vx_hat - vx)/vx`` over the braking, in %; seed 001 reports -18 %),
     ``speed_error_max_pct``, per axle: ``load_min_n``/``load_max_n``,
-    ``slip_mean``, ``abs_cycles``, ``xbs_rms_error`` (after braking starts),
+    ``slip_mean`` (``None`` before the ABS takes over), ``abs_cycles``, ``xbs_rms_error`` (after braking starts),
     ``observer_failure`` (``None`` or when and why the observer refused a step;
     the run then stops with status ``observer-failed``, as the quarter car's does).
 
@@ -339,7 +339,7 @@ class TwoAxleResult:
             if a["observer_failure"]:
                 xbs += f" (observer failed at {a['observer_failure'].split(':')[0]})"
             lines.append(f"| {axle} | {a['load_min_n']:.0f}–{a['load_max_n']:.0f} | {a['abs_cycles']} | "
-                         f"{a['slip_mean']:.3f} | {xbs} |")
+                         f"{_slip_text(a['slip_mean'])} | {xbs} |")
         lines += ["", f"series (NumPy, `result.series[...]`): {', '.join(f'`{k}`' for k in self.series)}"]
         return "\n".join(lines)
 
@@ -357,9 +357,14 @@ class TwoAxleResult:
             if a["observer_failure"]:
                 xbs += f", observer failed at {a['observer_failure'].split(':')[0]}"
             lines.append(f"  {axle}: load {a['load_min_n']:.0f}-{a['load_max_n']:.0f} N, {a['abs_cycles']} cycles, "
-                         f"mean slip {a['slip_mean']:.3f}{xbs}")
+                         f"mean slip {_slip_text(a['slip_mean'])}{xbs}")
         lines.append(f"  cost: {self.steps} steps, {self.wall_time_s:.3f} s wall")
         return "\n".join(lines)
+
+
+def _slip_text(slip: float | None) -> str:
+    """The mean slip of an axle, or a dash when its ABS never took over (a run stopped during the build-up)."""
+    return "–" if slip is None else f"{slip:.3f}"
 
 
 def simulate_two_axle(scenario: TwoAxleScenario, *,
