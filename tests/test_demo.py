@@ -274,7 +274,7 @@ def test_hoang2014_eq21_eq22_recorded_reference_reproduces_the_controller_rate()
         if "stall timeout" in text:
             rt.expire(t0, x2, v_wheel, vx)
         else:
-            g = rt.guards(x2, s["xbs"][i])
+            g = rt.guards(x2, s["xbs"][i], s["lambda"][i])
             rt.fire(t0, int(np.argmax(g)), x2, v_wheel, vx)
         assert rt.phase == int(text.split("-> ")[1].split()[0])
         t1 = events[k + 1][0] if k + 1 < len(events) else math.inf

@@ -253,6 +253,11 @@ def _samples() -> dict[str, Callable[[], tuple[Any, dict[str, Any]]]]:
         plants.simulate(sc, estimator=est)
         return est.record()
 
+    def encoder_measurements():  # a locked start makes NaN samples (TSA window not full yet)
+        t = np.linspace(0.0, 0.3, 301)
+        return loop.encoder_measurements(t, -30.0 * np.exp(-t / 0.1), 20.0 - 2.0 * t, np.full(300, 100.0),
+                                         encoder=sensors.Encoder(ppr=60, seed=1), radius_m=0.3)
+
     def observer():
         return xbs4_observer(100.0, 60.0, method="radau3")
 
@@ -285,6 +290,7 @@ def _samples() -> dict[str, Callable[[], tuple[Any, dict[str, Any]]]]:
         "Transformation": lambda: plain(_transformations()[0]),
         # plants
         "FivePhaseABS": lambda: plain(plants.FivePhaseABS(tracking=True, stall_timeout_s=None)),
+        "SixPhaseABS": lambda: plain(plants.SixPhaseABS(slip_threshold=0.08, hold_timeout_s=0.2)),
         "TwoPhaseABS": lambda: plain(plants.TwoPhaseABS(start_decel_m_s2=None)),
         "ContinuousXbsControl": lambda: plain(plants.ContinuousXbsControl(c=1.2, d=0.5)),
         "Burckhardt": lambda: plain(plants.road("snow")),
@@ -307,6 +313,7 @@ def _samples() -> dict[str, Callable[[], tuple[Any, dict[str, Any]]]]:
         "EstimatorSpec": lambda: plain(loop.EstimatorSpec("xbs4", beta=80.0, beta2=60.0, method="radau3")),
         "BrakingRun": lambda: series(_braking_run()),
         "EncoderLoopRecord": lambda: plain(encoder_loop()),
+        "EncoderMeasurements": lambda: plain(encoder_measurements()),
         "DemoSettings": lambda: plain(loop.DemoSettings(fast=True)),
         "ErrorRow": lambda: plain(_demo_report().braking.errors[1]),
         "BrakingSummary": lambda: plain(_demo_report().braking),

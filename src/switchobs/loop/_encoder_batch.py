@@ -18,6 +18,7 @@ from typing import Any
 import numpy as np
 import numpy.typing as npt
 
+from .._json import JsonRecord
 from ..exceptions import SimulationError
 from ..sensors import Encoder, ThreeStageEstimator, notch_series
 from ..sensors._tsa import check_order_window, fit_windows
@@ -28,7 +29,7 @@ Array = npt.NDArray[np.float64]
 
 
 @dataclass(frozen=True, eq=False)
-class EncoderMeasurements:
+class EncoderMeasurements(JsonRecord, error=SimulationError):
     """The encoder chain's measurements at the controller samples of a run.
 
     Attributes

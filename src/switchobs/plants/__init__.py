@@ -7,7 +7,7 @@ Tyres and roads
 Vehicle
     :class:`QuarterCar`, :class:`BrakeActuator`, :class:`PrescribedSpeed`
 Controllers
-    :class:`FivePhaseABS`, :class:`TwoPhaseABS`, :class:`ContinuousXbsControl`
+    :class:`FivePhaseABS`, :class:`SixPhaseABS` (the Bosch cycle), :class:`TwoPhaseABS`, :class:`ContinuousXbsControl`
 Observer port
     :class:`XbsEstimator` (the protocol the simulations call; observers are wired to it
     by :mod:`switchobs.loop`), :class:`TrueXbs` (oracle), :class:`X2Measurement` (a measured ``x2``
@@ -32,7 +32,7 @@ Limit cycle of the two-phase ABS
 """
 
 from ._compiled import CompiledEstimator, CompiledObserver
-from ._controllers import ContinuousXbsControl, FivePhaseABS, TwoPhaseABS
+from ._controllers import ContinuousXbsControl, FivePhaseABS, SixPhaseABS, TwoPhaseABS
 from ._estimator import Replay, ReplayEstimator, TrueXbs, X2Measurement, XbsEstimator, replay_updates
 from ._hybrid import MAX_CASCADE, Crossing, HybridPlant, HybridRun, integrate
 from ._plot import plot_braking, plot_table41, plot_two_axle
@@ -51,7 +51,7 @@ __all__ = [
     "Burckhardt", "ROADS", "road", "road_names", "ExponentialTyre", "fit_exponential", "relation19_alphas",
     "D1_HOANG", "D2_HOANG", "RoadChange", "RoadSchedule",
     "QuarterCar", "BrakeActuator", "PrescribedSpeed", "GRAVITY",
-    "FivePhaseABS", "TwoPhaseABS", "ContinuousXbsControl",
+    "FivePhaseABS", "SixPhaseABS", "TwoPhaseABS", "ContinuousXbsControl",
     "XbsEstimator", "TrueXbs", "X2Measurement", "CompiledEstimator", "CompiledObserver",
     "ReplayEstimator", "Replay", "replay_updates", "integrate", "HybridPlant", "HybridRun", "Crossing", "MAX_CASCADE",
     "BrakingScenario", "BrakingResult", "simulate", "SERIES",

@@ -1,4 +1,4 @@
-"""Brake controllers: five-phase hybrid ABS, two-phase XBS ABS and the continuous XBS law.
+"""Brake controllers: five-phase and six-phase (Bosch) hybrid ABS, two-phase XBS ABS and the continuous XBS law.
 
 Each controller is a frozen dataclass of tuning parameters (validated once)
 whose :meth:`runtime` builds the mutable hybrid automaton used by the
@@ -7,9 +7,11 @@ simulation loop.  A runtime exposes
 ``rate(t, x2, v_wheel, vx, xbs) -> float``
     commanded pressure rate ``dP_b/dt`` [bar/s], a continuous function of the
     signals within a phase;
-``guards(x2, xbs) -> tuple``
+``guards(x2, xbs, slip) -> tuple``
     one value per outgoing transition of the current phase; a transition fires
-    when its value becomes ``> 0`` (the loop locates that instant);
+    when its value becomes ``> 0`` (the loop locates that instant); ``slip`` is
+    the wheel slip ``(R ω - v_ref) / v_ref`` with the vehicle speed the
+    controller is given as reference;
 ``fire(t, index, x2, v_wheel, vx)``
     takes transition ``index``;
 ``breakpoint() -> float``
@@ -34,7 +36,7 @@ from .._json import JsonRecord
 from ..exceptions import SimulationError
 from ._vehicle import BrakeActuator, QuarterCar
 
-__all__ = ["FivePhaseABS", "TwoPhaseABS", "ContinuousXbsControl", "Controller"]
+__all__ = ["FivePhaseABS", "SixPhaseABS", "TwoPhaseABS", "ContinuousXbsControl", "Controller"]
 
 #: Wheel speed floor [m/s] in the rates ``u_i / (R ω)``: near lock-up the command saturates anyway.
 _V_WHEEL_FLOOR = 0.1
@@ -245,7 +247,7 @@ class _FivePhaseRuntime:
     #: the guards read x2 only, so they can be located within a step whatever the XBS source
     guards_use_xbs = False
 
-    def guards(self, x2: float, xbs: float) -> tuple[float, ...]:
+    def guards(self, x2: float, xbs: float, slip: float) -> tuple[float, ...]:
         return tuple(s * (x2 - thr) for s, thr, _ in self.table[self.phase])
 
     def fire(self, t: float, index: int, x2: float, v_wheel: float, vx: float) -> None:
@@ -283,6 +285,200 @@ class _FivePhaseRuntime:
         if self.tracking and self.phase in (1, 3, 4):
             return self.t0 + self.T
         return self.deadline
+
+
+@dataclass(frozen=True)
+class SixPhaseABS(JsonRecord, error=SimulationError):
+    """Six-phase ABS on wheel-deceleration thresholds ``-a``, ``+a``, ``+A`` and a slip threshold ``lambda1``.
+
+    The classical Bosch cycle of seed 001 Sec. 2.2.3 (Fig. 2.2, after [94, p. 82]), which we take as the
+    "six-phase ABS control algorithm" of seed 001 Sec. 3.6 (that section names it without describing
+    it): after the driver's build-up (Bosch phase 1) six control phases follow.  ``x2`` is the
+    wheel-acceleration offset, ``slip`` the wheel slip against the reference speed the controller is
+    given (the vehicle speed, or its estimate on the two-axle vehicle: the seed's ``vRef``)::
+
+        ours Bosch
+        0    1  apply (driver)  dP/dt = initial_rate      -> 6 when x2 <= -a
+        6    2  hold            dP/dt = 0                 -> 1 when slip <= -lambda1
+        1    3  release         dP/dt = -u_release / (R ω) -> 2 when x2 >= -a (and slip >= -lock_slip)
+        2    4  hold            dP/dt = 0                 -> 3 when x2 >= +A
+        3    5  apply           dP/dt = +u_apply / (R ω)   -> 4 when x2 <= +A
+        4    6  hold            dP/dt = 0                 -> 5 when x2 <= +a
+        5    7  slow apply      dP/dt = +u_step / (R ω)    -> 1 when x2 <= -a (Bosch phase 8 = second phase 3)
+
+    Our numbers keep phase 1 the release (as in :class:`FivePhaseABS`, so that the ABS cycles of the
+    metrics count releases); :attr:`BOSCH` maps them to Bosch's.  As the seed says, ``lambda1`` is used in
+    the first cycle only: from the second cycle on the release starts at ``-a`` directly.
+
+    What the seed gives: the phases, their order, the three modulator settings of each and the
+    thresholds that end them (Sec. 2.2.3); that ``-a`` is not the opposite of ``+a``; that ``+A`` is
+    "relatively high"; that the phase-7 increase is slow, "alternating between the 'apply pressure' and
+    the 'hold pressure' settings", and (Sec. 2.2.2) that valve pulse-width modulation sets the rate of a
+    pressure change.  What we chose (the seed gives no value, and Fig. 2.2 is lost in the text
+    extraction):
+
+    * the threshold values (defaults tuned on the roads of Table 2.1, see ``docs/abs.md``);
+    * the rates, divided by ``R ω`` like the five-phase ABS's so that the cycle in the ``(lambda, x2)``
+      plane does not depend on the speed;
+    * phase 7 as a continuous slow apply at the mean rate of the apply/hold pulse train (the seed's
+      PWM remark): pulses would only add a ripple of the pulse period;
+    * the exits the description lacks (without them the cycle stalls): a Bosch hold 2 or 4 (ours 6 or 2)
+      that lasts ``hold_timeout_s`` goes on to the slow apply (in hold 2 the ``-a`` crossing was a false
+      alarm of the stable zone, in hold 4 the wheel recovered without reaching ``+A``, as on ice or snow);
+      a hold 4 whose ``x2`` falls ``rerelease_margin`` below ``-a`` releases again; a release lasts at
+      least ``release_min_bar``; a hold or apply in which the slip passes ``-lock_slip`` releases (a locked wheel has ``dω/dt = 0``, so ``x2 =
+      -a_x > -a`` and the deceleration thresholds alone never see it), and that release ends only when
+      the slip is back above ``-lock_slip``.
+
+    Parameters
+    ----------
+    a_minus, a_plus, a_big : float
+        The thresholds ``-a``, ``+a`` and ``+A`` as positive magnitudes [m/s²]: the guards read
+        ``x2 <= -a_minus``, ``x2 <= a_plus``, ``x2 >= a_big``; ``a_big > a_plus`` is required.
+    slip_threshold : float
+        ``lambda1`` (> 0) of the first cycle.
+    lock_slip : float
+        Lock protection (ours), ``slip_threshold < lock_slip < 1``.
+    u_release, u_apply, u_step : float
+        Rate parameters [bar·m/s²] of phases 1 (Bosch 3), 3 (Bosch 5) and 5 (Bosch 7); ``u_step < u_apply``.
+    initial_rate_bar_s : float
+        The driver's build-up (phase 0).
+    hold_timeout_s : float
+        Longest stay in the holds 6 and 2 (Bosch 2 and 4) before the slow apply.
+    rerelease_margin : float
+        A hold 2 (Bosch 4) whose ``x2`` falls this far below ``-a`` releases again (ours: the stepwise
+        release of a wheel that does not recover) [m/s²].
+    release_min_bar : float
+        A release drops at least about this pressure before ``x2 >= -a`` can end it (ours: in the real
+        cycle the brake's lag keeps the deceleration below ``-a`` after the release starts; without a lag
+        ``x2`` would cross ``-a`` at once) [bar].
+
+    Raises
+    ------
+    SimulationError
+        A value that is not positive or thresholds and rates out of order.
+    """
+
+    a_minus: float = 70.0
+    a_plus: float = 8.0
+    a_big: float = 20.0
+    slip_threshold: float = 0.1
+    lock_slip: float = 0.6
+    u_release: float = 7000.0
+    u_apply: float = 3000.0
+    u_step: float = 2000.0
+    initial_rate_bar_s: float = 1000.0
+    hold_timeout_s: float = 0.1
+    rerelease_margin: float = 10.0
+    release_min_bar: float = 25.0
+
+    name = "six-phase"
+    uses_xbs = False
+    #: Bosch's number (seed 001 Sec. 2.2.3) of each of our phases 0..6.
+    BOSCH = (1, 3, 4, 5, 6, 7, 2)
+
+    def __post_init__(self) -> None:
+        owner = "six-phase ABS"
+        _positive(owner, a_minus=self.a_minus, a_plus=self.a_plus, a_big=self.a_big,
+                  slip_threshold=self.slip_threshold, lock_slip=self.lock_slip, u_release=self.u_release,
+                  u_apply=self.u_apply, u_step=self.u_step, initial_rate_bar_s=self.initial_rate_bar_s,
+                  hold_timeout_s=self.hold_timeout_s, rerelease_margin=self.rerelease_margin,
+                  release_min_bar=self.release_min_bar)
+        for ok, text in ((self.a_big > self.a_plus, f"+A = {self.a_big} must exceed +a = {self.a_plus} (the hold "
+                                                    f"after +A lasts until +a)"),
+                         (self.slip_threshold < self.lock_slip < 1.0,
+                          f"need lambda1 < lock_slip < 1, got lambda1 = {self.slip_threshold}, lock_slip = "
+                          f"{self.lock_slip}"),
+                         (self.u_step < self.u_apply, f"the slow apply u_step = {self.u_step} must be below "
+                                                      f"u_apply = {self.u_apply}")):
+            if not ok:
+                raise SimulationError(f"six-phase ABS settings out of order: {text}")
+
+    def runtime(self, plant: QuarterCar, actuator: BrakeActuator) -> _SixPhaseRuntime:
+        return _SixPhaseRuntime(self)
+
+    def to_json(self) -> dict[str, Any]:
+        return {"name": self.name, **asdict(self)}
+
+    def __str__(self) -> str:
+        return (f"six-phase ABS: -a={-self.a_minus:g}, +a={self.a_plus:g}, +A={self.a_big:g} m/s², "
+                f"lambda1={self.slip_threshold:g}, u=({self.u_release:g}, {self.u_apply:g}, {self.u_step:g}), "
+                f"hold timeout {self.hold_timeout_s:g} s")
+
+
+class _SixPhaseRuntime:
+    __slots__ = ("phase", "r0", "rates", "a_minus", "a_plus", "a_big", "margin", "lam1", "lock", "timeout",
+                 "deadline", "armed", "pulse")
+    guards_use_xbs = False
+
+    def __init__(self, cfg: SixPhaseABS):
+        self.phase = 0
+        self.r0 = cfg.initial_rate_bar_s
+        self.rates = (0.0, -cfg.u_release, 0.0, cfg.u_apply, 0.0, cfg.u_step, 0.0)
+        self.a_minus, self.a_plus, self.a_big = cfg.a_minus, cfg.a_plus, cfg.a_big
+        self.margin = cfg.rerelease_margin
+        self.lam1, self.lock = cfg.slip_threshold, cfg.lock_slip
+        self.timeout = cfg.hold_timeout_s
+        self.deadline = math.inf
+        self.armed = True
+        # duration of the shortest release per m/s of wheel speed: it drops about release_min_bar
+        self.pulse = cfg.release_min_bar / cfg.u_release
+
+    def rate(self, t: float, x2: float, v_wheel: float, vx: float, xbs: float) -> float:
+        if self.phase == 0:
+            return self.r0
+        r = self.rates[self.phase]
+        if r == 0.0:
+            return 0.0
+        return r / (v_wheel if v_wheel > _V_WHEEL_FLOOR else _V_WHEEL_FLOOR)
+
+    def guards(self, x2: float, xbs: float, slip: float) -> tuple[float, ...]:
+        p = self.phase
+        locking = -self.lock - slip
+        if p == 0:
+            return (-self.a_minus - x2,)
+        if p == 6:
+            return (-self.lam1 - slip,)
+        if p == 1:
+            return (min(x2 + self.a_minus, slip + self.lock),) if self.armed else ()
+        if p == 2:
+            return (x2 - self.a_big, -self.a_minus - self.margin - x2, locking)
+        if p == 3:
+            return (self.a_big - x2,)
+        if p == 4:
+            return (self.a_plus - x2, locking)
+        return (-self.a_minus - x2, locking)
+
+    #: where each guard of :meth:`guards` leads, per phase
+    _NEXT = ((6,), (2,), (3, 1, 1), (4,), (5, 1), (1, 1), (1,))
+
+    def fire(self, t: float, index: int, x2: float, v_wheel: float, vx: float) -> None:
+        self._enter(self._NEXT[self.phase][index], t, v_wheel)
+
+    def expire(self, t: float, x2: float, v_wheel: float, vx: float) -> None:
+        """The shortest release is over (its exit guard is armed now), or a hold 6 or 2 (Bosch 2 or 4)
+        lasted ``hold_timeout_s``: the wheel is stable, apply slowly (5)."""
+        if self.phase == 1:
+            self.armed = True
+            self.deadline = math.inf
+        else:
+            self._enter(5, t, v_wheel)
+
+    def _enter(self, p: int, t: float, v_wheel: float) -> None:
+        self.phase = p
+        self.armed = p != 1
+        if p == 1:
+            self.deadline = t + self.pulse * max(v_wheel, _V_WHEEL_FLOOR)
+        else:
+            self.deadline = t + self.timeout if p in (2, 6) else math.inf
+
+    def breakpoint(self) -> float:
+        return self.deadline
+
+    def reference(self, t: float) -> tuple[float, float]:
+        """No wheel-acceleration reference curve (recorded as NaN)."""
+        return (math.nan, math.nan)
+
 
 
 @dataclass(frozen=True)
@@ -370,7 +566,7 @@ class _TwoPhaseRuntime:
         z1_ref = self.z_ref if p == 1 else -self.z_ref
         return (-self.a * x2 * xbs + self.kp * (x2 - z1_ref)) / (vx * self.b)
 
-    def guards(self, x2: float, xbs: float) -> tuple[float, ...]:
+    def guards(self, x2: float, xbs: float, slip: float) -> tuple[float, ...]:
         if self.phase == 1:
             return (xbs - self.chi_b,)
         if self.phase == 0:
@@ -470,7 +666,7 @@ class _ContinuousRuntime:
         dz1_ref = -self.kr * self.d * x2 / (vx * den)
         return (-self.a * x2 * xbs + self.kp * (x2 - z1_ref) - vx * dz1_ref) / (vx * self.b)
 
-    def guards(self, x2: float, xbs: float) -> tuple[float, ...]:
+    def guards(self, x2: float, xbs: float, slip: float) -> tuple[float, ...]:
         return (self.start - xbs,) if self.phase == 0 else ()
 
     def fire(self, t: float, index: int, x2: float, v_wheel: float, vx: float) -> None:
@@ -484,4 +680,4 @@ class _ContinuousRuntime:
         return (math.nan, math.nan)
 
 
-Controller = FivePhaseABS | TwoPhaseABS | ContinuousXbsControl
+Controller = FivePhaseABS | SixPhaseABS | TwoPhaseABS | ContinuousXbsControl

@@ -20,16 +20,17 @@ def from_fields(cls: type[T], data: Any, what: str, **parsed: Any) -> T:
 
 
 def controller_from_json(data: Any, what: str) -> Any:
-    """A :class:`FivePhaseABS`, :class:`TwoPhaseABS` or :class:`ContinuousXbsControl` by its JSON ``name``.
+    """A :class:`FivePhaseABS`, :class:`SixPhaseABS`, :class:`TwoPhaseABS` or :class:`ContinuousXbsControl` by its
+    JSON ``name``.
 
     Raises
     ------
     SimulationError
         No known ``name`` or a setting the controller rejects; the message names ``what``.
     """
-    from ._controllers import ContinuousXbsControl, FivePhaseABS, TwoPhaseABS
+    from ._controllers import ContinuousXbsControl, FivePhaseABS, SixPhaseABS, TwoPhaseABS
 
-    kinds = {c.name: c for c in (FivePhaseABS, TwoPhaseABS, ContinuousXbsControl)}
+    kinds = {c.name: c for c in (FivePhaseABS, SixPhaseABS, TwoPhaseABS, ContinuousXbsControl)}
     if not isinstance(data, Mapping) or data.get("name") not in kinds:
         raise SimulationError(f"{what} needs a controller named one of {', '.join(kinds)}, got {data!r}")
     return from_fields(kinds[data["name"]], data, f"{data['name']} controller")

@@ -46,7 +46,7 @@ import numpy as np
 import numpy.typing as npt
 
 from ..exceptions import SimulationError
-from ._controllers import ContinuousXbsControl, Controller, FivePhaseABS, TwoPhaseABS
+from ._controllers import ContinuousXbsControl, Controller, FivePhaseABS, SixPhaseABS, TwoPhaseABS
 from ._compiled import compiled_support, compiler_available, run_compiled
 from ._estimator import ReplayEstimator, TrueXbs, X2Measurement, XbsEstimator, replay_updates
 from ._json import controller_from_json, from_fields, run_from_json
@@ -121,7 +121,7 @@ class BrakingScenario:
             object.__setattr__(self, "roads", RoadSchedule(self.roads))
         if not isinstance(self.roads, RoadSchedule):
             raise SimulationError(f"roads must be a RoadSchedule or a road name, got {self.roads!r}")
-        if not isinstance(self.controller, (FivePhaseABS, TwoPhaseABS, ContinuousXbsControl)):
+        if not isinstance(self.controller, (FivePhaseABS, SixPhaseABS, TwoPhaseABS, ContinuousXbsControl)):
             raise SimulationError(f"unknown controller {self.controller!r}")
         owner = f"scenario {self.name!r}"
         _check(owner, "initial speed speed_m_s", self.speed_m_s)
@@ -486,7 +486,7 @@ class _QuarterCar(HybridPlant):
         return self.road.at_breakpoint(t)
 
     def guard_values(self, k: int) -> tuple[float, ...]:
-        return self.ctrl.guards(self._ctrl_x2(), self.xbs_hat if self.use_hat else self.o_xbs)
+        return self.ctrl.guards(self._ctrl_x2(), self.xbs_hat if self.use_hat else self.o_xbs, self.o_lam)
 
     def locatable(self, k: int) -> bool:
         return self.x2_source is None and not (self.use_hat and self.ctrl.guards_use_xbs)

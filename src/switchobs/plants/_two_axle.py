@@ -33,7 +33,7 @@ import numpy as np
 import numpy.typing as npt
 
 from ..exceptions import SimulationError
-from ._controllers import FivePhaseABS, TwoPhaseABS
+from ._controllers import FivePhaseABS, SixPhaseABS, TwoPhaseABS
 from ._estimator import XbsEstimator
 from ._hybrid import Crossing, HybridPlant, integrate
 from ._json import controller_from_json, from_fields, run_from_json
@@ -168,12 +168,15 @@ class TwoAxleScenario:
     duration_s, stop_speed_m_s, dt_s, low_speed_m_s : float
         As in :class:`BrakingScenario` (the seed stops at 15 km/h).
     name : str
+    speed_from_filter : bool
+        ``False``: the controllers and observers read the true speed instead of the filter's (with an
+        ideal accelerometer, ``Accelerometer(0, 0)``, the "true signals" run of seed 001 Fig. 3.18).
     """
 
     roads: RoadSchedule
     speed_m_s: float
-    front: FivePhaseABS | TwoPhaseABS = field(default_factory=FivePhaseABS)
-    rear: FivePhaseABS | TwoPhaseABS = field(default_factory=FivePhaseABS)
+    front: FivePhaseABS | SixPhaseABS | TwoPhaseABS = field(default_factory=FivePhaseABS)
+    rear: FivePhaseABS | SixPhaseABS | TwoPhaseABS = field(default_factory=FivePhaseABS)
     vehicle: TwoAxleVehicle = field(default_factory=TwoAxleVehicle)
     actuator: BrakeActuator = field(default_factory=BrakeActuator)
     accelerometer: Accelerometer = field(default_factory=Accelerometer)
@@ -185,6 +188,7 @@ class TwoAxleScenario:
     dt_s: float = 1e-3
     low_speed_m_s: float = 5.0
     name: str = "two-axle"
+    speed_from_filter: bool = True
 
     def __post_init__(self) -> None:
         if isinstance(self.roads, str):
@@ -195,8 +199,9 @@ class TwoAxleScenario:
             raise SimulationError("the two-axle vehicle supports road changes at given times only "
                                   "(at_position_m would reach the two axles at different times)")
         for ctrl in (self.front, self.rear):
-            if not isinstance(ctrl, (FivePhaseABS, TwoPhaseABS)):
-                raise SimulationError(f"two-axle controllers must be FivePhaseABS or TwoPhaseABS, got {ctrl!r}")
+            if not isinstance(ctrl, (FivePhaseABS, SixPhaseABS, TwoPhaseABS)):
+                raise SimulationError(f"two-axle controllers must be FivePhaseABS, SixPhaseABS or TwoPhaseABS, "
+                                      f"got {ctrl!r}")
         _positive(f"scenario {self.name!r}", speed_m_s=self.speed_m_s, duration_s=self.duration_s,
                   stop_speed_m_s=self.stop_speed_m_s, dt_s=self.dt_s, speed_filter_q=self.speed_filter_q,
                   speed_filter_r=self.speed_filter_r, low_speed_m_s=self.low_speed_m_s)
@@ -217,7 +222,8 @@ class TwoAxleScenario:
                 "actuator": self.actuator.to_json(), "accelerometer": asdict(self.accelerometer),
                 "brake_start_s": self.brake_start_s, "speed_filter_q": self.speed_filter_q,
                 "speed_filter_r": self.speed_filter_r, "duration_s": self.duration_s,
-                "stop_speed_m_s": self.stop_speed_m_s, "dt_s": self.dt_s, "low_speed_m_s": self.low_speed_m_s}
+                "stop_speed_m_s": self.stop_speed_m_s, "dt_s": self.dt_s, "low_speed_m_s": self.low_speed_m_s,
+                "speed_from_filter": self.speed_from_filter}
 
     @classmethod
     def from_json(cls, data: Any) -> TwoAxleScenario:
@@ -257,7 +263,7 @@ class TwoAxleResult:
     ``mean_deceleration_m_s2``, ``speed_error_mean_pct`` (mean of
     ``(vx_hat - vx)/vx`` over the braking, in %; seed 001 reports -18 %),
     ``speed_error_max_pct``, per axle: ``load_min_n``/``load_max_n``,
-    ``slip_mean``, ``abs_cycles``, ``xbs_rms_error`` (after braking starts),
+    ``slip_mean`` (``None`` before the ABS takes over), ``abs_cycles``, ``xbs_rms_error`` (after braking starts),
     ``observer_failure`` (``None`` or when and why the observer refused a step;
     the run then stops with status ``observer-failed``, as the quarter car's does).
 
@@ -342,7 +348,7 @@ class TwoAxleResult:
             if a["observer_failure"]:
                 xbs += f" (observer failed at {a['observer_failure'].split(':')[0]})"
             lines.append(f"| {axle} | {a['load_min_n']:.0f}–{a['load_max_n']:.0f} | {a['abs_cycles']} | "
-                         f"{a['slip_mean']:.3f} | {xbs} |")
+                         f"{_slip_text(a['slip_mean'])} | {xbs} |")
         lines += ["", f"series (NumPy, `result.series[...]`): {', '.join(f'`{k}`' for k in self.series)}"]
         return "\n".join(lines)
 
@@ -358,9 +364,14 @@ class TwoAxleResult:
             if a["observer_failure"]:
                 xbs += f", observer failed at {a['observer_failure'].split(':')[0]}"
             lines.append(f"  {axle}: load {a['load_min_n']:.0f}-{a['load_max_n']:.0f} N, {a['abs_cycles']} cycles, "
-                         f"mean slip {a['slip_mean']:.3f}{xbs}")
+                         f"mean slip {_slip_text(a['slip_mean'])}{xbs}")
         lines.append(f"  cost: {self.steps} steps, {self.wall_time_s:.3f} s wall")
         return "\n".join(lines)
+
+
+def _slip_text(slip: float | None) -> str:
+    """The mean slip of an axle, or a dash when its ABS never took over (a run stopped during the build-up)."""
+    return "–" if slip is None else f"{slip:.3f}"
 
 
 def simulate_two_axle(scenario: TwoAxleScenario, *,
@@ -423,7 +434,7 @@ class _TwoAxle(HybridPlant):
         self.max_rate, self.p_max = sc.actuator.max_rate_bar_s, sc.actuator.max_pressure_bar
         # outputs of the last rhs evaluation, per wheel (front, rear) where they are two
         self.braking = False
-        self.lam = self.mu = self.xbs = self.fz = self.x2 = (0.0, 0.0)
+        self.lam = self.mu = self.xbs = self.fz = self.x2 = self.slip_ref = (0.0, 0.0)
         self.ax = self.ax_meas = 0.0
 
     def bias(self, t: float) -> float:
@@ -463,6 +474,9 @@ class _TwoAxle(HybridPlant):
                     u = 0.0
             rates.append(u)
         self.lam, self.mu, self.xbs, self.fz, self.x2 = (lf, lr), (muf, mur), (xf, xr), (fzf, fzr), (x2f, x2r)
+        # the slip the controllers see: against the estimated speed (the seed's reference speed vRef)
+        vh = self.vx_hat
+        self.slip_ref = ((R * omf - vh) / vh, (R * omr - vh) / vh)
         self.ax, self.ax_meas = ax, ax_meas
         return (dof, dor, ax, vx, rates[0], rates[1])
 
@@ -495,12 +509,15 @@ class _TwoAxle(HybridPlant):
 
     def after_step(self, t: float, y: tuple[float, ...], h: float) -> str | None:
         sc = self.sc
-        # speed estimate: predict with the biased accelerometer, correct with the fastest wheel
-        self.vx_hat += h * self.ax_meas
-        self.p_var += sc.speed_filter_q * h
-        gain = self.p_var / (self.p_var + sc.speed_filter_r)
-        self.vx_hat += gain * (self.R * max(y[0], y[1]) - self.vx_hat)
-        self.p_var *= 1.0 - gain
+        if sc.speed_from_filter:
+            # speed estimate: predict with the biased accelerometer, correct with the fastest wheel
+            self.vx_hat += h * self.ax_meas
+            self.p_var += sc.speed_filter_q * h
+            gain = self.p_var / (self.p_var + sc.speed_filter_r)
+            self.vx_hat += gain * (self.R * max(y[0], y[1]) - self.vx_hat)
+            self.p_var *= 1.0 - gain
+        else:
+            self.vx_hat = y[2]
         failure = None
         for k, est in enumerate(self.est):
             pressure = y[4 + k]
@@ -526,7 +543,8 @@ class _TwoAxle(HybridPlant):
     def guard_values(self, k: int) -> tuple[float, ...]:
         if not self.braking:          # the controllers take over when the driver brakes
             return ()
-        return self.automata[k].guards(self.x2[k], self.hat[k] if self.use_hat[k] else self.xbs[k])
+        return self.automata[k].guards(self.x2[k], self.hat[k] if self.use_hat[k] else self.xbs[k],
+                                       self.slip_ref[k])
 
     def locatable(self, k: int) -> bool:
         return not (self.use_hat[k] and self.automata[k].guards_use_xbs)

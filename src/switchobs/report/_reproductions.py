@@ -24,12 +24,14 @@ from .._json import JsonRecord
 from .._progress import progress
 from ..exceptions import PrerequisiteError, SimulationError
 from ..loop import X2_MEASUREMENTS, EncoderX2, EstimatorSpec, xbs_estimator
-from ..plants import (GRAVITY, TABLE41_SEED, BrakingResult, BrakingScenario, FivePhaseABS, PoincareMap, Table41Result,
-                      TwoAxleResult, TwoPhaseABS,
+from ..plants import (GRAVITY, TABLE41_SEED, Accelerometer, BrakingResult, BrakingScenario, FivePhaseABS, PoincareMap,
+                      SixPhaseABS, Table41Result, TwoAxleResult, TwoAxleScenario, TwoPhaseABS,
                       aguado_sec36, fit_exponential, road, scenario, simulate, simulate_two_axle, table41)
+from ..plants._metrics import _reconvergence
 from ..observers import xbs3_observer
 from ..sensors import (ROBUSTNESS_PROFILES, TABLE61_ENCODER, TABLE61_PROFILES, TABLE61_SEED, AngleTrajectory,
-                       ChainSettings, Encoder, EstimatorComparison, braking_trajectory, compare_estimators,
+                       ChainSettings, Encoder, EstimatorComparison, NotchFilter, braking_trajectory,
+                       compare_estimators, controller_times, time_stamping,
                        constant_speed, encoder_chain, rpm_to_rad_s, super_twisting, super_twisting_gains, tsa_condition_number,
                        varying_speed)
 
@@ -94,12 +96,20 @@ class _Runs:
 
     @cached_property
     def sec36(self) -> dict[str, TwoAxleResult]:
-        """Seed 001 Sec. 3.6 with the 4D observer (the scenario's default) and with the adaptive one (the seed's)."""
+        """Seed 001 Sec. 3.6: the six-phase ABS with the adaptive observer per wheel, fed by the estimated speed
+        and the biased accelerometer (``estimated``) or by the true signals (``true``, Fig. 3.18), and the
+        first second with the default ``Gamma`` (``gamma-default``, it diverges)."""
         sc = aguado_sec36()
-        with np.errstate(over="ignore", invalid="ignore"):    # the adaptive observer of the locked wheel overflows
-            return {kind: simulate_two_axle(sc, estimators=tuple(
-                xbs_estimator(kind, sc.vehicle.corner(axle), sc.roads.initial) for axle in ("front", "rear")))
-                for kind in ("xbs4", "adaptive")}
+        true = replace(sc, accelerometer=Accelerometer(bias_m_s2=0.0, drift_m_s2_per_sqrt_s=0.0),
+                       speed_from_filter=False)
+
+        def run(s: TwoAxleScenario, spec: EstimatorSpec) -> TwoAxleResult:
+            return simulate_two_axle(s, estimators=tuple(xbs_estimator(spec, s.vehicle.corner(axle), s.roads.initial)
+                                                         for axle in ("front", "rear")))
+
+        with np.errstate(over="ignore", invalid="ignore"):    # the default-Gamma run overflows on purpose
+            return {"estimated": run(sc, SEC36_OBSERVER), "true": run(true, SEC36_OBSERVER),
+                    "gamma-default": run(replace(sc, duration_s=1.0), EstimatorSpec("adaptive"))}
 
     @cached_property
     def fig67(self) -> dict[str, BrakingResult]:
@@ -135,8 +145,131 @@ class _Runs:
         return steps, arrivals, e1, e2
 
 
-def _rms_text(rms: float) -> str:
-    return f"{rms:.2f}" if rms < 1e3 else "blows up (the front wheel locks at the dry → snow change)"
+# ---------------------------------------------------------------- Sec. 3.6
+
+#: The adaptive observer of the Sec. 3.6 runs: the default Gamma = 1e4 I diverges on the front wheel at 1 kHz
+#: (its a = R² Fz / J is the largest of all our runs), half of it does not.
+SEC36_OBSERVER = EstimatorSpec("adaptive", gamma=5e3)
+#: Seed 001 Sec. 3.6: when the ABS takes over on each axle [s].
+_SEC36_ACTIVATION = {"front": 0.75, "rear": 0.50}
+
+
+def _bosch_sequence(res: TwoAxleResult, k: str) -> list[int]:
+    """The phases of wheel ``k`` ("f"/"r") in the order visited, as Bosch numbers (from the events: a phase
+    left at the instant it was entered has no sample)."""
+    label = "front" if k == "f" else "rear"
+    seq = [SixPhaseABS.BOSCH[0]]
+    for _, event in res.events:
+        words = event.split()
+        if words[0] == label and words[1] == "phase" and words[2] != words[4]:
+            seq.append(SixPhaseABS.BOSCH[int(words[4])])
+    return seq
+
+
+def _sec36_section(runs: _Runs) -> list[str]:
+    est, true = runs.sec36["estimated"], runs.sec36["true"]
+    sc = est.scenario
+    m = est.metrics
+    s = est.series
+    t = s["t"]
+    end = float(t[-1])
+    changes = ((2.5, 5.0, "→ snow"), (5.0, end, "→ wet asphalt"))
+
+    def activation(res: TwoAxleResult, k: str) -> float:
+        return float(res.series["t"][np.argmax(res.series[f"phase_{k}"] > 0)])
+
+    def sign_agreement(res: TwoAxleResult, k: str) -> float:
+        r = res.series
+        on = r["t"] >= activation(res, k)
+        return float(np.mean(np.sign(r[f"xbs_hat_{k}"][on]) == np.sign(r[f"xbs_{k}"][on])))
+
+    def reapproach(res: TwoAxleResult, k: str) -> str:
+        r = res.series
+        err = r[f"xbs_hat_{k}"] - r[f"xbs_{k}"]
+        return ", ".join(f"{label}: {_fmt_s(_reconvergence(r['t'], err, r[f'xbs_{k}'], a, b, label).time_s)}"
+                         for a, b, label in changes)
+
+    def initial_rms(res: TwoAxleResult, k: str) -> float:
+        r = res.series
+        a = activation(res, k)
+        keep = (r["t"] >= a) & (r["t"] < a + 0.5)
+        return float(np.sqrt(np.mean((r[f"xbs_hat_{k}"][keep] - r[f"xbs_{k}"][keep]) ** 2)))
+
+    def pressure(a: float, b: float) -> str:
+        keep = (t >= a) & (t < b)
+        return " / ".join(f"{np.mean(s[f'P_{k}'][keep]):.0f}" for k in "fr")
+
+    veh = sc.vehicle
+    load_error = np.abs(veh.static_loads[0] - veh.load_transfer * s["ax_meas"] - s["Fz_f"])
+    seq = _bosch_sequence(est, "f")
+    text = "".join(map(str, seq))
+    full = text.count("34567")
+    cycles = text.count("3")
+    diverged = runs.sec36["gamma-default"].metrics["front"]["xbs_rms_error"]
+    est_better = all(est.metrics[a]["xbs_rms_error"] <= 1.1 * true.metrics[a]["xbs_rms_error"]
+                     for a in ("front", "rear"))
+    front_better = initial_rms(est, "f") < initial_rms(est, "r")
+    lines = ["### Sec. 3.6: two-axle vehicle, six-phase ABS, adaptive observer", "",
+             "*Seed:* 180 km/h, braking from 0.25 s, dry asphalt → snow (2.5 s) → wet asphalt (5 s) until 15 km/h; a "
+             "six-phase ABS per wheel, the switched adaptive observer (3.4) per wheel fed by a Kalman speed estimate "
+             "and an accelerometer with a 0.5 m/s² turn-on bias; loads from (3.36). *Ours:* `aguado_sec36()` "
+             "(`SixPhaseABS`, the Bosch cycle of Sec. 2.2.3) with the adaptive observer per wheel, "
+             f"$\\Gamma = {SEC36_OBSERVER.gamma:g}\\,I$; the reference run of Fig. 3.18 reads the true $v_x$ and "
+             f"$a_x$ (`speed_from_filter=False`, ideal accelerometer). Run: status {est.status}, {end:.2f} s, "
+             f"stopping distance {m['stopping_distance_m']:.1f} m.", "",
+             _row("item", "seed", "ours", "deviation"), _row(*["---"] * 4),
+             _row("ABS takes over, front / rear", "0.75 / 0.50 s", " / ".join(f"{activation(est, k):.3f} s" for k in "fr"),
+                  " / ".join(f"{activation(est, k) - _SEC36_ACTIVATION[a]:+.3f} s"
+                             for k, a in (("f", "front"), ("r", "rear")))),
+             _row("six-phase cycle (front wheel, Bosch numbers)", "1 2 3 4 5 6 7, then 3 4 5 6 7 (Sec. 2.2.3)",
+                  " ".join(map(str, seq[:12])) + f" …; {full} of {cycles} releases followed by the full 4 5 6 7",
+                  "–"),
+             _row("mean speed error", "−18 % (underestimated)", f"{m['speed_error_mean_pct']:.1f} % (worst "
+                  f"{m['speed_error_max_pct']:.1f} %)", f"{m['speed_error_mean_pct'] + 18.0:+.1f} points"),
+             _row("front load from (3.36) with the measured $a_x$", "follows the real load closely",
+                  f"largest error {np.max(load_error):.0f} N (= $\\Delta F_z$ × bias) on "
+                  f"{m['front']['load_min_n']:.0f}–{m['front']['load_max_n']:.0f} N", "–"),
+             _row("mean pressure front / rear [bar]: dry, snow, wet", "drastically reduced on snow (Fig. 3.16)",
+                  f"{pressure(0.75, 2.5)}; {pressure(3.0, 5.0)}; {pressure(5.5, end)}", "–"),
+             _row("XBS RMS error with the estimated signals", "\"reasonable approximation\" with the "
+                  "estimated signals (Fig. 3.18)", ", ".join(f"{a} {est.metrics[a]['xbs_rms_error']:.2f} (true signals "
+                                                              f"{true.metrics[a]['xbs_rms_error']:.2f})"
+                                                              for a in ("front", "rear")), "–"),
+             _row("sign of the XBS estimate = sign of the true XBS (share of the time), front / rear",
+                  "zero crossings coincide", " / ".join(f"{100 * sign_agreement(est, k):.0f} %" for k in "fr")
+                  + " (true signals: " + " / ".join(f"{100 * sign_agreement(true, k):.0f} %" for k in "fr") + ")",
+                  "–"),
+             _row("re-approach after the road changes, front", "within 0.5 s (Fig. 3.19)", reapproach(est, "f"), "–"),
+             _row("re-approach after the road changes, rear", "within 0.5 s", reapproach(est, "r"), "–"),
+             _row("first 0.5 s of ABS, RMS error front / rear", "front better than rear",
+                  f"{initial_rms(est, 'f'):.2f} / {initial_rms(est, 'r'):.2f}", "–"),
+             "", "Re-approach: the error enters and stays within 10 % of the true XBS's peak-to-peak range on the "
+             "segment (as for Sec. 3.4). "
+             f"Reproduced: the six-phase cycle in the Bosch order, the speed underestimated on average "
+             f"({m['speed_error_mean_pct']:.1f} % against −18 %: the filter is ours, the seed's [19] is not "
+             "described), the loads of (3.36), the pressure cut on snow, an XBS estimate "
+             f"{'as good with the estimated signals as' if est_better else 'worse with the estimated signals than'} "
+             f"with the true ones, the front {'better' if front_better else 'NOT better'} than the rear in the first "
+             "0.5 s. Not reproduced: the re-approach within 0.5 s after every road change (the adaptive observer "
+             "re-identifies $(c, d)$ at the rate $\\Gamma$ allows, see Sec. 3.4 above) and coincident zero crossings "
+             f"on the rear wheel (its estimate has the sign of the true XBS {100 * sign_agreement(est, 'r'):.0f} % of "
+             "the time). With the default $\\Gamma = 10^4\\,I$ the front observer "
+             f"diverges within the first second (RMS error {_rms_text(diverged)}): its $a = R^2F_z/J$ is the "
+             "largest of our runs and the discrete adaptation is unstable at 1 kHz.", "",
+             "*Chosen by us (the seed does not give them):* that the six-phase ABS is the Bosch cycle of Sec. 2.2.3, "
+             "and all its values: " + str(sc.front) + "; rear thresholds × 0.6; the driver's build-up at "
+             f"{sc.front.initial_rate_bar_s:g} bar/s (chosen so that the ABS takes over at the seed's times); its exits the description lacks "
+             "(hold time-out, lock release, re-release, shortest release; see [ABS plants](abs.md)); "
+             f"$\\Gamma = {SEC36_OBSERVER.gamma:g}\\,I$ and $\\beta = 100$; the vehicle (mass, geometry, brakes), the "
+             "scalar Kalman speed filter and the accelerometer's random walk; the observers keep the static-load "
+             "$a$ (the seed updates it from (3.36)). Not modelled: suspension, pitch and tyre relaxation of the "
+             "seed's full vehicle model [30].", "",
+             "![two-axle vehicle of seed 001 Sec. 3.6](abs_sec36.png)", ""]
+    return lines
+
+
+def _rms_text(rms: float | None) -> str:
+    return f"{rms:.2f}" if rms is not None and rms < 1e3 else "blows up"
 
 
 def _segment_rms(res: BrakingResult, a: float, b: float) -> float:
@@ -337,6 +470,56 @@ def plot_fig67(runs: _Runs, path: Path) -> None:
 # ---------------------------------------------------------------- Table 6.1
 
 
+def notch_from_zero(profile: str, duration_s: float = 10.0) -> tuple[float, float]:
+    """RMS errors (velocity, acceleration) of the Table 6.1 notch when its state starts at zero and the whole
+    record is scored (no warm-up): our reading of the seed's notch row.
+
+    Our notch starts at its first input (no start-up transient) and Table 6.1 is scored after 1 s; a filter
+    whose state starts at 0 sees a step of the full speed at its first sample.  One zero sample fed before
+    the record gives that state.
+    """
+    traj = TABLE61_PROFILES[profile][1](duration_s)
+    events = TABLE61_ENCODER.events(traj)
+    ts = controller_times(0.0, duration_s, 1000.0)
+    tsa = time_stamping(events.times, events.angles, ts)
+    fw, fa = NotchFilter(dt_s=1e-3, damping=0.5), NotchFilter(dt_s=1e-3, damping=0.5)
+    valid = np.flatnonzero(tsa.valid)
+    fw.update(0.0, float(tsa.omega[valid[0]]))
+    fa.update(0.0, float(tsa.omega[valid[0]]))
+    om = np.array([fw.update(float(tsa.omega[i]), float(tsa.omega[i])) for i in valid])
+    al = np.array([fa.update(float(tsa.alpha[i]), float(tsa.omega[i])) for i in valid])
+    return (float(np.sqrt(np.mean((om - traj.omega(ts[valid])) ** 2))),
+            float(np.sqrt(np.mean((al - traj.alpha(ts[valid])) ** 2))))
+
+
+def _notch_section(runs: _Runs) -> list[str]:
+    """Why the notch row of Table 6.1 differs: a start-up transient in the seed's RMS, and the harmonic content."""
+    rows = [_row("profile", "velocity: ours (Table 6.1) / started at zero, whole record \\| seed",
+                 "acceleration: ours / started at zero \\| seed"), _row(*["---"] * 3)]
+    share = {}
+    for profile, cmp in runs.table61.items():
+        ours = cmp["notch"]
+        w0, a0 = notch_from_zero(profile)
+        seed_w, seed_a = TABLE61_SEED[profile]["notch"]
+        rows.append(_row(profile, f"{ours.rms_omega:.3f} / {w0:.3f} \\| {seed_w:.3f} ({_pct(w0, seed_w)})",
+                         f"{ours.rms_alpha:.2f} / {a0:.2f} \\| {seed_a:.2f} ({_pct(a0, seed_a)})"))
+        tsa_a, notch_a = cmp["tsa"].rms_alpha, ours.rms_alpha
+        share[profile] = (1 - (notch_a / tsa_a) ** 2, 1 - (seed_a / TABLE61_SEED[profile]["tsa"][1]) ** 2)
+    c = share["constant"]
+    return ["**The notch row.** A notch has unit gain at DC, so at constant speed it cannot add the seed's "
+            "3.07 rad/s of velocity error once it has settled; a start-up transient can. Started from a zero "
+            "state and scored over the whole 10 s (our reading of the seed's row; ours starts at its first "
+            "input and is scored after 1 s):", "", *rows, "",
+            "The start-up accounts for most of the constant profile's velocity error, not for the varying "
+            "profile's (whose first speed is three times lower, so its step is smaller), and it leaves the "
+            "acceleration unchanged. The acceleration row depends on the encoder: the notch removes the first "
+            f"harmonic only, which holds {100 * c[1]:.0f} % of the TSA acceleration error power in the seed's "
+            f"constant row ($1 - (7.95/30.09)^2$) but {100 * c[0]:.0f} % with our encoder, whose transition "
+            "noise (fitted to the TSA row alone) spreads over all harmonics. So the notch row is not matched "
+            "within 15 %: the seed's encoder and the notch's start are not given. "
+            "`test_table61_notch_row_start_up_transient` checks these numbers."]
+
+
 def _table61_section(runs: _Runs) -> list[str]:
     """Table 6.1: seed, ours and deviations per profile and estimator."""
     enc = TABLE61_ENCODER
@@ -358,7 +541,7 @@ def _table61_section(runs: _Runs) -> list[str]:
               f"clock {enc.clock_hz:g} Hz, noise seed {enc.seed}) were *fitted* so that the constant-speed TSA row "
               "matches the seed's; they are not predicted. The reference is the exact $\\theta(t)$ (the seed's is a "
               "1024-ppr encoder). Profiles: " + "; ".join(f"{name}: {desc}" for name, (desc, _) in TABLE61_PROFILES.items())
-              + "."]
+              + ".", "", *_notch_section(runs)]
     return lines
 
 
@@ -556,7 +739,6 @@ def _seed001(runs: _Runs) -> list[str]:
                runs.braking("aguado-sec34", EstimatorSpec(kind, beta=100.0)))
               for kind, sec in (("xbs3", "III, knows the initial road's $c$"), ("xbs4", "IV"))]
     a1 = sec34.metrics.assumption1
-    m36 = runs.sec36["xbs4"].metrics
     dry = road("dry-asphalt")
     lines = ["## Seed 001 (Aguado-Rojas 2020)", "", "### Adaptive observer, Chapter 3", "",
              _row("item", "seed", "ours", "test / page"), _row(*["---"] * 4),
@@ -604,22 +786,7 @@ def _seed001(runs: _Runs) -> list[str]:
               "*Chosen by us:* the drum speed $25 - 1.96t$ m/s (the seed gives the deceleration), 25 ms road "
               "transitions, the five-phase ABS with its stall exit, the gains above (equal rates $\\beta = 100$), "
               "initial estimates $(\\hat c, \\hat d) = (20, 10)$; the seed gives none of them.", "",
-              "### Sec. 3.6: two-axle vehicle", "",
-              _row("item", "seed", "ours", "deviation"), _row(*["---"] * 4),
-              _row("mean speed error", "−18 % (underestimated)", f"{m36['speed_error_mean_pct']:.1f} % "
-                   f"(worst {m36['speed_error_max_pct']:.1f} %)",
-                   f"{m36['speed_error_mean_pct'] + 18.0:+.1f} points"),
-              _row("vertical loads", "follow (3.36)", f"front {m36['front']['load_min_n']:.0f}–"
-                   f"{m36['front']['load_max_n']:.0f} N, rear {m36['rear']['load_min_n']:.0f}–"
-                   f"{m36['rear']['load_max_n']:.0f} N", "–"),
-              *(_row(f"XBS RMS error, {kind} observer per wheel, front / rear", "estimates re-approach the truth",
-                     " / ".join(_rms_text(r.metrics[axle]['xbs_rms_error']) for axle in ("front", "rear")), "–")
-                for kind, r in runs.sec36.items()),
-              "", "*Chosen by us:* the seed uses the adaptive observer and a six-phase ABS it does not describe; we "
-              "run the five-phase ABS (rear thresholds × 0.6), which does not read the XBS, so the speed error does "
-              "not depend on the observer; an accelerometer bias of 0.5 m/s² and a scalar Kalman speed filter "
-              "(details in [ABS plants](abs.md)). The six-phase ABS is not reproduced.", "",
-              "![two-axle vehicle of seed 001 Sec. 3.6](abs_sec36.png)", "",
+              *_sec36_section(runs),
               "### Chapter 4: Table 4.1 and the Poincaré map", "", *_table41_section(runs), "",
               "![Table 4.1](abs_table41.png)", "",
               "Poincaré map (4.13)–(4.18) of the two-phase ABS on dry asphalt ($z_{ref} = 8$, $\\chi_a = -0.1$, "
@@ -687,8 +854,7 @@ def _reproductions_md(runs: _Runs) -> str:
             "estimation based on a switched observer*; **001** Aguado-Rojas, PhD thesis (2020); **003** M'Sirdi et "
             "al. (2008), super-twisting observer; **004** Pasillas-Lépine, slides on switched observers via "
             "singular time-rescaling.", "",
-            "Not reproduced: the seed's six-phase ABS of Sec. 3.6 (the seeds do not describe it), and the "
-            "ordering of Figs. 6.7–6.9 (below).", ""]
+            "Not reproduced: the ordering of Figs. 6.7–6.9 and parts of Sec. 3.6 (below).", ""]
     body = head + _seed000(runs) + _seed001(runs) + _seed003(runs) + _SEED004
     return "\n".join(body).rstrip("\n") + "\n"
 
