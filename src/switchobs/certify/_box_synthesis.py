@@ -30,9 +30,7 @@ import time
 from collections.abc import Mapping, Sequence
 from typing import Any
 
-import cvxpy as cp
 import numpy as np
-import scipy.linalg
 
 from ..exceptions import ModelError
 from ..model import Model
@@ -106,6 +104,10 @@ def synthesize_box(model: Model, box: ParameterBox | Sequence[str] | Mapping[str
 
     if use_strict and not full_rank:
         return fail(STRICT_IMPOSSIBLE)
+    # imported here, not with the package: together about 1.5 s that certify and verify never need
+    import cvxpy as cp
+    import scipy.linalg
+
     sigma = float(rate)
     E = np.eye(n)[list(rows)]
     t0 = time.perf_counter()

@@ -50,7 +50,6 @@ from fractions import Fraction
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
-import scipy.linalg
 import sympy as sp
 from sympy.polys.matrices import DomainMatrix
 
@@ -230,6 +229,8 @@ def _decay_certificate(A: Matrix, rate: Fraction, start: np.ndarray | None) -> M
         X = dyadic((start + start.T) / 2)
         if not decay_holds(A, X, rate):
             return X
+    import scipy.linalg  # scipy costs about 0.4 s to import; certify and verify never get here
+
     Af = np.array([[float(x) for x in row] for row in A]) + float(rate) * np.eye(len(A))
     try:
         X_num = scipy.linalg.solve_continuous_lyapunov(Af.T, -np.eye(len(A)))
@@ -241,6 +242,8 @@ def _decay_certificate(A: Matrix, rate: Fraction, start: np.ndarray | None) -> M
 
 def noise_gain(A_mode: np.ndarray, K: np.ndarray, E: np.ndarray) -> float:
     """H2 norm of ``v -> E e`` for ``de/dtau = A_mode e + K v`` (``inf`` if ``A_mode`` is not Hurwitz)."""
+    import scipy.linalg
+
     if np.max(np.linalg.eigvals(A_mode).real) >= 0:
         return float("inf")
     Wc = scipy.linalg.solve_continuous_lyapunov(A_mode, -K @ K.T)
