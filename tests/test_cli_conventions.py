@@ -89,6 +89,22 @@ def test_a_commands_help_and_its_argparse_errors_import_none_of_the_slow_package
     assert lines == expected, proc.stderr[-3000:]
 
 
+def test_certify_and_verify_without_an_lmi_import_neither_cvxpy_nor_scipy(tmp_path):
+    """A family proved by the singular sum and the design's exact P solves no LMI: no solver import (1.5 s)."""
+    model = tmp_path / "chain.toml"
+    model.write_text('name = "chain-4"\nstates = ["x1", "x2", "x3", "x4"]\noutput = "y"\n'
+                     'A = [["-1", "1", "0", "0"], ["0", "-3/2", "1", "0"], ["0", "0", "-2", "1"], '
+                     '["0", "0", "0", "-5/2"]]\nC = ["1", "0", "0", "0"]\ntime_scale = "y"\n', encoding="utf-8")
+    cert = tmp_path / "chain.json"
+    probe = ("import sys\nfrom switchobs.cli.main import main\n"
+             f"codes = [main(['certify', {str(model)!r}, '--spectrum=-2,-3,-5/2,-7/2', '--out', {str(cert)!r}]),\n"
+             f"         main(['verify', {str(cert)!r}])]\n"
+             "loaded = sorted({m.split('.')[0] for m in sys.modules} & {'cvxpy', 'scipy', 'matplotlib', 'casadi'})\n"
+             "print('LOADED', codes, loaded, file=sys.stderr)")
+    proc = subprocess.run([sys.executable, "-c", probe], capture_output=True, text=True, timeout=300)
+    assert proc.stderr.strip().splitlines()[-1] == "LOADED [0, 0] []", proc.stderr[-3000:]
+
+
 def test_version_is_single_sourced(capsys):
     with pytest.raises(SystemExit):
         main(["--version"])

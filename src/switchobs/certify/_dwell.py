@@ -26,7 +26,6 @@ from fractions import Fraction
 from typing import Any
 
 import numpy as np
-import scipy.linalg
 
 from .._progress import progress
 from ._exact import Matrix, matrix_strings
@@ -127,6 +126,7 @@ def gc_margin(mats: Sequence[np.ndarray], T: float, *, solvers: Sequence[str] = 
               ) -> tuple[list[np.ndarray], float, SolveInfo]:
     """Normalised margin of the Geromel–Colaneri LMIs at dwell time ``T`` (positive: feasible)."""
     import cvxpy as cp
+    import scipy.linalg
 
     n = mats[0].shape[0]
     N = len(mats)

@@ -21,7 +21,6 @@ from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
-import scipy.linalg
 
 if TYPE_CHECKING:  # cvxpy is imported when a problem is solved: it costs about 1.5 s, and exact paths need none
     import cvxpy as cp
@@ -100,6 +99,8 @@ class Balanced:
 
 def balance(matrices: Sequence[np.ndarray]) -> Balanced:
     """Balance the family jointly (LAPACK gebal on ``sum |A_p|``) and scale it to unit 2-norm."""
+    import scipy.linalg  # about 0.4 s to import: only on the paths that solve an LMI
+
     total = sum(np.abs(A) for A in matrices)
     _, (d, _) = scipy.linalg.matrix_balance(total, permute=False, separate=True)
     d = np.asarray(d, dtype=float)

@@ -10,7 +10,6 @@ from collections.abc import Sequence
 from typing import Any
 
 import numpy as np
-import scipy.linalg
 
 from .._figures import panels
 from ..exceptions import CertificateError
@@ -84,6 +83,8 @@ def plot_certification(report: CertificationReport, *, ax: Any = None) -> Any:
 
 def _lyapunov(A: np.ndarray) -> np.ndarray:
     """``P`` with ``A' P + P A = -I``."""
+    import scipy.linalg  # with the figure only, like matplotlib
+
     return scipy.linalg.solve_continuous_lyapunov(A.T, -np.eye(A.shape[0]))
 
 
@@ -94,6 +95,8 @@ def _worst_path(mats: Sequence[np.ndarray], x0: np.ndarray, sign: int, half_turn
     unit angle (``x' A x / (sign x × A x)``) is followed; ``None`` when at some point no mode turns
     that way (cases i and ii, where no trajectory turns around the origin).
     """
+    import scipy.linalg
+
     dt = 0.02 / max(float(np.max(np.abs(np.linalg.eigvals(A)))) for A in mats)
     Es = [scipy.linalg.expm(A * dt) for A in mats]
     x, path, angle = x0, [x0], 0.0
@@ -115,6 +118,8 @@ def _worst_path(mats: Sequence[np.ndarray], x0: np.ndarray, sign: int, half_turn
 
 def _greedy(mats: Sequence[np.ndarray], x0: np.ndarray, t_end: float, steps: int) -> np.ndarray:
     """The switching that always picks the mode along which ``|x|`` grows fastest (or decays slowest)."""
+    import scipy.linalg
+
     dt = t_end / steps
     Es = [scipy.linalg.expm(A * dt) for A in mats]
     x, path = x0, [x0]

@@ -58,7 +58,6 @@ from fractions import Fraction
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
-import scipy.linalg
 
 if TYPE_CHECKING:  # imported where an LMI is built (see _lmi)
     import cvxpy as cp
@@ -283,6 +282,8 @@ def riccati_scaling(A: np.ndarray, C: np.ndarray, signs: Sequence[int]) -> np.nd
         ``S``, upper triangular; the Jacobi part ``diag(X0)^(1/2)`` alone if ``X0`` is numerically not
         definite, the identity if a mode is not detectable (the LMIs will then say so).
     """
+    import scipy.linalg  # about 0.4 s to import; certify and verify never get here
+
     n = len(A)
     try:
         X0 = sum(np.linalg.inv(scipy.linalg.solve_continuous_are((sign * A + np.eye(n)).T, C.T, np.eye(n),
@@ -327,6 +328,8 @@ def decay_certificate(mats: Sequence[Matrix], rate: Fraction, S: np.ndarray, sta
     reason : str
         Why the last candidate failed (empty with ``X``).
     """
+    import scipy.linalg
+
     n = len(mats[0])
     scaled = [S @ np.linalg.solve(S.T, (_floats(A) + float(rate) * np.eye(n)).T).T for A in mats]
     reason = "no candidate"
@@ -369,6 +372,8 @@ def noise_gain(A_mode: np.ndarray, K: np.ndarray, E: np.ndarray) -> float:
     """H2 norm of ``v -> E e`` for ``de/dtau = A_mode e + K v`` (``inf`` if ``A_mode`` is not Hurwitz)."""
     if np.max(np.linalg.eigvals(A_mode).real) >= 0:
         return float("inf")
+    import scipy.linalg
+
     Wc = scipy.linalg.solve_continuous_lyapunov(A_mode, -K @ K.T)
     return float(np.sqrt(max(np.trace(E @ Wc @ E.T), 0.0)))
 

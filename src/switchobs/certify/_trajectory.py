@@ -25,8 +25,6 @@ from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
-import scipy.integrate
-import scipy.optimize
 import sympy as sp
 
 from .._json import JsonRecord
@@ -385,6 +383,8 @@ class AdmissibleConstants(JsonRecord, error=SimulationError):
 
 def _extremes_1d(f: Any, lo: float, hi: float) -> tuple[float, float]:
     """Numerical (min, max) of a scalar function on [lo, hi]: dense grid then bounded refinement."""
+    import scipy.optimize  # scipy costs about 0.4 s to import: only where the trajectory analysis runs
+
     grid = np.linspace(lo, hi, 2001)
     vals = np.array([f(x) for x in grid], dtype=float)
     out = []
@@ -444,6 +444,9 @@ def admissible_constants(model: Model, *, bounds: Mapping[str, Sequence[float]],
     >>> round(c.alpha, 3)   # s0 = 1/5, a0 = a * 30, b0 = 35/8
     257.143
     """
+    import scipy.integrate
+    import scipy.optimize
+
     if len(model.inputs) != 1:
         raise ModelError(f"Theorem 3 is stated for one input; model {model.name!r} has {len(model.inputs)}")
     if model.parameters:
