@@ -8,7 +8,8 @@ For abs-xbs3 and abs-xbs4 (seed 000), double and float:
   scalar code, the same checks) and of a natural hand-written one (arrays and a right-hand-side function,
   the same checks); code size (``size``) and stack (``-fstack-usage``);
 * from Python (CPU time, median [min–max] of 5 runs of 100 000 rows): ns per step of ``CObserver.run``
-  (the generated ``_run`` through ctypes) against a numba ``njit`` loop of the same checked step, and
+  (the generated ``_run`` through ctypes, in the library ``CObserver`` builds: ``-O2`` plus ``HOST_FLAGS``,
+  the host's instruction set like numba's JIT) against a numba ``njit`` loop of the same checked step, and
   batch against batch the Python reference ``run``; µs per single call of the casadi ``Function``, the
   Python reference ``step`` and the C step through ctypes.
 
@@ -29,6 +30,7 @@ import numpy as np
 from _harness import MIN_REPEATS, Stats, cpu, publish, ratio
 
 from switchobs.codegen import CObserver
+from switchobs.codegen._build import BUILD_FLAGS, HOST_FLAGS
 from switchobs.observers import xbs3_observer, xbs4_observer
 
 try:
@@ -276,7 +278,8 @@ def c_timings(obs: CObserver, model: str, tmp: Path) -> dict:
             where, size, _ = line.split("\t")
             frames[where.rsplit(":", 1)[1]] = int(size)
     p = gen.prefix
-    stack_gen = frames[f"{p}_step"] + frames.get(f"{p}_advance", 0) + frames.get(f"{p}_kernel", 0)
+    stack_gen = (frames[f"{p}_step"] + frames.get(f"{p}_run", 0) + frames.get(f"{p}_advance", 0)
+                 + frames.get(f"{p}_kernel", 0))
     return {**{k: Stats(tuple(v)) for k, v in runs.items()}, "failures": failures,
             "gen_size": sizes[f"{gen.prefix}.o"], "hand_size": sizes["hand.o"],
             "gen_stack": stack_gen, "hand_stack": frames[f"hand_{model}"]}
@@ -422,8 +425,10 @@ def main() -> None:
             "interleaved runs; *generated* is `<prefix>_step` with all its checks, *casadi's generated C* is "
             "`Function.generate` of the same step (no checks, double only), *tuned hand C* is straight-line "
             "scalar code with the same checks, *natural hand C* the same step written with arrays and a "
-            "right-hand-side function. From Python: CPU time per step (`time.process_time`), median [min–max] "
-            f"of {args.repeats} runs of {rows_n} rows; the numba loop is the same checked step "
+            "right-hand-side function; *gen. stack*: the frames of `_step`, `_run`, `_advance` and the kernel "
+            "(those not inlined). From Python: CPU time per step (`time.process_time`), median [min–max] "
+            f"of {args.repeats} runs of {rows_n} rows, in the library `CObserver` builds (`gcc {' '.join(BUILD_FLAGS)} "
+            f"{' '.join(HOST_FLAGS)}`); the numba loop is the same checked step "
             f"(numba {numba.__version__ if numba else 'not installed'}), compiled before timing; "
             "*vs*: how the generated code compares (faster or slower).",
             [c_table, py_table], notes, write=not args.quick)
