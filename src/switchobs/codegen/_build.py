@@ -271,7 +271,9 @@ class CObserver:
     # ------------------------------------------------------------------ numerics
     def _vector(self, values: Any, names: Sequence[str], what: str) -> np.ndarray:
         arr = named_vector(values, names, what)
-        with np.errstate(over="ignore"):
+        if self._dtype is np.float64:
+            return np.ascontiguousarray(arr)
+        with np.errstate(over="ignore"):  # out-of-range doubles become inf, which the C checks refuse
             return np.ascontiguousarray(arr, dtype=self._dtype)
 
     def _dt(self, dt: Any) -> float:
@@ -335,7 +337,8 @@ class CObserver:
         ObserverInputError
             The status of the first failing step; the message names the row.
         """
-        x = self._vector(xhat0, self.state_names, "xhat0").copy()
+        # a copy: _run writes the final state into it
+        x = np.array(self._vector(xhat0, self.state_names, "xhat0"))
         rows = signal_matrix(signal_rows, self.signal_names)
         dt_f = self._dt(dt)
         if self._dtype is np.float64:
@@ -347,17 +350,16 @@ class CObserver:
         if k > _INT32_MAX:
             raise DimensionError(f"signal_rows has {k} rows; the C _run takes at most {_INT32_MAX} (int32_t) "
                                  "per call: split the record")
-        if not (math.isfinite(dt_f) and dt_f > 0.0) or not np.isfinite(x).all():
+        if not (math.isfinite(dt_f) and dt_f > 0.0) or not all(map(math.isfinite, x.tolist())):
             # the checks of the first step, also when there is no row (as the reference does)
             code = StepStatus.BAD_DT if not (math.isfinite(dt_f) and dt_f > 0.0) else StepStatus.NONFINITE_STATE
             raise self._fail(int(code), x, rows_c[0] if k else np.zeros(0), dt_f, 0)
-        x_start = x.copy()
         traj = np.empty((k, self.size), dtype=self._dtype)
         code = self._call_run(x, rows_c, traj, dt_f)
         if code != 0:
-            # rare path: run again on a NaN-filled trajectory to find the first failing row (rows before it are
-            # written, finite)
-            x = x_start
+            # rare path: run again from the start on a NaN-filled trajectory to find the first failing row (rows
+            # before it are written, finite)
+            x = np.array(self._vector(xhat0, self.state_names, "xhat0"))
             traj.fill(np.nan)
             self._call_run(x, rows_c, traj, dt_f)
             done = int(np.argmin(np.isfinite(traj).all(axis=1))) if k else 0
