@@ -12,8 +12,9 @@ For N = 2..8 and fully symbolic coefficients a_1..a_N and gains k_1..k_N:
   imports, design, the default exact re-check, printing).
 
 Each N runs in a fresh process.  Run: ``python benchmarks/design_scaling.py [--quick] [--max-n 8]
-[--repeats 5] [--baseline-limit 20]``; without ``--quick`` it also times the CLI goals once each
-(gains N = 8 and N = 10, symbolic spectrum N = 8).
+[--repeats 5] [--baseline-limit 20]``; without ``--quick`` it also times the CLI goals of issue 18
+(gains N = 8 < 10 s and N = 10 < 60 s, symbolic spectrum N = 8 < 30 s): CPU and wall time of
+``--repeats`` whole processes each.
 """
 
 from __future__ import annotations
@@ -21,6 +22,7 @@ from __future__ import annotations
 import argparse
 import multiprocessing as mp
 import queue as queue_module
+import time
 
 from _harness import MIN_REPEATS, Stats, cli_cpu, cpu, number, publish, ratio
 
@@ -103,6 +105,16 @@ def _naive_times(n: int, repeats: int, limit: float) -> list[float] | None:
     return times
 
 
+def _goal(args: list[str], repeats: int) -> tuple[Stats, Stats]:
+    """CPU and wall time of ``repeats`` whole ``switchobs ARGS`` processes."""
+    cpu_s, wall_s = [], []
+    for _ in range(repeats):
+        t0 = time.perf_counter()
+        cpu_s += cli_cpu(args, 1).values
+        wall_s.append(time.perf_counter() - t0)
+    return Stats(tuple(cpu_s)), Stats(tuple(wall_s))
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--quick", action="store_true",
@@ -138,14 +150,16 @@ def main() -> None:
         print(table[-1], flush=True)
     tables = [table]
     if not args.quick:
-        goals = ["| command (whole process, default exact re-check; one run) | CPU [s] | goal [s] |", "|---|---:|---:|"]
+        goals = [f"| command (whole process, default exact re-check; {args.repeats} runs) | CPU [s] | wall [s] "
+                 "| goal [s] | CPU within goal |", "|---|---:|---:|---:|---|"]
         for n, target, goal in ((8, "gains", 10), (10, "gains", 60), (8, "spectrum", 30)):
             if target == "gains":
                 argv = ["--gains-plus", ",".join(f"k{i}" for i in range(1, n + 1))]
             else:
                 argv = ["--spectrum", ",".join(f"-l{i}" for i in range(1, n + 1))]
-            t = cli_cpu(["design", f"normal-form-{n}", *argv], 1)
-            goals.append(f"| `switchobs design normal-form-{n} {argv[0]} {argv[1]}` | {number(t.median)} | {goal} |")
+            t, wall = _goal(["design", f"normal-form-{n}", *argv], args.repeats)
+            goals.append(f"| `switchobs design normal-form-{n} {argv[0]} {argv[1]}` | {t.show()} | {wall.show()} | "
+                         f"{goal} | {'yes' if t.max < goal else 'no'} |")
             print(goals[-1], flush=True)
         tables.append(goals)
     publish("design_scaling",
@@ -157,7 +171,8 @@ def main() -> None:
             f"*design*: gains, $K_-$, Routh–Hurwitz conditions, $P$ and the coupling constraints; *exact "
             f"re-check*: `GainDesign.verify()`; *text*: `str()` of the design (compact past N = 4); *CLI "
             f"process*: `switchobs design normal-form-N --gains-plus k1,...,kN` end to end with the default "
-            f"exact re-check (even N and the last N only: each run costs seconds).",
+            f"exact re-check (even N and the last N only: each run costs seconds). Goals: wall time is CPU "
+            f"time stretched by the machine's load (stated above); the goals hold if the CPU time does.",
             tables, write=not args.quick)
 
 

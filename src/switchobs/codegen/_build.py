@@ -72,7 +72,7 @@ def find_compiler(compiler: str | None = None) -> str:
 
 def compile_shared(gen: GeneratedObserver, *, compiler: str | None = None,
                    flags: Sequence[str] = BUILD_FLAGS, cache_dir: str | Path | None = None, host: bool = True) -> Path:
-    """Compile ``gen`` into a shared library (cached); return its path.
+    """Compile ``gen`` into a shared library (cached); return its path (``host``: see :func:`compile_sources`).
 
     Raises
     ------
