@@ -437,7 +437,8 @@ def main() -> None:
             "right-hand-side function; *gen. stack*: the frames of `_step`, `_run`, `_advance` and the kernel "
             "(those not inlined). From Python: CPU time per step (`time.process_time`), median [min–max] "
             f"of {args.repeats} runs of {rows_n} rows, in the library `CObserver` builds (`gcc {' '.join(BUILD_FLAGS)} "
-            f"{' '.join(HOST_FLAGS)}`); C `_run` and the numba loop alternated, {PAIR_RUNS * args.repeats} runs each; the numba loop is the same checked step "
+            f"{' '.join(HOST_FLAGS)}`); C `_run` and the numba loop alternated, {PAIR_RUNS * args.repeats} runs "
+            "each; the numba loop is the same checked step "
             f"(numba {numba.__version__ if numba else 'not installed'}), compiled before timing; "
             "*vs*: how the generated code compares (faster or slower).",
             [c_table, py_table], notes, write=not args.quick)

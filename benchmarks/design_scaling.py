@@ -118,12 +118,15 @@ def _goal(args: list[str], repeats: int) -> tuple[Stats, Stats]:
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--quick", action="store_true",
-                        help="smoke run: N up to 6, no goals; printed, not written to benchmarks/results")
+                        help="smoke run: N up to 4, 2 runs, the CLI at N = 4 once, no goals; printed, not written "
+                             "to benchmarks/results")
     parser.add_argument("--max-n", type=int, default=8)
     parser.add_argument("--repeats", type=int, default=MIN_REPEATS)
     parser.add_argument("--baseline-limit", type=float, default=20.0)
     args = parser.parse_args()
-    max_n = min(args.max_n, 6) if args.quick else args.max_n
+    max_n = min(args.max_n, 4) if args.quick else args.max_n
+    if args.quick:
+        args.repeats = 2
     table = ["| N | P only [ms] | naive P [ms] | P vs naive | design [ms] | exact re-check [ms] | text [ms] "
              "| text [kB] | CLI process [s] |",
              "|---:|---:|---:|---|---:|---:|---:|---:|---:|"]
@@ -143,8 +146,8 @@ def main() -> None:
             versus = f"> {number(args.baseline_limit / r['p'].median)}× faster"
         gains = ",".join(f"k{i}" for i in range(1, n + 1))
         # whole processes cost seconds each: every other N keeps `make bench` to a few minutes
-        cli = cli_cpu(["design", f"normal-form-{n}", "--gains-plus", gains], args.repeats).show() \
-            if n % 2 == 0 or n == max_n else "–"
+        cli = cli_cpu(["design", f"normal-form-{n}", "--gains-plus", gains], 1 if args.quick else args.repeats).show() \
+            if (n % 2 == 0 and not args.quick) or n == max_n else "–"
         table.append(f"| {n} | {r['p'].show(1e3)} | {naive_s} | {versus} | {r['design'].show(1e3)} | "
                      f"{r['recheck'].show(1e3)} | {r['text'].show(1e3)} | {number(r['chars'] / 1e3)} | {cli} |")
         print(table[-1], flush=True)

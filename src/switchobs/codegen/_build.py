@@ -32,8 +32,8 @@ from ..exceptions import CodegenError, DimensionError, ModelError, ObserverInput
 from ._generate import GeneratedObserver, generate_observer
 from ..spec import STATUS_TEXT, StepStatus
 
-__all__ = ["CObserver", "compile_observer", "compile_shared", "compile_sources", "cache_directory", "find_compiler", "BUILD_FLAGS",
-           "HOST_FLAGS"]
+__all__ = ["CObserver", "compile_observer", "compile_shared", "compile_sources", "cache_directory", "find_compiler",
+           "BUILD_FLAGS", "HOST_FLAGS"]
 
 #: Flags of the shared library the binding loads (the strict warning set is exercised by the tests).
 BUILD_FLAGS: tuple[str, ...] = ("-std=c99", "-O2", "-fPIC", "-shared")
