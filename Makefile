@@ -47,7 +47,8 @@ bench: $(STAMP)
 	@$(PY) -m pip install --quiet -e ".[bench]" || echo "!!! could not install numba: codegen_step.py will say that its numba column is missing !!!"
 	@for f in benchmarks/[!_]*.py; do \
 	  [ "$$f" = benchmarks/render_docs.py ] && continue; \
-	  echo "== $$f"; $(PY) $$f $(if $(BENCH_QUICK),--quick) || exit 1; done
+	  echo "== $$f"; t0=$$(date +%s); $(PY) $$f $(if $(BENCH_QUICK),--quick) || exit 1; \
+	  echo "== $$f: $$(( $$(date +%s) - t0 )) s wall"; done
 	$(if $(BENCH_QUICK),@echo "BENCH_QUICK: smoke run - the results files and docs are unchanged",$(PY) benchmarks/render_docs.py)
 
 docs: $(STAMP)

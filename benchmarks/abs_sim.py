@@ -41,10 +41,12 @@ def measure(label: str, sc, observer: str, repeats: int, in_loop: bool = True, i
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--quick", action="store_true",
-                        help="smoke run: no observer and the adaptive one only"
+                        help="smoke run: no observer and the adaptive one only, 2 runs"
                              "; printed, not written to benchmarks/results")
     parser.add_argument("--repeats", type=int, default=MIN_REPEATS)
     args = parser.parse_args()
+    if args.quick:  # a smoke run: two runs show that it works
+        args.repeats = min(args.repeats, 2)
     sc = scenario("aguado-sec34")
     observers = ("none", "adaptive") if args.quick else ("none", "xbs3", "xbs4", "adaptive")
     table = ["| run | observer | steps | CPU [s] | × real time | observer share | µs/step |",

@@ -7,8 +7,10 @@ For abs-xbs3 and abs-xbs4 (seed 000), double and float:
   the same step (``Function.generate``, double only, no checks), of a tuned hand-written step (straight-line
   scalar code, the same checks) and of a natural hand-written one (arrays and a right-hand-side function,
   the same checks); code size (``size``) and stack (``-fstack-usage``);
-* from Python (CPU time, median [min–max] of 5 runs of 100 000 rows): ns per step of ``CObserver.run``
-  (the generated ``_run`` through ctypes) against a numba ``njit`` loop of the same checked step, and
+* from Python (CPU time, median [min–max] of 5 runs of 100 000 rows, 20 alternated runs for ``CObserver.run``
+  and numba): ns per step of ``CObserver.run``
+  (the generated ``_run`` through ctypes, in the library ``CObserver`` builds: ``-O2`` plus ``HOST_FLAGS``,
+  the host's instruction set like numba's JIT) against a numba ``njit`` loop of the same checked step, and
   batch against batch the Python reference ``run``; µs per single call of the casadi ``Function``, the
   Python reference ``step`` and the C step through ctypes.
 
@@ -29,6 +31,7 @@ import numpy as np
 from _harness import MIN_REPEATS, Stats, cpu, publish, ratio
 
 from switchobs.codegen import CObserver
+from switchobs.codegen._build import BUILD_FLAGS, HOST_FLAGS
 from switchobs.observers import xbs3_observer, xbs4_observer
 
 try:
@@ -38,6 +41,8 @@ except ImportError:  # a benchmark-only extra: the table says that it is missing
 
 STEPS = 300_000
 RUN_ROWS = 100_000
+#: C ``_run`` against numba: this many times ``--repeats`` runs each, alternated (each run takes milliseconds).
+PAIR_RUNS = 4
 CFLAGS = ["-std=c99", "-O2"]
 
 # The checks of the generated step (status codes of the C API), shared by both hand-written steps.
@@ -276,7 +281,9 @@ def c_timings(obs: CObserver, model: str, tmp: Path) -> dict:
             where, size, _ = line.split("\t")
             frames[where.rsplit(":", 1)[1]] = int(size)
     p = gen.prefix
-    stack_gen = frames[f"{p}_step"] + frames.get(f"{p}_advance", 0) + frames.get(f"{p}_kernel", 0)
+    # the chain of one _step call, with the parts gcc splits off (``<name>.part.0``) and not inlined
+    chain = {f"{p}_step", f"{p}_run", f"{p}_advance", f"{p}_kernel"}
+    stack_gen = sum(size for name, size in frames.items() if name.split(".")[0] in chain)
     return {**{k: Stats(tuple(v)) for k, v in runs.items()}, "failures": failures,
             "gen_size": sizes[f"{gen.prefix}.o"], "hand_size": sizes["hand.o"],
             "gen_stack": stack_gen, "hand_stack": frames[f"hand_{model}"]}
@@ -359,8 +366,8 @@ def python_timings(ref, obs: CObserver, repeats: int, rows_n: int) -> dict:
     out = {"casadi_call": per_call(lambda: fn(x, sig, par, 1e-3), 500, repeats),
            "py_step": per_call(lambda: ref.step(x, sig, 1e-3), 2000, repeats),
            "c_step": per_call(lambda: obs.step(x, sig, 1e-3), 2000, repeats),
-           "py_run": cpu(lambda: ref.run(x, small, 1e-3), repeats).scaled(1 / small.shape[0]),
-           "c_run": cpu(lambda: obs.run(x, rows, 1e-3), repeats).scaled(1 / rows_n)}
+           "py_run": cpu(lambda: ref.run(x, small, 1e-3), repeats).scaled(1 / small.shape[0])}
+    runs = {"c_run": lambda: obs.run(x, rows, 1e-3)}
     loop = numba_loop(ref.size) if obs.real == "double" else None
     if loop is not None:
         traj = np.empty((rows_n, ref.size))
@@ -368,7 +375,12 @@ def python_timings(ref, obs: CObserver, repeats: int, rows_n: int) -> dict:
             raise SystemExit("the numba loop refused a step")
         if not np.allclose(traj, obs.run(x, rows, 1e-3), rtol=1e-9, atol=1e-9):
             raise SystemExit("the numba loop does not compute the generated step")
-        out["numba_run"] = cpu(lambda: loop(x, rows, par, 1e-3, traj), repeats).scaled(1 / rows_n)
+        runs["numba_run"] = lambda: loop(x, rows, par, 1e-3, traj)
+    times: dict[str, list[float]] = {name: [] for name in runs}
+    for _ in range(PAIR_RUNS * repeats):  # alternated, so that both see the same machine load
+        for name, run in runs.items():
+            times[name] += cpu(run, 1).values
+    out.update({name: Stats(tuple(v)).scaled(1 / rows_n) for name, v in times.items()})
     return out
 
 
@@ -422,8 +434,11 @@ def main() -> None:
             "interleaved runs; *generated* is `<prefix>_step` with all its checks, *casadi's generated C* is "
             "`Function.generate` of the same step (no checks, double only), *tuned hand C* is straight-line "
             "scalar code with the same checks, *natural hand C* the same step written with arrays and a "
-            "right-hand-side function. From Python: CPU time per step (`time.process_time`), median [min–max] "
-            f"of {args.repeats} runs of {rows_n} rows; the numba loop is the same checked step "
+            "right-hand-side function; *gen. stack*: the frames of `_step`, `_run`, `_advance` and the kernel "
+            "(those not inlined). From Python: CPU time per step (`time.process_time`), median [min–max] "
+            f"of {args.repeats} runs of {rows_n} rows, in the library `CObserver` builds (`gcc {' '.join(BUILD_FLAGS)} "
+            f"{' '.join(HOST_FLAGS)}`); C `_run` and the numba loop alternated, {PAIR_RUNS * args.repeats} runs "
+            "each; the numba loop is the same checked step "
             f"(numba {numba.__version__ if numba else 'not installed'}), compiled before timing; "
             "*vs*: how the generated code compares (faster or slower).",
             [c_table, py_table], notes, write=not args.quick)

@@ -36,9 +36,11 @@ def one_run(out: Path, fast: bool) -> tuple[float, float, dict]:
 
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--quick", action="store_true", help="switchobs demo --fast; print, do not publish")
+    parser.add_argument("--quick", action="store_true", help="switchobs demo --fast, 2 runs; print, do not publish")
     parser.add_argument("--repeats", type=int, default=MIN_REPEATS)
     args = parser.parse_args()
+    if args.quick:  # a smoke run: two runs show that it works
+        args.repeats = min(args.repeats, 2)
     cpus, walls, reports = [], [], []
     with tempfile.TemporaryDirectory() as tmp:
         for i in range(max(args.repeats, 1)):

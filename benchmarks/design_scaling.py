@@ -12,8 +12,9 @@ For N = 2..8 and fully symbolic coefficients a_1..a_N and gains k_1..k_N:
   imports, design, the default exact re-check, printing).
 
 Each N runs in a fresh process.  Run: ``python benchmarks/design_scaling.py [--quick] [--max-n 8]
-[--repeats 5] [--baseline-limit 20]``; without ``--quick`` it also times the CLI goals once each
-(gains N = 8 and N = 10, symbolic spectrum N = 8).
+[--repeats 5] [--baseline-limit 20]``; without ``--quick`` it also times the CLI goals of issue 18
+(gains N = 8 < 10 s and N = 10 < 60 s, symbolic spectrum N = 8 < 30 s): CPU and wall time of
+``--repeats`` whole processes each.
 """
 
 from __future__ import annotations
@@ -21,6 +22,7 @@ from __future__ import annotations
 import argparse
 import multiprocessing as mp
 import queue as queue_module
+import time
 
 from _harness import MIN_REPEATS, Stats, cli_cpu, cpu, number, publish, ratio
 
@@ -103,15 +105,28 @@ def _naive_times(n: int, repeats: int, limit: float) -> list[float] | None:
     return times
 
 
+def _goal(args: list[str], repeats: int) -> tuple[Stats, Stats]:
+    """CPU and wall time of ``repeats`` whole ``switchobs ARGS`` processes."""
+    cpu_s, wall_s = [], []
+    for _ in range(repeats):
+        t0 = time.perf_counter()
+        cpu_s += cli_cpu(args, 1).values
+        wall_s.append(time.perf_counter() - t0)
+    return Stats(tuple(cpu_s)), Stats(tuple(wall_s))
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--quick", action="store_true",
-                        help="smoke run: N up to 6, no goals; printed, not written to benchmarks/results")
+                        help="smoke run: N up to 4, 2 runs, the CLI at N = 4 once, no goals; printed, not written "
+                             "to benchmarks/results")
     parser.add_argument("--max-n", type=int, default=8)
     parser.add_argument("--repeats", type=int, default=MIN_REPEATS)
     parser.add_argument("--baseline-limit", type=float, default=20.0)
     args = parser.parse_args()
-    max_n = min(args.max_n, 6) if args.quick else args.max_n
+    max_n = min(args.max_n, 4) if args.quick else args.max_n
+    if args.quick:
+        args.repeats = 2
     table = ["| N | P only [ms] | naive P [ms] | P vs naive | design [ms] | exact re-check [ms] | text [ms] "
              "| text [kB] | CLI process [s] |",
              "|---:|---:|---:|---|---:|---:|---:|---:|---:|"]
@@ -131,21 +146,23 @@ def main() -> None:
             versus = f"> {number(args.baseline_limit / r['p'].median)}× faster"
         gains = ",".join(f"k{i}" for i in range(1, n + 1))
         # whole processes cost seconds each: every other N keeps `make bench` to a few minutes
-        cli = cli_cpu(["design", f"normal-form-{n}", "--gains-plus", gains], args.repeats).show() \
-            if n % 2 == 0 or n == max_n else "–"
+        cli = cli_cpu(["design", f"normal-form-{n}", "--gains-plus", gains], 1 if args.quick else args.repeats).show() \
+            if (n % 2 == 0 and not args.quick) or n == max_n else "–"
         table.append(f"| {n} | {r['p'].show(1e3)} | {naive_s} | {versus} | {r['design'].show(1e3)} | "
                      f"{r['recheck'].show(1e3)} | {r['text'].show(1e3)} | {number(r['chars'] / 1e3)} | {cli} |")
         print(table[-1], flush=True)
     tables = [table]
     if not args.quick:
-        goals = ["| command (whole process, default exact re-check; one run) | CPU [s] | goal [s] |", "|---|---:|---:|"]
+        goals = [f"| command (whole process, default exact re-check; {args.repeats} runs) | CPU [s] | wall [s] "
+                 "| goal [s] | CPU within goal |", "|---|---:|---:|---:|---|"]
         for n, target, goal in ((8, "gains", 10), (10, "gains", 60), (8, "spectrum", 30)):
             if target == "gains":
                 argv = ["--gains-plus", ",".join(f"k{i}" for i in range(1, n + 1))]
             else:
                 argv = ["--spectrum", ",".join(f"-l{i}" for i in range(1, n + 1))]
-            t = cli_cpu(["design", f"normal-form-{n}", *argv], 1)
-            goals.append(f"| `switchobs design normal-form-{n} {argv[0]} {argv[1]}` | {number(t.median)} | {goal} |")
+            t, wall = _goal(["design", f"normal-form-{n}", *argv], args.repeats)
+            goals.append(f"| `switchobs design normal-form-{n} {argv[0]} {argv[1]}` | {t.show()} | {wall.show()} | "
+                         f"{goal} | {'yes' if t.max < goal else 'no'} |")
             print(goals[-1], flush=True)
         tables.append(goals)
     publish("design_scaling",
@@ -157,7 +174,8 @@ def main() -> None:
             f"*design*: gains, $K_-$, Routh–Hurwitz conditions, $P$ and the coupling constraints; *exact "
             f"re-check*: `GainDesign.verify()`; *text*: `str()` of the design (compact past N = 4); *CLI "
             f"process*: `switchobs design normal-form-N --gains-plus k1,...,kN` end to end with the default "
-            f"exact re-check (even N and the last N only: each run costs seconds).",
+            f"exact re-check (even N and the last N only: each run costs seconds). Goals: wall time is CPU "
+            f"time stretched by the machine's load (stated above); the goals hold if the CPU time does.",
             tables, write=not args.quick)
 
 

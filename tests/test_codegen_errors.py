@@ -250,6 +250,34 @@ def test_compiler_failure_and_missing_compiler_are_codegen_errors(tmp_path):
         compile_observer(gen, compiler="no-such-cc-xyz", cache_dir=tmp_path)
 
 
+
+def test_host_tuned_library_equals_the_portable_build_and_falls_back_without_march_native(tmp_path, xbs4):
+    """HOST_FLAGS change speed, not results; a compiler that refuses them still gets the portable build."""
+    from switchobs.codegen._build import HOST_FLAGS, compile_shared, find_compiler
+
+    _, tuned, _ = xbs4
+    t = np.arange(400) * 1e-3
+    rows = np.column_stack([30 * np.sin(9 * t), 20 - 10 * t, 100 * np.cos(7 * t)])
+    want = tuned.run(X0, rows, 1e-3)
+    log = tmp_path / "calls"
+    refusing = tmp_path / "cc-without-march-native"
+    refusing.write_text(f'#!/bin/sh\necho "$@" >> {log}\n'
+                        f'for a in "$@"; do [ "$a" = "{HOST_FLAGS[0]}" ] && exit 1; done\n'
+                        f'exec {find_compiler()} "$@"\n')
+    refusing.chmod(0o755)
+    fallback = CObserver(tuned.generated, compiler=str(refusing), cache_dir=tmp_path)
+    calls = log.read_text().splitlines()
+    assert len(calls) == 2 and HOST_FLAGS[0] in calls[0].split() and HOST_FLAGS[0] not in calls[1].split()
+    assert np.array_equal(fallback.run(X0, rows, 1e-3), want)
+    portable = ctypes.CDLL(str(compile_shared(tuned.generated, cache_dir=tmp_path, host=False)))
+    run = getattr(portable, f"{tuned.generated.prefix}_run")
+    run.argtypes = [ctypes.c_void_p, ctypes.c_void_p, ctypes.c_int32, ctypes.c_void_p, ctypes.c_double,
+                    ctypes.c_void_p]
+    x, traj = np.array(X0), np.empty_like(want)
+    assert run(x.ctypes.data, rows.ctypes.data, len(rows), tuned.params.ctypes.data, 1e-3, traj.ctypes.data) == 0
+    assert np.array_equal(traj, want) and np.array_equal(x, want[-1])
+
+
 # --------------------------------------------------------------------------- CLI
 def test_cli_codegen_writes_the_files_and_json(tmp_path, capsys):
     out = tmp_path / "gen"

@@ -137,8 +137,9 @@ def test_fast_math_is_refused_with_the_reason(tmp_path, cc, flag):
 
 @pytest.mark.parametrize("name", sorted(SPECTRA))
 def test_stack_is_static_and_within_the_documented_bound(tmp_path, name):
-    """-fstack-usage: every frame is static (no VLA, no alloca), the deepest chain within STACK_REALS reals
-    plus the frames of three calls; no heap, no writable global data (size: data = bss = 0)."""
+    """-fstack-usage: every frame is static (no VLA, no alloca), the deepest chain (_step, _run, _advance,
+    kernel) within STACK_REALS reals plus the frames of four calls; no heap, no writable global data
+    (size: data = bss = 0)."""
     for real in ("double", "float"):
         for opt, h_max, method in (("-O0", None, "rk4"), ("-O2", None, "rk4"), ("-O2", "1/100", "rk4"),
                                    ("-O0", None, "radau3"), ("-O2", None, "radau3")):
@@ -153,10 +154,10 @@ def test_stack_is_static_and_within_the_documented_bound(tmp_path, name):
                 frames[where.rsplit(":", 1)[1]] = int(size)
             p = gen.prefix
             leaf = max(v for k, v in frames.items() if k not in (f"{p}_step", f"{p}_run", f"{p}_advance"))
-            chain = frames[f"{p}_step"] + frames.get(f"{p}_advance", 0) + leaf
+            chain = frames[f"{p}_step"] + frames[f"{p}_run"] + frames.get(f"{p}_advance", 0) + leaf
             width = 4 if real == "float" else 8
             # the x86-64 red zone (128 bytes) of the leaf kernel is not in its reported frame
-            assert chain <= gen.stack_reals * width + 256 + 128
+            assert chain <= gen.stack_reals * width + 384 + 128
             size = subprocess.run(["size", str(d / "obj.o")], capture_output=True, text=True, check=True).stdout
             text_, data, bss = map(int, size.splitlines()[1].split()[:3])
             assert data == 0 and bss == 0 and text_ > 0

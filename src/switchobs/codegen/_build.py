@@ -3,15 +3,20 @@
 The shared library is cached by the SHA-256 of its source, header, compiler
 and flags in a per-user directory outside the repository
 (``$SWITCHOBS_CODEGEN_CACHE``, default ``<tempdir>/switchobs-codegen-<uid>``),
-written atomically so that parallel test workers can share it.
+written atomically so that parallel test workers can share it.  It is built
+for the host's instruction set (:data:`HOST_FLAGS`, when the compiler accepts
+them; the key then names the CPU too), as numba's JIT is: it only ever runs on
+the machine that built it.  The files written for a target are unaffected.
 """
 
 from __future__ import annotations
 
 import ctypes
+import functools
 import hashlib
 import math
 import os
+import platform
 import shutil
 import subprocess
 import tempfile
@@ -27,10 +32,15 @@ from ..exceptions import CodegenError, DimensionError, ModelError, ObserverInput
 from ._generate import GeneratedObserver, generate_observer
 from ..spec import STATUS_TEXT, StepStatus
 
-__all__ = ["CObserver", "compile_observer", "compile_shared", "compile_sources", "cache_directory", "find_compiler", "BUILD_FLAGS"]
+__all__ = ["CObserver", "compile_observer", "compile_shared", "compile_sources", "cache_directory", "find_compiler",
+           "BUILD_FLAGS", "HOST_FLAGS"]
 
 #: Flags of the shared library the binding loads (the strict warning set is exercised by the tests).
 BUILD_FLAGS: tuple[str, ...] = ("-std=c99", "-O2", "-fPIC", "-shared")
+#: Added to the flags when the compiler accepts them (else the library is built without): the host's
+#: instruction set (3-operand AVX instead of SSE2 moves on x86-64), and no contraction into fused
+#: multiply-adds, so that every result equals the portable build's and the Python reference's.
+HOST_FLAGS: tuple[str, ...] = ("-march=native", "-ffp-contract=off")
 
 _LIBRARIES: dict[Path, ctypes.CDLL] = {}
 #: Largest n_steps of ``<prefix>_run`` (an int32_t, so that the API is the same on 16/32/64-bit targets).
@@ -61,8 +71,8 @@ def find_compiler(compiler: str | None = None) -> str:
 
 
 def compile_shared(gen: GeneratedObserver, *, compiler: str | None = None,
-                   flags: Sequence[str] = BUILD_FLAGS, cache_dir: str | Path | None = None) -> Path:
-    """Compile ``gen`` into a shared library (cached); return its path.
+                   flags: Sequence[str] = BUILD_FLAGS, cache_dir: str | Path | None = None, host: bool = True) -> Path:
+    """Compile ``gen`` into a shared library (cached); return its path (``host``: see :func:`compile_sources`).
 
     Raises
     ------
@@ -70,15 +80,30 @@ def compile_shared(gen: GeneratedObserver, *, compiler: str | None = None,
         If the compiler fails; the message holds its first error lines.
     """
     return compile_sources(gen.files, (f"{gen.prefix}.c",), gen.prefix, compiler=compiler, flags=flags,
-                           cache_dir=cache_dir)
+                           cache_dir=cache_dir, host=host)
+
+
+@functools.lru_cache(maxsize=1)
+def _host_cpu() -> str:
+    """What ``-march=native`` compiles for: the machine and, where ``/proc/cpuinfo`` exists, the CPU model
+    and its feature flags (a cache directory shared by different CPUs then holds one library per CPU)."""
+    try:
+        info = Path("/proc/cpuinfo").read_text(encoding="utf-8", errors="replace")
+    except OSError:
+        info = ""
+    keys = {"model name", "flags", "Features", "CPU implementer", "CPU part"}
+    lines = dict.fromkeys(line for line in info.splitlines() if line.split(":")[0].strip() in keys)
+    return "\0".join([platform.system(), platform.machine(), *lines])
 
 
 def compile_sources(files: Mapping[str, str], sources: Sequence[str], stem: str, *, compiler: str | None = None,
-                    flags: Sequence[str] = BUILD_FLAGS, cache_dir: str | Path | None = None) -> Path:
+                    flags: Sequence[str] = BUILD_FLAGS, cache_dir: str | Path | None = None,
+                    host: bool = True) -> Path:
     """Compile the C ``sources`` among ``files`` (name -> text) into one cached shared library ``<stem>-<key>.so``.
 
-    The key is the SHA-256 of the files, the compiler and the flags; the
-    library is written atomically, so parallel processes can share the cache.
+    The key is the SHA-256 of the files, the compiler, the flags and (``host``) the CPU; the
+    library is written atomically, so parallel processes can share the cache.  With ``host``,
+    :data:`HOST_FLAGS` are added to ``flags`` if the compiler accepts them.
 
     Raises
     ------
@@ -87,7 +112,8 @@ def compile_sources(files: Mapping[str, str], sources: Sequence[str], stem: str,
     """
     cc = find_compiler(compiler)
     material = [f"{name}\0{files[name]}" for name in sorted(files)]
-    key = hashlib.sha256("\0".join([*material, *sources, cc, *flags]).encode()).hexdigest()[:20]
+    tuning = [*HOST_FLAGS, _host_cpu()] if host else []
+    key = hashlib.sha256("\0".join([*material, *sources, cc, *flags, *tuning]).encode()).hexdigest()[:20]
     root = Path(cache_dir) if cache_dir is not None else cache_directory()
     target = root / f"{stem}-{key}.so"
     if target.exists():
@@ -98,8 +124,11 @@ def compile_sources(files: Mapping[str, str], sources: Sequence[str], stem: str,
             for name, text in files.items():
                 (Path(tmp) / name).write_text(text, encoding="utf-8")
             out = Path(tmp) / "lib.so"
-            proc = subprocess.run([cc, *flags, "-o", str(out), *(str(Path(tmp) / name) for name in sources), "-lm"],
-                                  capture_output=True, text=True, check=False)
+            args = ["-o", str(out), *(str(Path(tmp) / name) for name in sources), "-lm"]
+            proc = subprocess.run([cc, *flags, *(HOST_FLAGS if host else ()), *args], capture_output=True,
+                                  text=True, check=False)
+            if proc.returncode != 0 and host:  # a compiler without -march=native: the portable build
+                proc = subprocess.run([cc, *flags, *args], capture_output=True, text=True, check=False)
             if proc.returncode != 0:
                 lines = (proc.stderr or proc.stdout).strip().splitlines()
                 raise CodegenError(f"{cc} failed on the generated {', '.join(sources)}: " + " | ".join(lines[:4]))
@@ -242,7 +271,9 @@ class CObserver:
     # ------------------------------------------------------------------ numerics
     def _vector(self, values: Any, names: Sequence[str], what: str) -> np.ndarray:
         arr = named_vector(values, names, what)
-        with np.errstate(over="ignore"):
+        if self._dtype is np.float64:
+            return np.ascontiguousarray(arr)
+        with np.errstate(over="ignore"):  # out-of-range doubles become inf, which the C checks refuse
             return np.ascontiguousarray(arr, dtype=self._dtype)
 
     def _dt(self, dt: Any) -> float:
@@ -306,7 +337,8 @@ class CObserver:
         ObserverInputError
             The status of the first failing step; the message names the row.
         """
-        x = self._vector(xhat0, self.state_names, "xhat0").copy()
+        # a copy: _run writes the final state into it
+        x = np.array(self._vector(xhat0, self.state_names, "xhat0"))
         rows = signal_matrix(signal_rows, self.signal_names)
         dt_f = self._dt(dt)
         if self._dtype is np.float64:
@@ -318,17 +350,16 @@ class CObserver:
         if k > _INT32_MAX:
             raise DimensionError(f"signal_rows has {k} rows; the C _run takes at most {_INT32_MAX} (int32_t) "
                                  "per call: split the record")
-        if not (math.isfinite(dt_f) and dt_f > 0.0) or not np.isfinite(x).all():
+        if not (math.isfinite(dt_f) and dt_f > 0.0) or not all(map(math.isfinite, x.tolist())):
             # the checks of the first step, also when there is no row (as the reference does)
             code = StepStatus.BAD_DT if not (math.isfinite(dt_f) and dt_f > 0.0) else StepStatus.NONFINITE_STATE
             raise self._fail(int(code), x, rows_c[0] if k else np.zeros(0), dt_f, 0)
-        x_start = x.copy()
         traj = np.empty((k, self.size), dtype=self._dtype)
         code = self._call_run(x, rows_c, traj, dt_f)
         if code != 0:
-            # rare path: run again on a NaN-filled trajectory to find the first failing row (rows before it are
-            # written, finite)
-            x = x_start
+            # rare path: run again from the start on a NaN-filled trajectory to find the first failing row (rows
+            # before it are written, finite)
+            x = np.array(self._vector(xhat0, self.state_names, "xhat0"))
             traj.fill(np.nan)
             self._call_run(x, rows_c, traj, dt_f)
             done = int(np.argmin(np.isfinite(traj).all(axis=1))) if k else 0

@@ -216,7 +216,7 @@ def readme(gen: "GeneratedObserver", *, command: str | None) -> str:
         "## Memory",
         "",
         f"One step keeps at most `{P}_STACK_REALS` = {gen.stack_reals} `{real}`s on the stack "
-        f"(`{P}_SZ_W` = {gen.temporaries} temporaries of the step kernel plus the new state); no other memory.",
+        f"(`{P}_SZ_W` = {gen.temporaries} temporaries of the step kernel plus the current and the new state); no other memory.",
         "",
         "## Example",
         "",

@@ -21,7 +21,7 @@ from __future__ import annotations
 
 import dataclasses
 import json
-from collections.abc import Mapping, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -519,24 +519,27 @@ class GainDesign:
 
         The compact form gives the gains as lists and, in observer normal form, ``P`` by its ``n`` free
         entries ``u_m = P_mm`` (the checkerboard rule of seed 004 Theorem 1 gives the rest) over their
-        common denominator: megabytes less text for a fully symbolic model past N = 7.
+        common denominator: megabytes less text for a fully symbolic model past N = 7.  Past
+        PRETTY_MAX_N, sums are printed in sympy's internal order of their terms (``order="none"``):
+        sorting them is half the printing time of a symbolic N = 8 design.
         """
         small = self.n <= PRETTY_MAX_N
+        text = sp.sstr if small else _unsorted_sstr
 
         def mat(M: sp.MatrixBase) -> str:
-            text = sp.pretty(M, use_unicode=True) if small else sp.sstr(M.tolist())
-            return "\n".join("    " + line for line in text.splitlines())
+            shown = sp.pretty(M, use_unicode=True) if small else text(M.tolist())
+            return "\n".join("    " + line for line in shown.splitlines())
 
         def conds(cs: Sequence[sp.Basic]) -> str:
-            return "\n".join(f"    {sp.sstr(c)}" for c in cs) if cs else "    (none left: Hurwitz by construction)"
+            return "\n".join(f"    {text(c)}" for c in cs) if cs else "    (none left: Hurwitz by construction)"
 
         nf = self.normal_form
         if full:
             gains = ["  K_plus =", mat(self.K_plus), "  K_minus =", mat(self.K_minus)]
             lyapunov = ["  common Lyapunov matrix P =", mat(self.P)]
         else:
-            gains = [f"  K_plus = {sp.sstr(list(self.K_plus))}", f"  K_minus = {sp.sstr(list(self.K_minus))}"]
-            lyapunov = self._compact_P()
+            gains = [f"  K_plus = {text(list(self.K_plus))}", f"  K_minus = {text(list(self.K_minus))}"]
+            lyapunov = self._compact_P(text)
         lines = [
             f"switched observer design for model {self.model.name!r} (n = {self.n}, choice: {self.choice}"
             f"{', conditional on the coupling constraints' if self.conditional else ''})",
@@ -549,23 +552,27 @@ class GainDesign:
             *lyapunov,
             f"  C_plus = {list(self.C_plus)},  C_minus = {list(self.C_minus)}",
             "  coupling constraints on K_minus (Hoang family):",
-            "\n".join(f"    {sp.sstr(c)}" for c in self.gain_constraints) or "    (none)",
+            "\n".join(f"    {text(c)}" for c in self.gain_constraints) or "    (none)",
         ]
         if not full:
             lines.append("  (compact: full matrices with `switchobs design --full` or in `--json`)")
         return "\n".join(lines)
 
-    def _compact_P(self) -> list[str]:
+    def _compact_P(self, text: Callable[[Any], str]) -> list[str]:
         if not self.normal_form.is_identity:
-            return ["  common Lyapunov matrix P (rows) =", *(f"    {sp.sstr(list(row))}" for row in
+            return ["  common Lyapunov matrix P (rows) =", *(f"    {text(list(row))}" for row in
                                                            self.P.tolist())]
         parts = [sp.fraction(self.P[m, m]) for m in range(self.n)]
         head = ["  common Lyapunov matrix P: P_ij = (-1)^((j-i)/2) u_((i+j)/2) for i + j even, 0 otherwise, with"]
         dens = {d for _, d in parts}
         if len(dens) == 1 and dens != {1}:
-            return [*head, f"    u_m = N_m / D,  D = {sp.sstr(dens.pop())}",
-                    *(f"    N_{m + 1} = {sp.sstr(num)}" for m, (num, _) in enumerate(parts))]
-        return [*head, *(f"    u_{m + 1} = {sp.sstr(self.P[m, m])}" for m in range(self.n))]
+            return [*head, f"    u_m = N_m / D,  D = {text(dens.pop())}",
+                    *(f"    N_{m + 1} = {text(num)}" for m, (num, _) in enumerate(parts))]
+        return [*head, *(f"    u_{m + 1} = {text(self.P[m, m])}" for m in range(self.n))]
+
+
+def _unsorted_sstr(expr: Any) -> str:
+    return sp.sstr(expr, order="none")
 
 
 def design_gains(model: Model, spectrum: str | Sequence | None = None, *,
