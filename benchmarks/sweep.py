@@ -1,6 +1,6 @@
 """Throughput of the sweep engine: runs/s on 1 and 2 Dask workers, its overhead, the single-run real-time factor.
 
-Workload: 16 free-vehicle brakings to 2.5 km/h (four roads of seed 001 Table 2.1 × 60/90/120/150 km/h,
+Workload: 48 free-vehicle brakings to 2.5 km/h (six roads of seed 001 Table 2.1 × 40, 60, …, 180 km/h,
 five-phase ABS, the 4D XBS observer of seed 000 beside the loop on exact signals), the kind of case a
 design-space sweep runs by the thousand.  Measured in the same run:
 
@@ -30,9 +30,11 @@ from pathlib import Path
 from _harness import MIN_REPEATS, Stats, cpu, number, publish
 
 from switchobs.sweep import BrakingCase, grid, run_case, run_sweep
+from switchobs.sweep._engine import BATCHES_PER_WORKER
 
-ROADS = ("dry-asphalt", "wet-asphalt", "dry-concrete", "snow")
-SPEEDS = (60.0, 90.0, 120.0, 150.0)
+ROADS = ("dry-asphalt", "wet-asphalt", "dry-concrete", "dry-cobblestones", "wet-cobblestones", "snow")
+# enough cases that a sweep lasts seconds on the compiled loop: a one-second sweep measures Dask's latency
+SPEEDS = (40.0, 60.0, 80.0, 100.0, 120.0, 140.0, 160.0, 180.0)
 
 
 def cases(quick: bool) -> tuple[BrakingCase, ...]:
@@ -101,10 +103,10 @@ def main() -> None:
         loop = f"xbs4 ({impl}), {ppr}-ppr encoder" if ppr else f"xbs4 ({impl})"
         single.append(f"| `run_case`, five-phase ABS | {loop} | {t.show()} | {number(sim / t.median)} |")
     notes = [f"Parallel efficiency from 1 to 2 workers: {100 * efficiency:.0f} % "
-             f"({number(rates[1])} → {number(rates[2])} runs/s, wall time, on a machine shared with other jobs: "
-             f"the workers' CPU time shows the work itself). Engine overhead in-process: "
+             f"({number(rates[1])} → {number(rates[2])} runs/s, wall time; "
+             f"on a machine shared with other jobs the workers' CPU time shows the work itself). Engine overhead in-process: "
              f"{1e3 * overhead:.3g} ms per run ({100 * overhead * n / bare.median:.2g} % of a bare run), median "
-             f"of {repeats}; the Dask rows add the scheduling (about 4 batches per worker) and the transfer of "
+             f"of {repeats}; the Dask rows add the scheduling (about {BATCHES_PER_WORKER} batches per worker) and the transfer of "
              f"the rows."]
     publish("sweep",
             f"{n} brakings to standstill (roads {', '.join(ROADS[:2] if args.quick else ROADS)} × "

@@ -36,7 +36,7 @@ __all__ = ["run_sweep", "SweepResult", "read_results", "SCHEDULER_NONE", "SCHEDU
 SCHEDULER_NONE = "none"
 SCHEDULER_LOCAL = "local"
 #: Batches per worker a sweep aims at: enough to balance the load, few enough to amortise the scheduling.
-BATCHES_PER_WORKER = 4
+BATCHES_PER_WORKER = 8
 MAX_BATCH = 16  # an encoder-fed braking costs up to a second: a batch is also the loss of a kill and the tail
 
 
