@@ -15,6 +15,8 @@ from switchobs.observers import xbs4_observer
 from switchobs.plants import (BrakeActuator, BrakingScenario, ContinuousXbsControl, FivePhaseABS, RoadChange,
                               RoadSchedule, TwoPhaseABS, scenario, simulate)
 
+from _compare import assert_same
+
 pytestmark = pytest.mark.skipif(__import__("shutil").which("gcc") is None and __import__("shutil").which("cc") is None,
                                 reason="no C compiler")
 
@@ -29,14 +31,6 @@ def both(sc: BrakingScenario, spec: EstimatorSpec | str | None = None, in_loop: 
             est = spec
         out.append((simulate(sc, estimator=est, observer_in_loop=in_loop, compiled=compiled), est))
     return out
-
-
-def assert_same(ref, fast) -> None:
-    assert not ref.compiled and fast.compiled
-    assert (ref.status, ref.message, ref.steps, ref.events) == (fast.status, fast.message, fast.steps, fast.events)
-    for key, col in ref.series.items():
-        assert np.array_equal(col, fast.series[key], equal_nan=True), key
-    assert ref.metrics == fast.metrics
 
 
 CASES = {

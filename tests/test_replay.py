@@ -16,6 +16,8 @@ from switchobs.plants import BrakingScenario, FivePhaseABS, RoadChange, RoadSche
 from switchobs.sensors import Encoder
 from switchobs.sweep import BrakingCase, run_case
 
+from _compare import assert_same
+
 pytestmark = pytest.mark.skipif(__import__("shutil").which("gcc") is None and __import__("shutil").which("cc") is None,
                                 reason="no C compiler")
 
@@ -29,14 +31,6 @@ def encoder_estimator(impl: str, method: str = "radau3", beta: float | None = No
     est = xbs_estimator(spec, SC.vehicle, SC.roads.initial)
     return EncoderLoopEstimator([(str(spec), est.observer, dict(INITIAL_STATE["xbs4"]))],
                                 encoder=Encoder(ppr=60, seed=5), radius_m=SC.vehicle.radius_m)
-
-
-def assert_same(ref, fast) -> None:
-    assert not ref.compiled and fast.compiled
-    assert (ref.status, ref.message, ref.steps, ref.events) == (fast.status, fast.message, fast.steps, fast.events)
-    for key, col in ref.series.items():
-        assert np.array_equal(col, fast.series[key], equal_nan=True), key
-    assert ref.metrics == fast.metrics
 
 
 @pytest.mark.parametrize("impl", ["python", "c"])
