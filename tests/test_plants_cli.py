@@ -45,6 +45,22 @@ def test_simulate_two_axle_scenario_json(capsys, tmp_path):
     assert m["speed_error_mean_pct"] < 0 and png.exists()
 
 
+@pytest.mark.parametrize("argv, name", [((), "six-phase"), (("--controller", "six-phase"), "six-phase"),
+                                        (("--controller", "five-phase"), "five-phase")])
+def test_simulate_two_axle_controller_choice(capsys, argv, name):
+    code, out, _ = run(capsys, "aguado-sec36", "--duration", "1.0", "--json", *argv)
+    data = json.loads(out)
+    assert code == 0 and data["scenario"]["front"]["name"] == data["scenario"]["rear"]["name"] == name
+    # both ABS take over before 1 s (seed 001 Sec. 3.6: 0.75 s front, 0.50 s rear)
+    assert data["metrics"]["front"]["abs_cycles"] >= 1 and data["metrics"]["rear"]["abs_cycles"] >= 1
+
+
+def test_simulate_six_phase_on_the_quarter_car(capsys):
+    code, out, _ = run(capsys, "--speed-kmh", "60", "--controller", "six-phase", "--json")
+    data = json.loads(out)
+    assert code == 0 and data["status"] == "stopped" and data["scenario"]["controller"]["name"] == "six-phase"
+
+
 def test_simulate_series_in_json(capsys):
     code, out, _ = run(capsys, "--speed-kmh", "40", "--json", "--series")
     series = json.loads(out)["series"]
@@ -67,7 +83,9 @@ def test_simulate_table41_cli(capsys, tmp_path):
     (["--speed-kmh", "-5"], "--speed-kmh must be > 0, got -5"),
     (["--duration", "-1"], "--duration must be > 0 s, got -1"),
     (["--observer", "xbs3", "--beta", "-1"], "beta1 = -1.0 must be finite and > 0"),
-    (["aguado-sec36", "--controller", "two-phase"], "--controller does not apply to the two-axle scenario"),
+    (["aguado-sec36", "--controller", "two-phase"],
+     "--controller two-phase does not apply to the two-axle scenario 'aguado-sec36'; use six-phase or five-phase"),
+    (["aguado-sec36", "--tracking"], "--tracking does not apply to the two-axle scenario"),
     (["--controller", "two-phase", "--tracking"], "--tracking applies to the five-phase ABS"),
     (["fig99"], "unknown scenario 'fig99'"),
     (["aguado-sec34", "--road", "snow"], "--road does not apply to the scenario 'aguado-sec34'"),

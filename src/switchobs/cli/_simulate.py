@@ -4,7 +4,8 @@ Without SCENARIO: a straight-line emergency braking on one road from a given
 speed to standstill (the set-up of seed 001 Table 4.1).  Scenarios:
 ``hoang-fig3``, ``hoang-fig4``, ``aguado-sec34``, ``aguado-sec36`` (the
 two-axle vehicle) and ``table41`` (both ABS algorithms on every road and speed
-of seed 001 Table 4.1).
+of seed 001 Table 4.1).  ``--controller`` picks the ABS: on ``aguado-sec36``
+``six-phase`` (its default) or ``five-phase`` (:func:`aguado_sec36`).
 """
 
 from __future__ import annotations
@@ -21,14 +22,16 @@ from .._figures import save_figure
 from ..exceptions import SimulationError
 from ..loop import DEFAULT_GAMMA, OBSERVER_KINDS, EstimatorSpec, xbs_estimator
 from ..plants import (TABLE41_ROADS, TABLE41_SPEEDS_KMH, BrakeActuator, BrakingResult, BrakingScenario,
-                      ContinuousXbsControl, FivePhaseABS, TwoPhaseABS, XbsEstimator, aguado_sec36, plot_braking,
+                      ContinuousXbsControl, FivePhaseABS, SixPhaseABS, TwoPhaseABS, XbsEstimator, aguado_sec36, plot_braking,
                       plot_table41, plot_two_axle, road, road_names, scenario, scenario_description,
                       scenario_names, scenario_observer, simulate, simulate_two_axle, table41)
 from ._common import emit_json
 
 __all__ = ["register"]
 
-CONTROLLERS = ("five-phase", "two-phase", "continuous")
+CONTROLLERS = ("five-phase", "six-phase", "two-phase", "continuous")
+#: The ABS algorithms the two-axle scenario builds (:func:`aguado_sec36`).
+TWO_AXLE_CONTROLLERS = ("six-phase", "five-phase")
 
 
 def register(sub: argparse._SubParsersAction) -> None:
@@ -40,7 +43,9 @@ def register(sub: argparse._SubParsersAction) -> None:
                         f"from --speed-kmh to standstill)")
     p.add_argument("--road", help=f"road surface: {', '.join(road_names())} (default dry-asphalt)")
     p.add_argument("--speed-kmh", type=float, help="initial speed [km/h] (default 120)")
-    p.add_argument("--controller", choices=CONTROLLERS, help="ABS algorithm (default five-phase)")
+    p.add_argument("--controller", choices=CONTROLLERS,
+                   help="ABS algorithm (default five-phase; aguado-sec36: six-phase, and only six-phase or "
+                        "five-phase)")
     p.add_argument("--tracking", action="store_true",
                    help="five-phase: closed-loop wheel-acceleration tracking (21)-(22) in phases 1, 3, 4")
     p.add_argument("--observer", choices=OBSERVER_KINDS,
@@ -67,6 +72,8 @@ def _controller(args: argparse.Namespace, base: Any) -> Any:
         ctrl = base
     elif args.controller == "five-phase":
         ctrl = base if isinstance(base, FivePhaseABS) else FivePhaseABS()
+    elif args.controller == "six-phase":
+        ctrl = base if isinstance(base, SixPhaseABS) else SixPhaseABS()
     elif args.controller == "two-phase":
         ctrl = TwoPhaseABS()
     else:
@@ -138,10 +145,14 @@ def _table41(args: argparse.Namespace) -> int:
 
 
 def _two_axle(args: argparse.Namespace) -> int:
-    for opt in ("road", "controller", "delay"):
-        if getattr(args, opt) is not None or (opt == "controller" and args.tracking):
+    for opt in ("road", "tracking", "delay"):
+        if getattr(args, opt) not in (None, False):
             raise SimulationError(f"--{opt} does not apply to the two-axle scenario {args.scenario!r}")
-    sc = aguado_sec36()
+    controller = args.controller or TWO_AXLE_CONTROLLERS[0]
+    if controller not in TWO_AXLE_CONTROLLERS:
+        raise SimulationError(f"--controller {controller} does not apply to the two-axle scenario {args.scenario!r}; "
+                              f"use {' or '.join(TWO_AXLE_CONTROLLERS)}")
+    sc = aguado_sec36(controller)
     changes = _timing_changes(args)
     sc = replace(sc, **changes)
     kind = args.observer or scenario_observer(args.scenario)

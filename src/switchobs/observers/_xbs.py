@@ -130,7 +130,8 @@ def xbs4_observer(beta1: float, beta2: float, *, params: Mapping[str, Any] | Non
 
 
 def adaptive_xbs_observer(beta: float, Gamma: Any, *, params: Mapping[str, Any] | None = None,
-                          method: str = "rk4") -> AdaptiveSwitchedObserver:
+                          method: str = "rk4", h_max: Any = None,
+                          max_substeps: int | None = None) -> AdaptiveSwitchedObserver:
     """The switched adaptive XBS observer of seed 001 eq. (3.4) on model abs-adaptive2.
 
     Estimates ``w = (w1, w2)`` with ``w1 = z1``, ``w2 = z2 + (c/a) z1`` and
@@ -150,7 +151,12 @@ def adaptive_xbs_observer(beta: float, Gamma: Any, *, params: Mapping[str, Any] 
         Overrides of ``a`` and ``b`` (``c`` and ``d`` are estimated).
     method : {"rk4", "euler"}
         The adaptive observer is not affine in its state: the implicit methods are refused.
+    h_max, max_substeps
+        Bound on the step in rescaled time ``|s| dt`` and the sub-step limit, as for
+        :class:`AdaptiveSwitchedObserver`: the explicit step of the adaptation is unstable when
+        ``Gamma`` times that step is too large (seed 001 Sec. 3.6 at 1 kHz with ``Gamma = 1e4 I``).
     """
     gains = _xbs_design("abs-adaptive2", {"beta": beta}, params)
     return AdaptiveSwitchedObserver(builtin_model("abs-adaptive2"), gains, unknown=("c", "d"), Gamma=Gamma,
-                                    params=params, method=method, readout="w2 - c*w1/a")
+                                    params=params, method=method, readout="w2 - c*w1/a", h_max=h_max,
+                                    max_substeps=max_substeps)

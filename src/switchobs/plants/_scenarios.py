@@ -113,7 +113,7 @@ TWO_AXLE_SCENARIOS = {"aguado-sec36": (aguado_sec36, "xbs4",
                                        "seed 001 Sec. 3.6: two-axle vehicle from 180 km/h, dry asphalt -> snow at "
                                        "2.5 s -> wet asphalt at 5 s, stop at 15 km/h; load transfer (3.36), speed "
                                        "from a Kalman filter with a 0.5 m/s² accelerometer bias; six-phase (Bosch) ABS "
-                                       "on each axle; 4D observer per wheel")}
+                                       "on each axle (or five-phase); 4D observer per wheel")}
 
 
 def scenario_observer(name: str) -> str:

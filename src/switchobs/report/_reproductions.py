@@ -23,12 +23,13 @@ from .._figures import panels, save_figure
 from .._json import JsonRecord
 from .._progress import progress
 from ..exceptions import PrerequisiteError, SimulationError
-from ..loop import X2_MEASUREMENTS, EncoderX2, EstimatorSpec, xbs_estimator
+from ..loop import (DEFAULT_BETA, DEFAULT_GAMMA, INITIAL_STATE, X2_MEASUREMENTS, EncoderX2, EstimatorSpec,
+                   ObserverXbsEstimator, xbs_estimator)
 from ..plants import (GRAVITY, TABLE41_SEED, Accelerometer, BrakingResult, BrakingScenario, FivePhaseABS, PoincareMap,
                       SixPhaseABS, Table41Result, TwoAxleResult, TwoAxleScenario, TwoPhaseABS,
                       aguado_sec36, fit_exponential, road, scenario, simulate, simulate_two_axle, table41)
 from ..plants._metrics import _reconvergence
-from ..observers import xbs3_observer
+from ..observers import adaptive_xbs_observer, xbs3_observer
 from ..sensors import (ROBUSTNESS_PROFILES, TABLE61_ENCODER, TABLE61_PROFILES, TABLE61_SEED, AngleTrajectory,
                        ChainSettings, Encoder, EstimatorComparison, NotchFilter, braking_trajectory,
                        compare_estimators, controller_times, time_stamping,
@@ -98,7 +99,9 @@ class _Runs:
     def sec36(self) -> dict[str, TwoAxleResult]:
         """Seed 001 Sec. 3.6: the six-phase ABS with the adaptive observer per wheel, fed by the estimated speed
         and the biased accelerometer (``estimated``) or by the true signals (``true``, Fig. 3.18), and the
-        first second with the default ``Gamma`` (``gamma-default``, it diverges)."""
+        first second with the default ``Gamma`` at 1 ms (``gamma-default``, it diverges), at 0.5 ms
+        (``gamma-default-fine``), with ours at 1 ms (``gamma-half``), and the whole run with the default ``Gamma``
+        and the observer sub-stepped (``gamma-default-substeps``)."""
         sc = aguado_sec36()
         true = replace(sc, accelerometer=Accelerometer(bias_m_s2=0.0, drift_m_s2_per_sqrt_s=0.0),
                        speed_from_filter=False)
@@ -107,9 +110,22 @@ class _Runs:
             return simulate_two_axle(s, estimators=tuple(xbs_estimator(spec, s.vehicle.corner(axle), s.roads.initial)
                                                          for axle in ("front", "rear")))
 
+        first = replace(sc, duration_s=1.0)
+
+        def substepped(axle: str) -> ObserverXbsEstimator:
+            corner = sc.vehicle.corner(axle)
+            obs = adaptive_xbs_observer(DEFAULT_BETA["adaptive"], [DEFAULT_GAMMA, DEFAULT_GAMMA],
+                                        params={"a": corner.a, "b": corner.b}, h_max=SEC36_H_MAX,
+                                        max_substeps=_SEC36_MAX_SUBSTEPS)
+            return ObserverXbsEstimator(obs, initial_state=INITIAL_STATE["adaptive"])
+
         with np.errstate(over="ignore", invalid="ignore"):    # the default-Gamma run overflows on purpose
             return {"estimated": run(sc, SEC36_OBSERVER), "true": run(true, SEC36_OBSERVER),
-                    "gamma-default": run(replace(sc, duration_s=1.0), EstimatorSpec("adaptive"))}
+                    "gamma-default": run(first, EstimatorSpec("adaptive")),
+                    "gamma-default-fine": run(replace(first, dt_s=SEC36_FINE_STEP_S), EstimatorSpec("adaptive")),
+                    "gamma-default-substeps": simulate_two_axle(sc, estimators=(substepped("front"),
+                                                                                substepped("rear"))),
+                    "gamma-half": run(first, SEC36_OBSERVER)}
 
     @cached_property
     def fig67(self) -> dict[str, BrakingResult]:
@@ -147,9 +163,20 @@ class _Runs:
 
 # ---------------------------------------------------------------- Sec. 3.6
 
-#: The adaptive observer of the Sec. 3.6 runs: the default Gamma = 1e4 I diverges on the front wheel at 1 kHz
-#: (its a = R² Fz / J is the largest of all our runs), half of it does not.
+#: The adaptive observer of the Sec. 3.6 runs: the default Gamma = 1e4 I diverges on the front wheel with the
+#: explicit RK4 step at 1 kHz (its a = R² Fz / J is the largest of all our runs); at 0.5 ms it does not, nor does
+#: half of it at 1 kHz.  The seed gives neither Gamma nor beta.
 SEC36_OBSERVER = EstimatorSpec("adaptive", gamma=5e3)
+#: The Sec. 3.6 step that keeps Gamma = 1e4 I stable [s].
+SEC36_FINE_STEP_S = 5e-4
+#: The bound on the observer's step in rescaled time |s| dt that keeps Gamma = 1e4 I stable at the 1 ms loop step
+#: (3e-4 does not, measured), and a sub-step limit this run never reaches.
+SEC36_H_MAX = 1e-4
+_SEC36_MAX_SUBSTEPS = 1000
+#: "Re-approach" as read from Fig. 3.19: the error averaged over this window [s] is back within the 10 % band.
+_SEC36_WINDOW_S = 0.1
+#: A true zero crossing of the XBS "coincides" with an estimated one this close [s].
+_SEC36_CROSSING_TOL_S = 0.02
 #: Seed 001 Sec. 3.6: when the ABS takes over on each axle [s].
 _SEC36_ACTIVATION = {"front": 0.75, "rear": 0.50}
 
@@ -178,16 +205,58 @@ def _sec36_section(runs: _Runs) -> list[str]:
     def activation(res: TwoAxleResult, k: str) -> float:
         return float(res.series["t"][np.argmax(res.series[f"phase_{k}"] > 0)])
 
-    def sign_agreement(res: TwoAxleResult, k: str) -> float:
+    def sign_agreement(res: TwoAxleResult, k: str, floor: float = 0.0) -> float:
+        """Share of the ABS time where the estimate has the true XBS's sign, counting only where
+        |XBS| > ``floor`` × its peak-to-peak range (near 0 the sign says nothing about the tyre region)."""
         r = res.series
         on = r["t"] >= activation(res, k)
-        return float(np.mean(np.sign(r[f"xbs_hat_{k}"][on]) == np.sign(r[f"xbs_{k}"][on])))
+        xbs, hat = r[f"xbs_{k}"][on], r[f"xbs_hat_{k}"][on]
+        keep = np.abs(xbs) > floor * np.ptp(xbs)
+        return float(np.mean(np.sign(hat[keep]) == np.sign(xbs[keep])))
+
+    def crossings_met(res: TwoAxleResult, k: str) -> tuple[float, float, int, int]:
+        """Share of the true XBS's zero crossings with an estimated one within the tolerance, the median
+        distance [s], and both counts."""
+        r = res.series
+        on = r["t"] >= activation(res, k)
+        t_on = r["t"][on]
+
+        def crossings(x: np.ndarray) -> np.ndarray:
+            return t_on[1:][np.sign(x[1:]) != np.sign(x[:-1])]
+        true_c, hat_c = crossings(r[f"xbs_{k}"][on]), crossings(r[f"xbs_hat_{k}"][on])
+        dist = np.array([np.min(np.abs(hat_c - c)) for c in true_c])
+        return float(np.mean(dist <= _SEC36_CROSSING_TOL_S)), float(np.median(dist)), len(true_c), len(hat_c)
 
     def reapproach(res: TwoAxleResult, k: str) -> str:
         r = res.series
         err = r[f"xbs_hat_{k}"] - r[f"xbs_{k}"]
         return ", ".join(f"{label}: {_fmt_s(_reconvergence(r['t'], err, r[f'xbs_{k}'], a, b, label).time_s)}"
                          for a, b, label in changes)
+
+    def settled(res: TwoAxleResult, k: str, a: float, b: float) -> float | None:
+        """Time after ``a`` when the error's RMS over the trailing window first lies within the segment's
+        10 % band (the band of :func:`_reconvergence`)."""
+        r = res.series
+        sel = (r["t"] >= a) & (r["t"] <= b)
+        ts, err = r["t"][sel], r[f"xbs_hat_{k}"][sel] - r[f"xbs_{k}"][sel]
+        band = 0.1 * float(np.ptp(r[f"xbs_{k}"][sel]))
+        # the loop's step shrinks only below the low-speed limit, long after these segments start
+        n = int(round(_SEC36_WINDOW_S / float(np.median(np.diff(ts)))))
+        energy = np.cumsum(np.r_[0.0, err ** 2])
+        rms = np.sqrt((energy[n:] - energy[:-n]) / n)
+        inside = np.flatnonzero(rms <= band)
+        return float(ts[n - 1 + inside[0]] - a) if len(inside) else None
+
+    def excursions_stable(res: TwoAxleResult, k: str, a: float, b: float) -> float:
+        """Share of the samples outside the band, from 0.5 s after the change on, where the true XBS > 0."""
+        r = res.series
+        sel = (r["t"] >= a) & (r["t"] <= b)
+        band = 0.1 * float(np.ptp(r[f"xbs_{k}"][sel]))
+        out = sel & (r["t"] > a + 0.5) & (np.abs(r[f"xbs_hat_{k}"] - r[f"xbs_{k}"]) > band)
+        return float(np.mean(r[f"xbs_{k}"][out] > 0.0)) if np.any(out) else 1.0
+
+    def reapproach_mean(res: TwoAxleResult, k: str) -> str:
+        return ", ".join(f"{label}: {_fmt_s(settled(res, k, a, b))}" for a, b, label in changes)
 
     def initial_rms(res: TwoAxleResult, k: str) -> float:
         r = res.series
@@ -206,6 +275,18 @@ def _sec36_section(runs: _Runs) -> list[str]:
     full = text.count("34567")
     cycles = text.count("3")
     diverged = runs.sec36["gamma-default"].metrics["front"]["xbs_rms_error"]
+    rear_default = runs.sec36["gamma-default"].metrics["rear"]["xbs_rms_error"]
+    fine = runs.sec36["gamma-default-fine"].metrics["front"]["xbs_rms_error"]
+    substeps = runs.sec36["gamma-default-substeps"]
+    sub = {a: substeps.metrics[a]["xbs_rms_error"] for a in ("front", "rear")}
+    late_stable = [excursions_stable(est, k, a, b) for k in "fr" for a, b, _ in changes]
+    half = runs.sec36["gamma-half"].metrics["front"]["xbs_rms_error"]
+    back = {(k, a): settled(est, k, a, b) for k in "fr" for a, b, _ in changes}
+    late = [f"{'front' if k == 'f' else 'rear'} {label[2:]} ({back[k, a]:.2f} s)" for k in "fr"
+            for a, _, label in changes if back[k, a] is None or back[k, a] > 0.5]
+    met = {k: crossings_met(est, k) for k in "fr"}
+    met_true = {k: crossings_met(true, k) for k in "fr"}
+    away = {k: sign_agreement(est, k, 0.1) for k in "fr"}
     est_better = all(est.metrics[a]["xbs_rms_error"] <= 1.1 * true.metrics[a]["xbs_rms_error"]
                      for a in ("front", "rear"))
     front_better = initial_rms(est, "f") < initial_rms(est, "r")
@@ -235,27 +316,54 @@ def _sec36_section(runs: _Runs) -> list[str]:
                   "estimated signals (Fig. 3.18)", ", ".join(f"{a} {est.metrics[a]['xbs_rms_error']:.2f} (true signals "
                                                               f"{true.metrics[a]['xbs_rms_error']:.2f})"
                                                               for a in ("front", "rear")), "–"),
-             _row("sign of the XBS estimate = sign of the true XBS (share of the time), front / rear",
-                  "zero crossings coincide", " / ".join(f"{100 * sign_agreement(est, k):.0f} %" for k in "fr")
-                  + " (true signals: " + " / ".join(f"{100 * sign_agreement(true, k):.0f} %" for k in "fr") + ")",
-                  "–"),
-             _row("re-approach after the road changes, front", "within 0.5 s (Fig. 3.19)", reapproach(est, "f"), "–"),
-             _row("re-approach after the road changes, rear", "within 0.5 s", reapproach(est, "r"), "–"),
+             _row("zero crossings of the true XBS met by one of the estimate within "
+                  f"{1e3 * _SEC36_CROSSING_TOL_S:.0f} ms, front / rear", "zero crossings coincide (Fig. 3.18)",
+                  " / ".join(f"{100 * met[k][0]:.0f} % of {met[k][2]} (median {1e3 * met[k][1]:.0f} ms; "
+                             f"{met[k][3]} estimated crossings)" for k in "fr")
+                  + "; true signals: " + " / ".join(f"{100 * met_true[k][0]:.0f} %" for k in "fr"), "–"),
+             _row("sign of the estimate = sign of the true XBS, front / rear", "(the region of the tyre is "
+                  "detected)", "where the true XBS is beyond ±10 % of its range: " + " / ".join(
+                      f"{100 * away[k]:.1f} %" for k in "fr") + "; all the ABS time: "
+                  + " / ".join(f"{100 * sign_agreement(est, k):.0f} %" for k in "fr") + " (true signals: "
+                  + " / ".join(f"{100 * sign_agreement(true, k):.0f} %" for k in "fr") + ")", "–"),
+             _row("re-approach after the road changes, front: error's "
+                  f"{1e3 * _SEC36_WINDOW_S:.0f} ms RMS back within the band; error stays within it",
+                  "within 0.5 s (Fig. 3.19)", f"{reapproach_mean(est, 'f')}; stays: {reapproach(est, 'f')}", "–"),
+             _row("re-approach after the road changes, rear (same two measures)", "within 0.5 s",
+                  f"{reapproach_mean(est, 'r')}; stays: {reapproach(est, 'r')}", "–"),
              _row("first 0.5 s of ABS, RMS error front / rear", "front better than rear",
                   f"{initial_rms(est, 'f'):.2f} / {initial_rms(est, 'r'):.2f}", "–"),
-             "", "Re-approach: the error enters and stays within 10 % of the true XBS's peak-to-peak range on the "
-             "segment (as for Sec. 3.4). "
+             "", "Re-approach, two readings of the seed's \"re-approach their true values within 0.5 s\": the "
+             f"RMS of the error over the trailing {1e3 * _SEC36_WINDOW_S:.0f} ms is back within 10 % of the true "
+             "XBS's peak-to-peak range on the segment (what Fig. 3.19 shows: the perturbation has died out), and "
+             "the stricter measure of Sec. 3.4, the error enters and stays within that band until the next change "
+             "(isolated excursions at later pressure releases push it past 0.5 s). "
              f"Reproduced: the six-phase cycle in the Bosch order, the speed underestimated on average "
              f"({m['speed_error_mean_pct']:.1f} % against −18 %: the filter is ours, the seed's [19] is not "
              "described), the loads of (3.36), the pressure cut on snow, an XBS estimate "
              f"{'as good with the estimated signals as' if est_better else 'worse with the estimated signals than'} "
              f"with the true ones, the front {'better' if front_better else 'NOT better'} than the rear in the first "
-             "0.5 s. Not reproduced: the re-approach within 0.5 s after every road change (the adaptive observer "
-             "re-identifies $(c, d)$ at the rate $\\Gamma$ allows, see Sec. 3.4 above) and coincident zero crossings "
-             f"on the rear wheel (its estimate has the sign of the true XBS {100 * sign_agreement(est, 'r'):.0f} % of "
-             "the time). With the default $\\Gamma = 10^4\\,I$ the front observer "
-             f"diverges within the first second (RMS error {_rms_text(diverged)}): its $a = R^2F_z/J$ is the "
-             "largest of our runs and the discrete adaptation is unstable at 1 kHz.", "",
+             "0.5 s; the re-approach in the first reading after "
+             + ("every road change" if not late else f"the road changes except {', '.join(late)}")
+             + f"; the zero crossings: wherever the true XBS is beyond ±10 % of its range the estimate has its "
+             f"sign (front {100 * away['f']:.1f} %, rear {100 * away['r']:.1f} % of that time): the signs differ "
+             "where the wheel dwells near the friction peak (XBS ≈ 0), mostly the rear one, "
+             "whose estimate chatters across 0 "
+             f"({met['r'][3]} crossings against {met['r'][2]}), with the true signals as well. Not reproduced: "
+             "the error staying within the band 0.5 s after the changes: after 0.5 s the samples outside the band "
+             + ("all lie" if min(late_stable) == 1.0 else f"lie {100 * min(late_stable):.0f} % or more")
+             + " on the stable side of the tyre (true XBS > 0: the wheel has recovered after a release), and a "
+             "larger $\\Gamma$ does not remove them (the default $\\Gamma = 10^4\\,I$, sub-stepped as below, "
+             f"over the whole run: stays front {reapproach(substeps, 'f')}, rear {reapproach(substeps, 'r')}; "
+             f"RMS error front {_rms_text(sub['front'])}, rear {_rms_text(sub['rear'])}). With the default "
+             "$\\Gamma = 10^4\\,I$ the front observer diverges within the first second at the loop's 1 ms step "
+             f"(RMS error {_rms_text(diverged)}) and not at {1e3 * SEC36_FINE_STEP_S:g} ms (RMS error "
+             f"{_rms_text(fine)}; ours, $\\Gamma = {SEC36_OBSERVER.gamma:g}\\,I$ at 1 ms: {_rms_text(half)}), nor at 1 ms with the "
+             f"observer sub-stepped to $|s|\\,h \\le {SEC36_H_MAX:g}$ in rescaled time "
+             "(`adaptive_xbs_observer(..., h_max=...)`): the explicit RK4 step of the adaptation is "
+             "unstable once $\\Gamma\\,h$ is too large for the front wheel's gain $a = R^2F_z/J$, the largest of "
+             f"our runs (the rear one stays bounded: RMS error {_rms_text(rear_default)}). The implicit `radau3` step cannot be used: the adaptive "
+             "observer is not affine in its state ($\\hat\\theta$ multiplies $\\hat w$) and refuses it.", "",
              "*Chosen by us (the seed does not give them):* that the six-phase ABS is the Bosch cycle of Sec. 2.2.3, "
              "and all its values: " + str(sc.front) + "; rear thresholds × 0.6; the driver's build-up at "
              f"{sc.front.initial_rate_bar_s:g} bar/s (chosen so that the ABS takes over at the seed's times); its exits the description lacks "
