@@ -61,6 +61,16 @@ def test_simulate_six_phase_on_the_quarter_car(capsys):
     assert code == 0 and data["status"] == "stopped" and data["scenario"]["controller"]["name"] == "six-phase"
 
 
+def test_simulate_sec36_adaptive_divergence_names_its_cause_and_the_fix(capsys):
+    # seed 001 Sec. 3.6 with the adaptive observer: gamma = 1e4 diverges at the 1 ms explicit step
+    # (docs/reproductions.md); the failure says so, and the advised gamma runs
+    code, _, err = run(capsys, "aguado-sec36", "--duration", "1.5", "--observer", "adaptive")
+    assert code == 1 and err.count("\n") == 1
+    assert "front observer diverged" in err and "--gamma 5000" in err
+    code, _, err = run(capsys, "aguado-sec36", "--duration", "1.5", "--observer", "adaptive", "--gamma", "5000")
+    assert code == 0 and err == ""
+
+
 def test_simulate_series_in_json(capsys):
     code, out, _ = run(capsys, "--speed-kmh", "40", "--json", "--series")
     series = json.loads(out)["series"]

@@ -170,13 +170,16 @@ def _two_axle(args: argparse.Namespace) -> int:
     else:
         print(scenario_description(args.scenario))
         print(result)
-    return _verdict(result.failure)
+    return _verdict(result.failure, kind)
 
 
-def _verdict(failure: str | None) -> int:
+def _verdict(failure: str | None, kind: str) -> int:
     """Exit status 1 with the reason on stderr for a failed run, 0 otherwise (docs/errors.md)."""
     if failure is None:
         return 0
+    if kind == "adaptive" and "not finite" in failure:
+        # the explicit step of the adaptive observer, not the observer, diverges (docs/reproductions.md, Sec. 3.6)
+        failure += "; the adaptive observer's explicit step diverges for a large gamma: try --gamma 5000 or --dt 0.0005"
     print(f"switchobs simulate: failed: {failure}", file=sys.stderr)
     return 1
 
@@ -221,4 +224,4 @@ def _run(args: argparse.Namespace) -> int:
         if args.scenario is not None:
             print(scenario_description(args.scenario))
         print(result)
-    return _verdict(result.failure or _unfinished(args, result))
+    return _verdict(result.failure or _unfinished(args, result), kind)
