@@ -7,7 +7,8 @@ Goal of issue 5: the three-stage estimator at least 10x faster than real time.  
 the ABS loop (issue 14): the per-step ``EncoderLoopEstimator`` against ``encoder_measurements`` on the
 same recorded 10 s braking, each with the Python three-stage estimator and with its C kernel; goal: the
 chain of a 10 s braking well under 0.1 s CPU.
-Run: ``.venv/bin/python benchmarks/encoder_chain.py [--quick] [--repeats 5]``.
+Run: ``.venv/bin/python benchmarks/encoder_chain.py [--quick] [--repeats 5]`` (``--quick``: a 2 s braking, one
+run, without the whole chains; printed only).
 """
 
 from __future__ import annotations
@@ -24,6 +25,7 @@ from switchobs.sensors import (ChainSettings, Encoder, ThreeStageEstimator, Time
                                controller_times, encoder_chain, notch, three_stage, time_stamping)
 
 DURATION_S = 10.0
+QUICK_DURATION_S = 2.0
 
 
 class _Recorder:
@@ -37,11 +39,11 @@ class _Recorder:
         return 0.5
 
 
-def loop_table(repeats: int) -> tuple[list[str], str]:
-    """The chain of the ABS loop on one recorded 10 s braking: per step and at once, Python and C estimator."""
+def loop_table(repeats: int, duration: float) -> tuple[list[str], str]:
+    """The chain of the ABS loop on one recorded braking: per step and at once, Python and C estimator."""
     vehicle = QuarterCar()
     roads = RoadSchedule("dry-asphalt", [RoadChange("snow", at_time_s=1.0)])
-    sc = BrakingScenario(roads, speed_m_s=50.0, controller=FivePhaseABS(), vehicle=vehicle, duration_s=DURATION_S,
+    sc = BrakingScenario(roads, speed_m_s=50.0, controller=FivePhaseABS(), vehicle=vehicle, duration_s=duration,
                          stop_speed_m_s=10.0 / 3.6)
     rec = _Recorder()
     simulate(sc, estimator=rec, observer_in_loop=False)
@@ -71,8 +73,8 @@ def loop_table(repeats: int) -> tuple[list[str], str]:
     for name, st in timed:
         against = ratio(st.median, before) if st.median != before else "–"
         table.append(f"| {name} | {st.show(1e3)} | {number(1e6 * st.median / meas.t.size)} "
-                     f"| {number(DURATION_S / st.median)} | {against} |")
-    method = (f"The chain inside the ABS loop: {DURATION_S:g} s of five-phase ABS braking from 180 km/h, dry asphalt "
+                     f"| {number(duration / st.median)} | {against} |")
+    method = (f"The chain inside the ABS loop: {duration:g} s of five-phase ABS braking from 180 km/h, dry asphalt "
               f"then snow from 1 s ({t.size - 1} plant steps, {meas.events} edges, {meas.t.size} controller samples), "
               "recorded once; then the chain on the recorded steps (wheel reconstruction, edges, TSA, three-stage, "
               "notch, the plant's history at the window centres), without observers. Per step is what the loop "
@@ -85,18 +87,20 @@ def loop_table(repeats: int) -> tuple[list[str], str]:
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--quick", action="store_true",
-                        help="smoke run: the stages without the whole chains"
-                             "; printed, not written to benchmarks/results")
-    parser.add_argument("--repeats", type=int, default=MIN_REPEATS)
+                        help=f"smoke run: a {QUICK_DURATION_S:g} s braking, one run, the stages without the whole "
+                             "chains; printed, not written to benchmarks/results")
+    parser.add_argument("--repeats", type=int, help=f"runs per measurement (default {MIN_REPEATS}, 1 with --quick)")
     args = parser.parse_args()
+    args.repeats = args.repeats or (1 if args.quick else MIN_REPEATS)
+    duration = QUICK_DURATION_S if args.quick else DURATION_S
 
     start = time.process_time()
-    run = braking_trajectory(DURATION_S)
+    run = braking_trajectory(duration)
     plant_s = time.process_time() - start
     traj = run.trajectory("braking")
     encoder = Encoder(ppr=60, dnl_cycles=0.01, eccentricity=0.003, clock_hz=1e6, seed=1)
     events = encoder.events(traj)
-    ts = controller_times(0.0, DURATION_S, 1000.0)
+    ts = controller_times(0.0, duration, 1000.0)
     tsa = time_stamping(events.times, events.angles, ts)
     n_ev, n_s = len(events), ts.size
 
@@ -134,14 +138,16 @@ def main() -> None:
     table = ["| stage | CPU [ms] | µs/event | µs/sample | × real time |", "| --- | ---: | ---: | ---: | ---: |"]
     for name, t in rows:
         table.append(f"| {name} | {t.show(1e3)} | {number(1e6 * t.median / n_ev)} | {number(1e6 * t.median / n_s)} "
-                     f"| {number(DURATION_S / t.median)} |")
-    loop, loop_method = loop_table(args.repeats)
+                     f"| {number(duration / t.median)} |")
+    loop, loop_method = loop_table(args.repeats, duration)
     cli = ["| command (whole process) | CPU [s] | × real time |", "| --- | ---: | ---: |"]
-    for argv in (["encoder", "--duration", "10"], ["encoder", "--profile", "braking", "--estimator", "three-stage"]):
+    for argv in (["encoder", "--duration", f"{duration:g}"],
+                 ["encoder", "--profile", "braking", "--estimator", "three-stage",
+                  *(["--duration", f"{duration:g}"] if args.quick else [])]):
         t = cli_cpu(argv, args.repeats)
-        cli.append(f"| `switchobs {' '.join(argv)}` | {t.show()} | {number(DURATION_S / t.median)} |")
+        cli.append(f"| `switchobs {' '.join(argv)}` | {t.show()} | {number(duration / t.median)} |")
     publish("encoder_chain",
-            f"{DURATION_S:g} s of braking from 130 km/h on dry asphalt: {n_ev} events of a 60-ppr encoder, {n_s} "
+            f"{duration:g} s of braking from 130 km/h on dry asphalt: {n_ev} events of a 60-ppr encoder, {n_s} "
             f"controller samples at 1 kHz (the plant simulation, {plant_s:.2f} s CPU, not counted); CPU time "
             f"(`time.process_time`), median [min–max] of {args.repeats} runs; × real time = simulated time / "
             "median CPU time. The whole `switchobs encoder` process (`RUSAGE_CHILDREN`) adds the interpreter, "

@@ -25,7 +25,8 @@ CPU time (``RUSAGE_CHILDREN`` for a whole process, ``time.process_time`` in proc
 [min–max] of 5 runs; every child runs with bytecode caching on (``PYTHONPYCACHEPREFIX`` in the run's
 temporary directory, warmed by one untimed run), as an installed package has it.  The tables go to
 ``benchmarks/results/numeric_scaling.md`` and the log-log plot to docs/numeric_scaling.png.  Run with
-``python benchmarks/numeric_scaling.py [--quick] [n ...]`` (``--quick``: n <= 16, printed only).
+``python benchmarks/numeric_scaling.py [--quick] [n ...]`` (``--quick``: n = 4 and 8, one run each with the
+installation's bytecode caches and no warm-up run, printed only).
 """
 
 from __future__ import annotations
@@ -44,6 +45,7 @@ import numpy as np
 from _harness import MIN_REPEATS, Stats, publish, ratio, switchobs_exe
 
 SIZES = (4, 8, 16, 32, 64)
+QUICK_SIZES = (4, 8)
 TIMEOUT_S = 900
 ROOT = Path(__file__).resolve().parents[1]
 BASELINE = Path(__file__).resolve().with_name("_numeric_baseline.py")
@@ -73,8 +75,14 @@ def spectrum(n: int) -> str:
     return ",".join(POLES[i % 4] for i in range(n))
 
 
-def child_env(tmp: Path) -> dict[str, str]:
-    """The children's environment: bytecode cached under ``tmp`` (whatever PYTHONDONTWRITEBYTECODE says)."""
+def child_env(tmp: Path, quick: bool) -> dict[str, str]:
+    """The children's environment: bytecode cached under ``tmp`` (whatever PYTHONDONTWRITEBYTECODE says).
+
+    A quick run keeps the installation's own bytecode caches instead: compiling every module the children
+    import into a fresh cache would cost more than the quick run's few timed processes.
+    """
+    if quick:
+        return dict(os.environ)
     env = {k: v for k, v in os.environ.items() if k != "PYTHONDONTWRITEBYTECODE"}
     env["PYTHONPYCACHEPREFIX"] = str(tmp / "pycache")
     return env
@@ -203,15 +211,17 @@ def plot(results: dict[int, dict], path: Path) -> None:
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("sizes", nargs="*", type=int, help=f"state dimensions (default {list(SIZES)})")
-    parser.add_argument("--quick", action="store_true", help="n <= 16; print, do not publish or plot")
-    parser.add_argument("--repeats", type=int, default=MIN_REPEATS)
+    parser.add_argument("--quick", action="store_true",
+                        help=f"n = {', '.join(map(str, QUICK_SIZES))}, one run, no warm-up; print, do not publish or plot")
+    parser.add_argument("--repeats", type=int, help=f"runs per measurement (default {MIN_REPEATS}, 1 with --quick)")
     args = parser.parse_args()
-    sizes = tuple(args.sizes) or tuple(n for n in SIZES if n <= 16 or not args.quick)
+    sizes = tuple(args.sizes) or (QUICK_SIZES if args.quick else SIZES)
+    args.repeats = args.repeats or (1 if args.quick else MIN_REPEATS)
     results = {}
     with tempfile.TemporaryDirectory() as tmp:
-        env = child_env(Path(tmp))
+        env = child_env(Path(tmp), args.quick)
         for k, n in enumerate(sizes):
-            results[n] = measure(n, Path(tmp), args.repeats, env, warm_up=k == 0)
+            results[n] = measure(n, Path(tmp), args.repeats, env, warm_up=k == 0 and not args.quick)
             print(f"n = {n} done", file=sys.stderr, flush=True)
     whole = ["| n | design [s] | certify [s] | verify [s] | certify, interval [s] | verify, interval [s] "
              "| cvxpy LMI, Clarabel [s] | cvxpy LMI, SCS [s] | certify vs LMI |",

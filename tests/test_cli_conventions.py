@@ -105,6 +105,22 @@ def test_certify_and_verify_without_an_lmi_import_neither_cvxpy_nor_scipy(tmp_pa
     assert proc.stderr.strip().splitlines()[-1] == "LOADED [0, 0] []", proc.stderr[-3000:]
 
 
+def test_design_of_a_small_model_imports_no_plant_loop_sensor_or_solver(tmp_path):
+    """``design`` only prints stage lines from switchobs.report: not its demo's plants, loop and sensors (0.3 s)."""
+    model = tmp_path / "chain.toml"
+    model.write_text('name = "chain-4"\nstates = ["x1", "x2", "x3", "x4"]\noutput = "y"\n'
+                     'A = [["-1", "1", "0", "0"], ["0", "-3/2", "1", "0"], ["0", "0", "-2", "1"], '
+                     '["0", "0", "0", "-5/2"]]\nC = ["1", "0", "0", "0"]\ntime_scale = "y"\n', encoding="utf-8")
+    probe = ("import sys\nfrom switchobs.cli.main import main\n"
+             f"code = main(['design', {str(model)!r}, '--spectrum=-2,-3,-5/2,-7/2'])\n"
+             "loaded = sorted({'.'.join(m.split('.')[:2]) for m in sys.modules}\n"
+             "                & {'switchobs.plants', 'switchobs.loop', 'switchobs.sensors', 'cvxpy', 'casadi',"
+             " 'matplotlib'})\n"
+             "print('LOADED', code, loaded, file=sys.stderr)")
+    proc = subprocess.run([sys.executable, "-c", probe], capture_output=True, text=True, timeout=300)
+    assert proc.stderr.strip().splitlines()[-1] == "LOADED 0 []", proc.stderr[-3000:]
+
+
 def test_version_is_single_sourced(capsys):
     with pytest.raises(SystemExit):
         main(["--version"])

@@ -105,6 +105,15 @@ def test_bounded_expressions_still_parse_exactly():
     assert parse_expression("1e308", {}) == 10**308 and parse_expression("2.5e-308", {}) == sp.Rational(1, 4 * 10**307)
 
 
+def test_an_expanded_polynomial_is_counted_by_its_operands_not_its_operators():
+    import sympy as sp
+
+    # 60 monomials: 300 numbers and names, but 600 syntax nodes with the operators (cf. examples/systems/poly4.toml)
+    a, b = sp.symbols("a b")
+    text = " + ".join(f"{i}*a^{i % 7 + 1}*b^{i % 5 + 1}" for i in range(1, 61))
+    assert parse_expression(text, {"a": a, "b": b}) == sum(i * a**(i % 7 + 1) * b**(i % 5 + 1) for i in range(1, 61))
+
+
 @pytest.mark.parametrize("value, match", [
     ("1e400", "beyond the largest double"), ("1e-400", "below the smallest normal double"),
     ("1e999999999", "more than 1000 digits"), ("1e-999999999", "more than 1000 digits"),

@@ -28,7 +28,7 @@ __all__ = ["MAX_EXPRESSION_LENGTH", "MAX_EXPRESSION_DEPTH", "MAX_EXPRESSION_TERM
 MAX_EXPRESSION_LENGTH = 2000
 #: Nesting depth of an expression's syntax tree (parentheses, unary signs, powers of powers).
 MAX_EXPRESSION_DEPTH = 50
-#: Operators, numbers, names and calls in one expression.
+#: Numbers, names and calls in one expression (the operators between them are not counted).
 MAX_EXPRESSION_TERMS = 500
 #: Largest |exponent| of an exact power ``x**k`` (numerator and denominator of a rational ``k``).
 MAX_EXPONENT = 64

@@ -139,13 +139,17 @@ def _syntax_tree(text: str, what: str) -> tuple[ast.expr, str]:
     terms, stack = 0, [(tree.body, 1)]
     while stack:  # iterative: a deep tree must not exhaust the Python stack here either
         node, depth = stack.pop()
-        terms += 1
+        # Operands and calls, not operators: an operator joins operands already counted, so counting it too
+        # would refuse a legitimate expanded polynomial (a 42-monomial f of 750 characters) long before the
+        # length limit, while a hostile text is bounded by its operands just as well.
+        terms += isinstance(node, (ast.Name, ast.Constant, ast.Call))
         if depth > MAX_EXPRESSION_DEPTH:
             raise ExpressionError(f"{what}: the expression is nested more than {MAX_EXPRESSION_DEPTH} levels deep "
                                   f"(limit {MAX_EXPRESSION_DEPTH}): {text[:30]!r}...")
         if terms > MAX_EXPRESSION_TERMS:
-            raise ExpressionError(f"{what}: the expression has more than {MAX_EXPRESSION_TERMS} terms "
-                                  f"(limit {MAX_EXPRESSION_TERMS}): {text[:30]!r}...")
+            raise ExpressionError(f"{what}: the expression has more than {MAX_EXPRESSION_TERMS} terms (numbers, "
+                                  f"names and calls; limit {MAX_EXPRESSION_TERMS}): {text[:30]!r}...; split it "
+                                  "into parameters")
         stack.extend((child, depth + (0 if _chained(node, child) else 1)) for child in ast.iter_child_nodes(node)
                      if not isinstance(child, (ast.operator, ast.unaryop, ast.expr_context)))
     return tree.body, source

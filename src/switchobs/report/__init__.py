@@ -17,17 +17,50 @@ encoder_comparison, two_axle_box_check, synthesis_evidence, EncoderComparison, B
                        against a two-axle braking whose load varies
 """
 
-from ._demo import DEMO_BETAS, DEMO_MODELS, STAGES, DemoReport, ModelResult, run_demo
-from ._evidence import BoxRun, EncoderComparison, encoder_comparison, synthesis_evidence, two_axle_box_check
-from ._plots import demo_figures, mark_road_changes
-from ._progress import Progress, Stage, check_prerequisites
-from ._reproductions import (GENERATED_SECTIONS, ReproductionPage, reproduction_pages, stale_pages,
-                             write_reproductions)
-from ._sampled import sampled_lines, sampled_observer_table, speed_table
-from ._theory import THEORY_MODELS, TheoryDocument, theory_document, theory_documents, write_theory
+from __future__ import annotations
+
+import importlib
+from typing import TYPE_CHECKING, Any
+
+if TYPE_CHECKING:  # for type checkers and the API reference, which read the source; __getattr__ binds them at run time
+    from ._demo import DEMO_BETAS, DEMO_MODELS, STAGES, DemoReport, ModelResult, run_demo
+    from ._evidence import BoxRun, EncoderComparison, encoder_comparison, synthesis_evidence, two_axle_box_check
+    from ._plots import demo_figures, mark_road_changes
+    from ._progress import Progress, Stage, check_prerequisites
+    from ._reproductions import (GENERATED_SECTIONS, ReproductionPage, reproduction_pages, stale_pages,
+                                 write_reproductions)
+    from ._sampled import sampled_lines, sampled_observer_table, speed_table
+    from ._theory import THEORY_MODELS, TheoryDocument, theory_document, theory_documents, write_theory
+
+# Loaded on first use: the demo, evidence and plot modules import the plants, the loop and the sensors
+# (~0.3 s), which a command that only wants Progress (``switchobs design``) must not pay for.
+_EXPORTS = {
+    "._demo": ("DEMO_BETAS", "DEMO_MODELS", "STAGES", "DemoReport", "ModelResult", "run_demo"),
+    "._evidence": ("BoxRun", "EncoderComparison", "encoder_comparison", "synthesis_evidence", "two_axle_box_check"),
+    "._plots": ("demo_figures", "mark_road_changes"),
+    "._progress": ("Progress", "Stage", "check_prerequisites"),
+    "._reproductions": ("GENERATED_SECTIONS", "ReproductionPage", "reproduction_pages", "stale_pages",
+                        "write_reproductions"),
+    "._sampled": ("sampled_lines", "sampled_observer_table", "speed_table"),
+    "._theory": ("THEORY_MODELS", "TheoryDocument", "theory_document", "theory_documents", "write_theory"),
+}
+_WHERE = {name: module for module, names in _EXPORTS.items() for name in names}
 
 __all__ = ["DEMO_BETAS", "DEMO_MODELS", "STAGES", "DemoReport", "ModelResult", "run_demo", "mark_road_changes",
            "demo_figures", "Progress", "Stage", "check_prerequisites", "THEORY_MODELS", "TheoryDocument",
            "theory_document", "theory_documents", "write_theory", "sampled_lines", "sampled_observer_table", "speed_table",
            "GENERATED_SECTIONS", "ReproductionPage", "reproduction_pages", "stale_pages", "write_reproductions",
            "BoxRun", "EncoderComparison", "encoder_comparison", "synthesis_evidence", "two_axle_box_check"]
+
+
+def __getattr__(name: str) -> Any:
+    module = _WHERE.get(name)
+    if module is None:
+        raise AttributeError(f"module 'switchobs.report' has no attribute {name!r}")
+    value = getattr(importlib.import_module(module, __name__), name)
+    globals()[name] = value
+    return value
+
+
+def __dir__() -> list[str]:
+    return sorted(set(globals()) | set(__all__))
