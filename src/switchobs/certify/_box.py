@@ -26,6 +26,12 @@ Properties that can hold on a box:
 When the whole box is not certified, :func:`certify_box` bisects on the scale
 ``rho`` of the box ``nominal + rho (box - nominal)`` for the largest
 certified sub-box.
+
+The smallest dwell time is bracketed on the nominal point first (its LMIs have
+one matrix per mode instead of one per vertex, 10x cheaper at ``n = 16``): the
+nominal ``A`` is a convex combination of the vertices', so the vertex LMIs'
+margin never exceeds the nominal one and the bracket's lower end is infeasible
+for the box too.  The vertex LMIs then start at its upper end.
 """
 
 from __future__ import annotations
