@@ -157,3 +157,26 @@ def test_cli_output_shown_on_the_certify_page_is_what_the_command_prints(command
     assert block, f"certify.md has no output of `{command}`"
     main(shlex.split(command)[1:])
     assert capsys.readouterr().out.rstrip("\n") == block.group(1).rstrip("\n")
+
+
+def test_moderately_sized_box_is_certified_from_the_nominal_bracket_and_a_tampered_jump_is_rejected():
+    # normal-form-8 (a chain of integrators, badly conditioned): the dwell time is bracketed on the nominal
+    # point and the vertex LMIs are solved once or twice; the exact vertex check still decides
+    n = 8
+    model = builtin_model(f"normal-form-{n}")
+    values = {f"a{i}": "0" for i in range(1, n + 1)}
+    spectrum = ",".join(str(-1 - Fraction(i, n - 1)) for i in range(n))
+    K_plus, K_minus = _gains(model.with_values(values), spectrum)
+    res = certify_box(model, ["a1=-1/100:1/100", "a2=-1/100:1/100"], K_plus, K_minus, values=values, search=False)
+    assert res.certified and res.kind == "dwell-time" and res.vertices == 4
+    assert check_box_data(res.data) == ""
+    cert = res.data["certificate"]
+    K = cert["segments"]
+    tampered = copy.deepcopy(res.data)
+    # P_plus,K just below P_minus,0: the switch from A_plus to A_minus may then increase V
+    P_minus_0 = [[Fraction(x) for x in row] for row in cert["P_minus"][0]]
+    tampered["certificate"]["P_plus"][K] = [[str(x * (1 - Fraction(1, 2 ** 20))) for x in row] for row in P_minus_0]
+    assert "P_A_plus" in check_box_data(tampered)
+    shorter = copy.deepcopy(res.data)
+    shorter["certificate"]["tau_D"] = str(Fraction(cert["tau_D"]) / 1000)
+    assert check_box_data(shorter) != ""

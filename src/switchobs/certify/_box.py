@@ -26,6 +26,12 @@ Properties that can hold on a box:
 When the whole box is not certified, :func:`certify_box` bisects on the scale
 ``rho`` of the box ``nominal + rho (box - nominal)`` for the largest
 certified sub-box.
+
+The smallest dwell time is bracketed on the nominal point first (its LMIs have
+one matrix per mode instead of one per vertex, 10x cheaper at ``n = 16``): the
+nominal ``A`` is a convex combination of the vertices', so the vertex LMIs'
+margin never exceeds the nominal one and the bracket's lower end is infeasible
+for the box too.  The vertex LMIs then start at its upper end.
 """
 
 from __future__ import annotations
@@ -62,6 +68,10 @@ DEFAULT_SEGMENTS = 2
 SEARCH_STEPS = 6
 #: Candidates ``tau * 1.1^k`` tried for the exact dwell-time certificate.
 _CERTIFY_ATTEMPTS = 8
+#: Relative width at which the bisection on the dwell time stops.
+_REL_TOL = 0.02
+#: Factor by which the box's dwell time grows from the nominal bracket until the vertex LMIs hold.
+_GROWTH = 1.25
 
 
 @dataclass(frozen=True)
@@ -341,6 +351,7 @@ class _BoxProblem:
         self.terms, self.nominal, self.requested = terms, nominal, requested
         self.pieces, self.segments, self.C, self.Kp, self.Km = pieces, segments, C, Kp, Km
         self.eps, self.solvers, self.tau_max = eps, solvers, tau_max
+        self.nominal_modes = [_floats(mats[0]) for mats in self.vertices(Fraction(0))]
 
     def vertices(self, rho: Fraction) -> tuple[list[Matrix], list[Matrix]]:
         return vertex_matrices(self.terms, self.requested.scaled(self.nominal, rho).intervals, self.pieces,
@@ -377,29 +388,48 @@ class _BoxProblem:
         mats = [list(bal.matrices[:N]), list(bal.matrices[N:])]
         slow = min(float(np.min(-np.linalg.eigvals(A).real)) for A in bal.matrices)
         limit = self.tau_max * bal.sigma if self.tau_max is not None else 1000.0 / slow
-        hi = limit
+        solved: dict[Fraction, tuple[list[list[np.ndarray]], float]] = {}
+
+        def margin(tau: Fraction) -> float:
+            """The box LMIs' margin at the dwell time ``tau`` (rescaled time), solved once per ``tau``."""
+            if tau not in solved:
+                Ps_b, t, _ = pwl_margin(mats, float(tau) * bal.sigma, self.segments, solvers=self.solvers)
+                solved[tau] = (Ps_b, t)
+            return solved[tau][1]
+
+        hi_tau = _round_up(limit / bal.sigma)
         if smallest:
-            hi = 1.0 / slow
-            while pwl_margin(mats, hi, self.segments, solvers=self.solvers)[1] <= self.eps:
-                if hi >= limit:
+            # bracketed on the nominal point alone first (one vertex per mode instead of all of them, 10x
+            # cheaper at n = 16): the nominal A is a convex combination of the vertices', so the vertex LMIs'
+            # margin is at most the nominal one at every dwell time, and a dwell time infeasible there is
+            # infeasible for the box
+            nominal = [[(A * bal.d[None, :]) / bal.d[:, None] / bal.sigma] for A in self.nominal_modes]
+            bracket = self._bisect(nominal, 1.0 / slow, limit)
+            if bracket is None:
+                return _Attempt("", None, None, f"the dwell-time LMIs are infeasible up to tau = "
+                                                f"{limit / bal.sigma:.4g} (at the nominal point already)")
+            lo, hi_tau = bracket[0] / bal.sigma, _round_up(bracket[1] / bal.sigma)
+            while margin(hi_tau) <= self.eps:
+                if float(hi_tau) * bal.sigma >= limit:
                     return _Attempt("", None, None, f"the dwell-time LMIs are infeasible up to tau = "
-                                                    f"{hi / bal.sigma:.4g}")
-                hi = min(4 * hi, limit)
-            lo = 0.0
-            while hi - lo > 0.02 * hi:
-                mid = (lo + hi) / 2
-                if pwl_margin(mats, mid, self.segments, solvers=self.solvers)[1] > self.eps:
-                    hi = mid
+                                                    f"{float(hi_tau):.4g}")
+                lo, hi_tau = float(hi_tau), _round_up(min(float(hi_tau) * _GROWTH, limit / bal.sigma))
+            while float(hi_tau) - lo > _REL_TOL * float(hi_tau):
+                mid = _round_up((lo + float(hi_tau)) / 2)
+                if mid >= hi_tau:
+                    break
+                if margin(mid) > self.eps:
+                    hi_tau = mid
                 else:
-                    lo = mid
+                    lo = float(mid)
         detail = "the dwell-time LMIs are infeasible"
         for k in range(_CERTIFY_ATTEMPTS if smallest else 1):
-            tau = _round_up(hi / bal.sigma * 1.1 ** k)
-            Ps_b, t, _ = pwl_margin(mats, float(tau) * bal.sigma, self.segments, solvers=self.solvers)
+            tau = hi_tau if k == 0 else _round_up(float(hi_tau) * 1.1 ** k)
+            t = margin(tau)
             if t <= self.eps:
                 detail = f"the dwell-time LMIs are infeasible at tau = {float(tau):.4g} (margin {t:.3g})"
                 continue
-            Ps = [[dyadic(P / np.outer(bal.d, bal.d), 52) for P in seq] for seq in Ps_b]
+            Ps = [[dyadic(P / np.outer(bal.d, bal.d), 52) for P in seq] for seq in solved[tau][0]]
             reason = check_dwell(modes, Ps, tau)
             if not reason:
                 return _Attempt("dwell-time", {"kind": "dwell-time", "tau_D": str(tau), "segments": self.segments,
@@ -407,6 +437,22 @@ class _BoxProblem:
                                                "P_minus": [matrix_strings(P) for P in Ps[1]]}, tau, "")
             detail = f"rounded dwell-time matrices not exact at tau = {float(tau):.4g}: {reason}"
         return _Attempt("", None, None, detail)
+
+    def _bisect(self, mats: list[list[np.ndarray]], start: float, limit: float) -> tuple[float, float] | None:
+        """``(lo, hi)``: the dwell-time LMIs of ``mats`` infeasible at ``lo`` (or ``lo = 0``), feasible at
+        ``hi``, ``hi - lo`` within :data:`_REL_TOL` of ``hi``; None if infeasible up to ``limit``."""
+        lo, hi = 0.0, start
+        while pwl_margin(mats, hi, self.segments, solvers=self.solvers)[1] <= self.eps:
+            if hi >= limit:
+                return None
+            lo, hi = hi, min(4 * hi, limit)
+        while hi - lo > _REL_TOL * hi:
+            mid = (lo + hi) / 2
+            if pwl_margin(mats, mid, self.segments, solvers=self.solvers)[1] > self.eps:
+                hi = mid
+            else:
+                lo = mid
+        return lo, hi
 
 
 def certify_box(model: Model, box: ParameterBox | Sequence[str] | Mapping[str, Any], K_plus: Any, K_minus: Any,
