@@ -132,6 +132,20 @@ def test_malformed_toml_and_missing_file(tmp_path):
         load_model(write(tmp_path, 'name = "x"\nstates = ["z"]\nC = ["1"]\ntime_scale = "y"'))
 
 
+def test_model_file_not_utf8_or_too_large_is_refused_before_parsing(tmp_path):
+    from switchobs._limits import MAX_INPUT_FILE_BYTES
+
+    bad = tmp_path / "latin1.toml"
+    bad.write_bytes('name = "r\u00e9sum\u00e9"'.encode("latin-1"))
+    with pytest.raises(ModelError, match=r"model file '.*latin1.toml' is not UTF-8 text"):
+        load_model(bad)
+    big = tmp_path / "big.toml"
+    with big.open("wb") as f:  # sparse: the size is refused from stat, the content never read
+        f.truncate(MAX_INPUT_FILE_BYTES + 1)
+    with pytest.raises(ModelError, match=rf"has {MAX_INPUT_FILE_BYTES + 1} bytes \(limit {MAX_INPUT_FILE_BYTES}\)"):
+        load_model(big)
+
+
 def test_unknown_builtin_lists_known_names():
     with pytest.raises(ModelError, match="abs-xbs3, abs-xbs4, abs-adaptive2, normal-form-N"):
         builtin_model("abs-xbs5")

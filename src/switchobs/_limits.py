@@ -18,11 +18,14 @@ from __future__ import annotations
 import re
 import sys
 from fractions import Fraction
+from pathlib import Path
+
+from .exceptions import SwitchobsError
 
 __all__ = ["MAX_EXPRESSION_LENGTH", "MAX_EXPRESSION_DEPTH", "MAX_EXPRESSION_TERMS", "MAX_EXPONENT",
            "MAX_NUMBER_DIGITS", "MAX_CERTIFICATE_DIGITS", "MAX_CERTIFICATE_BYTES", "MAX_CERTIFICATE_DIMENSION",
-           "MAX_DWELL_BITS", "MAX_BOX_VERTICES",
-           "DOUBLE_MAX", "DOUBLE_MIN", "LIMITS", "decimal_fraction", "check_double", "digits"]
+           "MAX_DWELL_BITS", "MAX_BOX_VERTICES", "MAX_INPUT_FILE_BYTES",
+           "DOUBLE_MAX", "DOUBLE_MIN", "LIMITS", "decimal_fraction", "check_double", "digits", "read_text"]
 
 #: Characters in one expression string (a matrix entry, a pole, a gain).
 MAX_EXPRESSION_LENGTH = 2000
@@ -40,6 +43,8 @@ MAX_NUMBER_DIGITS = 1000
 MAX_CERTIFICATE_DIGITS = 4000
 #: Size of a certificate file.
 MAX_CERTIFICATE_BYTES = 50_000_000
+#: Size of a model, system or sweep file (TOML): a 64-state model of longest entries is about 8 MB.
+MAX_INPUT_FILE_BYTES = 10_000_000
 #: Largest state dimension and number of modes in a certificate's family.
 MAX_CERTIFICATE_DIMENSION = 100
 #: A dwell-time certificate is checked while ``||A_p||_inf * tau_D <= 2**MAX_DWELL_BITS`` (the enclosure of
@@ -59,10 +64,42 @@ LIMITS: dict[str, int | float] = {
     "MAX_NUMBER_DIGITS": MAX_NUMBER_DIGITS, "MAX_CERTIFICATE_DIGITS": MAX_CERTIFICATE_DIGITS,
     "MAX_CERTIFICATE_BYTES": MAX_CERTIFICATE_BYTES, "MAX_CERTIFICATE_DIMENSION": MAX_CERTIFICATE_DIMENSION,
     "MAX_DWELL_BITS": MAX_DWELL_BITS, "MAX_BOX_VERTICES": MAX_BOX_VERTICES,
+    "MAX_INPUT_FILE_BYTES": MAX_INPUT_FILE_BYTES,
 }
 
 _FRACTION = re.compile(r"^([+-]?)(\d+)\s*/\s*(\d+)$")
 _DECIMAL = re.compile(r"^([+-]?)(\d*)(?:\.(\d*))?(?:[eE]([+-]?\d+))?$")
+
+
+def read_text(path: str | Path, *, what: str, max_bytes: int, error: type[SwitchobsError]) -> tuple[str, str]:
+    """The text of a user's file, ``"-"`` standard input, and the name to quote it by.
+
+    The size is checked before the file is read (at most ``max_bytes + 1`` characters from standard input), so
+    a huge input is refused in bounded memory.
+
+    Raises
+    ------
+    SwitchobsError
+        ``error``: the file cannot be read, is larger than ``max_bytes`` or is not UTF-8 text; the message names
+        ``what`` and the file.
+    """
+    stdin = str(path) == "-"
+    where = "<stdin>" if stdin else str(path)
+    try:
+        if stdin:
+            text = sys.stdin.read(max_bytes + 1)
+            size = len(text.encode("utf-8"))
+        else:
+            size = Path(path).stat().st_size
+        if size > max_bytes:
+            raise error(f"{what} {where!r} has {size} bytes (limit {max_bytes})")
+        if not stdin:
+            text = Path(path).read_text(encoding="utf-8")
+    except OSError as exc:
+        raise error(f"cannot read {what} {where!r}: {exc.strerror}") from None
+    except UnicodeDecodeError as exc:
+        raise error(f"{what} {where!r} is not UTF-8 text ({exc.reason} at byte {exc.start})") from None
+    return text, where
 
 
 def _shorten(text: str, keep: int = 40) -> str:

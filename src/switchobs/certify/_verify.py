@@ -49,14 +49,13 @@ Certificate kinds and what they prove (``W_p(P) = A_p' P + P A_p``):
 from __future__ import annotations
 
 import json
-import sys
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 from fractions import Fraction
 from pathlib import Path
 from typing import Any
 
-from .._limits import MAX_CERTIFICATE_BYTES, MAX_CERTIFICATE_DIGITS, MAX_DWELL_BITS
+from .._limits import MAX_CERTIFICATE_BYTES, MAX_CERTIFICATE_DIGITS, MAX_DWELL_BITS, read_text
 from .._progress import progress
 from ..exceptions import CertificateError
 from ._exact import (Matrix, add, definiteness, expm_enclosure, fraction_matrix, inf_norm,
@@ -146,23 +145,7 @@ def load_certificate(path: str | Path) -> dict[str, Any]:
     CertificateError
         If the file cannot be read or is not JSON.
     """
-    stdin = str(path) == "-"
-    where = "<stdin>" if stdin else str(path)
-    try:
-        if stdin:
-            text = sys.stdin.read(MAX_CERTIFICATE_BYTES + 1)
-            size = len(text.encode("utf-8"))
-        else:
-            size = Path(path).stat().st_size
-        if size > MAX_CERTIFICATE_BYTES:
-            raise CertificateError(f"certificate {where!r} has {size} bytes (limit {MAX_CERTIFICATE_BYTES})")
-        if not stdin:
-            text = Path(path).read_text(encoding="utf-8")
-    except OSError as exc:
-        raise CertificateError(f"cannot read certificate {where!r}: {exc.strerror}") from None
-    except UnicodeDecodeError as exc:
-        raise CertificateError(f"certificate {where!r} is not UTF-8 text ({exc.reason} at byte {exc.start})") \
-            from None
+    text, where = read_text(path, what="certificate", max_bytes=MAX_CERTIFICATE_BYTES, error=CertificateError)
     try:
         doc = json.loads(text, parse_int=_json_integer)
     except json.JSONDecodeError as exc:

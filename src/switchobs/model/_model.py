@@ -9,7 +9,6 @@ from __future__ import annotations
 
 import dataclasses
 import re
-import sys
 import tomllib
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
@@ -20,7 +19,7 @@ from typing import Any
 import numpy as np
 import sympy as sp
 
-from .._limits import MAX_NUMBER_DIGITS, check_double, decimal_fraction, digits
+from .._limits import MAX_INPUT_FILE_BYTES, MAX_NUMBER_DIGITS, check_double, decimal_fraction, digits, read_text
 from ..exceptions import DimensionError, ExpressionError, FreeSymbolError, ModelError, NotRealError
 from ._expr import exact_number, parse_expression
 from ._interop import matrix_rows, statespace_matrices
@@ -437,14 +436,10 @@ def read_toml(path: str | Path, *, what: str = "model file", parse_float: Any = 
     Raises
     ------
     ModelError
-        The file cannot be read or is not valid TOML.
+        The file cannot be read, is larger than :data:`~switchobs._limits.MAX_INPUT_FILE_BYTES`, is not UTF-8 or
+        not valid TOML.
     """
-    stdin = str(path) == "-"
-    where = "<stdin>" if stdin else str(path)
-    try:
-        text = sys.stdin.read() if stdin else Path(path).read_text(encoding="utf-8")
-    except OSError as exc:
-        raise ModelError(f"cannot read {what} {where!r}: {exc.strerror}") from None
+    text, where = read_text(path, what=what, max_bytes=MAX_INPUT_FILE_BYTES, error=ModelError)
     try:
         return tomllib.loads(text, parse_float=parse_float)
     except tomllib.TOMLDecodeError as exc:
