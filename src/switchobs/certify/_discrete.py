@@ -229,10 +229,6 @@ def _witness(Mw: list[Matrix], n: int) -> list[Fraction] | None:
     return None
 
 
-def _quad(M: Matrix, u: Sequence[Fraction]) -> Fraction:
-    return sum((u[i] * M[i][j] * u[j] for i in range(len(u)) for j in range(len(u))), Fraction(0))
-
-
 # ------------------------------------------------------------ h_rho (numeric)
 def spectral_bound(A: Matrix, method: StepMethod) -> float | None:
     """Smallest ``h > 0`` where the spectral radius of ``R(h A)`` reaches 1 (None: never, A-stable method).
