@@ -480,7 +480,6 @@ class _SixPhaseRuntime:
         return (math.nan, math.nan)
 
 
-
 @dataclass(frozen=True)
 class TwoPhaseABS(JsonRecord, error=SimulationError):
     """Two-phase XBS-based hybrid ABS (seed 001 Fig. 4.3, law (4.3) without ``dz1*/dt``).
