@@ -25,7 +25,7 @@ from .._progress import progress
 from ..exceptions import PrerequisiteError, SimulationError
 from ..loop import (DEFAULT_BETA, DEFAULT_GAMMA, INITIAL_STATE, X2_MEASUREMENTS, EncoderX2, EstimatorSpec,
                    ObserverXbsEstimator, xbs_estimator)
-from ..plants import (GRAVITY, TABLE41_SEED, Accelerometer, BrakingResult, BrakingScenario, FivePhaseABS, PoincareMap,
+from ..plants import (GRAVITY, Accelerometer, BrakingResult, BrakingScenario, FivePhaseABS, PoincareMap,
                       SixPhaseABS, Table41Result, TwoAxleResult, TwoAxleScenario, TwoPhaseABS,
                       aguado_sec36, fit_exponential, road, scenario, simulate, simulate_two_axle, table41)
 from ..plants._metrics import _reconvergence
