@@ -67,6 +67,16 @@ def test_encoder_cli_output_shown_on_the_page_is_what_the_command_prints(capsys)
     assert "$ switchobs encoder --profile braking\n" + out in page
 
 
+@pytest.mark.slow
+def test_simulate_output_shown_on_the_abs_page_is_what_the_command_prints(capsys):
+    page = (ROOT / "docs/abs.md").read_text("utf-8")
+    assert main(["simulate", "aguado-sec34"]) == 0
+    out = capsys.readouterr().out
+    # the wall-clock cost line differs between runs; the page leaves it out
+    shown = "".join(line for line in out.splitlines(keepends=True) if not line.startswith("  cost:"))
+    assert shown != out and "$ switchobs simulate aguado-sec34\n" + shown + "```" in page
+
+
 def test_table61_notch_row_start_up_transient():
     # seed 001 Table 6.1, notch row: 3.07 rad/s at constant speed, which a settled notch (unit DC gain) cannot
     # give. A notch started from a zero state and scored over the whole record gets most of it; the
