@@ -68,6 +68,27 @@ def test_aguado_eq56_dnl_is_fixed_per_tooth_and_bounded():
         assert e[0] == pytest.approx(-delta[tooth], abs=1e-11)
 
 
+def test_aguado_eq56_jitter_is_drawn_per_event_bounded_and_reproducible():
+    # the stochastic part of (5.6): a fresh error at every event (seed 001 Fig. 5.3's scatter), on top of the
+    # fixed per-tooth error and seen through the eccentricity law (5.7)
+    enc = Encoder(ppr=60, dnl_cycles=0.01, jitter_cycles=0.02, eccentricity=0.003, seed=4)
+    traj = constant_speed(1020.0, 1.0)
+    ev = enc.events(traj)
+    again = Encoder(ppr=60, dnl_cycles=0.01, jitter_cycles=0.02, eccentricity=0.003, seed=4).events(traj)
+    np.testing.assert_array_equal(ev.times, again.times)
+    np.testing.assert_allclose(traj.theta(ev.exact_times), ev.true_angles, atol=1e-11)
+    # the code-track angle at each crossing is the tooth's fixed location plus at most the jitter bound
+    code = enc.measured_angle(ev.true_angles)
+    tooth = enc.transition_angles()[ev.edge_index]
+    jitter = np.mod(code - tooth + 1.0, 2 * math.pi) - 1.0
+    eps = 0.02 * 2 * math.pi / 60
+    assert np.all(np.abs(jitter) <= eps * (1 + 1e-9)) and np.ptp(jitter) > 1.8 * eps
+    # ... and differs from revolution to revolution for the same tooth
+    first = jitter[ev.edge_index == 0]
+    assert first.size >= 15 and np.std(first) > 0.4 * eps
+    assert len(ev) == len(Encoder(ppr=60).events(traj))
+
+
 @pytest.mark.parametrize("exact", [True, False])
 def test_aguado_eq57_eq58_eccentricity_error_is_the_arcsin_law(exact):
     rho, phi = 0.05, 0.7
@@ -123,6 +144,8 @@ def test_events_cross_the_transition_locations_exactly(ppr, dnl, ecc, phase, bot
     ({"ppr": 60.5}, r"ppr .* integer"),
     ({"dnl_cycles": -0.1}, "dnl_cycles"),
     ({"dnl_cycles": 0.3, "both_edges": True}, r"below 0.25"),
+    ({"dnl_cycles": 0.3, "jitter_cycles": 0.2}, r"dnl_cycles \+ jitter_cycles = 0.5 must stay below 0.5"),
+    ({"jitter_cycles": -0.01}, "jitter_cycles"),
     ({"eccentricity": 0.5}, r"eccentricity"),
     ({"clock_hz": 0.0}, "clock_hz"),
     ({"eccentricity_phase_rad": float("nan")}, "eccentricity_phase_rad"),
