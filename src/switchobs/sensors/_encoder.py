@@ -70,8 +70,8 @@ class Encoder:
     Raises
     ------
     SimulationError
-        For ``ppr`` outside ``[2, MAX_PPR]``, a negative or too large ``dnl_cycles``, ``eccentricity``
-        outside ``[0, 0.1]`` or a non-positive ``clock_hz``.
+        For ``ppr`` outside ``[2, MAX_PPR]``, a negative ``dnl_cycles`` or ``jitter_cycles`` or too large a
+        sum of the two, ``eccentricity`` outside ``[0, 0.1]`` or a non-positive ``clock_hz``.
 
     References
     ----------
