@@ -10,7 +10,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from switchobs.exceptions import SimulationError
-from switchobs.sensors import AngleTrajectory, Encoder, constant_speed, rpm_to_rad_s, varying_speed
+from switchobs.sensors import AngleTrajectory, Encoder, constant_speed, rpm_to_rad_s, trapezoid_speed, varying_speed
 
 
 def _quadratic(theta0: float, w0: float, a0: float, duration: float) -> AngleTrajectory:
@@ -48,6 +48,22 @@ def test_from_samples_speed_only_integrates_the_spline_exactly():
     assert float(traj.theta(np.array([2.0]))[0]) == pytest.approx(expected, rel=1e-7)
     ev = Encoder(ppr=60).events(traj)
     np.testing.assert_allclose(traj.theta(ev.exact_times), ev.true_angles, atol=1e-11)
+
+
+@pytest.mark.parametrize("ramp_s", [None, 0.25])
+def test_trapezoid_plateaus_and_ramps_are_continuous_and_integrate(ramp_s):
+    traj = trapezoid_speed(300.0, 600.0, 5.0, segment_s=1.0, ramp_s=ramp_s)
+    ramp = 1.0 if ramp_s is None else ramp_s
+    lo, hi = rpm_to_rad_s(300.0), rpm_to_rad_s(600.0)
+    period = 2.0 * (1.0 + ramp)
+    t = np.array([0.5, 1.0 + 0.5 * ramp, 1.5 + ramp, period + 0.5])
+    np.testing.assert_allclose(traj.omega(t), [lo, 0.5 * (lo + hi), hi, lo], rtol=1e-12)
+    np.testing.assert_allclose(traj.alpha(t[:3]), [0.0, (hi - lo) / ramp, 0.0], atol=1e-9)
+    # theta is the exact integral of omega across the corners
+    fine = np.linspace(0.0, 5.0, 200001)
+    w = traj.omega(fine)
+    integral = np.concatenate([[0.0], np.cumsum(0.5 * (w[1:] + w[:-1]) * np.diff(fine))])
+    np.testing.assert_allclose(traj.theta(fine), integral, atol=1e-6)
 
 
 def test_aguado_eq56_dnl_is_fixed_per_tooth_and_bounded():

@@ -861,8 +861,9 @@ def _varying_section(runs: _Runs) -> list[str]:
             f"standstill), a sinusoidal swing at most 1.94 ($4.375/1.5^2$, swinging down to standstill), our profile "
             f"{ours:.2f}. Either the seed's rig dwelt near standstill for most of the record (between 0 and one "
             f"speed, at most {100 / seed_speed_spread():.0f} % of the time at that speed) or its errors on that run "
-            "do not follow the measurement model (6.2)–(6.4); Fig. 6.4, which would show which, is lost. We keep the profile derived from the velocity cell, so the acceleration cell is the one it cannot "
-            "match (`test_table61_varying_tsa_acceleration_needs_a_wider_speed_spread`).", "",
+            "do not follow the measurement model (6.2)–(6.4); Fig. 6.4, which would show which, is lost. We keep "
+            "the profile derived from the velocity cell, so the acceleration cell is the one it cannot match "
+            "(`test_table61_varying_tsa_acceleration_needs_a_wider_speed_spread`).", "",
             "**Our stage 1.** The rows marked *seed's stage 1* run the three-stage estimator as the seed does "
             "(a 1 Hz high-pass before the least squares) and are the ones compared. Ours (the mean over the "
             "surrounding revolution, below) keeps the speed ramps out of the regression, which the high-pass lets "
