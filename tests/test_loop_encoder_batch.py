@@ -190,6 +190,12 @@ def test_bad_chain_settings_are_refused():
         batch(arrays, window=2)
     with pytest.raises(SimulationError, match="rate_hz must be finite"):
         batch(arrays, rate_hz=0.0)
+    # the loop's edges are fixed: a per-event jitter (open-loop chain only) is refused, not ignored
+    jittered = Encoder(ppr=60, jitter_cycles=0.004, seed=7)
+    with pytest.raises(SimulationError, match="jitter_cycles = 0.004: the ABS loop's encoder chain has fixed edges"):
+        batch(arrays, encoder=jittered)
+    with pytest.raises(SimulationError, match="jitter_cycles = 0.004"):
+        EncoderLoopEstimator([], encoder=jittered, radius_m=0.3)
 
 
 def test_dt_defaults_to_the_differences_of_t_and_the_result_reads_and_serialises():

@@ -80,12 +80,73 @@ def test_simulate_output_shown_on_the_abs_page_is_what_the_command_prints(capsys
 def test_table61_notch_row_start_up_transient():
     # seed 001 Table 6.1, notch row: 3.07 rad/s at constant speed, which a settled notch (unit DC gain) cannot
     # give. A notch started from a zero state and scored over the whole record gets most of it; the
-    # acceleration is unchanged, and the varying row stays far off (docs/encoders.md says why)
+    # acceleration (a fitted cell) is unchanged, and the varying row stays far off (docs/encoders.md says why)
     from switchobs.report._reproductions import notch_from_zero
     from switchobs.sensors import TABLE61_ENCODER, TABLE61_PROFILES, compare_estimators
     settled = compare_estimators(TABLE61_PROFILES["constant"][1](10.0), TABLE61_ENCODER, estimators=("notch",))["notch"]
     w0, a0 = notch_from_zero("constant")
     assert w0 > 10 * settled.rms_omega and abs(w0 / 3.0730 - 1) < 0.3
-    assert a0 == pytest.approx(settled.rms_alpha, rel=0.01) and a0 > 1.5 * 7.9528
+    assert a0 == pytest.approx(settled.rms_alpha, rel=0.02) and a0 == pytest.approx(7.9528, rel=0.15)
     w_var, _ = notch_from_zero("varying")
     assert w_var < 0.5 * 5.2597
+
+
+def test_table61_encoder_is_the_fit_of_three_constant_cells():
+    # the encoder's two sizes are the least-squares fit to the constant row's TSA velocity and acceleration and
+    # notch acceleration; no fixed per-tooth error, which the seed's notch = three-stage acceleration excludes
+    from switchobs.report._reproductions import fit_table61_encoder, tooth_error_bound
+    from switchobs.sensors import TABLE61_ENCODER
+    fit = fit_table61_encoder()
+    assert TABLE61_ENCODER.eccentricity == pytest.approx(fit.eccentricity, rel=5e-3)
+    assert TABLE61_ENCODER.jitter_cycles == pytest.approx(fit.jitter_cycles, rel=5e-3)
+    assert max(abs(d) for d in fit.deviation) < 0.1
+    # an eccentricity alone cannot match both TSA cells: its acceleration/velocity ratio is below the seed's
+    # first harmonic's (99 per s)
+    assert fit.eccentricity_cells[1] / fit.eccentricity_cells[0] < 0.9 * 99.4
+    assert TABLE61_ENCODER.dnl_cycles == 0.0
+    gap, allowed = tooth_error_bound()
+    assert gap > 10.0 and allowed < 1e-3
+
+
+def test_table61_varying_tsa_acceleration_needs_a_wider_speed_spread():
+    # the TSA errors of the encoder scale as omega and omega^2, so the seed's varying row fixes a lower bound on
+    # mean(w^4)/mean(w^2)^2 that no profile of equal plateaus and ramps (nor a sinusoid) reaches
+    import numpy as np
+
+    from switchobs.report._reproductions import (seed_speed_spread, speed_exponents, speed_spread,
+                                                 trapezoid_spread_bound)
+    from switchobs.sensors import TABLE61_PROFILES, varying_speed
+    p_w, p_a = speed_exponents(3.0)
+    assert p_w == pytest.approx(1.0, abs=0.05) and p_a == pytest.approx(2.0, abs=0.05)
+    t = np.linspace(1.0, 10.0, 9001)
+    ours = speed_spread(TABLE61_PROFILES["varying"][1](10.0).omega(t))
+    sine = speed_spread(varying_speed(1020.0, 10.0, amplitude_rad_s=106.0).omega(t))
+    bound = trapezoid_spread_bound(12)
+    assert ours < bound < 2.05 and sine < 1.95
+    assert seed_speed_spread() > 1.35 * bound
+
+
+def test_table61_varying_notch_is_not_the_notch_described():
+    # the seed's varying notch is 37x (velocity) and 2.6x (acceleration) worse than its raw TSA; the notch it
+    # describes stays far below both ratios however steep the ramps between the plateaus
+    from switchobs.report._reproductions import notch_to_tsa_ratios
+    from switchobs.sensors import TABLE61_SEED
+    seed = TABLE61_SEED["varying"]
+    ratios = notch_to_tsa_ratios(4.0)
+    assert max(w for _, w, _ in ratios) < 0.25 * seed["notch"][0] / seed["tsa"][0]
+    assert max(a for _, _, a in ratios) < 0.65 * seed["notch"][1] / seed["tsa"][1]
+
+
+def test_table61_three_stage_row_with_the_seeds_stage_1():
+    # predicted cells: the three-stage estimator with the seed's 1 Hz high-pass is within 15 % of the seed in
+    # both profiles; ours beats the seed's figures on the varying profile, where the high-pass leaks the ramps
+    from switchobs.sensors import TABLE61_ENCODER, TABLE61_PROFILES, TABLE61_SEED, ChainSettings, compare_estimators
+    for profile, (_, build) in TABLE61_PROFILES.items():
+        traj = build(10.0)
+        seeds = compare_estimators(traj, TABLE61_ENCODER, estimators=("three-stage",),
+                                   settings=ChainSettings(highpass_hz=1.0))["three-stage"]
+        w, a = TABLE61_SEED[profile]["three-stage"]
+        assert seeds.rms_omega == pytest.approx(w, rel=0.15) and seeds.rms_alpha == pytest.approx(a, rel=0.15)
+        if profile == "varying":
+            ours = compare_estimators(traj, TABLE61_ENCODER, estimators=("three-stage",))["three-stage"]
+            assert ours.rms_omega < 0.85 * w and ours.rms_omega < 0.85 * seeds.rms_omega

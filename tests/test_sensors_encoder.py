@@ -10,7 +10,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from switchobs.exceptions import SimulationError
-from switchobs.sensors import AngleTrajectory, Encoder, constant_speed, rpm_to_rad_s, varying_speed
+from switchobs.sensors import AngleTrajectory, Encoder, constant_speed, rpm_to_rad_s, trapezoid_speed, varying_speed
 
 
 def _quadratic(theta0: float, w0: float, a0: float, duration: float) -> AngleTrajectory:
@@ -50,6 +50,22 @@ def test_from_samples_speed_only_integrates_the_spline_exactly():
     np.testing.assert_allclose(traj.theta(ev.exact_times), ev.true_angles, atol=1e-11)
 
 
+@pytest.mark.parametrize("ramp_s", [None, 0.25])
+def test_trapezoid_plateaus_and_ramps_are_continuous_and_integrate(ramp_s):
+    traj = trapezoid_speed(300.0, 600.0, 5.0, segment_s=1.0, ramp_s=ramp_s)
+    ramp = 1.0 if ramp_s is None else ramp_s
+    lo, hi = rpm_to_rad_s(300.0), rpm_to_rad_s(600.0)
+    period = 2.0 * (1.0 + ramp)
+    t = np.array([0.5, 1.0 + 0.5 * ramp, 1.5 + ramp, period + 0.5])
+    np.testing.assert_allclose(traj.omega(t), [lo, 0.5 * (lo + hi), hi, lo], rtol=1e-12)
+    np.testing.assert_allclose(traj.alpha(t[:3]), [0.0, (hi - lo) / ramp, 0.0], atol=1e-9)
+    # theta is the exact integral of omega across the corners
+    fine = np.linspace(0.0, 5.0, 200001)
+    w = traj.omega(fine)
+    integral = np.concatenate([[0.0], np.cumsum(0.5 * (w[1:] + w[:-1]) * np.diff(fine))])
+    np.testing.assert_allclose(traj.theta(fine), integral, atol=1e-6)
+
+
 def test_aguado_eq56_dnl_is_fixed_per_tooth_and_bounded():
     enc = Encoder(ppr=60, dnl_cycles=0.02, seed=7)
     delta = enc.transition_angles() - enc.nominal_angles()
@@ -66,6 +82,27 @@ def test_aguado_eq56_dnl_is_fixed_per_tooth_and_bounded():
         e = err[ev.edge_index == tooth]
         assert e.size >= 15 and np.ptp(e) < 1e-11
         assert e[0] == pytest.approx(-delta[tooth], abs=1e-11)
+
+
+def test_aguado_eq56_jitter_is_drawn_per_event_bounded_and_reproducible():
+    # the stochastic part of (5.6): a fresh error at every event (seed 001 Fig. 5.3's scatter), on top of the
+    # fixed per-tooth error and seen through the eccentricity law (5.7)
+    enc = Encoder(ppr=60, dnl_cycles=0.01, jitter_cycles=0.02, eccentricity=0.003, seed=4)
+    traj = constant_speed(1020.0, 1.0)
+    ev = enc.events(traj)
+    again = Encoder(ppr=60, dnl_cycles=0.01, jitter_cycles=0.02, eccentricity=0.003, seed=4).events(traj)
+    np.testing.assert_array_equal(ev.times, again.times)
+    np.testing.assert_allclose(traj.theta(ev.exact_times), ev.true_angles, atol=1e-11)
+    # the code-track angle at each crossing is the tooth's fixed location plus at most the jitter bound
+    code = enc.measured_angle(ev.true_angles)
+    tooth = enc.transition_angles()[ev.edge_index]
+    jitter = np.mod(code - tooth + 1.0, 2 * math.pi) - 1.0
+    eps = 0.02 * 2 * math.pi / 60
+    assert np.all(np.abs(jitter) <= eps * (1 + 1e-9)) and np.ptp(jitter) > 1.8 * eps
+    # ... and differs from revolution to revolution for the same tooth
+    first = jitter[ev.edge_index == 0]
+    assert first.size >= 15 and np.std(first) > 0.4 * eps
+    assert len(ev) == len(Encoder(ppr=60).events(traj))
 
 
 @pytest.mark.parametrize("exact", [True, False])
@@ -123,6 +160,8 @@ def test_events_cross_the_transition_locations_exactly(ppr, dnl, ecc, phase, bot
     ({"ppr": 60.5}, r"ppr .* integer"),
     ({"dnl_cycles": -0.1}, "dnl_cycles"),
     ({"dnl_cycles": 0.3, "both_edges": True}, r"below 0.25"),
+    ({"dnl_cycles": 0.3, "jitter_cycles": 0.2}, r"dnl_cycles \+ jitter_cycles = 0.5 must stay below 0.5"),
+    ({"jitter_cycles": -0.01}, "jitter_cycles"),
     ({"eccentricity": 0.5}, r"eccentricity"),
     ({"clock_hz": 0.0}, "clock_hz"),
     ({"eccentricity_phase_rad": float("nan")}, "eccentricity_phase_rad"),

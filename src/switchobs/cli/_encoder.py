@@ -8,7 +8,7 @@ import sys
 from ..exceptions import SimulationError
 from .._atomic import check_output_file
 from .._figures import save_figure
-from ..sensors import (ESTIMATORS, AngleTrajectory, ChainSettings, Encoder, braking_trajectory,
+from ..sensors import (ESTIMATORS, TABLE61_ENCODER, AngleTrajectory, ChainSettings, Encoder, braking_trajectory,
                        compare_estimators, constant_speed, plot_comparison, varying_speed)
 from ._common import emit_json
 
@@ -33,12 +33,16 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--duration", type=float, default=10.0, help="simulated time in s (default 10)")
     p.add_argument("--estimator", choices=("all", *ESTIMATORS), default="all", help="estimator (default all)")
     p.add_argument("--rate-hz", type=float, default=1000.0, help="controller rate (default 1000)")
-    p.add_argument("--dnl", type=float, default=0.01,
-                   help="transition noise bound eps in encoder cycles (default 0.01)")
-    p.add_argument("--eccentricity", type=float, default=0.003, help="code-track eccentricity e/r (default 0.003)")
+    enc = TABLE61_ENCODER
+    p.add_argument("--dnl", type=float, default=enc.dnl_cycles,
+                   help=f"per-tooth transition noise bound eps in encoder cycles (default {enc.dnl_cycles:g})")
+    p.add_argument("--jitter", type=float, default=enc.jitter_cycles,
+                   help=f"per-event transition noise bound in encoder cycles (default {enc.jitter_cycles:g})")
+    p.add_argument("--eccentricity", type=float, default=enc.eccentricity,
+                   help=f"code-track eccentricity e/r (default {enc.eccentricity:g})")
     p.add_argument("--clock-hz", type=float, default=1e6, help="timer clock; 0 for exact time stamps (default 1e6)")
     p.add_argument("--both-edges", action="store_true", help="use rising and falling edges")
-    p.add_argument("--seed", type=int, default=1, help="seed of the per-tooth transition errors (default 1)")
+    p.add_argument("--seed", type=int, default=1, help="seed of the transition errors (default 1)")
     p.add_argument("--warmup", type=float, default=1.0, help="seconds left out of the statistics (default 1)")
     p.add_argument("--json", action="store_true", help="print the results as JSON")
     p.add_argument("--plot", metavar="PNG", help="save the speed and acceleration estimation errors of every estimator")
@@ -58,7 +62,7 @@ def run(args: argparse.Namespace) -> int:
         check_output_file(args.plot, what="the plot")
     if args.warmup >= args.duration:
         raise SimulationError(f"--warmup {args.warmup:g} must be shorter than --duration {args.duration:g}")
-    encoder = Encoder(ppr=args.ppr, dnl_cycles=args.dnl, eccentricity=args.eccentricity,
+    encoder = Encoder(ppr=args.ppr, dnl_cycles=args.dnl, jitter_cycles=args.jitter, eccentricity=args.eccentricity,
                       both_edges=args.both_edges, clock_hz=args.clock_hz or None, seed=args.seed)
     settings = ChainSettings(rate_hz=args.rate_hz, order=args.order, window=args.events,
                              harmonics=args.harmonics, warmup_s=args.warmup)

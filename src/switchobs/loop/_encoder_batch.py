@@ -153,10 +153,18 @@ def _wheel(x2: Array, vx: Array, h: Array, radius: float) -> tuple[Array, Array]
     return om, theta
 
 
+def fixed_edges(encoder: Encoder) -> Array:
+    """The rotation angles of the encoder's edges; refuses a per-event jitter, which the loop does not model."""
+    if encoder.jitter_cycles > 0:
+        raise SimulationError(f"jitter_cycles = {encoder.jitter_cycles:g}: the ABS loop's encoder chain has fixed "
+                              f"edges only; use jitter_cycles=0 (switchobs.sensors.encoder_chain models the jitter)")
+    return encoder.rotation_angles()
+
+
 def _edges(encoder: Encoder, t: Array, h: Array, om: Array, theta: Array) -> tuple[Array, Array, npt.NDArray[np.int_]]:
     """Time stamps, assigned angles and generating steps of the edges, as ``EncoderLoopEstimator._edges``."""
     two_pi = 2.0 * math.pi
-    base, nominal = encoder.rotation_angles(), encoder.nominal_angles()
+    base, nominal = fixed_edges(encoder), encoder.nominal_angles()
     revs = np.arange(int(theta[-1] // two_pi) + 2, dtype=float)
     levels = (base[None, :] + two_pi * revs[:, None]).ravel()
     angles = (nominal[None, :] + two_pi * revs[:, None]).ravel()

@@ -50,7 +50,7 @@ from ..exceptions import SimulationError
 from ..plants import Replay, replay_updates
 from ..sensors import Encoder, NotchFilter, ThreeStageEstimator, TimeStamper
 from ._adapter import ObserverXbsEstimator, SteppingObserver, check_xbs_signals, initial_xbs_state
-from ._encoder_batch import EncoderMeasurements, encoder_measurements
+from ._encoder_batch import EncoderMeasurements, encoder_measurements, fixed_edges
 from ._stepping import step_through
 
 __all__ = ["EncoderLoopEstimator", "EncoderLoopRecord", "EncoderX2", "X2_MEASUREMENTS"]
@@ -195,7 +195,7 @@ class EncoderLoopEstimator:
         self._initial_xbs = float(initial_xbs)
         self._damping = notch_damping
         self._compiled = compiled
-        self._base = encoder.rotation_angles()
+        self._base = fixed_edges(encoder)
         self._nominal = encoder.nominal_angles()
         # validate the chain settings now rather than at the first sample
         TimeStamper(order=order, window=window)

@@ -1,8 +1,9 @@
 """Imperfect incremental encoder: tooth edges, transition noise, eccentricity, timer clock.
 
 Seed 001, Section 5.3: the actual transition locations are the nominal ones
-plus a differential nonlinearity fixed per edge, (5.6), and the code track is
-seen through the eccentricity law (5.7) (small-angle form (5.8)).  An edge
+plus a differential nonlinearity, (5.6), fixed per edge and/or drawn afresh at
+every event (the revolution-to-revolution scatter of Fig. 5.3), and the code
+track is seen through the eccentricity law (5.7) (small-angle form (5.8)).  An edge
 fires when the code-track angle seen by the pick-off sensor reaches a
 transition location; the electronic control unit only counts edges, so it
 assigns each event the *nominal* angle of its edge.
@@ -43,8 +44,8 @@ class Encoder:
         Differential nonlinearity bound ``eps`` of (5.6), in encoder cycles
         (one cycle is ``2 pi / N``): every edge ``i`` gets a fixed error
         ``delta_i ~ U[-eps, eps]``.  Real sensors: 0.002-0.05 cycles (seed 001,
-        Section 6.1).  Must stay below 1/4 cycle with ``both_edges`` (1/2
-        otherwise) so that edges keep their order.
+        Section 6.1).  With ``jitter_cycles`` it must stay below 1/4 cycle with
+        ``both_edges`` (1/2 otherwise) so that edges keep their order.
     eccentricity : float
         Ratio ``e / r`` of code-track eccentricity to code-track radius, in
         ``[0, 0.1]`` (0.05-0.25 mm on a few-cm track in practice).
@@ -60,12 +61,17 @@ class Encoder:
         Seed of ``numpy.random.default_rng`` drawing the ``delta_i``.
     exact_arcsin : bool
         Use the exact eccentricity law (5.7) rather than its small-angle form (5.8).
+    jitter_cycles : float
+        Bound of a transition error ``U[-eps_j, eps_j]`` (encoder cycles) drawn
+        afresh for every event: the stochastic part of (5.6), the scatter of
+        the dots around each tooth's mean in seed 001 Fig. 5.3.  It is not
+        periodic in the angle, so no harmonic compensation removes it.
 
     Raises
     ------
     SimulationError
-        For ``ppr`` outside ``[2, MAX_PPR]``, a negative or too large ``dnl_cycles``, ``eccentricity``
-        outside ``[0, 0.1]`` or a non-positive ``clock_hz``.
+        For ``ppr`` outside ``[2, MAX_PPR]``, a negative ``dnl_cycles`` or ``jitter_cycles`` or too large a
+        sum of the two, ``eccentricity`` outside ``[0, 0.1]`` or a non-positive ``clock_hz``.
 
     References
     ----------
@@ -87,6 +93,7 @@ class Encoder:
     clock_hz: float | None = None
     seed: int = 0
     exact_arcsin: bool = True
+    jitter_cycles: float = 0.0
     _transitions: Array = field(init=False, repr=False, compare=False)
 
     def __post_init__(self) -> None:
@@ -94,9 +101,11 @@ class Encoder:
             raise SimulationError(f"ppr = {self.ppr} lies above {MAX_PPR}, more teeth than any wheel encoder has")
         limit = 0.25 if self.both_edges else 0.5
         dnl = check_positive(self.dnl_cycles, "dnl_cycles", allow_zero=True)
-        if dnl >= limit:
+        jitter = check_positive(self.jitter_cycles, "jitter_cycles", allow_zero=True)
+        if dnl + jitter >= limit:
             raise SimulationError(
-                f"dnl_cycles = {dnl:g} must stay below {limit:g} cycle so that consecutive edges keep their order")
+                f"dnl_cycles + jitter_cycles = {dnl + jitter:g} must stay below {limit:g} cycle so that consecutive "
+                f"edges keep their order")
         check_range(self.eccentricity, "eccentricity (e/r)", 0.0, _MAX_ECCENTRICITY)
         check_range(self.eccentricity_phase_rad, "eccentricity_phase_rad", -1e6, 1e6)
         if self.clock_hz is not None:
@@ -131,11 +140,14 @@ class Encoder:
         return th + (np.arcsin(s) if self.exact_arcsin else s)
 
     def rotation_angles(self) -> Array:
-        """Rotation angles ``theta_r`` at which each edge of revolution 0 fires.
+        """Rotation angles ``theta_r`` at which each edge of revolution 0 fires (without ``jitter_cycles``).
 
         Inverts ``measured_angle`` (strictly increasing since ``e/r <= 0.1``) by Newton's method.
         """
-        target = self._transitions
+        return self._rotation(self._transitions)
+
+    def _rotation(self, target: Array) -> Array:
+        """``measured_angle`` inverted at the code-track angles ``target`` (Newton's method)."""
         th = target.copy()
         rho, phi = self.eccentricity, self.eccentricity_phase_rad
         for _ in range(50):
@@ -166,10 +178,15 @@ class Encoder:
         base = self.rotation_angles()
         two_pi = 2.0 * math.pi
         th0, th1 = (float(v) for v in trajectory.theta(np.array([trajectory.t_start, trajectory.t_end])))
-        k0 = math.floor((th0 - base[-1]) / two_pi)
-        k1 = math.ceil((th1 - base[0]) / two_pi)
+        k0 = math.floor((th0 - base[-1]) / two_pi) - 1
+        k1 = math.ceil((th1 - base[0]) / two_pi) + 1
         revs = np.arange(k0, k1 + 1)
-        levels = (base[None, :] + two_pi * revs[:, None]).ravel()
+        if self.jitter_cycles > 0:
+            # a fresh code-track error per event; (5.7) is 2 pi-periodic, so revolution 0 is inverted
+            width = self.jitter_cycles * 2.0 * math.pi / self.ppr
+            jitter = np.random.default_rng([self.seed, 1]).uniform(-width, width, (revs.size, self.n_edges))
+            base = self._rotation((self._transitions[None, :] + jitter).ravel()).reshape(revs.size, self.n_edges)
+        levels = (base + two_pi * revs[:, None]).ravel()
         edge = np.tile(np.arange(self.n_edges), revs.size)
         rev = np.repeat(revs, self.n_edges)
         keep = (levels > th0) & (levels <= th1)

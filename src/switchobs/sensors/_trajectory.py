@@ -281,11 +281,12 @@ def varying_speed(
 
 
 def trapezoid_speed(low_rpm: float, high_rpm: float, duration_s: float = 10.0, *, segment_s: float = 1.0,
-                    theta0: float = 0.0) -> AngleTrajectory:
+                    ramp_s: float | None = None, theta0: float = 0.0) -> AngleTrajectory:
     """Plateaus at constant speed joined by ramps at constant acceleration (a motor test rig's profile).
 
-    Each ``segment_s``: a plateau at ``low_rpm``, a ramp up, a plateau at
-    ``high_rpm``, a ramp down, repeated.  Seed 001 Sec. 6.3 describes its
+    A plateau of ``segment_s`` at ``low_rpm``, a ramp up of ``ramp_s``
+    (default ``segment_s``), a plateau of ``segment_s`` at ``high_rpm``, a
+    ramp down of ``ramp_s``, repeated.  Seed 001 Sec. 6.3 describes its
     time-varying reference (Fig. 6.4) by "the intervals in which the velocity
     or the acceleration are constant"; ``docs/encoders.md`` derives the speeds
     from its Table 6.1.
@@ -301,10 +302,13 @@ def trapezoid_speed(low_rpm: float, high_rpm: float, duration_s: float = 10.0, *
         raise SimulationError(f"low_rpm = {low_rpm:g} must be below high_rpm = {high_rpm:g}")
     dur = _duration(duration_s)
     seg = check_positive(segment_s, "segment_s")
-    knots = np.arange(0.0, dur + seg, seg)
-    speeds = np.resize([lo, lo, hi, hi], knots.size)     # lo plateau, ramp up, hi plateau, ramp down
-    slopes = np.diff(speeds) / seg
-    angles = theta0 + np.concatenate([[0.0], np.cumsum(0.5 * (speeds[1:] + speeds[:-1]) * seg)])
+    ramp = seg if ramp_s is None else check_positive(ramp_s, "ramp_s")
+    period = 2.0 * (seg + ramp)
+    starts = np.array([0.0, seg, seg + ramp, 2.0 * seg + ramp])     # lo plateau, ramp up, hi plateau, ramp down
+    knots = (starts[None, :] + period * np.arange(math.ceil(dur / period) + 1)[:, None]).ravel()
+    speeds = np.resize([lo, lo, hi, hi], knots.size)
+    slopes = np.diff(speeds) / np.diff(knots)
+    angles = theta0 + np.concatenate([[0.0], np.cumsum(0.5 * (speeds[1:] + speeds[:-1]) * np.diff(knots))])
 
     def cell(t: Array) -> tuple[Array, Array]:
         t = np.asarray(t, dtype=float)
@@ -324,4 +328,4 @@ def trapezoid_speed(low_rpm: float, high_rpm: float, duration_s: float = 10.0, *
 
     return AngleTrajectory(theta=theta, omega=omega, alpha=alpha, t_start=0.0, t_end=dur,
                            grid=_grid(0.0, dur, 1e-2),
-                           name=f"trapezoid {low_rpm:g}-{high_rpm:g} rpm, {seg:g} s segments")
+                           name=f"trapezoid {low_rpm:g}-{high_rpm:g} rpm, {seg:g} s plateaus, {ramp:g} s ramps")
