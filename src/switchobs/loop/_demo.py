@@ -51,7 +51,8 @@ class DemoSettings(JsonRecord, error=SimulationError):
         The run ends at 10 km/h, where an ABS hands back to the driver.
     duration_s : float
         Bound on the simulated time (fast mode ends shortly after the change to snow).
-    encoder_ppr, dnl_cycles, eccentricity, clock_hz, encoder_seed : encoder (docs/encoders.md defaults)
+    encoder_ppr, dnl_cycles, eccentricity, clock_hz, encoder_seed : a 60-ppr encoder with fixed per-tooth errors
+        (the in-loop chain needs fixed edges, so not the per-event jitter of the Table 6.1 encoder)
     tsa_window, harmonics : TSA window ``n`` and harmonics ``M`` (seed 001: 15 and 5)
     timing_steps : int
         Steps of the C ``_run`` timing.
