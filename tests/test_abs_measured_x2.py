@@ -160,3 +160,16 @@ def test_fig67_below_60_kmh_the_tsa_window_lag_alone_loses_the_cycle():
     assert np.min(late.series["lambda"][slow["half-window"]]) < -0.9
     # above 60 km/h the same lag costs little
     assert _excursion(late, ~slow["half-window"]) < 45.0
+
+
+def test_fig67_open_loop_the_three_stage_estimator_removes_the_ripple_during_the_braking():
+    """Neither the deceleration nor the high-pass stage disturbs the identification: what is left is the lag."""
+    from switchobs.report._reproductions import fig67_open_loop, fig67_scenario
+
+    err = fig67_open_loop(simulate(fig67_scenario()))
+    centre, sample = ({kind: e[i] for kind, e in err.items()} for i in (0, 1))
+    assert centre["three-stage"] < 1.5 * centre["tsa-ideal"] + 0.2 < 0.2 * centre["tsa"]
+    # against the x2 at the sample the window's lag dominates, with or without imperfection
+    assert sample["tsa-ideal"] > 5.0 * centre["tsa-ideal"]
+    assert abs(sample["three-stage"] - sample["tsa-ideal"]) < 0.5
+    assert sample["notch"] > sample["three-stage"]
