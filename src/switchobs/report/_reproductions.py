@@ -208,7 +208,7 @@ def sec36_estimators(sc: TwoAxleScenario, spec: EstimatorSpec, *, load_signal: b
 class _ParameterRecorder:
     """An estimator passed through (load included), recording one estimated parameter after every update."""
 
-    def __init__(self, estimator: ObserverXbsEstimator, name: str):
+    def __init__(self, estimator: LoadXbsEstimator, name: str):
         self.estimator = estimator
         self.index = estimator.observer.state_names.index(name)
         self.rows: list[tuple[float, float]] = []
