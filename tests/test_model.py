@@ -147,5 +147,5 @@ def test_model_file_not_utf8_or_too_large_is_refused_before_parsing(tmp_path):
 
 
 def test_unknown_builtin_lists_known_names():
-    with pytest.raises(ModelError, match="abs-xbs3, abs-xbs4, abs-adaptive2, normal-form-N"):
+    with pytest.raises(ModelError, match="abs-xbs3, abs-xbs4, abs-adaptive2, abs-adaptive2-load, normal-form-N"):
         builtin_model("abs-xbs5")

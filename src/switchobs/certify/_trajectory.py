@@ -422,8 +422,8 @@ def admissible_constants(model: Model, *, bounds: Mapping[str, Sequence[float]],
     Raises
     ------
     ModelError
-        Free parameters, several inputs, ``s`` depending on ``t``, missing
-        bounds, or ``C b(y)`` vanishing on the slab.
+        Free parameters, several inputs, ``s`` depending on ``t``, ``C d`` or ``C b`` reading an external
+        signal, missing bounds, or ``C b(y)`` vanishing on the slab.
     SimulationError
         Empty/inverted bounds, ``epsilon <= 0`` or ``beta <= alpha``.
 
@@ -455,6 +455,11 @@ def admissible_constants(model: Model, *, bounds: Mapping[str, Sequence[float]],
     if not epsilon > 0:
         raise SimulationError(f"epsilon must be positive, got {epsilon}")
     tsym = model.symbols["t"]
+    signals_in_d = sorted(e for e in model.external if model.symbols[e] in (model.C * model.d)[0].free_symbols
+                          | (model.C * model.b)[0].free_symbols)
+    if signals_in_d:
+        raise ModelError(f"C d and C b of model {model.name!r} read the external signal(s) {signals_in_d}; "
+                         "Theorem 3's a0 and b0 are bounds over y alone")
     if tsym in model.time_scale.free_symbols:
         raise ModelError(f"s = {model.time_scale} depends on t; Theorem 3's s0 needs s(y) on a compact set")
     box = []

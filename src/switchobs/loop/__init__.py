@@ -12,6 +12,8 @@ EstimatorSpec, xbs_estimator -- an observer kind (xbs3, xbs4, adaptive, none), g
                                (python | c) -> an estimator for a vehicle (sign conventions, initial state)
 OBSERVER_KINDS, DEFAULT_BETA, DEFAULT_GAMMA, INITIAL_STATE -- the factory's choices and defaults
 ObserverXbsEstimator        -- any observer with step/readout as an estimator (mean-hold of the signals)
+LoadXbsEstimator            -- the same for an observer that reads the wheel load a = R^2 Fz / J as a signal
+                               (seed 001 Sec. 3.6; the two-axle vehicle feeds it the load (3.36))
 SteppingObserver            -- what it needs (Python reference observers and compiled C observers qualify)
 EncoderLoopEstimator        -- XBS observers fed by a simulated encoder with three-stage compensation
 EncoderLoopRecord           -- what the encoder chain and the observers saw
@@ -34,7 +36,7 @@ Example
 "SwitchedObserver of model 'abs-xbs4' (rk4, ZOH signals y, vx, u)"
 """
 
-from ._adapter import ObserverXbsEstimator, SteppingObserver
+from ._adapter import LoadXbsEstimator, ObserverXbsEstimator, SteppingObserver
 from ._braking import CONTROLLER_NAMES, BrakingRun, run_braking
 from ._demo import (SETTLE_S, BrakingSummary, DemoSettings, ErrorRow, demo_braking, demo_scenario, road_segments,
                     segment_errors, summarise_braking)
@@ -43,7 +45,7 @@ from ._encoder_loop import X2_MEASUREMENTS, EncoderLoopEstimator, EncoderLoopRec
 from ._factory import DEFAULT_BETA, DEFAULT_GAMMA, INITIAL_STATE, OBSERVER_KINDS, EstimatorSpec, xbs_estimator
 
 __all__ = ["EstimatorSpec", "xbs_estimator", "OBSERVER_KINDS", "DEFAULT_BETA", "DEFAULT_GAMMA", "INITIAL_STATE",
-           "ObserverXbsEstimator", "SteppingObserver", "run_braking", "BrakingRun", "CONTROLLER_NAMES", "EncoderLoopEstimator", "EncoderLoopRecord",
+           "ObserverXbsEstimator", "LoadXbsEstimator", "SteppingObserver", "run_braking", "BrakingRun", "CONTROLLER_NAMES", "EncoderLoopEstimator", "EncoderLoopRecord",
            "EncoderX2", "X2_MEASUREMENTS", "encoder_measurements", "EncoderMeasurements",
            "DemoSettings", "demo_scenario", "demo_braking", "road_segments", "segment_errors", "ErrorRow",
            "summarise_braking", "BrakingSummary", "SETTLE_S"]

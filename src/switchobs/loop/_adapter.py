@@ -17,7 +17,7 @@ import numpy as np
 from ..exceptions import DimensionError, ModelError, ObserverInputError, SimulationError
 from ..plants import CompiledObserver
 
-__all__ = ["ObserverXbsEstimator", "SteppingObserver", "initial_xbs_state", "c_readout"]
+__all__ = ["ObserverXbsEstimator", "LoadXbsEstimator", "SteppingObserver", "initial_xbs_state", "c_readout"]
 
 #: Tokens of a readout that C evaluates as Python does: state names, number literals, + - * / and parentheses.
 _TOKEN = re.compile(r"\s*(?:(?P<state>x\d+)|(?P<number>\d+\.?\d*(?:[eE][+-]?\d+)?)|(?P<op>[-+*/()]))")
@@ -37,10 +37,13 @@ class SteppingObserver(Protocol):
     def readout(self, xhat: Any) -> float: ...
 
 
-def check_xbs_signals(observer: SteppingObserver, label: str = "an XBS estimator") -> None:
-    """Refuse an observer whose signals are not ``(y, vx, u)`` (the XBS models of seeds 000 and 001)."""
-    if tuple(observer.signal_names)[1:] != ("vx", "u") or len(observer.signal_names) != 3:
-        raise ModelError(f"{label} needs an observer with signals (y, vx, u), got {tuple(observer.signal_names)}")
+def check_xbs_signals(observer: SteppingObserver, label: str = "an XBS estimator",
+                      signals: tuple[str, ...] = ("vx", "u")) -> None:
+    """Refuse an observer whose signals are not ``(y, *signals)`` (``(y, vx, u)``: the XBS models of seeds 000
+    and 001)."""
+    if tuple(observer.signal_names)[1:] != signals:
+        raise ModelError(f"{label} needs an observer with signals (y, {', '.join(signals)}), got "
+                         f"{tuple(observer.signal_names)}")
 
 
 def initial_xbs_state(observer: SteppingObserver, y0: float, initial_state: Mapping[str, float]) -> np.ndarray:
@@ -120,8 +123,11 @@ class ObserverXbsEstimator:
     0.297506
     """
 
+    #: The signals after ``y`` that the observer must take.
+    _signals: tuple[str, ...] = ("vx", "u")
+
     def __init__(self, observer: SteppingObserver, *, initial_state: Mapping[str, float] | None = None):
-        check_xbs_signals(observer)
+        check_xbs_signals(observer, signals=self._signals)
         names = tuple(observer.state_names)
         unknown = sorted(set(initial_state or {}) - set(names))
         if unknown:
@@ -151,7 +157,7 @@ class ObserverXbsEstimator:
         x = initial_xbs_state(self.observer, y0, self._initial)
         self._state = x
         self._y, self._vx = float(y0), float(vx0)
-        self._estimate = float(self.observer.readout(x))
+        self._estimate = self._readout(x)
 
     def compiled(self) -> CompiledObserver | None:
         """The C step of a compiled double-precision observer for the compiled braking loop; else ``None``.
@@ -199,8 +205,78 @@ class ObserverXbsEstimator:
             signals (e.g. a held ``vx <= 0``, ``dt < 0``).
         """
         if dt != 0.0:
-            signals = (0.5 * (self._y + y), 0.5 * (self._vx + vx), u)
-            self._state = self.observer.step(self._state, signals, dt)
-            self._estimate = float(self.observer.readout(self._state))
+            self._state = self.observer.step(self._state, self._held(y, vx, u), dt)
+            self._estimate = self._readout(self._state)
         self._y, self._vx = float(y), float(vx)
         return self._estimate
+
+    def _held(self, y: float, vx: float, u: float) -> tuple[float, ...]:
+        """The signals held over the step that ends at the sample ``(y, vx)``."""
+        return (0.5 * (self._y + y), 0.5 * (self._vx + vx), u)
+
+    def _readout(self, x: np.ndarray) -> float:
+        return float(self.observer.readout(x))
+
+
+class LoadXbsEstimator(ObserverXbsEstimator):
+    """An XBS observer that reads the wheel load, seen as an estimator that takes it (:class:`switchobs.plants.LoadInput`).
+
+    Seed 001 Sec. 3.6 computes the adaptive observer's ``a = R^2 Fz / J`` on line from the loads (3.36).
+    The observer (``adaptive_xbs_observer(..., load_signal=True)``) takes ``a`` as its third signal and
+    reads out ``a`` times the XBS; this estimator holds ``a`` over a step at the mean of the two bounding
+    samples (as ``y`` and ``vx``) and divides the readout by it.  Until :meth:`set_load` is called (the
+    quarter car never calls it) the load is ``load_n``.
+
+    Parameters
+    ----------
+    observer : SteppingObserver
+        Signals ``(y, vx, a, u)``, a readout equal to ``a`` times the XBS.
+    load_n : float
+        The static load [N] (``QuarterCar.load_n``).
+    load_gain : float
+        ``R^2 / J`` [1/kg], so that ``a = load_gain * Fz``.
+    initial_state : mapping, optional
+        As for :class:`ObserverXbsEstimator`.
+
+    Examples
+    --------
+    >>> from switchobs.observers import adaptive_xbs_observer
+    >>> obs = adaptive_xbs_observer(100.0, [5e3, 5e3], params={"b": 4.375}, load_signal=True)
+    >>> est = LoadXbsEstimator(obs, load_n=2850.0, load_gain=0.3 ** 2 / 1.2, initial_state={"c": 20.0, "d": 10.0})
+    >>> est.reset(0.0, -5.0, 20.0)
+    >>> est.set_load(3000.0)
+    >>> round(est.update(0.001, -5.1, 19.99, 120.0, 0.001), 6)
+    0.452495
+    """
+
+    _signals = ("vx", "a", "u")
+
+    def __init__(self, observer: SteppingObserver, *, load_n: float, load_gain: float,
+                 initial_state: Mapping[str, float] | None = None):
+        super().__init__(observer, initial_state=initial_state)
+        for name, value in (("load_n", load_n), ("load_gain", load_gain)):
+            if not (isinstance(value, (int, float)) and np.isfinite(value) and value > 0):
+                raise SimulationError(f"LoadXbsEstimator: {name} must be a finite number > 0, got {value!r}")
+        self.load_gain = float(load_gain)
+        self._a = self._a_prev = self._a_held = self.load_gain * float(load_n)
+
+    def set_load(self, fz_n: float) -> None:
+        """The wheel's vertical load [N] at the next sample (protocol :class:`switchobs.plants.LoadInput`)."""
+        self._a = self.load_gain * float(fz_n)
+
+    def reset(self, t0: float, y0: float, vx0: float) -> None:
+        self._a_prev = self._a_held = self._a
+        super().reset(t0, y0, vx0)
+
+    def update(self, t: float, y: float, vx: float, u: float, dt: float) -> float:
+        """As :meth:`ObserverXbsEstimator.update`, with ``a`` held at the mean of the last two loads given."""
+        self._a_held = 0.5 * (self._a_prev + self._a)
+        estimate = super().update(t, y, vx, u, dt)
+        self._a_prev = self._a
+        return estimate
+
+    def _held(self, y: float, vx: float, u: float) -> tuple[float, ...]:
+        return (0.5 * (self._y + y), 0.5 * (self._vx + vx), self._a_held, u)
+
+    def _readout(self, x: np.ndarray) -> float:
+        return float(self.observer.readout(x)) / self._a_held

@@ -18,7 +18,7 @@ from typing import Any
 from .._json import JsonRecord
 from ..exceptions import SimulationError
 from ..plants import Burckhardt, QuarterCar, XbsEstimator, road
-from ._adapter import ObserverXbsEstimator
+from ._adapter import LoadXbsEstimator, ObserverXbsEstimator
 
 __all__ = ["EstimatorSpec", "xbs_estimator", "OBSERVER_KINDS", "DEFAULT_BETA", "DEFAULT_GAMMA", "INITIAL_STATE"]
 
@@ -104,8 +104,8 @@ class EstimatorSpec(JsonRecord, error=SimulationError):
         return f"{text} ({self.impl}{'' if self.method == 'rk4' else ', ' + self.method})"
 
 
-def xbs_estimator(spec: EstimatorSpec | str, vehicle: QuarterCar, initial_road: Burckhardt | str
-                  ) -> XbsEstimator | None:
+def xbs_estimator(spec: EstimatorSpec | str, vehicle: QuarterCar, initial_road: Burckhardt | str, *,
+                  load_signal: bool = False) -> XbsEstimator | None:
     """The observer of ``spec`` set up for ``vehicle``, as an estimator for the ABS simulations.
 
     Parameters
@@ -118,12 +118,20 @@ def xbs_estimator(spec: EstimatorSpec | str, vehicle: QuarterCar, initial_road: 
         corner of the wheel (:meth:`TwoAxleVehicle.corner`).
     initial_road : Burckhardt or str
         The road the 3D observer assumes (``c = -c2``); ignored by the others.
+    load_signal : bool
+        Adaptive observer only: read ``a = R² Fz / J`` on line from the load the two-axle vehicle feeds
+        (seed 001 Sec. 3.6, :class:`LoadXbsEstimator`; ``vehicle.load_n`` until it does).
 
     Returns
     -------
     ObserverXbsEstimator or None
         ``None`` for ``kind = "none"``; otherwise started from
         :data:`INITIAL_STATE`.
+
+    Raises
+    ------
+    SimulationError
+        ``load_signal`` for another kind than ``adaptive``.
 
     Examples
     --------
@@ -138,19 +146,25 @@ def xbs_estimator(spec: EstimatorSpec | str, vehicle: QuarterCar, initial_road: 
         spec = EstimatorSpec(spec)
     if not isinstance(spec, EstimatorSpec):
         raise SimulationError(f"xbs_estimator() needs an EstimatorSpec or an observer kind, got {spec!r}")
+    if load_signal and spec.kind != "adaptive":
+        raise SimulationError(f"load_signal: only the adaptive observer reads the load on line, not {spec.kind!r}")
     if spec.kind == "none":
         return None
     beta = DEFAULT_BETA[spec.kind] if spec.beta is None else spec.beta
     beta2 = beta if spec.beta2 is None else spec.beta2
     gamma = (DEFAULT_GAMMA if spec.gamma is None else spec.gamma) if spec.kind == "adaptive" else None
     c = road(initial_road).c if spec.kind == "xbs3" else None
+    if load_signal:
+        obs = _observer("adaptive-load", beta, beta2, gamma, spec.impl, spec.method, None, vehicle.b, None)
+        return LoadXbsEstimator(obs, load_n=vehicle.load_n, load_gain=vehicle.radius_m ** 2 / vehicle.inertia_kg_m2,
+                                initial_state=INITIAL_STATE["adaptive"])
     obs = _observer(spec.kind, beta, beta2, gamma, spec.impl, spec.method, vehicle.a, vehicle.b, c)
     return ObserverXbsEstimator(obs, initial_state=INITIAL_STATE[spec.kind])
 
 
 @functools.lru_cache(maxsize=64)
-def _observer(kind: str, beta: float, beta2: float, gamma: float | None, impl: str, method: str, a: float, b: float,
-              c: float | None) -> Any:
+def _observer(kind: str, beta: float, beta2: float, gamma: float | None, impl: str, method: str, a: float | None,
+              b: float, c: float | None) -> Any:
     """The observer of :func:`xbs_estimator`, built once per setting: the symbolic set-up and the C
     generation take 0.05-0.7 s, a braking run in the compiled loop 0.02 s; an observer holds no
     run state (the estimator does), so runs can share it."""
@@ -160,8 +174,10 @@ def _observer(kind: str, beta: float, beta2: float, gamma: float | None, impl: s
         obs = xbs3_observer(beta, beta2, params={"a": a, "b": -b, "c": c}, method=method)
     elif kind == "xbs4":
         obs = xbs4_observer(beta, beta2, params={"a": a, "b": -b}, method=method)
-    else:
+    elif kind == "adaptive":
         obs = adaptive_xbs_observer(beta, [gamma, gamma], params={"a": a, "b": b}, method=method)
+    else:   # "adaptive-load": a is a signal
+        obs = adaptive_xbs_observer(beta, [gamma, gamma], params={"b": b}, method=method, load_signal=True)
     if impl == "c":
         from ..codegen import CObserver
 

@@ -13,7 +13,7 @@ from ._model import Model
 __all__ = ["builtin_model", "builtin_names", "load_model"]
 
 _NORMAL_FORM = re.compile(r"^normal-form-(\d+)$")
-_FILES = ("abs-xbs3", "abs-xbs4", "abs-adaptive2")
+_FILES = ("abs-xbs3", "abs-xbs4", "abs-adaptive2", "abs-adaptive2-load")
 
 
 def builtin_names() -> tuple[str, ...]:
@@ -44,7 +44,8 @@ def builtin_model(name: str) -> Model:
     ----------
     name : str
         ``abs-xbs3`` (seed 000 eq. (7)), ``abs-xbs4`` (seed 000 eq. (20)),
-        ``abs-adaptive2`` (seed 001 eq. (3.2)) or ``normal-form-N``.
+        ``abs-adaptive2`` (seed 001 eq. (3.2)), ``abs-adaptive2-load`` (the same with the load-dependent
+        ``a`` a measured signal, seed 001 Sec. 3.6) or ``normal-form-N``.
 
     Raises
     ------

@@ -104,9 +104,9 @@ class Model:
     C : sympy.ImmutableMatrix, 1 x n
         Output row.
     d : sympy.ImmutableMatrix, n x 1
-        Drift vector, function of ``y`` and the parameters.
+        Drift vector, function of ``y``, the external signals and the parameters.
     b : sympy.ImmutableMatrix, n x m
-        Input matrix, function of ``y`` and the parameters.
+        Input matrix, function of ``y``, the external signals and the parameters.
     time_scale : sympy.Expr
         ``s(y, t)``, function of ``y``, the external signals and ``t``.
     parameters, external, inputs : tuple of str
@@ -192,13 +192,15 @@ class Model:
         if not isinstance(C_raw, list):
             raise DimensionError(f"'C' must be a row (a list of {n} expressions), got {C_raw!r}")
         C = _matrix([C_raw], par, rows=1, cols=n, name="C")
-        d = _vector(matrix_rows(data.get("d", [0] * n), name="d"), y_par, n, "d")
+        # d and b may read the external signals as well: they are measured (seed 001 Sec. 3.6 feeds the load)
+        signal_par = {**y_par, **{k: symbols[k] for k in external}}
+        d = _vector(matrix_rows(data.get("d", [0] * n), name="d"), signal_par, n, "d")
         m = len(inputs)
         b_raw = matrix_rows(data.get("b", [[0] * m for _ in range(n)] if m != 1 else [0] * n), name="b")
         if m == 1 and isinstance(b_raw, list) and all(not isinstance(e, list) for e in b_raw):
-            b = _vector(b_raw, y_par, n, "b")
+            b = _vector(b_raw, signal_par, n, "b")
         else:
-            b = _matrix(b_raw, y_par, rows=n, cols=m, name="b")
+            b = _matrix(b_raw, signal_par, rows=n, cols=m, name="b")
         time_scale = parse_expression(data["time_scale"], s_names, what="time_scale")
         if time_scale == 0:
             raise ModelError(f"{source}: 'time_scale' is identically zero; the observer would never move")

@@ -6,8 +6,9 @@ SwitchedObserver         -- dzhat/dt = s (A zhat + d + K(s)(y - C zhat)) + b u f
 AdaptiveSwitchedObserver -- switched adaptive observer of seed 001 eq. (3.4) for any linearly parametrised model
 xbs3_observer            -- 3D known-road XBS observer (abs-xbs3, seed 000 Sec. III), gains from beta1, beta2
 xbs4_observer            -- 4D unknown-road XBS observer (abs-xbs4, seed 000 Sec. IV), gains from beta1, beta2
-adaptive_xbs_observer    -- switched adaptive XBS observer (abs-adaptive2, seed 001 Ch. 3), gains from beta, Gamma
-xbs_gains                -- the beta-parametrised gain pairs of the three built-in XBS models
+adaptive_xbs_observer    -- switched adaptive XBS observer (abs-adaptive2, seed 001 Ch. 3), gains from beta, Gamma;
+                            load_signal=True: a = R^2 Fz / J read each step (abs-adaptive2-load, Sec. 3.6)
+xbs_gains                -- the beta-parametrised gain pairs of the built-in XBS models
 ErrorCode                -- status codes of a refused step: switchobs.spec.StepStatus, shared with the generated C
 METHODS                  -- discretisations: "rk4" (default), "euler", "midpoint", "radau3" (switched only)
 

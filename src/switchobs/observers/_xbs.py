@@ -10,7 +10,7 @@ from typing import Any
 import numpy as np
 
 from ..design import GainDesign, design_gains
-from ..exceptions import SpectrumError
+from ..exceptions import ModelError, SpectrumError
 from ..model import builtin_model
 from ._observer import AdaptiveSwitchedObserver, SwitchedObserver
 
@@ -21,6 +21,7 @@ _SPECTRA = {
     "abs-xbs3": ("-beta1,-beta2,-beta2", ("beta1", "beta2")),          # seed 000 Sec. III-E
     "abs-xbs4": ("-beta1,-beta1,-beta2,-beta2", ("beta1", "beta2")),   # seed 000 Sec. IV-D
     "abs-adaptive2": ("-beta,-beta", ("beta",)),                        # seed 001 (3.20), double pole
+    "abs-adaptive2-load": ("-beta,-beta", ("beta",)),                   # the same in (w1, a w2)
 }
 
 
@@ -53,9 +54,9 @@ def xbs_gains(model_name: str, betas: Mapping[str, float], *,
 
     Parameters
     ----------
-    model_name : {"abs-xbs3", "abs-xbs4", "abs-adaptive2"}
+    model_name : {"abs-xbs3", "abs-xbs4", "abs-adaptive2", "abs-adaptive2-load"}
     betas : mapping
-        ``beta1``, ``beta2`` (or ``beta`` for abs-adaptive2), all > 0.
+        ``beta1``, ``beta2`` (or ``beta`` for abs-adaptive2 and abs-adaptive2-load), all > 0.
     params : mapping, optional
         Model parameter values overriding the built-in ones (e.g. ``{"c": 24}``).
 
@@ -130,8 +131,8 @@ def xbs4_observer(beta1: float, beta2: float, *, params: Mapping[str, Any] | Non
 
 
 def adaptive_xbs_observer(beta: float, Gamma: Any, *, params: Mapping[str, Any] | None = None,
-                          method: str = "rk4", h_max: Any = None,
-                          max_substeps: int | None = None) -> AdaptiveSwitchedObserver:
+                          method: str = "rk4", h_max: Any = None, max_substeps: int | None = None,
+                          load_signal: bool = False) -> AdaptiveSwitchedObserver:
     """The switched adaptive XBS observer of seed 001 eq. (3.4) on model abs-adaptive2.
 
     Estimates ``w = (w1, w2)`` with ``w1 = z1``, ``w2 = z2 + (c/a) z1`` and
@@ -155,8 +156,30 @@ def adaptive_xbs_observer(beta: float, Gamma: Any, *, params: Mapping[str, Any] 
         Bound on the step in rescaled time ``|s| dt`` and the sub-step limit, as for
         :class:`AdaptiveSwitchedObserver`: the explicit step of the adaptation is unstable when
         ``Gamma`` times that step is too large (seed 001 Sec. 3.6 at 1 kHz with ``Gamma = 1e4 I``).
+    load_signal : bool
+        ``True``: ``a = R^2 Fz / J`` is not a parameter but a measured signal, read each step (seed 001
+        Sec. 3.6 computes it on line from the loads (3.36)).  The observer is then the same (3.4) on
+        model abs-adaptive2-load, in the coordinates ``(w1, v2) = (w1, a w2)`` where ``a`` enters only
+        the regressor (``Psi[1][d] = s a``) and the gains are ``a``-free (``k2 = -beta^2``); signals
+        ``(y, vx, a, u)``; the readout ``v2 - c*w1`` is ``a`` times the XBS (divide by the step's ``a``,
+        as :class:`switchobs.loop.LoadXbsEstimator` does).  For a constant ``a`` its estimates equal
+        the default observer's up to rounding.
+
+    Examples
+    --------
+    >>> obs = adaptive_xbs_observer(100.0, [5e3, 5e3], params={"b": 4.0}, load_signal=True)
+    >>> obs.signal_names
+    ('y', 'vx', 'a', 'u')
+    >>> x = obs.step([-3.0, 190 * 0.4, 20.0, 10.0, 0.01, -0.02, 190 * 0.03, 190 * 0.5], [-3.2, 30.0, 190.0, 150.0],
+    ...              1e-3)
+    >>> round(obs.readout(x) / 190.0, 9)   # the XBS estimate; the default observer's with a = 190 is the same
+    0.711595288
     """
-    gains = _xbs_design("abs-adaptive2", {"beta": beta}, params)
-    return AdaptiveSwitchedObserver(builtin_model("abs-adaptive2"), gains, unknown=("c", "d"), Gamma=Gamma,
-                                    params=params, method=method, readout="w2 - c*w1/a", h_max=h_max,
-                                    max_substeps=max_substeps)
+    name = "abs-adaptive2-load" if load_signal else "abs-adaptive2"
+    if load_signal and params is not None and "a" in params:
+        raise ModelError(f"with load_signal=True the load a is a signal, read each step; drop params['a'] = "
+                              f"{params['a']!r}")
+    gains = _xbs_design(name, {"beta": beta}, params)
+    return AdaptiveSwitchedObserver(builtin_model(name), gains, unknown=("c", "d"), Gamma=Gamma, params=params,
+                                    method=method, readout="v2 - c*w1" if load_signal else "w2 - c*w1/a",
+                                    h_max=h_max, max_substeps=max_substeps)

@@ -10,7 +10,8 @@ Controllers
     :class:`FivePhaseABS`, :class:`SixPhaseABS` (the Bosch cycle), :class:`TwoPhaseABS`, :class:`ContinuousXbsControl`
 Observer port
     :class:`XbsEstimator` (the protocol the simulations call; observers are wired to it
-    by :mod:`switchobs.loop`), :class:`TrueXbs` (oracle), :class:`X2Measurement` (a measured ``x2``
+    by :mod:`switchobs.loop`), :class:`LoadInput` (an estimator that also reads the wheel load, fed by the
+    two-axle vehicle, seed 001 Sec. 3.6), :class:`TrueXbs` (oracle), :class:`X2Measurement` (a measured ``x2``
     the controller reads, seed 001 Figs. 6.7-6.9), :class:`CompiledEstimator` and
     :class:`CompiledObserver` (an estimator's C step, run by the compiled braking loop),
     :class:`ReplayEstimator`, :data:`Replay` and :func:`replay_updates` (an estimator beside the loop,
@@ -33,7 +34,7 @@ Limit cycle of the two-phase ABS
 
 from ._compiled import CompiledEstimator, CompiledObserver
 from ._controllers import ContinuousXbsControl, FivePhaseABS, SixPhaseABS, TwoPhaseABS
-from ._estimator import Replay, ReplayEstimator, TrueXbs, X2Measurement, XbsEstimator, replay_updates
+from ._estimator import LoadInput, Replay, ReplayEstimator, TrueXbs, X2Measurement, XbsEstimator, replay_updates
 from ._hybrid import MAX_CASCADE, Crossing, HybridPlant, HybridRun, integrate
 from ._plot import plot_braking, plot_table41, plot_two_axle
 from ._poincare import PoincareFixedPoint, PoincareMap, simulate_return_map
@@ -52,7 +53,7 @@ __all__ = [
     "D1_HOANG", "D2_HOANG", "RoadChange", "RoadSchedule",
     "QuarterCar", "BrakeActuator", "PrescribedSpeed", "GRAVITY",
     "FivePhaseABS", "SixPhaseABS", "TwoPhaseABS", "ContinuousXbsControl",
-    "XbsEstimator", "TrueXbs", "X2Measurement", "CompiledEstimator", "CompiledObserver",
+    "XbsEstimator", "LoadInput", "TrueXbs", "X2Measurement", "CompiledEstimator", "CompiledObserver",
     "ReplayEstimator", "Replay", "replay_updates", "integrate", "HybridPlant", "HybridRun", "Crossing", "MAX_CASCADE",
     "BrakingScenario", "BrakingResult", "simulate", "SERIES",
     "BrakingMetrics", "Assumption1Status", "Reconvergence", "assumption1",

@@ -19,7 +19,7 @@ import numpy.typing as npt
 
 from ..exceptions import SimulationError
 
-__all__ = ["XbsEstimator", "TrueXbs", "X2Measurement", "ReplayEstimator", "Replay", "replay_updates"]
+__all__ = ["XbsEstimator", "LoadInput", "TrueXbs", "X2Measurement", "ReplayEstimator", "Replay", "replay_updates"]
 
 Array = npt.NDArray[np.float64]
 #: What a replay returns: the estimate after each sample (NaN at the first, as the loop records it), and the
@@ -62,6 +62,22 @@ class XbsEstimator(Protocol):
         ``ObserverInputError``) to refuse a step; the simulation (quarter car
         and two-axle vehicle alike) then stops with status ``observer-failed``.
         """
+        ...
+
+
+@runtime_checkable
+class LoadInput(Protocol):
+    """An estimator that also reads the wheel's vertical load (seed 001 Sec. 3.6: the observer's ``a``
+    computed on line from the loads (3.36)).
+
+    :func:`switchobs.plants.simulate_two_axle` calls :meth:`set_load` before :meth:`XbsEstimator.reset` and
+    before every :meth:`XbsEstimator.update`, with the load (3.36) of the estimator's wheel computed from
+    the *measured* acceleration (the biased accelerometer).  The quarter car does not call it (its load is
+    constant).  :class:`switchobs.loop.LoadXbsEstimator` implements it.
+    """
+
+    def set_load(self, fz_n: float) -> None:
+        """The vertical load [N] at the time of the next ``reset`` or ``update``."""
         ...
 
 

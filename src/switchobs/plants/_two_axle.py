@@ -16,8 +16,10 @@ The measured wheel-acceleration offset is ``R dω/dt - a_x^meas``.
 Not modelled (seed 001 simulates them with a full vehicle model [30]):
 suspension and pitch dynamics (the load transfer is instantaneous), tyre
 relaxation length, left/right differences, position-triggered road changes.
-The observers keep the static-load ``a`` (the seed recomputes it on line from
-(3.36)); the loads the controllers would need are reported instead.
+An estimator that reads the load (:class:`LoadInput`, e.g. the adaptive observer
+with ``load_signal=True``) gets its wheel's load (3.36) computed with the
+*measured* acceleration before each update, as seed 001 computes the observer's
+``a`` on line; the others keep their static-load ``a``.
 
 Integration as the quarter car's (:func:`switchobs.plants.integrate`),
 with one controller per axle; the controllers take over at ``brake_start_s``.
@@ -34,7 +36,7 @@ import numpy.typing as npt
 
 from ..exceptions import SimulationError
 from ._controllers import FivePhaseABS, SixPhaseABS, TwoPhaseABS
-from ._estimator import XbsEstimator
+from ._estimator import LoadInput, XbsEstimator
 from ._hybrid import Crossing, HybridPlant, integrate
 from ._json import controller_from_json, from_fields, run_from_json
 from ._metrics import _cumtrapz, diverged
@@ -384,7 +386,8 @@ def simulate_two_axle(scenario: TwoAxleScenario, *,
     scenario : TwoAxleScenario
     estimators : (front, rear)
         XBS observers fed with the measured ``x2`` of their wheel, the
-        estimated speed and the wheel's pressure rate.
+        estimated speed and the wheel's pressure rate; one that is a :class:`LoadInput` also with the
+        wheel's load (3.36) from the measured acceleration.
     observer_in_loop : bool
         Two-phase controllers read the estimate (else the true XBS).
 
@@ -423,6 +426,7 @@ class _TwoAxle(HybridPlant):
         self.automata = (sc.front.runtime(veh.corner("front"), sc.actuator),
                          sc.rear.runtime(veh.corner("rear"), sc.actuator))
         self.est = estimators
+        self.load_fed = tuple(isinstance(e, LoadInput) for e in estimators)
         self.use_hat = tuple(bool(e is not None and in_loop and c.uses_xbs) for e, c in zip(estimators,
                                                                                           (sc.front, sc.rear)))
         self.hat = [math.nan, math.nan]
@@ -504,8 +508,15 @@ class _TwoAxle(HybridPlant):
     def start(self, t: float, y: tuple[float, ...]) -> bool:
         for k, est in enumerate(self.est):
             if est is not None:
+                self.feed_load(k)
                 est.reset(t, self.x2[k], self.vx_hat)
         return False
+
+    def feed_load(self, k: int) -> None:
+        """Give estimator ``k`` its wheel's load (3.36) computed with the measured acceleration, if it reads one."""
+        if self.load_fed[k]:
+            ax = self.ax_meas
+            self.est[k].set_load(self.W[0] - self.dz * ax if k == 0 else self.W[1] + self.dz * ax)
 
     def after_step(self, t: float, y: tuple[float, ...], h: float) -> str | None:
         sc = self.sc
@@ -524,6 +535,7 @@ class _TwoAxle(HybridPlant):
             u, self.p_prev[k] = (pressure - self.p_prev[k]) / h, pressure
             if est is not None and failure is None:
                 try:
+                    self.feed_load(k)
                     self.hat[k] = est.update(t, self.x2[k], self.vx_hat, u, h)
                 except SimulationError as exc:    # e.g. ObserverInputError: the run stops (integrate's rule)
                     self.failed[k] = f"t = {t:.4f} s: {exc}"
