@@ -151,9 +151,6 @@ def _library(path: Path, gen: GeneratedObserver) -> ctypes.CDLL:
         run = getattr(lib, f"{gen.prefix}_run")
         run.argtypes = [ptr, ptr, ctypes.c_int32, ptr, real, ptr]
         run.restype = ctypes.c_int32
-        run_dt = getattr(lib, f"{gen.prefix}_run_dt")
-        run_dt.argtypes = [ptr, ptr, ctypes.c_int32, ptr, ptr, ptr]
-        run_dt.restype = ctypes.c_int32
         _LIBRARIES[path] = lib
     return lib
 
@@ -343,7 +340,7 @@ class CObserver:
         ObserverInputError
             The status of the first failing step; the message names the row.
         """
-        x, rows_c = self._start(xhat0, signal_rows)
+        x, rows_c = self._start(xhat0, signal_rows, "_run")
         dt_f = self._dt(dt)
         k = rows_c.shape[0]
         if not (math.isfinite(dt_f) and dt_f > 0.0) or not all(map(math.isfinite, x.tolist())):
@@ -367,7 +364,7 @@ class CObserver:
         DimensionError
             If ``dt`` is not one number per row.
         """
-        x, rows_c = self._start(xhat0, signal_rows)
+        x, rows_c = self._start(xhat0, signal_rows, "_run_dt")
         try:
             steps = np.asarray(dt, dtype=float)
         except (TypeError, ValueError):
@@ -389,13 +386,14 @@ class CObserver:
         with np.errstate(over="ignore"):  # out-of-range doubles become inf, which the C checks refuse
             return np.ascontiguousarray(values, dtype=self._dtype)
 
-    def _start(self, xhat0: npt.ArrayLike, signal_rows: npt.ArrayLike) -> tuple[np.ndarray, np.ndarray]:
-        """The state the C call writes into (a copy) and the signal rows in the C real type."""
+    def _start(self, xhat0: npt.ArrayLike, signal_rows: npt.ArrayLike, function: str
+               ) -> tuple[np.ndarray, np.ndarray]:
+        """The state the C ``function`` writes into (a copy) and the signal rows in the C real type."""
         x = np.array(self._vector(xhat0, self.state_names, "xhat0"))
         rows_c = self._reals(signal_matrix(signal_rows, self.signal_names))
         if rows_c.shape[0] > _INT32_MAX:
-            raise DimensionError(f"signal_rows has {rows_c.shape[0]} rows; the C _run takes at most {_INT32_MAX} "
-                                 "(int32_t) per call: split the record")
+            raise DimensionError(f"signal_rows has {rows_c.shape[0]} rows; the C {function} takes at most "
+                                 f"{_INT32_MAX} (int32_t) per call: split the record")
         return x, rows_c
 
     def _rows(self, xhat0: npt.ArrayLike, x: np.ndarray, rows_c: np.ndarray, dt_of: Callable[[int], float],
