@@ -282,7 +282,7 @@ def c_timings(obs: CObserver, model: str, tmp: Path) -> dict:
             frames[where.rsplit(":", 1)[1]] = int(size)
     p = gen.prefix
     # the chain of one _step call, with the parts gcc splits off (``<name>.part.0``) and not inlined
-    chain = {f"{p}_step", f"{p}_run", f"{p}_advance", f"{p}_kernel"}
+    chain = {f"{p}_step", f"{p}_rows", f"{p}_advance", f"{p}_kernel"}
     stack_gen = sum(size for name, size in frames.items() if name.split(".")[0] in chain)
     return {**{k: Stats(tuple(v)) for k, v in runs.items()}, "failures": failures,
             "gen_size": sizes[f"{gen.prefix}.o"], "hand_size": sizes["hand.o"],
@@ -434,7 +434,7 @@ def main() -> None:
             "interleaved runs; *generated* is `<prefix>_step` with all its checks, *casadi's generated C* is "
             "`Function.generate` of the same step (no checks, double only), *tuned hand C* is straight-line "
             "scalar code with the same checks, *natural hand C* the same step written with arrays and a "
-            "right-hand-side function; *gen. stack*: the frames of `_step`, `_run`, `_advance` and the kernel "
+            "right-hand-side function; *gen. stack*: the frames of `_step`, `_rows`, `_advance` and the kernel "
             "(those not inlined). From Python: CPU time per step (`time.process_time`), median [min–max] "
             f"of {args.repeats} runs of {rows_n} rows, in the library `CObserver` builds (`gcc {' '.join(BUILD_FLAGS)} "
             f"{' '.join(HOST_FLAGS)}`); C `_run` and the numba loop alternated, {PAIR_RUNS * args.repeats} runs "

@@ -147,6 +147,132 @@ def test_run_checks_dt_and_parameters_once_but_reports_what_step_reports(xbs4):
                           c.step(c.step(c.step(X0, SIG, 1e-3), SIG, 1e-3), SIG, 1e-3))
 
 
+def _stepped(c: CObserver, x0, rows: np.ndarray, dts: np.ndarray) -> tuple[np.ndarray, int | None, int | None]:
+    """``c.step`` row after row: the states, and the row and code of the first refusal (None if none)."""
+    x, out = np.asarray(x0, dtype=float), []
+    for i, (row, dt) in enumerate(zip(rows, dts)):
+        try:
+            x = c.step(x, row, dt)
+        except ObserverInputError as err:
+            return np.array(out).reshape(-1, c.size), i, err.code
+        out.append(x)
+    return np.array(out).reshape(-1, c.size), None, None
+
+
+def _raw_run_dt(c: CObserver):
+    lib = ctypes.CDLL(str(c.library_path))
+    fn = getattr(lib, f"{c.generated.prefix}_run_dt")
+    fn.argtypes = [ctypes.c_void_p, ctypes.c_void_p, ctypes.c_int32, ctypes.c_void_p, ctypes.c_void_p,
+                   ctypes.c_void_p]
+    fn.restype = ctypes.c_int32
+    return lambda *args: fn(*(a.ctypes.data if isinstance(a, np.ndarray) else a for a in args))
+
+
+def _irregular(rng: np.random.Generator, k: int) -> tuple[np.ndarray, np.ndarray]:
+    """Rows (y, vx, u) and step lengths from 10 µs to 5 ms, log-uniform (measurements at uneven intervals)."""
+    rows = np.column_stack([rng.normal(0.0, 3.0, k), rng.uniform(2.0, 40.0, k), rng.normal(0.0, 100.0, k)])
+    return rows, 10.0 ** rng.uniform(-5.0, np.log10(5e-3), k)
+
+
+def _sub_stepped() -> CObserver:
+    m = builtin_model("abs-xbs3")
+    return compile_observer(generate_observer(m, design(m, "-40,-60,-60"), method="radau3", h_max="1/4000",
+                                              max_substeps=64))
+
+
+def _adaptive() -> CObserver:
+    m = builtin_model("abs-adaptive2")
+    return compile_observer(generate_observer(m, design(m, "-15,-15"), unknown=["c", "d"], Gamma=[50.0, 20.0]))
+
+
+@pytest.mark.parametrize("which", ["double", "float", "radau3-substeps", "adaptive"])
+def test_run_dt_equals_step_row_by_row_bit_for_bit(xbs4, which):
+    """_run_dt: row k a step of dt[k]; the states are _step's row by row, bit for bit; equal steps give _run."""
+    c = {"double": xbs4[1], "float": xbs4[2]}.get(which) or (_sub_stepped() if which == "radau3-substeps"
+                                                             else _adaptive())
+    rng = np.random.default_rng(7)
+    rows, dts = _irregular(rng, 400)
+    x0 = np.zeros(c.size)
+    x0[0] = 0.5
+    if which == "radau3-substeps":  # some rows are split into sub-steps of H_MAX, others are not
+        a = np.abs(rows[:, 0] / rows[:, 1]) * dts
+        assert np.any(a > 1 / 4000) and np.any(a <= 1 / 4000)
+    traj = c.run_dt(x0, rows, dts)
+    stepped, failed, _ = _stepped(c, x0, rows, dts)
+    assert failed is None and np.all(np.isfinite(traj))
+    assert traj.dtype == np.float64 and np.array_equal(traj, stepped)
+    assert np.array_equal(c.run_dt(x0, rows, np.full(len(rows), 1e-3)), c.run(x0, rows, 1e-3))
+    assert c.run_dt(x0, rows[:0], dts[:0]).shape == (0, c.size)
+
+
+@pytest.mark.parametrize("bad", [0.0, -1e-3, NAN, INF, -INF])
+def test_run_dt_refuses_a_bad_step_length_at_its_row(xbs4, bad):
+    _, c, c32 = xbs4
+    rows, dts = np.tile(SIG, (10, 1)), np.full(10, 1e-3)
+    dts[5] = bad
+    for obs in (c, c32):
+        with pytest.raises(ObserverInputError, match="row 5") as err:
+            obs.run_dt(X0, rows, dts)
+        assert err.value.code == StepStatus.BAD_DT and f"dt = {bad!r} must be finite and > 0" in str(err.value)
+    # the C: xhat holds the state after the 5 good steps, rows 0..4 are written, the rest untouched
+    x, traj = np.array(X0, dtype=float), np.full((10, 4), -7.0)
+    assert _raw_run_dt(c)(x, np.ascontiguousarray(rows), 10, None, dts, traj) == StepStatus.BAD_DT
+    good = c.run(X0, rows[:5], 1e-3)
+    assert np.array_equal(traj[:5], good) and np.all(traj[5:] == -7.0) and np.array_equal(x, good[-1])
+
+
+def test_run_dt_reports_the_first_failing_row_with_the_status_step_reports(xbs4):
+    """Bad rows and bad parameters: the row and code of _step row by row (a bad dt makes every row check
+    everything again, in _step's order)."""
+    _, c, _ = xbs4
+    bad_params = c.with_params({"alpha1": NAN})
+    rows, dts = np.tile(SIG, (8, 1)), np.linspace(1e-3, 2e-3, 8)
+    cases = []
+    r = rows.copy()
+    r[6, 1] = 0.0  # vx = 0
+    cases.append((c, X0, r, dts, 6, StepStatus.UNDEFINED_TIME_SCALE))
+    r, d = rows.copy(), dts.copy()
+    r[2, 0], d[5] = NAN, NAN
+    cases.append((c, X0, r, d, 2, StepStatus.NONFINITE_SIGNAL))
+    d = dts.copy()
+    d[3] = -1.0
+    cases.append((c, (NAN, *X0[1:]), rows, d, 0, StepStatus.NONFINITE_STATE))
+    cases.append((bad_params, X0, rows, dts, 0, StepStatus.BAD_PARAM))
+    d = dts.copy()
+    d[0] = 0.0
+    cases.append((bad_params, X0, rows, d, 0, StepStatus.BAD_DT))
+    r = rows.copy()
+    r[4] = [1e150, 20.0, 1e300]
+    d = dts.copy()
+    d[4] = 1.0
+    cases.append((c, X0, r, d, 4, StepStatus.NONFINITE_RESULT))
+    for obs, x0, r, d, row, status in cases:
+        _, failed, code = _stepped(obs, x0, r, d)
+        assert (failed, code) == (row, status)
+        with pytest.raises(ObserverInputError, match=f"row {row}:") as err:
+            obs.run_dt(x0, r, d)
+        assert err.value.code == status
+
+
+def test_run_dt_refuses_null_pointers_and_a_dt_that_is_not_one_number_per_row(xbs4):
+    _, c, _ = xbs4
+    run_dt = _raw_run_dt(c)
+    x, rows, dts = np.array(X0, dtype=float), np.tile(SIG, (3, 1)), np.full(3, 1e-3)
+    assert run_dt(x, rows, 3, None, None, None) == StepStatus.BAD_ARGUMENT
+    assert run_dt(x, None, 3, None, dts, None) == StepStatus.BAD_ARGUMENT
+    assert run_dt(None, rows, 3, None, dts, None) == StepStatus.BAD_ARGUMENT
+    assert run_dt(x, rows, -1, None, dts, None) == StepStatus.BAD_ARGUMENT
+    assert run_dt(x, None, 0, None, None, None) == 0 and np.array_equal(x, X0)
+    assert run_dt(x, rows, 3, None, dts, None) == 0 and np.array_equal(x, c.run(X0, rows, 1e-3)[-1])
+    with pytest.raises(DimensionError, match="one step length per row"):
+        c.run_dt(X0, rows, dts[:2])
+    with pytest.raises(DimensionError, match="one step length per row"):
+        c.run_dt(X0, rows, 1e-3)
+    with pytest.raises(ObserverInputError, match="BAD_DT") as err:
+        c.run_dt(X0, rows, ["fast", "slow", "slow"])
+    assert err.value.code == StepStatus.BAD_DT
+
+
 def test_domain_guards_of_d_and_b_match_the_reference(tmp_path):
     """Division by zero and log of a non-positive number in d(y): NONFINITE_RESULT in C and in Python."""
     path = tmp_path / "dom.toml"

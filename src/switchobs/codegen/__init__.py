@@ -7,9 +7,10 @@ generate_observer   -- model + gains -> GeneratedObserver (``<prefix>.h``, ``<pr
 generate_super_twisting -- the super-twisting observer of seed 003 (8)-(9), Euler scheme (13)
 GeneratedObserver   -- the generated files and what they mean (names, defaults, checks, stack)
 compile_observer    -- compile with the system C compiler (cached) and bind with ctypes
-CObserver           -- the compiled observer: ``step`` / ``run`` like the Python reference observers
+CObserver           -- the compiled observer: ``step`` / ``run`` like the Python reference observers, ``run_dt``
+                       with a step length per row
 compile_sources     -- compile C files into one cached shared library (the observers' and the braking loop's)
-StepStatus          -- status codes of ``<prefix>_step`` / ``<prefix>_run``
+StepStatus          -- status codes of ``<prefix>_step`` / ``<prefix>_run`` / ``<prefix>_run_dt``
 default_prefix      -- ``switchobs_<model>`` with non-identifier characters as ``_``
 """
 

@@ -163,7 +163,8 @@ class CObserver:
     ``run(xhat0, signal_rows, dt)``, ``readout(xhat)``, ``state_names``,
     ``signal_names``, ``size``, ``method``, and raises the same
     :class:`~switchobs.exceptions.ObserverInputError` codes, so either can be
-    plugged into the simulations.
+    plugged into the simulations.  ``run_dt(xhat0, signal_rows, dt)`` runs the
+    rows with a step length per row (``<prefix>_run_dt``).
 
     Parameters
     ----------
@@ -199,11 +200,13 @@ class CObserver:
         self._s_type = self._ctype * generated.ns
         self._step = getattr(self._lib, f"{generated.prefix}_step")
         self._run = getattr(self._lib, f"{generated.prefix}_run")
-        # the same _run with untyped pointers: run() passes the arrays' addresses, without a ctypes
-        # pointer object per argument (the per-call cost of run() on short records)
-        self._run_addr = ctypes.CFUNCTYPE(ctypes.c_int32, ctypes.c_void_p, ctypes.c_void_p, ctypes.c_int32,
-                                          ctypes.c_void_p, self._ctype, ctypes.c_void_p)(
-            ctypes.cast(self._run, ctypes.c_void_p).value)
+        # _run and _run_dt with untyped pointers: run() and run_dt() pass the arrays' addresses, without a
+        # ctypes pointer object per argument (the per-call cost on short records)
+        vp = ctypes.c_void_p
+        self._run_addr = ctypes.CFUNCTYPE(ctypes.c_int32, vp, vp, ctypes.c_int32, vp, self._ctype, vp)(
+            ctypes.cast(self._run, vp).value)
+        self._run_dt_addr = ctypes.CFUNCTYPE(ctypes.c_int32, vp, vp, ctypes.c_int32, vp, vp, vp)(
+            ctypes.cast(getattr(self._lib, f"{generated.prefix}_run_dt"), vp).value)
         self._params_addr = self.params.ctypes.data
         self._readout = readout
 
@@ -337,38 +340,78 @@ class CObserver:
         ObserverInputError
             The status of the first failing step; the message names the row.
         """
-        # a copy: _run writes the final state into it
-        x = np.array(self._vector(xhat0, self.state_names, "xhat0"))
-        rows = signal_matrix(signal_rows, self.signal_names)
+        x, rows_c = self._start(xhat0, signal_rows, "_run")
         dt_f = self._dt(dt)
-        if self._dtype is np.float64:
-            rows_c = np.ascontiguousarray(rows)
-        else:
-            with np.errstate(over="ignore"):  # out-of-range doubles become inf, which the C checks refuse
-                rows_c = np.ascontiguousarray(rows, dtype=self._dtype)
         k = rows_c.shape[0]
-        if k > _INT32_MAX:
-            raise DimensionError(f"signal_rows has {k} rows; the C _run takes at most {_INT32_MAX} (int32_t) "
-                                 "per call: split the record")
         if not (math.isfinite(dt_f) and dt_f > 0.0) or not all(map(math.isfinite, x.tolist())):
             # the checks of the first step, also when there is no row (as the reference does)
             code = StepStatus.BAD_DT if not (math.isfinite(dt_f) and dt_f > 0.0) else StepStatus.NONFINITE_STATE
             raise self._fail(int(code), x, rows_c[0] if k else np.zeros(0), dt_f, 0)
+        return self._rows(xhat0, x, rows_c, lambda i: dt_f,
+                          lambda x, traj: self._run_addr(x.ctypes.data, rows_c.ctypes.data, k, self._params_addr,
+                                                         dt_f, traj.ctypes.data))
+
+    def run_dt(self, xhat0: npt.ArrayLike, signal_rows: npt.ArrayLike, dt: npt.ArrayLike) -> np.ndarray:
+        """All rows in one call of ``<prefix>_run_dt``: row ``i`` a step of ``dt[i]`` seconds (irregular sampling).
+
+        The states equal those of :meth:`step` row after row, bit for bit.
+
+        Raises
+        ------
+        ObserverInputError
+            The status of the first failing step (``BAD_DT`` for a ``dt[i]`` not finite or ``<= 0``); the
+            message names the row.
+        DimensionError
+            If ``dt`` is not one number per row.
+        """
+        x, rows_c = self._start(xhat0, signal_rows, "_run_dt")
+        try:
+            steps = np.asarray(dt, dtype=float)
+        except (TypeError, ValueError):
+            raise ObserverInputError(f"C observer step refused (BAD_DT, code 1): dt = {dt!r} is not a sequence of "
+                                     "numbers (seconds, one per row)", int(StepStatus.BAD_DT)) from None
+        k = rows_c.shape[0]
+        if steps.shape != (k,):
+            raise DimensionError(f"dt has shape {steps.shape} but signal_rows has {k} rows; give one step length "
+                                 "per row")
+        steps_c = self._reals(steps)
+        return self._rows(xhat0, x, rows_c, lambda i: float(steps[i]),
+                          lambda x, traj: self._run_dt_addr(x.ctypes.data, rows_c.ctypes.data, k, self._params_addr,
+                                                            steps_c.ctypes.data, traj.ctypes.data))
+
+    def _reals(self, values: np.ndarray) -> np.ndarray:
+        """``values`` as a C-contiguous array of the C real type."""
+        if self._dtype is np.float64:
+            return np.ascontiguousarray(values, dtype=np.float64)
+        with np.errstate(over="ignore"):  # out-of-range doubles become inf, which the C checks refuse
+            return np.ascontiguousarray(values, dtype=self._dtype)
+
+    def _start(self, xhat0: npt.ArrayLike, signal_rows: npt.ArrayLike, function: str
+               ) -> tuple[np.ndarray, np.ndarray]:
+        """The state the C ``function`` writes into (a copy) and the signal rows in the C real type."""
+        x = np.array(self._vector(xhat0, self.state_names, "xhat0"))
+        rows_c = self._reals(signal_matrix(signal_rows, self.signal_names))
+        if rows_c.shape[0] > _INT32_MAX:
+            raise DimensionError(f"signal_rows has {rows_c.shape[0]} rows; the C {function} takes at most "
+                                 f"{_INT32_MAX} (int32_t) per call: split the record")
+        return x, rows_c
+
+    def _rows(self, xhat0: npt.ArrayLike, x: np.ndarray, rows_c: np.ndarray, dt_of: Callable[[int], float],
+              call: Callable[[np.ndarray, np.ndarray], int]) -> np.ndarray:
+        """The trajectory of ``call(x, trajectory)`` (``_run`` or ``_run_dt`` over ``rows_c`` from ``x``), or the
+        refusal of its first failing row (``dt_of(row)``: that row's step length, for the message)."""
+        k = rows_c.shape[0]
         traj = np.empty((k, self.size), dtype=self._dtype)
-        code = self._call_run(x, rows_c, traj, dt_f)
+        code = call(x, traj)
         if code != 0:
             # rare path: run again from the start on a NaN-filled trajectory to find the first failing row (rows
             # before it are written, finite)
             x = np.array(self._vector(xhat0, self.state_names, "xhat0"))
             traj.fill(np.nan)
-            self._call_run(x, rows_c, traj, dt_f)
+            call(x, traj)
             done = int(np.argmin(np.isfinite(traj).all(axis=1))) if k else 0
-            raise self._fail(code, x, rows_c[done], dt_f, done)
+            raise self._fail(code, x, rows_c[done], dt_of(done), done)
         return traj if traj.dtype == np.float64 else traj.astype(float)
-
-    def _call_run(self, x: np.ndarray, rows: np.ndarray, traj: np.ndarray, dt: float) -> int:
-        return self._run_addr(x.ctypes.data, rows.ctypes.data, rows.shape[0], self._params_addr, dt,
-                              traj.ctypes.data)
 
     def readout(self, xhat: npt.ArrayLike) -> Any:
         """The readout given at construction (e.g. the XBS estimate) of a state or trajectory."""
