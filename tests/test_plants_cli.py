@@ -35,6 +35,19 @@ def test_simulate_scenario_text_reports_reconvergence(capsys):
     assert "-> hoang-wet" in out and "re-convergence within 10 %" in out and "Assumption 1" in out
 
 
+def test_simulate_aguado_sec34_uses_the_scenario_gains_of_its_adaptive_observer(capsys):
+    # docs/reproductions.md, Sec. 3.4: beta = 150, Gamma = 1e4 I, with or without --observer adaptive;
+    # --beta / --gamma override them, and another observer keeps its own defaults
+    def rms(*argv):
+        code, out, _ = run(capsys, "aguado-sec34", "--duration", "3.2", "--json", *argv)
+        assert code == 0
+        return json.loads(out)["metrics"]["xbs_rms_error"]
+    scenario_default = rms()
+    assert rms("--observer", "adaptive") == scenario_default == rms("--beta", "150", "--gamma", "10000")
+    assert rms("--beta", "100") != scenario_default
+    assert rms("--observer", "xbs4") == rms("--observer", "xbs4", "--beta", "100")
+
+
 def test_simulate_two_axle_scenario_json(capsys, tmp_path):
     png = tmp_path / "sec36.png"
     code, out, _ = run(capsys, "aguado-sec36", "--duration", "1.5", "--json", "--plot", str(png))

@@ -24,7 +24,7 @@ from ..loop import DEFAULT_GAMMA, OBSERVER_KINDS, EstimatorSpec, xbs_estimator
 from ..plants import (TABLE41_ROADS, TABLE41_SPEEDS_KMH, BrakeActuator, BrakingResult, BrakingScenario,
                       ContinuousXbsControl, FivePhaseABS, SixPhaseABS, TwoPhaseABS, XbsEstimator, aguado_sec36, plot_braking,
                       plot_table41, plot_two_axle, road, road_names, scenario, scenario_description,
-                      scenario_names, scenario_observer, simulate, simulate_two_axle, table41)
+                      scenario_names, scenario_observer, scenario_observer_gains, simulate, simulate_two_axle, table41)
 from ._common import emit_json
 
 __all__ = ["register"]
@@ -56,8 +56,10 @@ def register(sub: argparse._SubParsersAction) -> None:
                         "double, compiled with the system gcc)")
     p.add_argument("--parallel", action="store_true",
                    help="run the observer beside the loop: the controller reads the true XBS (seed 001 Fig. 4.5)")
-    p.add_argument("--beta", type=float, help="observer rate beta in the rescaled time (default per observer)")
-    p.add_argument("--gamma", type=float, help=f"adaptive observer: Gamma = gamma I (default {DEFAULT_GAMMA:g})")
+    p.add_argument("--beta", type=float, help="observer rate beta in the rescaled time (default: the scenario's "
+                                              "for its own observer, else per observer)")
+    p.add_argument("--gamma", type=float, help=f"adaptive observer: Gamma = gamma I (default: the scenario's for "
+                                               f"its own observer, else {DEFAULT_GAMMA:g})")
     p.add_argument("--duration", type=float, help="time bound [s] (default: scenario's, or 60)")
     p.add_argument("--dt", type=float, help="integration step [s] (default 0.001)")
     p.add_argument("--delay", type=float, help="actuator delay [s] (0 or >= the step)")
@@ -118,7 +120,12 @@ def _timing_changes(args: argparse.Namespace) -> dict[str, Any]:
 
 
 def _spec(args: argparse.Namespace, kind: str) -> EstimatorSpec:
-    return EstimatorSpec(kind, beta=args.beta, gamma=args.gamma, impl=args.observer_impl)
+    """The observer of --observer with --beta and --gamma, else the gains the scenario chose for its own observer."""
+    gains = scenario_observer_gains(args.scenario) if args.scenario is not None else {}
+    if gains and kind != scenario_observer(args.scenario):
+        gains = {}
+    return EstimatorSpec(kind, beta=gains.get("beta") if args.beta is None else args.beta,
+                         gamma=gains.get("gamma") if args.gamma is None else args.gamma, impl=args.observer_impl)
 
 
 def _table41(args: argparse.Namespace) -> int:

@@ -12,8 +12,8 @@ from __future__ import annotations
 
 import math
 import time
-from collections.abc import Callable, Sequence
-from dataclasses import dataclass, replace
+from collections.abc import Callable, Mapping, Sequence
+from dataclasses import dataclass, field, replace
 from typing import Any
 
 from .._progress import progress
@@ -26,7 +26,8 @@ from ._simulate import BrakingResult, BrakingScenario, simulate
 from ._two_axle import TwoAxleScenario
 from ._vehicle import PrescribedSpeed, QuarterCar
 
-__all__ = ["SCENARIOS", "TWO_AXLE_SCENARIOS", "aguado_sec36", "scenario", "scenario_names", "scenario_observer", "scenario_description", "TABLE41_SEED", "TABLE41_ROADS", "TABLE41_SPEEDS_KMH",
+__all__ = ["SCENARIOS", "TWO_AXLE_SCENARIOS", "aguado_sec36", "scenario", "scenario_names", "scenario_observer",
+           "scenario_observer_gains", "scenario_description", "TABLE41_SEED", "TABLE41_ROADS", "TABLE41_SPEEDS_KMH",
            "Table41Row", "Table41Result", "table41"]
 
 #: Transition length of the road changes (seed 000 Sec. IV-D: "transitions, (which last 25 ms)").
@@ -38,6 +39,7 @@ class _Spec:
     description: str
     build: Callable[[], BrakingScenario]
     observer: str            # default --observer of the CLI
+    gains: Mapping[str, float] = field(default_factory=dict)   # its beta / gamma where not the observer's defaults
 
 
 def _hoang_fig3() -> BrakingScenario:
@@ -72,7 +74,9 @@ SCENARIOS: dict[str, _Spec] = {
                         _hoang_fig4, "xbs4"),
     "aguado-sec34": _Spec("seed 001 Sec. 3.4: 25 m/s with a constant deceleration of 1.96 m/s², dry asphalt, "
                           "wet asphalt at 3 s, dry concrete at 6 s (Table 2.1); five-phase ABS; switched "
-                          "adaptive observer (3.4)", _aguado_sec34, "adaptive"),
+                          "adaptive observer (3.4) with beta = 150, Gamma = 1e4 I (chosen by us: the seed gives "
+                          "none; docs/reproductions.md, Sec. 3.4)", _aguado_sec34, "adaptive",
+                          {"beta": 150.0, "gamma": 1e4}),
 }
 
 
@@ -122,6 +126,27 @@ def scenario_observer(name: str) -> str:
         return TWO_AXLE_SCENARIOS[name][1]
     scenario(name)
     return SCENARIOS[name].observer
+
+
+def scenario_observer_gains(name: str) -> dict[str, float]:
+    """The observer gains a built-in scenario uses by default (``beta``, ``gamma``); the observer's own
+    defaults (:data:`switchobs.loop.DEFAULT_BETA`, :data:`switchobs.loop.DEFAULT_GAMMA`, an empty mapping) for
+    the others, ``aguado-sec36`` and ``table41`` included.
+
+    Seed 001 Sec. 3.4 gives no gains; ``aguado-sec34`` uses the ones of ``docs/reproductions.md`` (Sec. 3.4),
+    where the seed's ordering of the observers holds.
+
+    Examples
+    --------
+    >>> scenario_observer_gains("aguado-sec34")
+    {'beta': 150.0, 'gamma': 10000.0}
+    >>> scenario_observer_gains("hoang-fig3")
+    {}
+    """
+    if name in TWO_AXLE_SCENARIOS or name == "table41":
+        return {}
+    scenario(name)
+    return dict(SCENARIOS[name].gains)
 
 
 def scenario_description(name: str) -> str:
