@@ -229,7 +229,7 @@ def test_aguado2020_sec34_adaptive_reconverges_and_beats_the_augmented_observers
 
 
 class _Recorder:
-    """An adaptive-observer estimator keeping (c_hat, d_hat) after every sample."""
+    """An adaptive-observer estimator keeping (c_hat, d_hat, Upsilon_w1_c, Upsilon_w1_d) after every sample."""
 
     def __init__(self, gamma, beta=100.0, initial=None, h_max=1e-4):
         from switchobs.loop import INITIAL_STATE, ObserverXbsEstimator
@@ -242,11 +242,11 @@ class _Recorder:
 
     def reset(self, t0, y0, vx0):
         self.est.reset(t0, y0, vx0)
-        self.theta = [self.est.state[2:4]]
+        self.theta = [self.est.state[2:6]]
 
     def update(self, t, y, vx, u, dt):
         out = self.est.update(t, y, vx, u, dt)
-        self.theta.append(self.est.state[2:4])
+        self.theta.append(self.est.state[2:6])
         return out
 
 
@@ -273,6 +273,13 @@ def test_aguado2020_sec34_the_road_change_not_the_step_limits_the_adaptive_obser
     t = res.series["t"]
     before, after = theta[np.searchsorted(t, 3.0), 0], theta[np.searchsorted(t, 3.1), 0]
     assert abs(before - dry.c) < 0.05 * dry.c and after > wet.c + 0.5 * (wet.c - dry.c) + 10.0
+
+    def excitation(a, b):   # smallest eigenvalue of the integral of Upsilon_1' Upsilon_1, which drives (3.4b)
+        keep = (t >= a) & (t < b)
+        u1, dt = theta[keep, 2:4], np.diff(t[keep], append=t[keep][-1])
+        return np.linalg.eigvalsh(np.einsum("ki,kj,k->ij", u1, u1, dt))[0]
+    dry_x, wet_x, concrete_x = excitation(1.5, 2.5), excitation(4.0, 5.0), excitation(8.0, 9.0)
+    assert wet_x < min(dry_x, concrete_x) and 1.0 / (1e4 * wet_x) > 2.0     # the slowest time constant: seconds
     gains = scenario_observer_gains("aguado-sec34")
     chosen, theta = run(_Recorder(gains["gamma"], beta=gains["beta"], h_max=None))
     assert abs(theta[np.searchsorted(chosen.series["t"], 5.99), 0] - wet.c) > 0.2 * wet.c
@@ -281,7 +288,7 @@ def test_aguado2020_sec34_the_road_change_not_the_step_limits_the_adaptive_obser
     for initial in ({"c": 40.0, "d": 20.0}, {"c": dry.c, "d": dry.d}):
         rec = _Recorder(1e4, initial=initial)
         simulate(short, estimator=rec)
-        assert rec.theta[-1] == pytest.approx([dry.c, dry.d], rel=0.05)
+        assert rec.theta[-1][:2] == pytest.approx([dry.c, dry.d], rel=0.05)
 
 
 def test_hoang2014_sec5_five_phase_stalls_after_a_road_change_without_timeout():
