@@ -217,6 +217,8 @@ class _Traced:
 class _StateRecorder(ObserverXbsEstimator):
     """The estimator of a braking run, keeping its state (``theta_hat``, ``Upsilon`` of (3.4)) after every sample."""
 
+    states: list[np.ndarray]
+
     def reset(self, t0: float, y0: float, vx0: float) -> None:
         super().reset(t0, y0, vx0)
         self.states = [self.state]
