@@ -35,11 +35,24 @@ def test_simulate_scenario_text_reports_reconvergence(capsys):
     assert "-> hoang-wet" in out and "re-convergence within 10 %" in out and "Assumption 1" in out
 
 
+def test_simulate_aguado_sec34_uses_the_scenario_gains_of_its_adaptive_observer(capsys):
+    # docs/reproductions.md, Sec. 3.4: beta = 150, Gamma = 1e4 I, with or without --observer adaptive;
+    # --beta / --gamma override them, and another observer keeps its own defaults
+    def rms(*argv):
+        code, out, _ = run(capsys, "aguado-sec34", "--duration", "3.2", "--json", *argv)
+        assert code == 0
+        return json.loads(out)["metrics"]["xbs_rms_error"]
+    scenario_default = rms()
+    assert rms("--observer", "adaptive") == scenario_default == rms("--beta", "150", "--gamma", "10000")
+    assert rms("--beta", "100") != scenario_default
+    assert rms("--observer", "xbs4") == rms("--observer", "xbs4", "--beta", "100")
+
+
 def test_simulate_two_axle_scenario_json(capsys, tmp_path):
     png = tmp_path / "sec36.png"
     code, out, _ = run(capsys, "aguado-sec36", "--duration", "1.5", "--json", "--plot", str(png))
     data = json.loads(out)
-    assert code == 0 and data["observer"] == "xbs4" and data["description"].startswith("seed 001 Sec. 3.6")
+    assert code == 0 and data["observer"] == "adaptive" and data["description"].startswith("seed 001 Sec. 3.6")
     m = data["metrics"]
     assert m["front"]["load_max_n"] > data["scenario"]["vehicle"]["static_loads_n"][0]
     assert m["speed_error_mean_pct"] < 0 and png.exists()
@@ -63,12 +76,29 @@ def test_simulate_six_phase_on_the_quarter_car(capsys):
 
 def test_simulate_sec36_adaptive_divergence_names_its_cause_and_the_fix(capsys):
     # seed 001 Sec. 3.6 with the adaptive observer: gamma = 1e4 diverges at the 1 ms explicit step
-    # (docs/reproductions.md); the failure says so, and the advised gamma runs
-    code, _, err = run(capsys, "aguado-sec36", "--duration", "1.5", "--observer", "adaptive")
+    # (docs/reproductions.md); the failure says so, and the scenario's own gamma runs
+    code, _, err = run(capsys, "aguado-sec36", "--duration", "1.5", "--observer", "adaptive", "--gamma", "10000")
     assert code == 1 and err.count("\n") == 1
     assert "front observer diverged" in err and "--gamma 5000" in err
-    code, _, err = run(capsys, "aguado-sec36", "--duration", "1.5", "--observer", "adaptive", "--gamma", "5000")
-    assert code == 0 and err == ""
+    code, out, err = run(capsys, "aguado-sec36", "--duration", "1.5")
+    assert code == 0 and err == "" and "adaptive observer, beta 100, gamma 5000" in out
+
+
+def test_simulate_sec36_reads_the_load_on_line_unless_told_not_to(capsys):
+    """Seed 001 Sec. 3.6: the observers' a = R^2 Fz / J follows (3.36); --static-load keeps the corner's."""
+    def front_rms(*extra):
+        code, out, _ = run(capsys, "aguado-sec36", "--duration", "1.5", "--json", *extra)
+        data = json.loads(out)
+        assert code == 0
+        return data["observer_load"], data["metrics"]["front"]["xbs_rms_error"]
+    online, static = front_rms(), front_rms("--static-load")
+    assert online[0] == "online" and static[0] == "static" and online[1] != static[1]
+    for extra, message in ((("--static-load", "--observer", "xbs4"), "the xbs4 observer always keeps"),
+                           (("--static-load", "hoang-fig3"), "only applies to the two-axle scenario")):
+        args = [a for a in extra if a != "hoang-fig3"]
+        scenario = "hoang-fig3" if "hoang-fig3" in extra else "aguado-sec36"
+        code, _, err = run(capsys, scenario, *args)
+        assert code == 2 and message in err and err.count("\n") == 1
 
 
 def test_simulate_series_in_json(capsys):

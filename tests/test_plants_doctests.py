@@ -5,7 +5,7 @@ import importlib
 
 import pytest
 
-MODULES = ["_tyre", "_road", "_estimator", "_poincare", "_simulate"]
+MODULES = ["_tyre", "_road", "_estimator", "_poincare", "_simulate", "_scenarios"]
 
 
 @pytest.mark.parametrize("module", MODULES)

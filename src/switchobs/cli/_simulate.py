@@ -24,7 +24,7 @@ from ..loop import DEFAULT_GAMMA, OBSERVER_KINDS, EstimatorSpec, xbs_estimator
 from ..plants import (TABLE41_ROADS, TABLE41_SPEEDS_KMH, BrakeActuator, BrakingResult, BrakingScenario,
                       ContinuousXbsControl, FivePhaseABS, SixPhaseABS, TwoPhaseABS, XbsEstimator, aguado_sec36, plot_braking,
                       plot_table41, plot_two_axle, road, road_names, scenario, scenario_description,
-                      scenario_names, scenario_observer, simulate, simulate_two_axle, table41)
+                      scenario_names, scenario_observer, scenario_observer_gains, simulate, simulate_two_axle, table41)
 from ._common import emit_json
 
 __all__ = ["register"]
@@ -56,8 +56,13 @@ def register(sub: argparse._SubParsersAction) -> None:
                         "double, compiled with the system gcc)")
     p.add_argument("--parallel", action="store_true",
                    help="run the observer beside the loop: the controller reads the true XBS (seed 001 Fig. 4.5)")
-    p.add_argument("--beta", type=float, help="observer rate beta in the rescaled time (default per observer)")
-    p.add_argument("--gamma", type=float, help=f"adaptive observer: Gamma = gamma I (default {DEFAULT_GAMMA:g})")
+    p.add_argument("--beta", type=float, help="observer rate beta in the rescaled time (default: the scenario's "
+                                              "for its own observer, else per observer)")
+    p.add_argument("--gamma", type=float, help=f"adaptive observer: Gamma = gamma I (default: the scenario's for "
+                                               f"its own observer, else {DEFAULT_GAMMA:g})")
+    p.add_argument("--static-load", action="store_true",
+                   help="aguado-sec36, adaptive observer: keep each wheel's static load in a = R^2 Fz / J instead "
+                        "of reading Fz from (3.36) on line (seed 001 Sec. 3.6)")
     p.add_argument("--duration", type=float, help="time bound [s] (default: scenario's, or 60)")
     p.add_argument("--dt", type=float, help="integration step [s] (default 0.001)")
     p.add_argument("--delay", type=float, help="actuator delay [s] (0 or >= the step)")
@@ -118,7 +123,12 @@ def _timing_changes(args: argparse.Namespace) -> dict[str, Any]:
 
 
 def _spec(args: argparse.Namespace, kind: str) -> EstimatorSpec:
-    return EstimatorSpec(kind, beta=args.beta, gamma=args.gamma, impl=args.observer_impl)
+    """The observer of --observer with --beta and --gamma, else the gains the scenario chose for its own observer."""
+    gains = scenario_observer_gains(args.scenario) if args.scenario is not None else {}
+    if gains and kind != scenario_observer(args.scenario):
+        gains = {}
+    return EstimatorSpec(kind, beta=gains.get("beta") if args.beta is None else args.beta,
+                         gamma=gains.get("gamma") if args.gamma is None else args.gamma, impl=args.observer_impl)
 
 
 def _table41(args: argparse.Namespace) -> int:
@@ -156,9 +166,14 @@ def _two_axle(args: argparse.Namespace) -> int:
     changes = _timing_changes(args)
     sc = replace(sc, **changes)
     kind = args.observer or scenario_observer(args.scenario)
-    # each observer knows its wheel's static load: a = R^2 Fz / J of the corner
-    spec = _spec(args, kind)
-    ests = tuple(xbs_estimator(spec, sc.vehicle.corner(axle), sc.roads.initial) for axle in ("front", "rear"))
+    if args.static_load and kind != "adaptive":
+        raise SimulationError(f"--static-load applies to the adaptive observer, which reads the load on line; "
+                              f"the {kind} observer always keeps its wheel's static load")
+    # the adaptive observer reads its wheel's load (3.36) on line as in the seed, the others keep a = R^2 Fz / J
+    # of the corner's static load
+    spec, online = _spec(args, kind), kind == "adaptive" and not args.static_load
+    ests = tuple(xbs_estimator(spec, sc.vehicle.corner(axle), sc.roads.initial, load_signal=online)
+                 for axle in ("front", "rear"))
     result = simulate_two_axle(sc, estimators=ests, observer_in_loop=not args.parallel)
     if args.plot:
         save_figure(plot_two_axle(result), args.plot)
@@ -166,10 +181,13 @@ def _two_axle(args: argparse.Namespace) -> int:
         data = result.to_json(include_series=args.series)
         data["description"] = scenario_description(args.scenario)
         data["observer"] = kind
+        data["observer_load"] = "online" if online else "static"
         emit_json(data)
     else:
         print(scenario_description(args.scenario))
         print(result)
+        if kind != "none":
+            print(f"  per wheel: {spec}, {'load (3.36) read on line' if online else 'static load'}")
     return _verdict(result.failure, kind)
 
 
@@ -206,6 +224,9 @@ def run(args: argparse.Namespace) -> int:
 def _run(args: argparse.Namespace) -> int:
     if args.series and not args.json:
         raise SimulationError("--series only applies with --json")
+    if args.static_load and args.scenario != "aguado-sec36":
+        raise SimulationError("--static-load only applies to the two-axle scenario aguado-sec36, whose loads move "
+                              "(3.36); a quarter car's load is static")
     if args.scenario == "table41":
         return _table41(args)
     if args.scenario == "aguado-sec36":

@@ -26,7 +26,7 @@ Two-axle vehicle (seed 001 Sec. 3.6)
     :class:`TwoAxleVehicle`, :class:`Accelerometer`, :class:`TwoAxleScenario`,
     :func:`simulate_two_axle`, :class:`TwoAxleResult`
 Scenarios and figures
-    :func:`scenario`, :func:`scenario_names`, :func:`aguado_sec36`, :func:`table41`
+    :func:`scenario`, :func:`scenario_names`, :func:`scenario_observer_gains`, :func:`aguado_sec36`, :func:`table41`
     (seed 001 Table 4.1), :func:`plot_braking`, :func:`plot_two_axle`, :func:`plot_table41`
 Limit cycle of the two-phase ABS
     :class:`PoincareMap` (seed 001 eqs. (4.13)-(4.14)), :func:`simulate_return_map`
@@ -40,7 +40,7 @@ from ._plot import plot_braking, plot_table41, plot_two_axle
 from ._poincare import PoincareFixedPoint, PoincareMap, simulate_return_map
 from ._two_axle import Accelerometer, TwoAxleResult, TwoAxleScenario, TwoAxleVehicle, simulate_two_axle
 from ._scenarios import (TABLE41_ROADS, aguado_sec36, TABLE41_SEED, TABLE41_SPEEDS_KMH, Table41Result, Table41Row, scenario,
-                         scenario_description, scenario_names, scenario_observer, table41)
+                         scenario_description, scenario_names, scenario_observer, scenario_observer_gains, table41)
 from ._metrics import Assumption1Status, BrakingMetrics, Reconvergence, assumption1
 from ._road import RoadChange, RoadSchedule
 from ._simulate import SERIES, BrakingResult, BrakingScenario, simulate
@@ -57,7 +57,7 @@ __all__ = [
     "ReplayEstimator", "Replay", "replay_updates", "integrate", "HybridPlant", "HybridRun", "Crossing", "MAX_CASCADE",
     "BrakingScenario", "BrakingResult", "simulate", "SERIES",
     "BrakingMetrics", "Assumption1Status", "Reconvergence", "assumption1",
-    "scenario", "scenario_names", "scenario_observer", "scenario_description", "table41", "Table41Result",
+    "scenario", "scenario_names", "scenario_observer", "scenario_observer_gains", "scenario_description", "table41", "Table41Result",
     "Table41Row", "TABLE41_SEED", "TABLE41_ROADS", "TABLE41_SPEEDS_KMH", "plot_braking", "plot_table41",
     "PoincareMap", "PoincareFixedPoint", "simulate_return_map",
     "TwoAxleVehicle", "Accelerometer", "TwoAxleScenario", "TwoAxleResult", "simulate_two_axle", "aguado_sec36",

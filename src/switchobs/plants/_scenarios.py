@@ -12,8 +12,8 @@ from __future__ import annotations
 
 import math
 import time
-from collections.abc import Callable, Sequence
-from dataclasses import dataclass, replace
+from collections.abc import Callable, Mapping, Sequence
+from dataclasses import dataclass, field, replace
 from typing import Any
 
 from .._progress import progress
@@ -26,7 +26,8 @@ from ._simulate import BrakingResult, BrakingScenario, simulate
 from ._two_axle import TwoAxleScenario
 from ._vehicle import PrescribedSpeed, QuarterCar
 
-__all__ = ["SCENARIOS", "TWO_AXLE_SCENARIOS", "aguado_sec36", "scenario", "scenario_names", "scenario_observer", "scenario_description", "TABLE41_SEED", "TABLE41_ROADS", "TABLE41_SPEEDS_KMH",
+__all__ = ["SCENARIOS", "TWO_AXLE_SCENARIOS", "aguado_sec36", "scenario", "scenario_names", "scenario_observer",
+           "scenario_observer_gains", "scenario_description", "TABLE41_SEED", "TABLE41_ROADS", "TABLE41_SPEEDS_KMH",
            "Table41Row", "Table41Result", "table41"]
 
 #: Transition length of the road changes (seed 000 Sec. IV-D: "transitions, (which last 25 ms)").
@@ -36,8 +37,9 @@ TRANSITION_S = 0.025
 @dataclass(frozen=True)
 class _Spec:
     description: str
-    build: Callable[[], BrakingScenario]
+    build: Callable[[], BrakingScenario | TwoAxleScenario]
     observer: str            # default --observer of the CLI
+    gains: Mapping[str, float] = field(default_factory=dict)   # its beta / gamma where not the observer's defaults
 
 
 def _hoang_fig3() -> BrakingScenario:
@@ -72,7 +74,9 @@ SCENARIOS: dict[str, _Spec] = {
                         _hoang_fig4, "xbs4"),
     "aguado-sec34": _Spec("seed 001 Sec. 3.4: 25 m/s with a constant deceleration of 1.96 m/s², dry asphalt, "
                           "wet asphalt at 3 s, dry concrete at 6 s (Table 2.1); five-phase ABS; switched "
-                          "adaptive observer (3.4)", _aguado_sec34, "adaptive"),
+                          "adaptive observer (3.4) with beta = 150, Gamma = 1e4 I (chosen by us: the seed gives "
+                          "none; docs/reproductions.md, Sec. 3.4)", _aguado_sec34, "adaptive",
+                          {"beta": 150.0, "gamma": 1e4}),
 }
 
 
@@ -109,27 +113,52 @@ def aguado_sec36(controller: str = "six-phase") -> TwoAxleScenario:
 
 
 #: Two-axle scenarios (run by :func:`switchobs.plants.simulate_two_axle`).
-TWO_AXLE_SCENARIOS = {"aguado-sec36": (aguado_sec36, "xbs4",
-                                       "seed 001 Sec. 3.6: two-axle vehicle from 180 km/h, dry asphalt -> snow at "
-                                       "2.5 s -> wet asphalt at 5 s, stop at 15 km/h; load transfer (3.36), speed "
-                                       "from a Kalman filter with a 0.5 m/s² accelerometer bias; six-phase (Bosch) ABS "
-                                       "on each axle (or five-phase); 4D observer per wheel")}
+TWO_AXLE_SCENARIOS: dict[str, _Spec] = {
+    "aguado-sec36": _Spec("seed 001 Sec. 3.6: two-axle vehicle from 180 km/h, dry asphalt -> snow at 2.5 s -> wet "
+                          "asphalt at 5 s, stop at 15 km/h; load transfer (3.36), speed from a Kalman filter with a "
+                          "0.5 m/s² accelerometer bias; six-phase (Bosch) ABS on each axle (or five-phase); switched "
+                          "adaptive observer (3.4) per wheel with its load from (3.36) on line, Gamma = 5000 I (chosen "
+                          "by us: the default 1e4 I diverges at the 1 ms step; docs/reproductions.md, Sec. 3.6)",
+                          aguado_sec36, "adaptive", {"gamma": 5e3})}
+
+
+def _spec(name: str) -> _Spec:
+    """The built-in scenario ``name``, quarter car or two axles (``table41`` and unknown names refused)."""
+    if name in TWO_AXLE_SCENARIOS:
+        return TWO_AXLE_SCENARIOS[name]
+    scenario(name)
+    return SCENARIOS[name]
 
 
 def scenario_observer(name: str) -> str:
     """The observer a built-in scenario uses by default (``xbs4`` or ``adaptive``)."""
-    if name in TWO_AXLE_SCENARIOS:
-        return TWO_AXLE_SCENARIOS[name][1]
-    scenario(name)
-    return SCENARIOS[name].observer
+    return _spec(name).observer
+
+
+def scenario_observer_gains(name: str) -> dict[str, float]:
+    """The observer gains a built-in scenario uses by default (``beta``, ``gamma``); the observer's own
+    defaults (:data:`switchobs.loop.DEFAULT_BETA`, :data:`switchobs.loop.DEFAULT_GAMMA`, an empty mapping) for
+    the others and for ``table41``.
+
+    The seed gives no gains: ``aguado-sec34`` uses the ones of ``docs/reproductions.md`` (Sec. 3.4), where the
+    seed's ordering of the observers holds, ``aguado-sec36`` the adaptation gain that stays stable at the
+    1 ms step (Sec. 3.6).
+
+    Examples
+    --------
+    >>> scenario_observer_gains("aguado-sec34")
+    {'beta': 150.0, 'gamma': 10000.0}
+    >>> scenario_observer_gains("aguado-sec36")
+    {'gamma': 5000.0}
+    >>> scenario_observer_gains("hoang-fig3")
+    {}
+    """
+    return {} if name == "table41" else dict(_spec(name).gains)
 
 
 def scenario_description(name: str) -> str:
     """What a built-in scenario reproduces and the settings chosen for it."""
-    if name in TWO_AXLE_SCENARIOS:
-        return TWO_AXLE_SCENARIOS[name][2]
-    scenario(name)
-    return SCENARIOS[name].description
+    return _spec(name).description
 
 
 def scenario_names() -> tuple[str, ...]:
