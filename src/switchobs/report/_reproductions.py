@@ -36,6 +36,7 @@ from ..sensors import (ROBUSTNESS_PROFILES, TABLE61_ENCODER, TABLE61_PROFILES, T
                        compare_estimators, controller_times, time_stamping,
                        constant_speed, encoder_chain, rpm_to_rad_s, super_twisting, super_twisting_gains, tsa_condition_number,
                        varying_speed)
+from ._measured import MEASURED_SECTIONS
 
 __all__ = ["ReproductionPage", "GENERATED_SECTIONS", "reproduction_pages", "write_reproductions", "stale_pages"]
 
@@ -1067,6 +1068,7 @@ _SECTIONS: dict[str, tuple[str, Callable[[_Runs], list[str]]]] = {
     "chain_abs": ("docs/encoders.md", _chain_abs_section),
     "super_twisting": ("docs/encoders.md", _super_twisting_section),
 }
+_SECTIONS.update({name: (path, section) for name, path, section in MEASURED_SECTIONS})
 #: (page, section name) of every generated section, in page order.
 GENERATED_SECTIONS: tuple[tuple[str, str], ...] = tuple((path, name) for name, (path, _) in _SECTIONS.items())
 

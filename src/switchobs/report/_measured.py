@@ -1,0 +1,138 @@
+"""The measured tables of the layer pages (observers, certification), generated from runs.
+
+Not seed reproductions: these are the numbers the pages quote about our own observers and runs (decay
+rates of the switched error, the observers on the quarter car, Assumption 1 on a braking run).  They are
+sections of :mod:`switchobs.report._reproductions` (``switchobs reproduce`` writes them, its ``--check``
+and ``tests/test_reproductions.py`` fail when a committed page differs from a fresh run).
+"""
+
+from __future__ import annotations
+
+import math
+from typing import TYPE_CHECKING
+
+import numpy as np
+
+from ..loop import DEFAULT_BETA, DEFAULT_GAMMA, EstimatorSpec, xbs_estimator
+from ..plants import BrakingScenario, road, scenario, scenario_observer, simulate
+
+if TYPE_CHECKING:
+    from ._reproductions import _Runs
+
+#: The observer rates and half-cycle lengths in tau of the decay-rate table of docs/observers.md.
+DECAY_BETAS = (5, 10, 20, 40, 60, 100, 150, 200, 300, 500)
+DECAY_DTAUS = (0.03, 0.1)
+#: The quarter-car comparison of docs/observers.md: plant steps [s], observers (kind, Gamma), rates.
+QUARTER_CAR_STEPS = (1e-3, 2.5e-4)
+QUARTER_CAR_OBSERVERS = (("xbs3", None), ("xbs4", None), ("adaptive", 1e4), ("adaptive", 1e3))
+QUARTER_CAR_BETAS = (60.0, 100.0, 150.0)
+#: Where the quarter-car error is scored: after the start-up transient and above the low-speed end [s], [m/s].
+_SCORED_AFTER_S, _SCORED_ABOVE_M_S = 0.5, 5.0
+#: Assumption 1 on aguado-sec34 (docs/certify.md): the PE window T0 and the regressor window T1 [s].
+_TRAJECTORY_T0_S, _TRAJECTORY_T1_S = 0.2, 1.0
+
+
+def _row(*cells: object) -> str:
+    return "| " + " | ".join(str(c) for c in cells) + " |"
+
+
+def _tex(kind: str) -> str:
+    return "3D" if kind == "xbs3" else "4D" if kind == "xbs4" else "adaptive"
+
+
+def symmetric_switching_rate(A_plus: np.ndarray, A_minus: np.ndarray, dtau: float) -> float:
+    """Decay rate in tau of the switched error under switching every ``dtau``:
+    ``-log rho(exp(A_minus dtau) exp(A_plus dtau)) / (2 dtau)``."""
+    from scipy.linalg import expm
+
+    cycle = expm(A_minus * dtau) @ expm(A_plus * dtau)
+    return -math.log(float(np.max(np.abs(np.linalg.eigvals(cycle))))) / (2.0 * dtau)
+
+
+def _error_matrices(obs) -> tuple[np.ndarray, np.ndarray]:
+    A, C = np.asarray(obs.A, dtype=float), np.asarray(obs.C, dtype=float).ravel()
+    return A - np.outer(obs.K_plus, C), -A + np.outer(obs.K_minus, C)
+
+
+def _decay_section(runs: _Runs) -> list[str]:
+    from ..observers import adaptive_xbs_observer, xbs3_observer, xbs4_observer
+
+    build = {"abs-xbs3": lambda b: xbs3_observer(b, b), "abs-xbs4": lambda b: xbs4_observer(b, b),
+             "abs-adaptive2": lambda b: adaptive_xbs_observer(b, [DEFAULT_GAMMA, DEFAULT_GAMMA])}
+    lines = [_row(r"$\beta$ (all equal)", *DECAY_BETAS), "| --- |" + " ---: |" * len(DECAY_BETAS)]
+    for model, make in build.items():
+        pairs = [_error_matrices(make(float(beta))) for beta in DECAY_BETAS]
+        for dtau in DECAY_DTAUS:
+            lines.append(_row(f"{model}, $\\Delta\\tau = {dtau:g}$",
+                              *(f"{symmetric_switching_rate(Ap, Am, dtau):.1f}" for Ap, Am in pairs)))
+    return lines
+
+
+def _scored(res) -> np.ndarray:
+    s = res.series
+    return (s["t"] > _SCORED_AFTER_S) & (s["vx"] > _SCORED_ABOVE_M_S)
+
+
+def _quarter_car_rms(dt: float, kind: str, gamma: float | None, beta: float) -> str:
+    sc = BrakingScenario("dry-asphalt", speed_m_s=25.0, dt_s=dt)
+    est = xbs_estimator(EstimatorSpec(kind, beta=beta, gamma=gamma), sc.vehicle, sc.roads.initial)
+    with np.errstate(over="ignore", invalid="ignore"):     # Gamma = 1e4 I at beta = 60 diverges at 1 ms
+        res = simulate(sc, estimator=est, observer_in_loop=False)
+    m = _scored(res)
+    rms = float(np.sqrt(np.mean((res.series["xbs_hat"][m] - res.series["xbs"][m]) ** 2)))
+    return f"{rms:#.3g}" if math.isfinite(rms) and rms < 1e3 else "diverges"
+
+
+def _quarter_car_section(runs: _Runs) -> list[str]:
+    dry = road("dry-asphalt")
+    truth = simulate(BrakingScenario("dry-asphalt", speed_m_s=25.0, dt_s=QUARTER_CAR_STEPS[0]))
+    xbs = truth.series["xbs"][_scored(truth)]
+    head = ("Measured with `switchobs.plants.simulate` (five-phase ABS, dry asphalt of seed 001 Table 2.1, "
+            "25 m/s, observer in parallel, adapter with mean hold): RMS of $\\hat\\mu' - \\mu'$ for "
+            f"$t > {_SCORED_AFTER_S:g}$ s and $v_x > {_SCORED_ABOVE_M_S:g}$ m/s (the true XBS ranges over "
+            f"$[{xbs.min():.2f}, {xbs.max():.2f}]$, standard deviation {xbs.std():.2f}, there). The error is "
+            "dominated by the simplification $(-a_x x_1 + x_2) \\simeq x_2$, $\\dot a_x \\simeq 0$ of the observer "
+            "models, not by the discretisation (compare the two steps).")
+    names = {("xbs3", None): f"xbs3 (road known, $c = {dry.c:g}$)", ("xbs4", None): "xbs4",
+             ("adaptive", 1e4): "adaptive, $\\Gamma = 10^4 I$", ("adaptive", 1e3): "adaptive, $\\Gamma = 10^3 I$"}
+    lines = [head, "", _row("plant step [ms]", "observer", *(f"$\\beta = {b:g}$" for b in QUARTER_CAR_BETAS)),
+             "| --- | --- |" + " ---: |" * len(QUARTER_CAR_BETAS)]
+    for dt in QUARTER_CAR_STEPS:
+        for kind, gamma in QUARTER_CAR_OBSERVERS:
+            name = names[kind, gamma] if dt == QUARTER_CAR_STEPS[0] else names[kind, gamma].split(" (")[0]
+            lines.append(_row(f"{dt * 1e3:g}", name,
+                              *(_quarter_car_rms(dt, kind, gamma, beta) for beta in QUARTER_CAR_BETAS)))
+    lines += ["", "The scenarios' defaults (`switchobs.loop.DEFAULT_BETA`, `DEFAULT_GAMMA`): "
+              f"$\\beta_1 = \\beta_2 = {DEFAULT_BETA['xbs3']:g}$ for xbs3, {DEFAULT_BETA['xbs4']:g} for xbs4, "
+              f"$\\beta = {DEFAULT_BETA['adaptive']:g}$, $\\Gamma = 10^{{{round(math.log10(DEFAULT_GAMMA))}}} I$ "
+              "for the adaptive observer, with a plant step of at most 1 ms."]
+    return lines
+
+
+def _trajectory_section(runs: _Runs) -> list[str]:
+    from ..certify import trajectory_conditions
+
+    name = "aguado-sec34"
+    res, vehicle = runs.braking(name, scenario_observer(name)), scenario(name).vehicle
+    s = res.series
+    t, y, vx, u = s["t"], s["x2"], s["vx"], s["u"]
+    psi = np.zeros((len(t), 2, 2))
+    psi[:, 0, 0], psi[:, 1, 0], psi[:, 1, 1] = y * y / vx, -(vehicle.b / vehicle.a) * u, y / vx
+    rep = trajectory_conditions(t, y, window=_TRAJECTORY_T0_S, vx=vx, psi=psi, psi_window=_TRAJECTORY_T1_S)
+    pe = rep.psi_pe_level
+    return [_row("quantity", "value"), "|---|---|",
+            _row(f"$\\tau$ after {rep.duration:g} s", f"{rep.tau_final:.2f}"),
+            _row(f"$\\min \\int y^2$ over {_TRAJECTORY_T0_S:g} s windows", f"{rep.pe_level_y:.2f}"),
+            _row(f"$\\min \\int s^2$ over {_TRAJECTORY_T0_S:g} s windows", f"{rep.pe_level_s:#.3g}"),
+            _row("zero crossings / smallest $\\lvert dy/dt\\rvert$",
+                 f"{len(rep.crossings)} / {rep.min_abs_slope:.0f} m/s³ "
+                 f"({'transversal' if rep.transversal else 'not transversal'})"),
+            _row("$T_D$ in $t$ / in $\\tau$", f"{rep.dwell_time_t:#.3g} s / {rep.dwell_time_tau:#.3g}"),
+            _row(f"$\\min\\lambda_{{\\min}}\\int\\Psi^\\top\\Psi$ over {_TRAJECTORY_T1_S:g} s windows (Fig. 3.1)",
+                 f"{pe:#.3g} {'> 0 (PE)' if pe > 0 else '(not PE)'}")]
+
+
+#: (section name, page, section function) of this module, appended to the sections of ``switchobs reproduce``.
+MEASURED_SECTIONS = (("observer_decay_rates", "docs/observers.md", _decay_section),
+                     ("observer_quarter_car", "docs/observers.md", _quarter_car_section),
+                     ("trajectory_conditions", "docs/certify.md", _trajectory_section))
