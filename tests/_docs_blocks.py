@@ -26,3 +26,8 @@ def matches_with_elisions(shown: str, printed: str) -> bool:
         else:
             pattern.append(re.escape(line) + r"\n")
     return re.fullmatch("".join(pattern), printed.rstrip("\n") + "\n") is not None
+
+
+def assert_page_says(page: str, fragment: str) -> None:
+    """``docs/page`` quotes ``fragment`` (a number of a fresh run, formatted as the page shows it)."""
+    assert fragment in (DOCS / page).read_text("utf-8"), f"docs/{page} does not say {fragment!r} (a fresh run)"
