@@ -95,3 +95,16 @@ def test_codegen_output_and_the_c_example_of_the_codegen_page(tmp_path, monkeypa
     assert build.returncode == 0, build.stderr
     ran = subprocess.run(["./ex"], cwd=tmp_path / "gen", capture_output=True, text=True)
     assert ran.returncode == 0 and ran.stdout.rstrip("\n") == line.group(2)
+
+
+def test_the_table41_sweep_of_the_sweeps_page_prints_what_the_page_shows(tmp_path, monkeypatch, capsys):
+    command = "switchobs sweep examples/sweep_table41.toml --scheduler none --out table41.jsonl --plots figures/"
+    (tmp_path / "examples").mkdir()
+    shutil.copy(ROOT / "examples" / "sweep_table41.toml", tmp_path / "examples")
+    (tmp_path / "figures").mkdir()
+    monkeypatch.chdir(tmp_path)
+    status, out = run(command, capsys)
+    assert status == 0
+    # the run's wall time and rate differ between runs; the rest (every distance) is what the page shows
+    clock = re.compile(r" in [\d.]+ s, [\d.]+ cases/s\)")
+    assert clock.sub(")", out) == clock.sub(")", shown_output("sweeps.md", command))
