@@ -307,7 +307,8 @@ def test_aguado2020_prop2_parameters_converge_under_pe(adaptive, adaptive_run):
     within = [t[np.flatnonzero(rel > tol)[-1] + 1] for tol in (0.1, 0.01, 0.001)]
     below = t[np.flatnonzero(err >= 0.01)[-1] + 1]
     assert_page_says("observers.md", "$\\hat\\theta(4\\,\\text{s}) = (%.5f, %.5f)$" % tuple(theta_hat))
-    assert_page_says("observers.md", "within 10 %% after %.2f s, 1 %% after %.2f s, 0.1 %% after %.2f s" % tuple(within))
+    assert_page_says("observers.md", "within 10 %% after %.2f s, 1 %% after %.2f s, 0.1 %% after %.2f s"
+                     % tuple(within))
     assert_page_says("observers.md", f"XBS error from {tex(err[0])} to {tex(err[-1])} (below 0.01 after {below:.2f} s)")
     assert_page_says("observers.md", f"PE level (3.7) with $T_1 = 1$ s: {min(mu1):.2f}-{max(mu1):.2f}")
 
