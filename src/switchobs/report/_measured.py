@@ -9,12 +9,14 @@ and ``tests/test_reproductions.py`` fail when a committed page differs from a fr
 from __future__ import annotations
 
 import math
+import re
 from typing import TYPE_CHECKING
 
 import numpy as np
 
 from ..loop import DEFAULT_BETA, DEFAULT_GAMMA, EstimatorSpec, xbs_estimator
-from ..plants import BrakingScenario, road, scenario, scenario_observer, simulate
+from ..plants import (D1_HOANG, D2_HOANG, BrakingScenario, PoincareMap, fit_exponential, road, scenario,
+                      scenario_observer, simulate, simulate_return_map)
 
 if TYPE_CHECKING:
     from ._reproductions import _Runs
@@ -132,7 +134,64 @@ def _trajectory_section(runs: _Runs) -> list[str]:
                  f"{pe:#.3g} {'> 0 (PE)' if pe > 0 else '(not PE)'}")]
 
 
+#: Seed 000 Table I: theta per road, as printed.
+TABLE1_SEED = {"hoang-dry": (-0.53, 25.22, 7.2), "hoang-wet": (-0.36, 8.86, 24.0), "hoang-snow": (-0.05, 0.24, 14.0)}
+#: The two-phase ABS of the Poincare table (docs/abs.md): gains, and where the maps are compared.
+POINCARE_KPS = (10.0, 50.0, 100.0, 300.0, 3000.0)
+POINCARE_SETTING = {"z_ref": 8.0, "chi_a": -0.1, "chi_b": 0.1}
+POINCARE_ZETAS = (-0.9, -0.5, -0.1)
+
+
+def _minus(text: str) -> str:
+    """The typographic minus of the abs.md tables."""
+    return text.replace("-", "−")
+
+
+def _short(x: float) -> str:
+    """Four significant digits, two below 1e-3 (``9.5e-8``, not ``9.462e-08``)."""
+    text = f"{x:.4g}" if abs(x) >= 1e-3 else f"{x:.2g}"
+    return re.sub(r"e([+-])0*(\d)", r"e\1\2", text).replace("e+", "e")
+
+
+def _table1_section(runs: _Runs) -> list[str]:
+    lines = [f"Least squares on 101 equally spaced slips in $[-1,0]$, $d_1={D1_HOANG:g}$, $d_2={D2_HOANG:g}$ "
+             "(`fit_exponential`):", "",
+             _row("road", "$\\theta$ ours", "$\\theta$ seed", "fit RMS", "$\\alpha_0=d_1d_2\\theta_0$"),
+             "| --- | --- | --- | --- | --- |"]
+    for name, seed in TABLE1_SEED.items():
+        fit = fit_exponential(name)
+        lines.append(_row(name.removeprefix("hoang-"), _minus("(" + ", ".join(f"{x:.3f}" for x in fit.theta) + ")"),
+                          _minus("(" + ", ".join(f"{x:g}" for x in seed) + ")"), f"{fit.residual_rms:.4f}",
+                          _minus(f"{D1_HOANG * D2_HOANG * fit.theta[0]:.1f}")))
+    return lines
+
+
+def _poincare_section(runs: _Runs) -> list[str]:
+    dry = road("dry-asphalt")
+    maps = {kp: PoincareMap.from_abs(kp=kp, c=dry.c, d=dry.d, **POINCARE_SETTING) for kp in POINCARE_KPS}
+    z_ref = POINCARE_SETTING["z_ref"]
+    zetas = ",".join(f"{z:g}" for z in POINCARE_ZETAS)
+    symbols = {"z_ref": "z_{ref}", "chi_a": "\\chi_a", "chi_b": "\\chi_b"}
+    lines = ["Dry asphalt, " + ", ".join(f"${symbols[k]}={v:g}$" for k, v in POINCARE_SETTING.items())
+             + f" ($\\kappa={maps[POINCARE_KPS[0]].kappa:.3g}$):", "",
+             _row("$k_p=\\alpha$", "$\\zeta^\\circ$", "$P'(\\zeta^\\circ)$", "bound", "condition",
+                  f"largest relative error, analytic vs simulated map ($\\zeta={zetas}$)"),
+             "| --- | --- | --- | --- | --- | --- |"]
+    for kp, pm in maps.items():
+        fp = pm.fixed_point()
+        errors = []
+        for zeta in POINCARE_ZETAS:
+            _, back = simulate_return_map(zeta * z_ref, kp=kp, c=dry.c, d=dry.d, **POINCARE_SETTING)
+            errors.append(abs(pm(zeta) - back / z_ref) / abs(back / z_ref))
+        condition = "yes" if fp.alpha > fp.alpha_bound else ("no (yet stable)" if fp.stable else "no (unstable)")
+        lines.append(_row(f"{kp:g}", _minus(f"{fp.zeta:.6f}"), _short(fp.derivative), f"{fp.alpha_bound:.2f}",
+                          condition, f"{max(errors):.2g}"))
+    return lines
+
+
 #: (section name, page, section function) of this module, appended to the sections of ``switchobs reproduce``.
 MEASURED_SECTIONS = (("observer_decay_rates", "docs/observers.md", _decay_section),
                      ("observer_quarter_car", "docs/observers.md", _quarter_car_section),
-                     ("trajectory_conditions", "docs/certify.md", _trajectory_section))
+                     ("trajectory_conditions", "docs/certify.md", _trajectory_section),
+                     ("exponential_fit", "docs/abs.md", _table1_section),
+                     ("poincare_map", "docs/abs.md", _poincare_section))
