@@ -6,6 +6,7 @@ import numpy as np
 import pytest
 import scipy.linalg
 import sympy as sp
+from _docs_blocks import assert_page_says
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
@@ -66,6 +67,7 @@ def test_case_iv_stable_pair_contracts_under_random_periodic_switching():
         t1, t2 = rng.exponential(0.3, 2)
         assert max(abs(np.linalg.eigvals(scipy.linalg.expm(A2 * t2) @ scipy.linalg.expm(A1 * t1)))) < 1
     assert res.R < 1
+    assert_page_says("certify.md", f"A case (iv) pair with $R = {res.R:.3g}$")
 
 
 @st.composite

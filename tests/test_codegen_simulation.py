@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+from _docs_blocks import assert_page_says
 
 from switchobs.codegen import CObserver, compile_observer, generate_super_twisting
 from switchobs.loop import ObserverXbsEstimator
@@ -47,6 +48,9 @@ def test_hoang2014_fig4_closed_loop_with_c_observer_same_as_python(fig4_python):
         ok = np.isfinite(b)
         assert np.array_equal(np.isfinite(a), ok)
         assert np.max(np.abs(a[ok] - b[ok])) <= 1e-12 * np.max(np.abs(b[ok]))
+    # docs/codegen.md, "In the simulations": the reference's numbers are this run's
+    assert_page_says("codegen.md", f"travelled distance | {py.metrics.stopping_distance_m:.2f} m |")
+    assert_page_says("codegen.md", f"| same, XBS estimation RMS error | {py.metrics.xbs_rms_error:.5f} |")
 
 
 def test_hoang2014_fig4_closed_loop_float_within_documented_tolerance(fig4_python):
@@ -54,6 +58,10 @@ def test_hoang2014_fig4_closed_loop_float_within_documented_tolerance(fig4_pytho
     assert _same(c.metrics.braking_distance_m, py.metrics.braking_distance_m, FLOAT_DISTANCE_RTOL)
     assert c.metrics.stopping_distance_m == pytest.approx(py.metrics.stopping_distance_m, rel=FLOAT_DISTANCE_RTOL)
     assert c.metrics.xbs_rms_error == pytest.approx(py.metrics.xbs_rms_error, rel=FLOAT_XBS_RMS_RTOL)
+    observed = abs(c.metrics.xbs_rms_error / py.metrics.xbs_rms_error - 1)
+    assert_page_says("codegen.md", f"| {c.metrics.stopping_distance_m:.2f} m (≤ 1e-6, documented) |")
+    assert_page_says("codegen.md", f"{c.metrics.xbs_rms_error:.5f} (≤ 1e-2 documented; observed {observed:.0e} relative)"
+                     .replace("e-0", "e-"))
 
 
 @pytest.fixture(scope="module")
