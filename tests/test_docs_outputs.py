@@ -108,3 +108,18 @@ def test_the_table41_sweep_of_the_sweeps_page_prints_what_the_page_shows(tmp_pat
     # the run's wall time and rate differ between runs; the rest (every distance) is what the page shows
     clock = re.compile(r" in [\d.]+ s, [\d.]+ cases/s\)")
     assert clock.sub(")", out) == clock.sub(")", shown_output("sweeps.md", command))
+
+
+def test_the_usage_example_of_the_observers_page_prints_what_the_page_shows(capsys):
+    page = (ROOT / "docs" / "observers.md").read_text("utf-8")
+    code, shown = re.search(r"## Usage\n\n```python\n(.*?)```\n\nprints\n\n```\n(.*?)```", page, re.S).groups()
+    *body, last = code.rstrip("\n").splitlines()
+    namespace: dict = {}
+    exec("\n".join(body), namespace)   # noqa: S102 - our own documentation
+    with pytest.raises(Exception) as refused:   # the last line shows a refused step
+        exec(last, namespace)   # noqa: S102
+    error = refused.value
+    printed = capsys.readouterr().out + f"{type(error).__module__}.{type(error).__qualname__}: {error}\n"
+    assert printed == shown
+    names = re.search(r">>> (adaptive_xbs_observer\(.*?\)\.state_names)\n(.*?)\n```", page, re.S)
+    assert repr(eval(names.group(1), namespace)) == names.group(2)   # noqa: S307
