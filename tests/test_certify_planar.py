@@ -31,6 +31,16 @@ def test_seed001_prop1_pair_is_case_ii_identically():
     assert res.gamma == Fraction(-15) and res.det1 == res.det2 == Fraction(15)
 
 
+def test_seed004_2d_example_is_case_ii_with_a_singular_sum_proof():
+    """docs/certify.md, "Seed 004, 2D example": a = 187.5, c = 34, k+ = (60, -30), Theorem 1's k- = (8, -7714/375)."""
+    A1, A2 = [[-60, "-375/2"], [30, 34]], [[8, "375/2"], ["-7714/375", -34]]
+    res = classify_planar(A1, A2)
+    assert res.case == "ii" and res.gamma == -3585 and res.det1 == res.det2 == 3585
+    assert_page_says("certify.md", f"$\\Gamma = {res.gamma} = -\\sqrt{{{res.det1}\\cdot {res.det2}}}$")
+    strict = strict_common_lyapunov([A1, A2])
+    assert not strict.certified and strict.dual.kind == "singular-sum" and tuple(strict.dual.v) == (0, 1)
+
+
 def test_case_i_gamma_below_minus_sqrt_det_product():
     res = classify_planar([[-1, -100], [10, -1]], [[-1, 10], [-100, -1]])
     assert res.case == "i" and res.stability == "unbounded"
