@@ -1,7 +1,8 @@
-"""The measured tables of the layer pages (observers, certification), generated from runs.
+"""The measured numbers of the layer pages (observers, certification, ABS), generated from runs.
 
-Not seed reproductions: these are the numbers the pages quote about our own observers and runs (decay
-rates of the switched error, the observers on the quarter car, Assumption 1 on a braking run).  They are
+Not the seed reproductions of ``docs/reproductions.md``: these are the numbers the pages quote about our own
+observers, controllers and runs (decay rates of the switched error, the observers on the quarter car,
+Assumption 1 on a braking run, the controllers' behaviour, the Table I fit and the Poincare map).  They are
 sections of :mod:`switchobs.report._reproductions` (``switchobs reproduce`` writes them, its ``--check``
 and ``tests/test_reproductions.py`` fail when a committed page differs from a fresh run).
 """
@@ -16,8 +17,8 @@ import numpy as np
 
 from ..loop import DEFAULT_BETA, DEFAULT_GAMMA, EstimatorSpec, xbs_estimator
 from ..plants import (D1_HOANG, D2_HOANG, BrakingScenario, ContinuousXbsControl, FivePhaseABS, PoincareMap,
-                      TwoPhaseABS,
-                      fit_exponential, road, scenario, scenario_observer, simulate, simulate_return_map)
+                      TwoPhaseABS, fit_exponential, road, scenario, scenario_observer, simulate, simulate_return_map)
+from ._markdown import md_table
 
 if TYPE_CHECKING:
     from ._reproductions import _Runs
@@ -35,15 +36,7 @@ _SCORED_AFTER_S, _SCORED_ABOVE_M_S = 0.5, 5.0
 _TRAJECTORY_T0_S, _TRAJECTORY_T1_S = 0.2, 1.0
 
 
-def _row(*cells: object) -> str:
-    return "| " + " | ".join(str(c) for c in cells) + " |"
-
-
-def _tex(kind: str) -> str:
-    return "3D" if kind == "xbs3" else "4D" if kind == "xbs4" else "adaptive"
-
-
-def symmetric_switching_rate(A_plus: np.ndarray, A_minus: np.ndarray, dtau: float) -> float:
+def _symmetric_switching_rate(A_plus: np.ndarray, A_minus: np.ndarray, dtau: float) -> float:
     """Decay rate in tau of the switched error under switching every ``dtau``:
     ``-log rho(exp(A_minus dtau) exp(A_plus dtau)) / (2 dtau)``."""
     from scipy.linalg import expm
@@ -62,13 +55,13 @@ def _decay_section(runs: _Runs) -> list[str]:
 
     build = {"abs-xbs3": lambda b: xbs3_observer(b, b), "abs-xbs4": lambda b: xbs4_observer(b, b),
              "abs-adaptive2": lambda b: adaptive_xbs_observer(b, [DEFAULT_GAMMA, DEFAULT_GAMMA])}
-    lines = [_row(r"$\beta$ (all equal)", *DECAY_BETAS), "| --- |" + " ---: |" * len(DECAY_BETAS)]
+    rows = []
     for model, make in build.items():
         pairs = [_error_matrices(make(float(beta))) for beta in DECAY_BETAS]
         for dtau in DECAY_DTAUS:
-            lines.append(_row(f"{model}, $\\Delta\\tau = {dtau:g}$",
-                              *(f"{symmetric_switching_rate(Ap, Am, dtau):.1f}" for Ap, Am in pairs)))
-    return lines
+            rows.append([f"{model}, $\\Delta\\tau = {dtau:g}$",
+                         *(f"{_symmetric_switching_rate(Ap, Am, dtau):.1f}" for Ap, Am in pairs)])
+    return [md_table([r"$\beta$ (all equal)", *map(str, DECAY_BETAS)], rows)]
 
 
 def _scored(res) -> np.ndarray:
@@ -98,13 +91,14 @@ def _quarter_car_section(runs: _Runs) -> list[str]:
             "models, not by the discretisation (compare the two steps).")
     names = {("xbs3", None): f"xbs3 (road known, $c = {dry.c:g}$)", ("xbs4", None): "xbs4",
              ("adaptive", 1e4): "adaptive, $\\Gamma = 10^4 I$", ("adaptive", 1e3): "adaptive, $\\Gamma = 10^3 I$"}
-    lines = [head, "", _row("plant step [ms]", "observer", *(f"$\\beta = {b:g}$" for b in QUARTER_CAR_BETAS)),
-             "| --- | --- |" + " ---: |" * len(QUARTER_CAR_BETAS)]
+    rows = []
     for dt in QUARTER_CAR_STEPS:
         for kind, gamma in QUARTER_CAR_OBSERVERS:
             name = names[kind, gamma] if dt == QUARTER_CAR_STEPS[0] else names[kind, gamma].split(" (")[0]
-            lines.append(_row(f"{dt * 1e3:g}", name,
-                              *(_quarter_car_rms(dt, kind, gamma, beta) for beta in QUARTER_CAR_BETAS)))
+            rows.append([f"{dt * 1e3:g}", name,
+                         *(_quarter_car_rms(dt, kind, gamma, beta) for beta in QUARTER_CAR_BETAS)])
+    lines = [head, "", md_table(["plant step [ms]", "observer", *(f"$\\beta = {b:g}$" for b in QUARTER_CAR_BETAS)],
+                                rows)]
     lines += ["", "The scenarios' defaults (`switchobs.loop.DEFAULT_BETA`, `DEFAULT_GAMMA`): "
               f"$\\beta_1 = \\beta_2 = {DEFAULT_BETA['xbs3']:g}$ for xbs3, {DEFAULT_BETA['xbs4']:g} for xbs4, "
               f"$\\beta = {DEFAULT_BETA['adaptive']:g}$, $\\Gamma = 10^{{{round(math.log10(DEFAULT_GAMMA))}}} I$ "
@@ -123,16 +117,16 @@ def _trajectory_section(runs: _Runs) -> list[str]:
     psi[:, 0, 0], psi[:, 1, 0], psi[:, 1, 1] = y * y / vx, -(vehicle.b / vehicle.a) * u, y / vx
     rep = trajectory_conditions(t, y, window=_TRAJECTORY_T0_S, vx=vx, psi=psi, psi_window=_TRAJECTORY_T1_S)
     pe = rep.psi_pe_level
-    return [_row("quantity", "value"), "|---|---|",
-            _row(f"$\\tau$ after {rep.duration:g} s", f"{rep.tau_final:.2f}"),
-            _row(f"$\\min \\int y^2$ over {_TRAJECTORY_T0_S:g} s windows", f"{rep.pe_level_y:.2f}"),
-            _row(f"$\\min \\int s^2$ over {_TRAJECTORY_T0_S:g} s windows", f"{rep.pe_level_s:#.3g}"),
-            _row("zero crossings / smallest $\\lvert dy/dt\\rvert$",
-                 f"{len(rep.crossings)} / {rep.min_abs_slope:.0f} m/s³ "
-                 f"({'transversal' if rep.transversal else 'not transversal'})"),
-            _row("$T_D$ in $t$ / in $\\tau$", f"{rep.dwell_time_t:#.3g} s / {rep.dwell_time_tau:#.3g}"),
-            _row(f"$\\min\\lambda_{{\\min}}\\int\\Psi^\\top\\Psi$ over {_TRAJECTORY_T1_S:g} s windows (Fig. 3.1)",
-                 f"{pe:#.3g} {'> 0 (PE)' if pe > 0 else '(not PE)'}")]
+    return [md_table(["quantity", "value"], [
+        [f"$\\tau$ after {rep.duration:g} s", f"{rep.tau_final:.2f}"],
+        [f"$\\min \\int y^2$ over {_TRAJECTORY_T0_S:g} s windows", f"{rep.pe_level_y:.2f}"],
+        [f"$\\min \\int s^2$ over {_TRAJECTORY_T0_S:g} s windows", f"{rep.pe_level_s:#.3g}"],
+        ["zero crossings / smallest $\\lvert dy/dt\\rvert$",
+         f"{len(rep.crossings)} / {rep.min_abs_slope:.0f} m/s³ "
+         f"({'transversal' if rep.transversal else 'not transversal'})"],
+        ["$T_D$ in $t$ / in $\\tau$", f"{rep.dwell_time_t:#.3g} s / {rep.dwell_time_tau:#.3g}"],
+        [f"$\\min\\lambda_{{\\min}}\\int\\Psi^\\top\\Psi$ over {_TRAJECTORY_T1_S:g} s windows (Fig. 3.1)",
+         f"{pe:#.3g} {'> 0 (PE)' if pe > 0 else '(not PE)'}"]])]
 
 
 #: Seed 000 Table I: theta per road, as printed.
@@ -156,15 +150,15 @@ def _short(x: float) -> str:
 
 def _table1_section(runs: _Runs) -> list[str]:
     lines = [f"Least squares on 101 equally spaced slips in $[-1,0]$, $d_1={D1_HOANG:g}$, $d_2={D2_HOANG:g}$ "
-             "(`fit_exponential`):", "",
-             _row("road", "$\\theta$ ours", "$\\theta$ seed", "fit RMS", "$\\alpha_0=d_1d_2\\theta_0$"),
-             "| --- | --- | --- | --- | --- |"]
+             "(`fit_exponential`):", ""]
+    rows = []
     for name, seed in TABLE1_SEED.items():
         fit = fit_exponential(name)
-        lines.append(_row(name.removeprefix("hoang-"), _minus("(" + ", ".join(f"{x:.3f}" for x in fit.theta) + ")"),
-                          _minus("(" + ", ".join(f"{x:g}" for x in seed) + ")"), f"{fit.residual_rms:.4f}",
-                          _minus(f"{D1_HOANG * D2_HOANG * fit.theta[0]:.1f}")))
-    return lines
+        rows.append([name.removeprefix("hoang-"), _minus("(" + ", ".join(f"{x:.3f}" for x in fit.theta) + ")"),
+                     _minus("(" + ", ".join(f"{x:g}" for x in seed) + ")"), f"{fit.residual_rms:.4f}",
+                     _minus(f"{D1_HOANG * D2_HOANG * fit.theta[0]:.1f}")])
+    return lines + [md_table(["road", "$\\theta$ ours", "$\\theta$ seed", "fit RMS", "$\\alpha_0=d_1d_2\\theta_0$"],
+                             rows)]
 
 
 def _poincare_section(runs: _Runs) -> list[str]:
@@ -174,10 +168,8 @@ def _poincare_section(runs: _Runs) -> list[str]:
     zetas = ",".join(f"{z:g}" for z in POINCARE_ZETAS)
     symbols = {"z_ref": "z_{ref}", "chi_a": "\\chi_a", "chi_b": "\\chi_b"}
     lines = ["Dry asphalt, " + ", ".join(f"${symbols[k]}={v:g}$" for k, v in POINCARE_SETTING.items())
-             + f" ($\\kappa={maps[POINCARE_KPS[0]].kappa:.3g}$):", "",
-             _row("$k_p=\\alpha$", "$\\zeta^\\circ$", "$P'(\\zeta^\\circ)$", "bound", "condition",
-                  f"largest relative error, analytic vs simulated map ($\\zeta={zetas}$)"),
-             "| --- | --- | --- | --- | --- | --- |"]
+             + f" ($\\kappa={maps[POINCARE_KPS[0]].kappa:.3g}$):", ""]
+    rows = []
     for kp, pm in maps.items():
         fp = pm.fixed_point()
         errors = []
@@ -185,9 +177,10 @@ def _poincare_section(runs: _Runs) -> list[str]:
             _, back = simulate_return_map(zeta * z_ref, kp=kp, c=dry.c, d=dry.d, **POINCARE_SETTING)
             errors.append(abs(pm(zeta) - back / z_ref) / abs(back / z_ref))
         condition = "yes" if fp.alpha > fp.alpha_bound else ("no (yet stable)" if fp.stable else "no (unstable)")
-        lines.append(_row(f"{kp:g}", _minus(f"{fp.zeta:.6f}"), _short(fp.derivative), f"{fp.alpha_bound:.2f}",
-                          condition, f"{max(errors):.2g}"))
-    return lines
+        rows.append([f"{kp:g}", _minus(f"{fp.zeta:.6f}"), _short(fp.derivative), f"{fp.alpha_bound:.2f}",
+                     condition, f"{max(errors):.2g}"])
+    return lines + [md_table(["$k_p=\\alpha$", "$\\zeta^\\circ$", "$P'(\\zeta^\\circ)$", "bound", "condition",
+                              f"largest relative error, analytic vs simulated map ($\\zeta={zetas}$)"], rows)]
 
 
 def _continuous_section(runs: _Runs) -> list[str]:
