@@ -31,3 +31,10 @@ def matches_with_elisions(shown: str, printed: str) -> bool:
 def assert_page_says(page: str, fragment: str) -> None:
     """``docs/page`` quotes ``fragment`` (a number of a fresh run, formatted as the page shows it)."""
     assert fragment in (DOCS / page).read_text("utf-8"), f"docs/{page} does not say {fragment!r} (a fresh run)"
+
+
+def page_number(page: str, pattern: str) -> float:
+    """The number ``docs/page`` gives where ``pattern`` (a regular expression with one group) matches."""
+    found = re.search(pattern, (DOCS / page).read_text("utf-8"))
+    assert found, f"docs/{page} has no {pattern!r}"
+    return float(found.group(1))

@@ -13,6 +13,7 @@ from fractions import Fraction
 
 import numpy as np
 import pytest
+from _docs_blocks import page_number
 
 from switchobs.cli.main import main
 from switchobs.codegen import CObserver, StepStatus, generate_observer
@@ -100,12 +101,17 @@ def test_c_equals_python_reference(name, method):
     c = CObserver.like(ref)
     assert c.method == method
     rng = np.random.default_rng(7)
+    errors = []
     for _ in range(300):
         x = rng.normal(size=ref.size)
         sig = [rng.normal() * 60.0, rng.uniform(0.5, 5.0), rng.normal() * 100.0]
         dt = float(rng.choice([1e-3, 2e-3]))
         want = ref.step(x, sig, dt)
-        assert np.max(np.abs(c.step(x, sig, dt) - want)) <= TOL * np.max(np.abs(want))
+        errors.append(np.max(np.abs(c.step(x, sig, dt) - want)) / np.max(np.abs(want)))
+    assert max(errors) <= TOL
+    # docs/codegen.md: "observed <= BOUND, about half the steps bit-identical" holds for this pair
+    bound = page_number("codegen.md", r"observed ≤ ([\d.e-]+), about half the steps bit-identical")
+    assert max(errors) <= bound and 0.3 <= np.mean(np.array(errors) == 0.0) <= 0.7
     t = np.arange(3000) * 1e-3
     rows = np.column_stack([30 * np.sin(9 * t), 1.0 + 0 * t, 100 * np.cos(7 * t)])
     x0 = np.r_[rows[0, 0], np.zeros(ref.size - 1)]
