@@ -144,6 +144,7 @@ def test_cli_certify_with_a_box(tmp_path, capsys):
 @pytest.mark.slow
 @pytest.mark.parametrize("command", [
     "switchobs certify abs-xbs3 --spectrum=-100,-100,-100 --no-dwell --box a=150:230 --box c=20:40",
+    "switchobs certify abs-xbs3 --spectrum=-10,-20,-20 --no-dwell --box a=150:230 --box c=20:40",
     "switchobs synthesize abs-xbs3 --decay 100 --noise-weight 0.1 --estimate z2",
     "switchobs synthesize abs-xbs3 --decay 100 --noise-weight 0.1 --estimate z2 --box a=150:230",
 ])

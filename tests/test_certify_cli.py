@@ -5,6 +5,7 @@ import json
 from fractions import Fraction
 
 import pytest
+from _docs_blocks import assert_page_says
 
 from switchobs.certify import certify_model, verify_certificate
 from switchobs.cli.main import main
@@ -27,6 +28,9 @@ def test_hoang2014_xbs3_certificate_verdict(xbs3_report):
     assert kinds == ["hespanha", "singular-sum", "dwell-time"]
     assert rep.document["observer"]["K_plus"] == ["84", "-7312/375", "-64/3"]   # seed 000 Sec. III-E
     assert rep.document["observer"]["K_minus"] == ["-16", "-512/375", "64/3"]
+    # the first row of the full runs in docs/certify.md is this run
+    assert_page_says("certify.md", f"| abs-xbs3 | 10, 20 | certified (design P) | - | none (singular sum) | "
+                                   f"{float(rep.dwell.tau_D):.4g} | any | holds |")
 
 
 def _tampered(doc, edit):

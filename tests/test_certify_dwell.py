@@ -6,6 +6,7 @@ from fractions import Fraction
 import numpy as np
 import pytest
 import scipy.linalg
+from _docs_blocks import assert_page_says
 
 from switchobs.certify import classify_planar, dwell_time, verify_certificate
 from switchobs.certify._verify import _check_dwell
@@ -36,6 +37,12 @@ def test_periodic_switching_slower_than_tau_D_contracts(name, results):
             Phi = scipy.linalg.expm(A2 * t2) @ scipy.linalg.expm(A1 * t1)
             worst = max(worst, max(abs(np.linalg.eigvals(Phi))))
     assert worst < 1
+    if name == "liberzon":   # docs/certify.md, "Unstable under fast switching"
+        tau = res.tau_D
+        assert_page_says("certify.md", f"$\\tau_D = {tau.numerator}/{tau.denominator} = {float(tau):.4g}$ "
+                                       f"(LMI infeasible at {res.tau_lower:.5g})")
+        assert_page_says("certify.md", f"(max {worst:.3g} on a 15×15 grid)")
+        assert_page_says("certify.md", f"case (iv), $R = {classify_planar(*PAIRS[name]).R:.5g} > 1$")
 
 
 @pytest.mark.parametrize("name", list(PAIRS))

@@ -6,6 +6,7 @@ import numpy as np
 import pytest
 import scipy.linalg
 import sympy as sp
+from _docs_blocks import assert_page_says
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
@@ -28,6 +29,16 @@ def test_seed001_prop1_pair_is_case_ii_identically():
     res = classify_planar([[-8, "-375/2"], ["2/25", 0]], [[-8, "375/2"], ["-2/25", 0]])
     assert res.case == "ii" and res.stability == "UGS-not-UGES"
     assert res.gamma == Fraction(-15) and res.det1 == res.det2 == Fraction(15)
+
+
+def test_seed004_2d_example_is_case_ii_with_a_singular_sum_proof():
+    """docs/certify.md, "Seed 004, 2D example": a = 187.5, c = 34, k+ = (60, -30), Theorem 1's k- = (8, -7714/375)."""
+    A1, A2 = [[-60, "-375/2"], [30, 34]], [[8, "375/2"], ["-7714/375", -34]]
+    res = classify_planar(A1, A2)
+    assert res.case == "ii" and res.gamma == -3585 and res.det1 == res.det2 == 3585
+    assert_page_says("certify.md", f"$\\Gamma = {res.gamma} = -\\sqrt{{{res.det1}\\cdot {res.det2}}}$")
+    strict = strict_common_lyapunov([A1, A2])
+    assert not strict.certified and strict.dual.kind == "singular-sum" and tuple(strict.dual.v) == (0, 1)
 
 
 def test_case_i_gamma_below_minus_sqrt_det_product():
@@ -66,6 +77,7 @@ def test_case_iv_stable_pair_contracts_under_random_periodic_switching():
         t1, t2 = rng.exponential(0.3, 2)
         assert max(abs(np.linalg.eigvals(scipy.linalg.expm(A2 * t2) @ scipy.linalg.expm(A1 * t1)))) < 1
     assert res.R < 1
+    assert_page_says("certify.md", f"A case (iv) pair with $R = {res.R:.3g}$")
 
 
 @st.composite

@@ -2,6 +2,7 @@
 
 import numpy as np
 import pytest
+from _docs_blocks import assert_page_says
 
 from switchobs.certify import (admissible_constants, pe_level, regressor_excitation, time_rescaling,
                                trajectory_conditions, zero_crossings)
@@ -89,6 +90,11 @@ def test_seed004_theorem3_constants_for_xbs3():
     assert c.dwell_time_t == pytest.approx(2 * 1.0 / v)
     # tau grows at least by 2 ∫_0^eps y / vx_max dy / v = eps^2 / vx_max / v
     assert c.dwell_time_tau == pytest.approx(1.0 / 40 / v, rel=1e-6)
+    # docs/certify.md quotes this run
+    assert_page_says("certify.md", f"$a_0 = {c.a0:g}$,\n$d_0 = {c.d0:g}$, $s_0 = {c.s0:g}$, $b_0 = {c.b0:g}$")
+    assert_page_says("certify.md", f"$\\alpha = {c.alpha:.4g}$")
+    t_D, tau_D = (f"{x:.1e}".replace("e-0", "\\cdot10^{-") + "}" for x in (c.dwell_time_t, c.dwell_time_tau))
+    assert_page_says("certify.md", f"for $\\beta = 1000$: ${t_D}$ s and\n${tau_D}$")
 
 
 def test_seed004_theorem3_d0_for_the_adaptive_model():

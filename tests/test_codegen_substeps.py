@@ -13,6 +13,7 @@ from fractions import Fraction
 
 import numpy as np
 import pytest
+from _docs_blocks import assert_page_says
 
 from switchobs import certify
 from switchobs.cli.main import main
@@ -88,6 +89,7 @@ def test_braking_record_diverges_without_substeps_and_stays_bounded_with_h_max(x
     # what remains is the hold of fast signals, not the sub-stepping: ten times the rate, a tenth of the error
     fine = certified.run([0.0, 0.0, 0.0], braking_record(1e-4), 1e-4)
     assert np.abs(fine[10000:, 1] - XBS).max() < 0.15 * error[1000:].max()
+    assert_page_says("codegen.md", f"against {error[1000:].max():.3g} for the sub-stepped RK4")
 
 
 def test_braking_record_radau3_stays_bounded_without_substeps(xbs3):
@@ -99,6 +101,10 @@ def test_braking_record_radau3_stays_bounded_without_substeps(xbs3):
     traj = compile_observer(gen).run([0.0, 0.0, 0.0], rows, 1e-3)
     assert np.isfinite(traj).all()
     assert np.abs(traj[1000:, 1] - XBS).max() < 1.1  # the criterion of the sub-stepped rk4 above
+    midpoint = compile_observer(generate_observer(m, d, method="midpoint")).run([0.0, 0.0, 0.0], rows, 1e-3)
+    # docs/codegen.md quotes both errors: the record holds the signals at the step midpoints
+    assert_page_says("codegen.md", f"observed {np.abs(traj[1000:, 1] - XBS).max():.2g} against")
+    assert_page_says("codegen.md", f"midpoint {np.abs(midpoint[1000:, 1] - XBS).max():.1g}, as the record")
 
 
 def needed_substeps(rows: np.ndarray, dt: float, h_max_c: float) -> np.ndarray:

@@ -13,6 +13,7 @@ import math
 import numpy as np
 import pytest
 import sympy as sp
+from _docs_blocks import assert_page_says
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
@@ -63,9 +64,16 @@ def test_hoang2014_eq8_aguado_eq34_c_step_equals_python_reference(pair):
     ref, c = pair
     rng = np.random.default_rng(1)
     assert c.state_names == ref.state_names and c.signal_names == ref.signal_names
+    worst = 0.0
     for _ in range(300):
         x, sig, dt = random_inputs(rng, ref.size)
-        assert rel_err(c.step(x, sig, dt), ref.step(x, sig, dt)) <= RTOL_DOUBLE
+        worst = max(worst, rel_err(c.step(x, sig, dt), ref.step(x, sig, dt)))
+    assert worst <= RTOL_DOUBLE
+    # what docs/codegen.md says was observed: bit-identical switched observers, the adaptive one to rounding
+    if isinstance(ref, AdaptiveSwitchedObserver):
+        assert_page_says("codegen.md", f"≤ {worst:.1e} for the adaptive one".replace("e-0", "e-"))
+    else:
+        assert worst == 0.0
 
 
 def test_c_run_equals_python_run_and_repeated_steps(pair):

@@ -8,6 +8,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from _docs_blocks import matches_with_elisions, shown_output
 
 from switchobs._figures import save_figure
 from switchobs.certify import as_family, certify, classify_planar, plot_certification, plot_planar
@@ -18,25 +19,30 @@ ROOT = Path(__file__).resolve().parents[1]
 A1, A2 = [["-0.1", -1], [2, "-0.1"]], [["-0.1", -2], [1, "-0.1"]]  # planar case iv, R = 1.604 (docs/certify.md)
 
 
-def _figure_commands() -> list[list[str]]:
+def _figure_commands() -> list[str]:
     """The `switchobs ...` lines of the Makefile's `figures` target."""
     text = (ROOT / "Makefile").read_text("utf-8")
     block = re.search(r"^figures:.*\n((?:\t.*\n)+)", text, re.M).group(1)
-    return [shlex.split(line.strip())[1:] for line in block.splitlines() if "switchobs" in line]
+    return [line.strip().removeprefix("$(VENV)/bin/") for line in block.splitlines() if "switchobs" in line]
 
 
-def test_the_docs_figure_generator_runs_and_its_figures_are_used(tmp_path, capsys):
+def test_the_docs_figure_generator_runs_prints_what_the_page_shows_and_its_figures_are_used(tmp_path, capsys):
     commands = _figure_commands()
     assert len(commands) == 2
     docs = (ROOT / "docs" / "certify.md").read_text("utf-8")
-    for argv in commands:
+    for line in commands:
+        argv = shlex.split(line)[1:]
         target = argv[argv.index("--plot") + 1]
         assert f"({target.removeprefix('docs/')})" in docs and (ROOT / target).is_file()
         out = tmp_path / Path(target).name
         argv[argv.index("--plot") + 1] = str(out)
         assert main(argv) == 0
         assert out.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
-        assert f"figure written to {out}" in capsys.readouterr().out
+        printed = capsys.readouterr().out
+        assert f"figure written to {out}\n" in printed
+        # the page shows the same command without --plot: the same output less the figure's line
+        shown = shown_output("certify.md", line.replace(f" --plot {target}", ""))
+        assert matches_with_elisions(shown, printed.replace(f"figure written to {out}\n", "")), printed
     assert not list(tmp_path.glob(".*partial*"))
 
 

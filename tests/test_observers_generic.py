@@ -6,6 +6,7 @@ import math
 import numpy as np
 import pytest
 import sympy as sp
+from _docs_blocks import assert_page_says
 from hypothesis import given, settings
 from hypothesis import strategies as st
 from scipy.linalg import expm
@@ -186,6 +187,7 @@ def _piecewise_exact(obs, x0, rows, H):
 
 @pytest.mark.parametrize("method, order", [("rk4", 4), ("euler", 1)])
 def test_convergence_order_against_exact_piecewise_solution(method, order):
+    method_names = {"rk4": "RK4", "euler": "Euler"}
     obs = xbs3_observer(150.0, 150.0, method=method)
     H = 4e-3
     t = np.arange(25) * H
@@ -198,6 +200,7 @@ def test_convergence_order_against_exact_piecewise_solution(method, order):
         errors.append(np.linalg.norm(traj[-1] - exact) / np.linalg.norm(exact))
     observed = np.log2(np.array(errors[:-1]) / np.array(errors[1:]))
     assert np.all(np.abs(observed - order) < 0.25), (errors, observed)
+    assert_page_says("observers.md", ", ".join(f"{o:.2f}" for o in observed) + f" for {method_names[method]}")
 
 
 def test_hoang2014_eq9_correction_continuous_at_s_zero(xbs3):

@@ -14,6 +14,7 @@ import math
 import numpy as np
 import pytest
 import sympy as sp
+from _docs_blocks import assert_page_says
 from scipy.integrate import solve_ivp
 from scipy.linalg import expm
 
@@ -23,6 +24,14 @@ from switchobs.model import builtin_model
 from switchobs.observers import adaptive_xbs_observer, xbs3_observer, xbs4_observer, xbs_gains
 
 A_RIG, B_RIG = 187.5, -4.375      # seed 000 Fig. 2: a = R^2 Fz / I, b = -R gamma_b / I
+
+
+def tex(x: float) -> str:
+    """``x`` with two significant digits as docs/observers.md writes it: ``22.1``, ``$1.1\\times10^{-7}$``."""
+    if abs(x) >= 1e-2:
+        return f"{x:.3g}"
+    mantissa, exponent = f"{x:.1e}".split("e")
+    return f"${mantissa}\\times10^{{{int(exponent)}}}$"
 
 
 # --------------------------------------------------------------------------- truth
@@ -173,8 +182,10 @@ def test_hoang2014_eq14_error_is_the_switched_linear_system_in_tau(run3, run4, w
     e = r["z"] - r["xhat"]
     A_plus, A_minus = switched_matrices(obs)
     M = product_of_modes(A_plus, A_minus, r["tau"], r["crossings"])
-    assert np.linalg.norm(M @ e[0] - e[-1]) <= 1e-8 * np.linalg.norm(e[0])
+    assert np.linalg.norm(M @ e[0] - e[-1]) <= 1e-11 * np.linalg.norm(e[0])
     assert np.linalg.norm(e[-1]) < 1e-5 * np.linalg.norm(e[0])
+    norm0, norm1 = np.linalg.norm(e[0]), np.linalg.norm(e[-1])
+    assert_page_says("observers.md", f"$\\lVert e\\rVert$ from {tex(norm0).strip('$')} to {tex(norm1)}")
 
 
 @pytest.mark.parametrize("which", ["xbs3", "xbs4"])
@@ -195,6 +206,7 @@ def test_hoang2014_error_decays_exponentially_in_tau_at_the_switched_rate(run3, 
     assert rates.min() > 0
     assert 0.9 * rates.min() < -slope < 1.1 * rates.max(), (slope, rates.min(), rates.max())
     assert -slope < (XBS3 if which == "xbs3" else XBS4)["beta"]
+    assert_page_says("observers.md", f"fitted {-slope:.1f}; cycle-product rates {rates.min():.1f}-{rates.max():.1f}")
 
 
 def test_hoang2014_appendix_common_lyapunov_function_never_increases(run3):
@@ -215,16 +227,19 @@ def test_hoang2014_discretised_observer_tracks_xbs_at_1khz():
     r = simulate_truth(builtin_model("abs-xbs3"), obs, np.array(XBS3["xhat0"]), XBS3["z_rest0"],
                        amplitude=20.0, freq=8.0, T=1.0, samples=250)   # 4 kHz samples
     sig = np.column_stack([r["z"][:, 0], r["vx"], r["u"]])
-    floors = []
+    floors, previous = [], []
     for stride in (4, 2):                                            # 1 kHz and 2 kHz
         s = sig[::stride]
-        rows = 0.5 * (s[:-1] + s[1:])
-        traj = obs.run(XBS3["xhat0"], rows, stride * 2.5e-4)
-        err = obs.readout(traj) - r["z"][stride::stride, 1]
         late = r["t"][stride::stride] > 0.75
-        floors.append(np.abs(err[late]).max())
+        for held, out in ((0.5 * (s[:-1] + s[1:]), floors), (s[:-1], previous)):   # mean / previous sample
+            traj = obs.run(XBS3["xhat0"], held, stride * 2.5e-4)
+            out.append(np.abs(obs.readout(traj) - r["z"][stride::stride, 1])[late].max())
     assert floors[0] < 0.03          # z2 swings over [-0.3, 0.4]; initial error 0.8
     assert floors[0] / floors[1] > 3.0
+    assert previous[0] > floors[0] and previous[1] > floors[1]
+    assert_page_says("observers.md", f"tracks the XBS within {floors[0]:.2g} after convergence")
+    assert_page_says("observers.md", f"at 2 kHz within {floors[1]:.2g} (second order)")
+    assert_page_says("observers.md", f"previous sample instead gives {previous[0]:.2g} and {previous[1]:.2g}")
 
 
 # --------------------------------------------------------------------------- seed 001
@@ -288,6 +303,14 @@ def test_aguado2020_prop2_parameters_converge_under_pe(adaptive, adaptive_run):
     mu1 = [np.linalg.eigvalsh(np.trapezoid(PtP[sel], t[sel], axis=0)).min()
            for sel in ((t >= k) & (t <= k + 1) for k in range(3))]
     assert min(mu1) > 1.0
+    rel = np.max(np.abs(r["xhat"][:, 2:4] / np.array([23.99, 12.4748]) - 1), axis=1)
+    within = [t[np.flatnonzero(rel > tol)[-1] + 1] for tol in (0.1, 0.01, 0.001)]
+    below = t[np.flatnonzero(err >= 0.01)[-1] + 1]
+    assert_page_says("observers.md", "$\\hat\\theta(4\\,\\text{s}) = (%.5f, %.5f)$" % tuple(theta_hat))
+    assert_page_says("observers.md", "within 10 %% after %.2f s, 1 %% after %.2f s, 0.1 %% after %.2f s"
+                     % tuple(within))
+    assert_page_says("observers.md", f"XBS error from {tex(err[0])} to {tex(err[-1])} (below 0.01 after {below:.2f} s)")
+    assert_page_says("observers.md", f"PE level (3.7) with $T_1 = 1$ s: {min(mu1):.2f}-{max(mu1):.2f}")
 
 
 def test_aguado2020_eq333_eta_is_the_switched_linear_system(adaptive, adaptive_run):
@@ -315,3 +338,4 @@ def test_adaptive_rk4_step_has_order_four():
     errors = [np.linalg.norm(obs.run(x0, np.repeat(rows, m, axis=0), H / m)[-1] - ref) for m in (4, 8, 16)]
     observed = np.log2(np.array(errors[:-1]) / np.array(errors[1:]))
     assert np.all(np.abs(observed - 4) < 0.3), (errors, observed)
+    assert_page_says("observers.md", f"order {observed[0]:.1f}-{observed[-1]:.1f} against a")

@@ -39,6 +39,7 @@ from ..sensors import (ROBUSTNESS_PROFILES, TABLE61_ENCODER, TABLE61_PROFILES, T
                        constant_speed, encoder_chain, rpm_to_rad_s, super_twisting, super_twisting_gains, tsa_condition_number,
                        trapezoid_speed, varying_speed)
 from ..sensors._series import rms_error
+from ._measured import MEASURED_SECTIONS
 
 __all__ = ["ReproductionPage", "GENERATED_SECTIONS", "reproduction_pages", "write_reproductions", "stale_pages"]
 
@@ -1887,6 +1888,7 @@ _SECTIONS: dict[str, tuple[str, Callable[[_Runs], list[str]]]] = {
     "chain_abs": ("docs/encoders.md", _chain_abs_section),
     "super_twisting": ("docs/encoders.md", _super_twisting_section),
 }
+_SECTIONS.update({name: (path, section) for name, path, section in MEASURED_SECTIONS})
 #: (page, section name) of every generated section, in page order.
 GENERATED_SECTIONS: tuple[tuple[str, str], ...] = tuple((path, name) for name, (path, _) in _SECTIONS.items())
 
