@@ -58,6 +58,10 @@ docs: $(STAMP)
 figures: $(STAMP)
 	$(VENV)/bin/switchobs certify abs-adaptive2 --gains-plus 8,-2/25 --gains-minus -3,-1/25 --plot docs/figures/certify_abs_adaptive2.png
 	$(VENV)/bin/switchobs classify "[[-0.1,-1],[2,-0.1]]" "[[-0.1,-2],[1,-0.1]]" --plot docs/figures/classify_case_iv.png
+	$(VENV)/bin/switchobs simulate hoang-fig4 --plot docs/abs_hoang_fig4.png
+	$(VENV)/bin/switchobs simulate aguado-sec36 --plot docs/abs_sec36.png
+	$(VENV)/bin/switchobs simulate table41 --plot docs/abs_table41.png
+	$(VENV)/bin/switchobs simulate --road wet-asphalt --speed-kmh 120 --controller two-phase --observer adaptive --plot docs/abs_two_phase_wet.png
 
 clean:
 	rm -rf $(VENV) site out build *.egg-info src/*.egg-info

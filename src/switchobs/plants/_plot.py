@@ -69,9 +69,12 @@ def plot_braking(result: BrakingResult, *, ax: Any = None) -> Any:
     has_estimate = not np.all(np.isnan(s["xbs_hat"]))
     if has_estimate:
         axes[4].plot(t, s["xbs_hat"], "--", label="μ' estimate")
-    # the limits hold the true XBS but its first-instant spike (the 1-99 percentiles; the estimate's transients
-    # after a road change may leave them), with headroom above for the legend so that it covers no data
-    lo, hi = (float(v) for v in np.percentile(s["xbs"][np.isfinite(s["xbs"])], [1, 99]))
+    # the limits hold the true XBS of the ABS cycles, not its build-up before the first release (the 1-99
+    # percentiles once the ABS is active; the estimate's transients after a road change may leave them), with
+    # headroom above for the legend so that it covers no data
+    active = s["phase"] >= 1
+    cycled = s["xbs"][active & np.isfinite(s["xbs"])]
+    lo, hi = (float(v) for v in np.percentile(cycled if cycled.size else s["xbs"][np.isfinite(s["xbs"])], [1, 99]))
     pad = 0.08 * (hi - lo or 1.0)
     axes[4].set_ylim(lo - pad, hi + pad + 0.45 * (hi - lo or 1.0))
     axes[4].set_ylabel("XBS")
@@ -81,7 +84,6 @@ def plot_braking(result: BrakingResult, *, ax: Any = None) -> Any:
         if what.startswith("road"):
             for a in axes:
                 a.axvline(when, color="tab:red", lw=0.6, ls=":")
-    active = s["phase"] >= 1
     p1.plot(s["lambda"][active], s["x2"][active], lw=0.6)
     p1.set_xlabel("slip λ")
     p1.set_ylabel("x2 [m/s²]")
@@ -170,6 +172,6 @@ def plot_two_axle(result: TwoAxleResult, *, ax: Any = None) -> Any:
         for when, what in result.events:
             if what.startswith("road"):
                 ax.axvline(when, color="tab:red", lw=0.6, ls=":")
-    fig.suptitle(str(result.scenario), fontsize=9)
+    fig.suptitle("\n".join(textwrap.wrap(str(result.scenario), 110)), fontsize=9)  # wrapped: never wider than the figure
     fig.tight_layout()
     return fig
