@@ -62,6 +62,7 @@ figures: $(STAMP)
 	$(VENV)/bin/switchobs simulate aguado-sec36 --plot docs/abs_sec36.png
 	$(VENV)/bin/switchobs simulate table41 --plot docs/abs_table41.png
 	$(VENV)/bin/switchobs simulate --road wet-asphalt --speed-kmh 120 --controller two-phase --observer adaptive --plot docs/abs_two_phase_wet.png
+	$(VENV)/bin/switchobs encoder --profile varying --plot docs/encoders_varying.png
 
 clean:
 	rm -rf $(VENV) site out build *.egg-info src/*.egg-info
