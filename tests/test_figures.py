@@ -26,18 +26,25 @@ def _figure_commands() -> list[str]:
     return [line.strip().removeprefix("$(VENV)/bin/") for line in block.splitlines() if "switchobs" in line]
 
 
+def _draw(line: str, pages: str, tmp_path: Path) -> tuple[str, Path]:
+    """Run a figure line of the Makefile with its figure written under ``tmp_path``, after checking that the
+    committed figure exists and ``pages`` use it; return the target and the figure drawn."""
+    argv = shlex.split(line)[1:]
+    target = argv[argv.index("--plot") + 1]
+    assert f"({target.removeprefix('docs/')})" in pages and (ROOT / target).is_file()
+    out = tmp_path / Path(target).name
+    argv[argv.index("--plot") + 1] = str(out)
+    assert main(argv) == 0
+    assert out.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+    return target, out
+
+
 def test_the_docs_figure_generator_runs_prints_what_the_page_shows_and_its_figures_are_used(tmp_path, capsys):
     commands = [line for line in _figure_commands() if line.split()[1] in ("certify", "classify")]
     assert len(commands) == 2
     docs = (ROOT / "docs" / "certify.md").read_text("utf-8")
     for line in commands:
-        argv = shlex.split(line)[1:]
-        target = argv[argv.index("--plot") + 1]
-        assert f"({target.removeprefix('docs/')})" in docs and (ROOT / target).is_file()
-        out = tmp_path / Path(target).name
-        argv[argv.index("--plot") + 1] = str(out)
-        assert main(argv) == 0
-        assert out.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+        target, out = _draw(line, docs, tmp_path)
         printed = capsys.readouterr().out
         assert f"figure written to {out}\n" in printed
         # the page shows the same command without --plot: the same output less the figure's line
@@ -51,15 +58,9 @@ def test_the_braking_and_encoder_figures_are_drawn_by_the_figure_generator(tmp_p
     from `switchobs reproduce`)."""
     commands = [line for line in _figure_commands() if line.split()[1] in ("simulate", "encoder")]
     assert len(commands) == 5
-    page = (ROOT / "docs" / "abs.md").read_text("utf-8") + (ROOT / "docs" / "encoders.md").read_text("utf-8")
+    pages = (ROOT / "docs" / "abs.md").read_text("utf-8") + (ROOT / "docs" / "encoders.md").read_text("utf-8")
     for line in commands:
-        argv = shlex.split(line)[1:]
-        target = argv[argv.index("--plot") + 1]
-        assert f"({target.removeprefix('docs/')})" in page and (ROOT / target).is_file()
-        out = tmp_path / Path(target).name
-        argv[argv.index("--plot") + 1] = str(out)
-        assert main(argv) == 0
-        assert out.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+        _draw(line, pages, tmp_path)
 
 
 def test_worst_trajectory_grows_by_R_per_half_turn():
