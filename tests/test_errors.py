@@ -7,7 +7,6 @@ memory run in one subprocess capped at 1 GiB, whose timeout fails the test if an
 
 from __future__ import annotations
 
-import copy
 import json
 import re
 from pathlib import Path

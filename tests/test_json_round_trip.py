@@ -208,7 +208,6 @@ def _samples() -> dict[str, Callable[[], tuple[Any, dict[str, Any]]]]:
         return plants.PoincareMap.from_abs(kp=10.0, z_ref=8.0, chi_a=-0.1, chi_b=0.1, c=r.c, d=r.d)
 
     def trajectory():
-        from switchobs.model import builtin_model
         t = np.linspace(0.0, 2.0, 401)
         return certify.trajectory_conditions(t, np.sin(3 * t) + 0.2, window=1.0, vx=np.full_like(t, 20.0))
 

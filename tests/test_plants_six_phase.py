@@ -96,7 +96,7 @@ def test_aguado2020_sec36_online_load_helps_the_front_but_the_unmodelled_load_ra
     assert m["front"]["xbs_rms_error"] < 0.9 * m0["front"]["xbs_rms_error"]
     assert _first_half_second(sec36, "r") > 1.5 * _first_half_second(sec36_static, "r")
     # the term (R^2/J) dFz/dt mu of dx2/dt, not in (3.2), outweighs the modelled a mu' x2/vx on the rear wheel only
-    s, t, veh = sec36.series, sec36.series["t"], sec36.scenario.vehicle
+    s, t = sec36.series, sec36.series["t"]
     for k, low, high in (("f", 0.0, 0.5), ("r", 1.0, np.inf)):
         a = t[np.argmax(s[f"phase_{k}"] > 0)]
         keep = (t >= a) & (t < a + 0.5)

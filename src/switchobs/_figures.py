@@ -10,7 +10,6 @@ Axes to draw on (a sequence of them for a figure with several panels) or
 
 from __future__ import annotations
 
-import os
 from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
