@@ -8,8 +8,9 @@ import pytest
 
 from switchobs.exceptions import SimulationError
 from switchobs.plants import BrakingScenario, SixPhaseABS, TwoAxleScenario, aguado_sec36, simulate, simulate_two_axle
-from switchobs.report._reproductions import (SEC36_OBSERVER, _bosch_sequence, _Runs, sec36_estimators,
-                                             sec36_late_excursions, sec36_settled, sec36_stays)
+from switchobs.report._repro_adaptive import (SEC36_OBSERVER, _bosch_sequence, sec36_estimators, sec36_late_excursions,
+                                              sec36_settled, sec36_stays)
+from switchobs.report._repro_runs import _Runs
 
 
 def _bosch(res):

@@ -22,7 +22,7 @@ from ..plants import (D1_HOANG, D2_HOANG, BrakingScenario, ContinuousXbsControl,
 from ._markdown import md_table
 
 if TYPE_CHECKING:
-    from ._reproductions import _Runs
+    from ._repro_runs import _Runs
 
 #: The observer rates and half-cycle lengths in tau of the decay-rate table of docs/observers.md.
 DECAY_BETAS = (5, 10, 20, 40, 60, 100, 150, 200, 300, 500)
