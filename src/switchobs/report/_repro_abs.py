@@ -17,7 +17,7 @@ from .._figures import panels, save_figure
 from ..loop import X2_MEASUREMENTS, EstimatorSpec, encoder_measurements
 from ..plants import (GRAVITY, BrakingResult, BrakingScenario, FivePhaseABS, Table41Result, TwoPhaseABS, road,
                       scenario, scenario_description, scenario_observer, scenario_observer_gains, simulate)
-from ..sensors import Encoder
+from ..sensors import TABLE61_ENCODER, Encoder
 from ._repro_cells import _fmt_s, _pct, _reconv, _row
 
 if TYPE_CHECKING:
@@ -199,7 +199,7 @@ def _step_halving_section(runs: _Runs) -> list[str]:
 #: the friction peak and stay above -eps5 afterwards (docs/reproductions.md).
 FIG67_ENCODER = Encoder(ppr=60, eccentricity=0.006)
 #: Our Table 6.1 encoder's eccentricity: with it the raw TSA of Fig. 6.7 cycles (the ripple is too small to trap).
-FIG67_SMALL_ECCENTRICITY = 0.003
+FIG67_SMALL_ECCENTRICITY = TABLE61_ENCODER.eccentricity
 #: The seed's statements are scored while the vehicle is faster than this (60 km/h, the lowest initial speed of
 #: the seed's ABS simulations, Table 4.1); below it every TSA-fed loop, a perfect encoder's included, loses the
 #: cycle (the TSA window's lag), which the seed does not discuss.
