@@ -123,3 +123,20 @@ def test_the_usage_example_of_the_observers_page_prints_what_the_page_shows(caps
     assert printed == shown
     names = re.search(r">>> (adaptive_xbs_observer\(.*?\)\.state_names)\n(.*?)\n```", page, re.S)
     assert repr(eval(names.group(1), namespace)) == names.group(2)   # noqa: S307
+
+
+@pytest.mark.slow
+def test_the_demo_output_of_the_guide_is_what_the_demo_prints(tmp_path, monkeypatch, capsys):
+    monkeypatch.chdir(tmp_path)
+    assert main(["demo"]) == 0
+    captured = capsys.readouterr()
+    # the stages' clocks and the C timings differ between runs and machines; every other figure is shown
+    clocks = [(re.compile(r"done in [\d.]+ s \(total [\d.]+ s\)"), "done in _"),
+              (re.compile(r"\d+ ns per step"), "_ ns per step"), (re.compile(r"\) \d+ ns$", re.M), ") _ ns")]
+
+    def steady(text: str) -> str:
+        for pattern, fixed in clocks:
+            text = pattern.sub(fixed, text)
+        return text
+    printed = captured.err.rstrip("\n") + "\n" + captured.out.rstrip("\n")
+    assert steady(printed) == steady(shown_output("guide.md", "switchobs demo"))
