@@ -289,3 +289,21 @@ def test_hoang2014_eq21_eq22_recorded_reference_reproduces_the_controller_rate()
             else:
                 assert math.isnan(ref[j])
     assert checked > 100
+
+
+@pytest.mark.slow
+def test_a_diverged_observer_fails_the_demo(demo_run):
+    """A non-finite XBS error over the run fails the demo's checks (exit 1), as it fails `switchobs simulate`."""
+    from dataclasses import replace
+
+    from switchobs.report import DemoReport
+
+    out, _ = demo_run
+    report = DemoReport.from_json(json.loads((out / "report.json").read_text()))
+    assert report.ok and not report.diverged
+    errors = tuple(replace(e, rms=float("nan")) if e.segment == "whole run" and "beside" in e.estimator else e
+                   for e in report.braking.errors)
+    broken = replace(report, braking=replace(report.braking, errors=errors))
+    assert not broken.ok and broken.diverged and all("beside" in name for name in broken.diverged)
+    text = str(broken)
+    assert "(diverged)" in text and text.endswith("SOME CHECKS FAILED")

@@ -121,9 +121,16 @@ class DemoReport(JsonRecord, error=SimulationError):
 
     @property
     def ok(self) -> bool:
-        """Every exact check, certificate and re-verification holds and the car stopped (or ran its time)."""
+        """Every exact check, certificate and re-verification holds, the car stopped (or ran its time) and no
+        observer diverged (a non-finite RMS error over the run, as ``switchobs simulate`` fails a run)."""
         return (all(all(m.exact_checks.values()) and m.certified and m.verified for m in self.models)
-                and self.braking.status in ("stopped", "duration"))
+                and self.braking.status in ("stopped", "duration") and not self.diverged)
+
+    @property
+    def diverged(self) -> tuple[str, ...]:
+        """The estimators whose XBS error over the whole run is not finite."""
+        return tuple(e.estimator for e in self.braking.errors
+                     if e.segment == "whole run" and not math.isfinite(e.rms))
 
     def to_json(self) -> dict[str, Any]:
         return {"out_dir": self.out_dir, "ok": self.ok, "settings": self.settings.to_json(),
@@ -160,7 +167,8 @@ class DemoReport(JsonRecord, error=SimulationError):
                      f"(Table 4.1 definition) {dist}")
         for e in b.errors:
             if e.segment == "whole run":
-                lines.append(f"  XBS error, {e.estimator}: median {e.median:.3f}, RMS {e.rms:.3f}")
+                lines.append(f"  XBS error, {e.estimator}: median {e.median:.3f}, RMS {e.rms:.3f}"
+                             + ("" if math.isfinite(e.rms) else " (diverged)"))
         lines.append(f"  {'all checks hold' if self.ok else 'SOME CHECKS FAILED'}")
         return "\n".join(lines)
 
