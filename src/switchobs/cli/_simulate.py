@@ -168,7 +168,8 @@ def _two_axle(args: argparse.Namespace) -> int:
     kind = args.observer or scenario_observer(args.scenario)
     if args.static_load and kind != "adaptive":
         raise SimulationError(f"--static-load applies to the adaptive observer, which reads the load on line; "
-                              f"the {kind} observer always keeps its wheel's static load")
+                              + ("--observer none runs no observer" if kind == "none" else
+                                 f"the {kind} observer always keeps its wheel's static load"))
     # the adaptive observer reads its wheel's load (3.36) on line as in the seed, the others keep a = R^2 Fz / J
     # of the corner's static load
     spec, online = _spec(args, kind), kind == "adaptive" and not args.static_load
