@@ -515,8 +515,7 @@ class _TwoAxle(HybridPlant):
     def feed_load(self, k: int) -> None:
         """Give estimator ``k`` its wheel's load (3.36) computed with the measured acceleration, if it reads one."""
         if self.load_fed[k]:
-            ax = self.ax_meas
-            self.est[k].set_load(self.W[0] - self.dz * ax if k == 0 else self.W[1] + self.dz * ax)
+            self.est[k].set_load(self.sc.vehicle.loads(self.ax_meas)[k])
 
     def after_step(self, t: float, y: tuple[float, ...], h: float) -> str | None:
         sc = self.sc
