@@ -84,7 +84,7 @@ def test_simulate_sec36_adaptive_divergence_names_its_cause_and_the_fix(capsys):
     assert code == 0 and err == "" and "adaptive observer, beta 100, gamma 5000" in out
 
 
-def test_simulate_sec36_reads_the_load_on_line_unless_told_not_to(capsys):
+def test_simulate_sec36_reads_the_load_on_line_unless_told_not_to_and_refuses_what_does_not_apply(capsys):
     """Seed 001 Sec. 3.6: the observers' a = R^2 Fz / J follows (3.36); --static-load keeps the corner's."""
     def front_rms(*extra):
         code, out, _ = run(capsys, "aguado-sec36", "--duration", "1.5", "--json", *extra)
@@ -94,6 +94,7 @@ def test_simulate_sec36_reads_the_load_on_line_unless_told_not_to(capsys):
     online, static = front_rms(), front_rms("--static-load")
     assert online[0] == "online" and static[0] == "static" and online[1] != static[1]
     for extra, message in ((("--static-load", "--observer", "xbs4"), "the xbs4 observer always keeps"),
+                           (("--duration", "0.2"), "--duration 0.2 s ends before the braking of aguado-sec36 starts"),
                            (("--static-load", "hoang-fig3"), "only applies to the two-axle scenario")):
         args = [a for a in extra if a != "hoang-fig3"]
         scenario = "hoang-fig3" if "hoang-fig3" in extra else "aguado-sec36"

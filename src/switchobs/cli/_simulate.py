@@ -11,6 +11,7 @@ of seed 001 Table 4.1).  ``--controller`` picks the ABS: on ``aguado-sec36``
 from __future__ import annotations
 
 import argparse
+import math
 import sys
 from dataclasses import replace
 from typing import Any
@@ -164,6 +165,9 @@ def _two_axle(args: argparse.Namespace) -> int:
                               f"use {' or '.join(TWO_AXLE_CONTROLLERS)}")
     sc = aguado_sec36(controller)
     changes = _timing_changes(args)
+    if changes.get("duration_s", math.inf) <= sc.brake_start_s:
+        raise SimulationError(f"--duration {args.duration:g} s ends before the braking of {args.scenario} starts "
+                              f"({sc.brake_start_s:g} s); give more than {sc.brake_start_s:g}")
     sc = replace(sc, **changes)
     kind = args.observer or scenario_observer(args.scenario)
     if args.static_load and kind != "adaptive":
