@@ -14,7 +14,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from .._figures import panels, save_figure
-from ..loop import X2_MEASUREMENTS, EstimatorSpec, encoder_measurements
+from ..loop import X2_MEASUREMENTS, encoder_measurements
 from ..plants import (GRAVITY, BrakingResult, BrakingScenario, FivePhaseABS, Table41Result, TwoPhaseABS, road,
                       scenario, scenario_description, scenario_observer, scenario_observer_gains, simulate)
 from ..sensors import TABLE61_ENCODER, Encoder
@@ -41,8 +41,7 @@ def _gains_text(gains: Mapping[str, float]) -> str:
 
 def _scenarios_section(runs: _Runs) -> list[str]:
     """The built-in scenarios with their default observers: one CLI output and what each seed says vs ours."""
-    fig3, fig4, sec34 = (runs.braking(n, EstimatorSpec(scenario_observer(n), **scenario_observer_gains(n)))
-                         for n in ("hoang-fig3", "hoang-fig4", "aguado-sec34"))
+    fig3, fig4, sec34 = (runs.default_run(n) for n in ("hoang-fig3", "hoang-fig4", "aguado-sec34"))
     free = scenario("hoang-fig4")
     free = replace(free, controller=replace(free.controller, stall_timeout_s=None))
     on_snow = free.roads.changes[-1].at_time_s

@@ -45,6 +45,11 @@ class _Runs:
             self._brakings[name, spec] = simulate(sc, estimator=xbs_estimator(spec, sc.vehicle, sc.roads.initial))
         return self._brakings[name, spec]
 
+    def default_run(self, name: str) -> BrakingResult:
+        """``switchobs simulate NAME``: the built-in scenario with its default observer and the gains the
+        scenario chose for it."""
+        return self.braking(name, EstimatorSpec(scenario_observer(name), **scenario_observer_gains(name)))
+
     def sec34(self, beta: float, gamma: float, h_max: float | None = None) -> _Traced:
         """Seed 001 Sec. 3.4 with the adaptive observer ``(beta, Gamma = gamma I)`` sub-stepped to ``|s| dt <=
         h_max`` (default :data:`SEC34_H_MAX`), and its states after every sample."""
