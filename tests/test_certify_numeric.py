@@ -122,3 +122,17 @@ def test_ctrl_c_stops_certify_with_130_and_no_certificate(tmp_path):
     assert err.strip().splitlines()[-1] == "switchobs certify: interrupted"
     assert "Traceback" not in err
     assert list(tmp_path.iterdir()) == [model]
+
+
+@pytest.mark.parametrize("multiplicity", [2, 3, 4])
+def test_a_repeated_pole_is_printed_as_the_exact_pole_not_its_rounding_scatter(multiplicity):
+    # the eigenvalues of a k-fold pole scatter by eps**(1/k) in floating point (differently on every BLAS);
+    # the printed spectrum takes the square-free factor of the exact characteristic polynomial instead
+    from switchobs.certify import as_family
+
+    n = multiplicity + 1
+    M = [[Fraction(-100) if i == j else Fraction(1) if j == i + 1 else Fraction(0) for j in range(n)]
+         for i in range(n)]
+    M[-1][-1] = Fraction(-7, 3)   # one simple pole beside the Jordan block
+    text = as_family([M, M]).spectra()["A_1"]
+    assert text == "[" + ", ".join(["-100"] * multiplicity + ["-2.33333"]) + "]"

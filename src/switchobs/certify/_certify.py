@@ -33,7 +33,7 @@ from ..model import Model
 from ._box import BoxCertificate, certify_box
 from ._exact import arithmetic as exact_arithmetic
 from ._exact import fraction_matrix, matrix_strings
-from ._family import Family, FamilyLike, as_family, format_spectrum, user_matrix
+from ._family import Family, FamilyLike, as_family, user_matrix
 from ._discrete import DiscreteCertificate, discrete_certificate, stability_function
 from ._dwell import DwellTimeResult, dwell_time
 from ._lmi import DEFAULT_SOLVERS
@@ -157,7 +157,7 @@ class CertificationReport:
                 "verification": self.verification.to_json(), "timings": self.timings,
                 "discrete": None if self.discrete is None else self.discrete.to_json(),
                 "box": None if self.box is None else self.box.to_json(),
-                "spectra": {nm: format_spectrum(M) for nm, M in zip(self.family.names, self.family.numeric)},
+                "spectra": self.family.spectra(),
                 "certificate": self.document, "discrete_method": self.discrete_method}
 
     @classmethod
@@ -199,8 +199,8 @@ class CertificationReport:
         rows = self._rows()
         table = ["| " + " | ".join(rows[0]) + " |", "|" + "---|" * len(rows[0])]
         table += ["| " + " | ".join(r) + " |" for r in rows[1:]]
-        spectra = "; ".join(f"${nm.replace('_plus', '^+').replace('_minus', '^-')}$: {format_spectrum(M)}"
-                            for nm, M in zip(self.family.names, self.family.numeric))
+        spectra = "; ".join(f"${nm.replace('_plus', '^+').replace('_minus', '^-')}$: {text}"
+                            for nm, text in self.family.spectra().items())
         tail = [f"**verdict**: {self.text}",
                 f"independent exact check of the certificate: **{'holds' if self.verification.holds else 'FAILS'}**"]
         if self.discrete is not None:
@@ -253,8 +253,8 @@ class CertificationReport:
         widths = [max(len(r[i]) for r in rows) for i in range(5)]
         lines = ["  ".join(c.ljust(w) for c, w in zip(r, widths)).rstrip() for r in rows]
         lines.insert(1, "  ".join("-" * w for w in widths))
-        head = [f"{self.family} (spectra: " + "; ".join(f"{nm} {format_spectrum(M)}" for nm, M in
-                                                         zip(self.family.names, self.family.numeric)) + ")"]
+        head = [f"{self.family} (spectra: " + "; ".join(f"{nm} {text}" for nm, text in self.family.spectra().items())
+                + ")"]
         tail = [f"verdict: {self.text}"]
         if self.box is not None:
             tail.append(str(self.box))

@@ -7,7 +7,7 @@ from dataclasses import dataclass
 from typing import Any, Union
 
 import numpy as np
-from sympy import QQ
+from sympy import QQ, Poly, Symbol
 from sympy.polys.matrices import DomainMatrix
 
 from ..design import routh_first_column
@@ -66,6 +66,10 @@ class Family:
                                    f"{len(data['matrices'])} matrices")
         return cls(names, exact, tuple(np.array([[float(x) for x in row] for row in M]) for M in exact))
 
+    def spectra(self) -> dict[str, str]:
+        """Each matrix's name and its spectrum as :func:`format_spectrum` prints it."""
+        return {nm: format_spectrum(M, E) for nm, M, E in zip(self.names, self.numeric, self.exact)}
+
     def __str__(self) -> str:
         return f"family of {len(self)} matrices of size {self.n}: {', '.join(self.names)}"
 
@@ -73,13 +77,30 @@ class Family:
 FamilyLike = Union[Family, Sequence[Any], Mapping[str, Any]]
 
 
-def format_spectrum(M: np.ndarray) -> str:
-    eig = np.linalg.eigvals(np.asarray(M, dtype=float))
+def format_spectrum(M: np.ndarray, exact: Matrix | None = None) -> str:
+    """The eigenvalues of ``M`` sorted by real part, 6 significant digits.
+
+    With the ``exact`` matrix, a repeated eigenvalue is printed as the root of its square-free factor of
+    the exact characteristic polynomial: the floating-point eigenvalues of an m-fold root scatter by
+    ``eps**(1/m)`` (``-100`` as ``-100.001 +- 0.00095j``, differently on every BLAS).
+    """
+    eig = _spectrum(np.asarray(M, dtype=float), exact)
     eig = eig[np.lexsort((eig.imag, eig.real))]
     parts = []
     for z in eig:
         parts.append(f"{z.real:.6g}" if abs(z.imag) <= 1e-6 * max(1.0, abs(z)) else f"{z.real:.6g}{z.imag:+.6g}j")
     return "[" + ", ".join(parts) + "]"
+
+
+def _spectrum(M: np.ndarray, exact: Matrix | None) -> np.ndarray:
+    eig = np.linalg.eigvals(M)
+    gaps = np.abs(eig[:, None] - eig[None, :])[~np.eye(len(eig), dtype=bool)]
+    if exact is None or len(eig) < 2 or np.min(gaps) > 1e-3 * max(1.0, float(np.max(np.abs(eig)))):
+        return eig   # no cluster: the eigenvalues are simple and well separated
+    dm = DomainMatrix([[QQ(x.numerator, x.denominator) for x in row] for row in exact], (len(exact),) * 2, QQ)
+    _, factors = Poly(dm.charpoly(), Symbol("lam"), domain=QQ).sqf_list()
+    return np.concatenate([np.asarray(np.roots([float(c) for c in f.all_coeffs()]), dtype=complex)
+                           for f, m in factors for _ in range(m)])
 
 
 def _hurwitz_exact(M: Matrix) -> bool:
