@@ -53,6 +53,7 @@ from ..model import Model, numeric, rational_value
 from ..spec import METHODS, STATUS_TEXT, STEP_METHODS, Guard, ObserverSpec, StepStatus, require_explicit
 from ._emit import CFunction, float_literal, kernel
 from ._readme import readme
+from ._text import c_comment
 from ._translate import (GUARD_TESTS, Translation, translate_adaptive, translate_original, translate_super_twisting,
                          translate_switched)
 
@@ -422,6 +423,12 @@ def _assemble(tr: Translation, *, info: _Info, kind: str, real: str, method: str
         require_explicit(method, "the adaptive observer's right-hand side", CodegenError)
     if method not in tr.methods:
         raise CodegenError(f"the {kind} observer admits only method {list(tr.methods)}, got {method!r}")
+    # every text of the user's that the files print passes the one gate, here
+    info = _Info(name=c_comment(info.name), description=c_comment(info.description),
+                 equations=tuple(map(c_comment, info.equations)), signal_roles=tuple(map(c_comment, info.signal_roles)),
+                 references={c_comment(k): c_comment(v) for k, v in info.references.items()})
+    command = None if command is None else c_comment(command)
+    certificate = None if certificate is None else c_comment(certificate)
     P = prefix.upper()
     x_macros = _macro_names("state", tr.state_names)
     s_macros = _macro_names("signal", tr.signal_names)
@@ -462,7 +469,7 @@ def _assemble(tr: Translation, *, info: _Info, kind: str, real: str, method: str
             checks.append("    " + k.call("&g", sig="sig", par="par"))
         test = GUARD_TESTS[guard.kind].format(g=value)
         checks.append(f"    if ({P}_UNLIKELY(!({test}))) return {P}_ERR_{guard.status.name};  "
-                      f"/* {_comment(guard.reason)} */")
+                      f"/* {c_comment(guard.reason)} */")
         if guard.status == StepStatus.BAD_PARAM:
             param_checks += checks[-2:] if k is not None else checks[-1:]
     if not scale_done:
@@ -497,10 +504,6 @@ def _assemble(tr: Translation, *, info: _Info, kind: str, real: str, method: str
         h_max=None if bound is None else bound[0], h_max_c=h_max_c, max_substeps=None if bound is None else bound[1],
         certificate=certificate, original_names=tuple(original_names), step_function=step_fn)
     return dataclasses.replace(gen, readme=readme(gen, command=command))
-
-
-def _comment(text: str) -> str:
-    return text.replace("*/", "* /")
 
 
 def generate_observer(model: Model, gains: GainDesign | tuple[Sequence[float], Sequence[float]], *,
@@ -660,9 +663,9 @@ def _header(*, tr: Translation, info: _Info, kind: str, real: str, method: str, 
         " * No heap allocation, no global mutable state: re-entrant and thread-safe.",
     ]
     if certificate:
-        lines.append(f" * Discrete certificate (switchobs.certify.discrete_certificate, exact): {_comment(certificate)}.")
+        lines.append(f" * Discrete certificate (switchobs.certify.discrete_certificate, exact): {certificate}.")
     if command:
-        lines.append(f" * Regenerate with: {_comment(command)}")
+        lines.append(f" * Regenerate with: {command}")
     lines += [" */", f"#ifndef {guard}", f"#define {guard}", "", "#include <stdint.h>", "",
               "#ifdef __cplusplus", 'extern "C" {', "#endif", "",
               f"#define {P}_NX {len(tr.state_names)}  /* observer state size */",

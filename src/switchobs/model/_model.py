@@ -26,7 +26,7 @@ from ._interop import matrix_rows, statespace_matrices
 
 __all__ = ["Model", "numeric", "make_symbol"]
 
-_IDENT = re.compile(r"^[A-Za-z_][A-Za-z0-9_]*$")
+_IDENT = re.compile(r"[A-Za-z_][A-Za-z0-9_]*\Z")  # \Z: "$" would admit a trailing newline
 _RESERVED = {"t", "pi", "E", "I"}
 
 
