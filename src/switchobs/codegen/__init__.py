@@ -10,14 +10,16 @@ compile_observer    -- compile with the system C compiler (cached) and bind with
 CObserver           -- the compiled observer: ``step`` / ``run`` like the Python reference observers, ``run_dt``
                        with a step length per row
 compile_sources     -- compile C files into one cached shared library (the observers' and the braking loop's)
+load_library        -- load a library that compile_sources built and verified (nothing else is loaded)
+cache_directory     -- where compiled libraries are cached: the user's own cache directory
 StepStatus          -- status codes of ``<prefix>_step`` / ``<prefix>_run`` / ``<prefix>_run_dt``
 default_prefix      -- ``switchobs_<model>`` with non-identifier characters as ``_``
 """
 
 from ..spec import METHODS, STATUS_TEXT, Guard, StepStatus, domain_guards
-from ._build import CObserver, cache_directory, compile_observer, compile_sources, find_compiler
+from ._build import CObserver, cache_directory, compile_observer, compile_sources, find_compiler, load_library
 from ._generate import REALS, GeneratedObserver, default_prefix, generate_observer, generate_super_twisting
 
 __all__ = ["CObserver", "GeneratedObserver", "Guard", "METHODS", "REALS", "STATUS_TEXT", "StepStatus",
-           "cache_directory", "compile_observer", "compile_sources", "find_compiler", "default_prefix", "domain_guards", "generate_observer",
-           "generate_super_twisting"]
+           "cache_directory", "compile_observer", "compile_sources", "find_compiler", "default_prefix", "domain_guards",
+           "generate_observer", "generate_super_twisting", "load_library"]

@@ -1,9 +1,17 @@
 """Compile a generated observer with the system C compiler and drive it from Python (ctypes).
 
 The shared library is cached by the SHA-256 of its source, header, compiler
-and flags in a per-user directory outside the repository
-(``$SWITCHOBS_CODEGEN_CACHE``, default ``<tempdir>/switchobs-codegen-<uid>``),
-written atomically so that parallel test workers can share it.  It is built
+and flags in the user's own cache directory (``$SWITCHOBS_CODEGEN_CACHE``, by
+default the platform's per-user cache: ``~/.cache/switchobs/codegen`` on Linux,
+see :func:`cache_directory`), written atomically so that parallel test workers
+can share it.  A library is code that runs in the user's process, so nothing is
+loaded from a place another user can write: the directory is created 0700 and
+refused when it, or a directory above it, is owned by another user or writable
+by others (a sticky ``/tmp`` above is fine); a library is loaded only when it is
+the user's, not writable by others, and its SHA-256 is the one recorded when it
+was built, under the key of its source.  The cache keeps at most
+:data:`CACHE_MAX_LIBRARIES` libraries and :data:`CACHE_MAX_BYTES` bytes, the
+least recently used going first.  It is built
 for the host's instruction set (:data:`HOST_FLAGS`, when the compiler accepts
 them; the key then names the CPU too), as numba's JIT is: it only ever runs on
 the machine that built it.  The files written for a target are unaffected.
@@ -14,12 +22,16 @@ from __future__ import annotations
 import ctypes
 import functools
 import hashlib
+import json
 import math
 import os
 import platform
 import shutil
+import stat
 import subprocess
+import sys
 import tempfile
+import time
 from collections.abc import Callable, Mapping, Sequence
 from pathlib import Path
 from typing import Any
@@ -33,7 +45,7 @@ from ._generate import GeneratedObserver, generate_observer
 from ..spec import STATUS_TEXT, StepStatus
 
 __all__ = ["CObserver", "compile_observer", "compile_shared", "compile_sources", "cache_directory", "find_compiler",
-           "BUILD_FLAGS", "HOST_FLAGS"]
+           "load_library", "BUILD_FLAGS", "HOST_FLAGS", "CACHE_MAX_LIBRARIES", "CACHE_MAX_BYTES"]
 
 #: Flags of the shared library the binding loads (the strict warning set is exercised by the tests).
 BUILD_FLAGS: tuple[str, ...] = ("-std=c99", "-O2", "-fPIC", "-shared")
@@ -42,16 +54,143 @@ BUILD_FLAGS: tuple[str, ...] = ("-std=c99", "-O2", "-fPIC", "-shared")
 #: multiply-adds, so that every result equals the portable build's and the Python reference's.
 HOST_FLAGS: tuple[str, ...] = ("-march=native", "-ffp-contract=off")
 
-_LIBRARIES: dict[Path, ctypes.CDLL] = {}
 #: Largest n_steps of ``<prefix>_run`` (an int32_t, so that the API is the same on 16/32/64-bit targets).
 _INT32_MAX = 2**31 - 1
 
 
+#: The cache keeps at most this many compiled libraries ...
+CACHE_MAX_LIBRARIES = 200
+#: ... and this many bytes of them; beyond, the least recently used are removed after a build.
+CACHE_MAX_BYTES = 256 * 2**20
+
+
 def cache_directory() -> Path:
-    """Where compiled observers are cached: ``$SWITCHOBS_CODEGEN_CACHE`` or a per-user temp directory."""
+    """Where compiled observers are cached: ``$SWITCHOBS_CODEGEN_CACHE``, else the user's cache directory.
+
+    The platform's per-user cache (platformdirs' ``user_cache_dir``): ``$XDG_CACHE_HOME/switchobs/codegen``
+    or ``~/.cache/switchobs/codegen`` on Linux, ``~/Library/Caches/switchobs/codegen`` on macOS,
+    ``%LOCALAPPDATA%\\switchobs\\Cache\\codegen`` on Windows.  Never a shared temporary directory: a
+    predictable name there can be created first by another user, who then plants the libraries.
+    """
     env = os.environ.get("SWITCHOBS_CODEGEN_CACHE")
-    uid = os.getuid() if hasattr(os, "getuid") else 0
-    return Path(env) if env else Path(tempfile.gettempdir()) / f"switchobs-codegen-{uid}"
+    if env:
+        return Path(env)
+    import platformdirs
+
+    return Path(platformdirs.user_cache_dir("switchobs", appauthor=False)) / "codegen"
+
+
+def _refuse(path: Path, why: str) -> CodegenError:
+    return CodegenError(f"refusing the compiled-code cache {str(path)!r}: {why}; compiled code is only loaded from "
+                        "a directory that no other user can write (remove it, or set SWITCHOBS_CODEGEN_CACHE to "
+                        "a directory of your own)")
+
+
+def _check_owner(path: Path, st: os.stat_result, what: str) -> None:
+    """Refuse ``path`` (with its stat ``st``) if another user owns it or may write it (POSIX; Windows ACLs are
+    not inspected)."""
+    if not hasattr(os, "getuid"):
+        return
+    if st.st_uid not in (os.getuid(), 0):
+        raise _refuse(path, f"{what} is owned by user id {st.st_uid}, not by you ({os.getuid()})")
+    # group write of the user's own primary group is the usual umask 002 of private user groups
+    writers = stat.S_IWOTH | (0 if st.st_gid == os.getgid() else stat.S_IWGRP)
+    if st.st_mode & writers and not (stat.S_ISDIR(st.st_mode) and st.st_mode & stat.S_ISVTX):
+        raise _refuse(path, f"{what} is writable by other users (mode {stat.S_IMODE(st.st_mode):04o})")
+
+
+def _secure_root(root: Path) -> Path:
+    """``root`` created 0700 if missing, then checked: it and every directory above it are the user's (or
+    root's) and not writable by others, except sticky directories such as ``/tmp`` (whose entries only their
+    owner can rename)."""
+    try:
+        root.mkdir(mode=0o700, parents=True, exist_ok=True)
+        real = root.resolve(strict=True)
+        st = os.stat(real)
+    except OSError as exc:
+        raise CodegenError(f"cannot create the compiled-code cache {str(root)!r}: {exc.strerror}; "
+                           "set SWITCHOBS_CODEGEN_CACHE to a writable directory of your own") from None
+    if not stat.S_ISDIR(st.st_mode):
+        raise _refuse(root, "it is not a directory")
+    if hasattr(os, "getuid") and st.st_uid != os.getuid():
+        raise _refuse(root, f"it is owned by user id {st.st_uid}, not by you ({os.getuid()})")
+    if st.st_mode & (stat.S_IWGRP | stat.S_IWOTH):
+        raise _refuse(root, f"other users may write it (mode {stat.S_IMODE(st.st_mode):04o}; it is created 0700)")
+    for parent in real.parents:
+        _check_owner(parent, os.stat(parent), f"the directory {str(parent)!r} above it")
+    return real
+
+
+def _manifest(library: Path) -> Path:
+    return library.with_suffix(".json")
+
+
+def _digest(data: bytes) -> str:
+    return hashlib.sha256(data).hexdigest()
+
+
+def _verified(library: Path, key: str) -> bool:
+    """Whether ``library`` is the one built for ``key``: the user's file, not writable by others, with the
+    SHA-256 its manifest recorded at build time under that key.  A library without a matching manifest is not
+    loaded (it is rebuilt); one owned by someone else or writable by others is refused."""
+    try:
+        fd = os.open(library, os.O_RDONLY | getattr(os, "O_NOFOLLOW", 0))
+    except OSError:
+        return False
+    with os.fdopen(fd, "rb") as fh:
+        st = os.fstat(fh.fileno())
+        if not stat.S_ISREG(st.st_mode):
+            raise _refuse(library, "it is not a regular file")
+        _check_owner(library, st, "the library")
+        data = fh.read()
+    try:
+        record = json.loads(_manifest(library).read_text("utf-8"))
+    except (OSError, ValueError):
+        return False
+    return isinstance(record, dict) and record.get("key") == key and record.get("sha256") == _digest(data)
+
+
+def _prune(root: Path, keep: Path) -> None:
+    """Remove the least recently used libraries beyond :data:`CACHE_MAX_LIBRARIES` / :data:`CACHE_MAX_BYTES`."""
+    entries = []
+    for lib in root.glob("*.so"):
+        try:
+            st = lib.stat()
+        except OSError:
+            continue
+        entries.append((st.st_mtime, st.st_size, lib))
+    entries.sort(reverse=True)
+    total = 0
+    for count, (_, size, lib) in enumerate(entries, 1):
+        total += size
+        if lib != keep and (count > CACHE_MAX_LIBRARIES or total > CACHE_MAX_BYTES):
+            for path in (lib, _manifest(lib)):
+                try:
+                    path.unlink()
+                except OSError:
+                    pass
+
+
+_LIBRARIES_LOADED: dict[Path, ctypes.CDLL] = {}
+
+
+def load_library(path: Path) -> ctypes.CDLL:
+    """The library at ``path`` (as :func:`compile_sources` returns it), loaded once per process.
+
+    Every compiled library of switchobs is loaded here, and only after :func:`compile_sources`
+    verified it; a path it did not return is refused.
+    """
+    lib = _LIBRARIES_LOADED.get(path)
+    if lib is None:
+        if path not in _VERIFIED:
+            raise CodegenError(f"refusing to load {str(path)!r}: not a library that switchobs built and verified")
+        lib = ctypes.CDLL(str(path))
+        _LIBRARIES_LOADED[path] = lib
+    return lib
+
+
+#: Libraries verified in this process (path -> key), the only ones :func:`load_library` loads.
+_VERIFIED: dict[Path, str] = {}
 
 
 def find_compiler(compiler: str | None = None) -> str:
@@ -114,12 +253,16 @@ def compile_sources(files: Mapping[str, str], sources: Sequence[str], stem: str,
     material = [f"{name}\0{files[name]}" for name in sorted(files)]
     tuning = [*HOST_FLAGS, _host_cpu()] if host else []
     key = hashlib.sha256("\0".join([*material, *sources, cc, *flags, *tuning]).encode()).hexdigest()[:20]
-    root = Path(cache_dir) if cache_dir is not None else cache_directory()
+    root = _secure_root(Path(cache_dir) if cache_dir is not None else cache_directory())
     target = root / f"{stem}-{key}.so"
-    if target.exists():
+    if _verified(target, key):   # hashed on every call: a file changed since the last call is not loaded
+        _VERIFIED[target] = key
+        try:
+            os.utime(target)   # recently used: pruned last
+        except OSError:
+            pass
         return target
     try:
-        root.mkdir(parents=True, exist_ok=True)
         with tempfile.TemporaryDirectory(dir=root) as tmp:
             for name, text in files.items():
                 (Path(tmp) / name).write_text(text, encoding="utf-8")
@@ -132,26 +275,39 @@ def compile_sources(files: Mapping[str, str], sources: Sequence[str], stem: str,
             if proc.returncode != 0:
                 lines = (proc.stderr or proc.stdout).strip().splitlines()
                 raise CodegenError(f"{cc} failed on the generated {', '.join(sources)}: " + " | ".join(lines[:4]))
+            os.chmod(out, 0o700)
+            record = Path(tmp) / "lib.json"
+            record.write_text(json.dumps({"key": key, "sha256": _digest(out.read_bytes()), "compiler": cc,
+                                          "python": sys.version.split()[0]}), encoding="utf-8")
+            # the manifest last: a library is only loaded with its manifest, so a half-replaced pair is rebuilt
             os.replace(out, target)
+            os.replace(record, _manifest(target))
     except OSError as exc:
         raise CodegenError(f"cannot build in the cache directory {str(root)!r}: {exc.strerror}; "
                            "set SWITCHOBS_CODEGEN_CACHE to a writable directory") from None
+    # another process building the same key may be between its two renames: its pair is whole a moment later
+    for _ in range(20):
+        if _verified(target, key):
+            break
+        time.sleep(0.05)
+    else:
+        raise CodegenError(f"the library {str(target)!r} does not match its manifest after it was built; "
+                           "another program is changing the compiled-code cache")
+    _VERIFIED[target] = key
+    _prune(root, target)
     return target
 
 
 def _library(path: Path, gen: GeneratedObserver) -> ctypes.CDLL:
-    lib = _LIBRARIES.get(path)
-    if lib is None:
-        lib = ctypes.CDLL(str(path))
-        real = ctypes.c_float if gen.real == "float" else ctypes.c_double
-        ptr = ctypes.POINTER(real)
-        step = getattr(lib, f"{gen.prefix}_step")
-        step.argtypes = [ptr, ptr, ptr, real]
-        step.restype = ctypes.c_int32
-        run = getattr(lib, f"{gen.prefix}_run")
-        run.argtypes = [ptr, ptr, ctypes.c_int32, ptr, real, ptr]
-        run.restype = ctypes.c_int32
-        _LIBRARIES[path] = lib
+    lib = load_library(path)
+    real = ctypes.c_float if gen.real == "float" else ctypes.c_double
+    ptr = ctypes.POINTER(real)
+    step = getattr(lib, f"{gen.prefix}_step")
+    step.argtypes = [ptr, ptr, ptr, real]
+    step.restype = ctypes.c_int32
+    run = getattr(lib, f"{gen.prefix}_run")
+    run.argtypes = [ptr, ptr, ctypes.c_int32, ptr, real, ptr]
+    run.restype = ctypes.c_int32
     return lib
 
 

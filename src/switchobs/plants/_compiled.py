@@ -127,7 +127,7 @@ _LOADED: dict[Path, Any] = {}
 
 
 def _library(obs: CompiledObserver | None, n_series: int, step_lengths: bool) -> Any:
-    from ..codegen import compile_sources
+    from ..codegen import compile_sources, load_library
 
     source = resources.files(__package__).joinpath("_closed_loop.c").read_text(encoding="utf-8")
     files = {"switchobs_braking.c": _defines(obs, n_series, step_lengths) + source}
@@ -139,7 +139,7 @@ def _library(obs: CompiledObserver | None, n_series: int, step_lengths: bool) ->
     path = compile_sources(files, sources, "switchobs_braking" if obs is None else f"switchobs_braking_{obs.prefix}")
     fn = _LOADED.get(path)
     if fn is None:
-        lib = ctypes.CDLL(str(path))
+        lib = load_library(path)
         vp, i64 = ctypes.c_void_p, ctypes.c_int64
         fn = ctypes.CFUNCTYPE(ctypes.c_int32, vp, vp, ctypes.c_int32, vp, vp, vp, i64, vp, i64, vp)(
             ctypes.cast(getattr(lib, _ENTRY), vp).value)

@@ -28,11 +28,11 @@ _LIBRARY: list[Any] = []
 
 def _library() -> Any:
     if not _LIBRARY:
-        from ..codegen import compile_sources
+        from ..codegen import compile_sources, load_library
 
         source = resources.files(__package__).joinpath("_kernels.c").read_text(encoding="utf-8")
-        lib = ctypes.CDLL(str(compile_sources({"switchobs_sensors.c": source}, ["switchobs_sensors.c"],
-                                              "switchobs_sensors")))
+        lib = load_library(compile_sources({"switchobs_sensors.c": source}, ["switchobs_sensors.c"],
+                                           "switchobs_sensors"))
         vp, i64, dbl = ctypes.c_void_p, ctypes.c_int64, ctypes.c_double
         lib.switchobs_three_stage_run.argtypes = [vp, vp, i64, vp, vp, vp, vp, vp]
         lib.switchobs_three_stage_update.argtypes = [vp, vp, dbl, dbl, dbl, vp]
