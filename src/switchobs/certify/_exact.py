@@ -285,7 +285,7 @@ class Definiteness:
 def definiteness(M: Sequence[Sequence[Any]], *, strict: bool) -> Definiteness:
     """Exactly decide ``M > 0`` (``strict``) or ``M >= 0`` for a symmetric rational matrix.
 
-    Fraction-free symmetric Bareiss elimination on ``N = d M`` (integers).
+    Fraction-free symmetric Bareiss elimination on ``N = d M`` (integers, python-flint's ``fmpz``).
     After eliminating the pivots ``K``, entry ``(i, j)`` of the working matrix
     is the minor ``det N[K+i, K+j]``, so the diagonal pivots are leading
     principal minors (Sylvester's criterion) and every division is exact.
@@ -312,7 +312,12 @@ def definiteness(M: Sequence[Sequence[Any]], *, strict: bool) -> Definiteness:
         a, _ = integer_form([[Fraction(x) for x in row] for row in M])
     if strict and _ARITHMETIC.get() == "interval" and _interval_positive_definite(a):
         return Definiteness(True)
-    prev = 1
+    # GMP integers (python-flint): the same operations, 7x faster than Python's ints at n = 64 on
+    # 150-digit entries (the minors grow to n times the digits)
+    import flint
+
+    a = [[flint.fmpz(x) for x in row] for row in a]
+    prev = flint.fmpz(1)
     kept: list[int] = []
     for k in range(n):
         p = a[k][k]
