@@ -6,6 +6,7 @@ import argparse
 import math
 
 from .._atomic import check_output_file
+from .._display import ROUNDED_NOTE, exact_display, readable_number
 from ..spec import STEP_METHODS
 from ..exceptions import CertificateError, SpectrumError
 from ..model import load_model
@@ -52,6 +53,8 @@ def register(sub: argparse._SubParsersAction) -> None:
                         "arithmetic with outward rounding where it can (rigorous, much faster at n = 64); "
                         "recorded in the certificate's provenance")
     p.add_argument("--json", action="store_true", help="print the full report as JSON")
+    p.add_argument("--exact", action="store_true",
+                   help="print the gains in full (default: rationals longer than 20 characters to 6 digits)")
     p.add_argument("--out", metavar="CERT.json", help="write the certificate (checkable with switchobs verify); "
                    "- writes it to standard output and the summary to stderr")
     p.add_argument("--plot", metavar="PATH", help="write a figure: the spectra of A_plus and A_minus and, when the "
@@ -92,8 +95,12 @@ def run(args: argparse.Namespace) -> int:
         obs = report.document.get("observer", {})
         values = ", ".join(f"{k} = {v}" for k, v in prov.get("parameters", {}).items())
         print(f"switchobs certify: model {prov.get('model')}{' (' + values + ')' if values else ''}", file=stream)
-        print(f"  K_plus  = [{', '.join(obs.get('K_plus', []))}]", file=stream)
-        print(f"  K_minus = [{', '.join(obs.get('K_minus', []))}]", file=stream)
+        gains = [*obs.get("K_plus", []), *obs.get("K_minus", [])]
+        with exact_display(args.exact):
+            print(f"  K_plus  = [{', '.join(map(readable_number, obs.get('K_plus', [])))}]", file=stream)
+            print(f"  K_minus = [{', '.join(map(readable_number, obs.get('K_minus', [])))}]", file=stream)
+            if any(readable_number(k) != k for k in gains):
+                print(f"  {ROUNDED_NOTE}", file=stream)
         print(report, file=stream)
         if report.discrete is not None:
             from ..report import sampled_lines

@@ -5,6 +5,7 @@ from __future__ import annotations
 import argparse
 import sys
 
+from .._display import exact_display
 from ..design import design_gains
 from ..exceptions import SpectrumError
 from ..report import Progress
@@ -28,6 +29,8 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--json", action="store_true", help="print the certificate as JSON (full matrices)")
     p.add_argument("--full", action="store_true",
                    help="print full matrices also for n > 4 (default there: gains as lists, P by its n free entries)")
+    p.add_argument("--exact", action="store_true",
+                   help="print every rational in full (default: those longer than 20 characters to 6 digits)")
     p.add_argument("--no-verify", action="store_true",
                    help="skip the exact re-check of the Lyapunov equations (for large symbolic models)")
     p.set_defaults(func=run)
@@ -53,7 +56,8 @@ def run(args: argparse.Namespace) -> int:
         data["verified"] = checks
         emit_json(data)
     else:
-        print(result.describe(full=True) if args.full else result)
+        with exact_display(args.exact):
+            print(result.describe(full=True) if args.full else result)
         if checks is not None:
             status = "all hold exactly" if all(checks.values()) else "FAILED: " + ", ".join(
                 k for k, v in checks.items() if not v)

@@ -33,6 +33,7 @@ from ..exceptions import (CertificateError, DimensionError, ExpressionError, Mod
                           NotObservableError, SpectrumError)
 from ..model import Model, entries, free_names, make_symbol, numeric, parse_expression, rational_value
 from ._lyapunov import _generic_solution, observer_form_gramian
+from .._display import ROUNDED_NOTE, is_shortened, readable
 from .._progress import progress
 from ._normal_form import ObserverNormalForm, is_rational, observer_normal_form, rational_matrix
 from ._recheck import lyapunov_by_substitution, lyapunov_residual_is_zero
@@ -492,23 +493,26 @@ class GainDesign:
     def _repr_markdown_(self) -> str:
         """The design in a notebook: gains, error matrices and P in LaTeX (gains only past PRETTY_MAX_N)."""
         nf = self.normal_form
-        target = (", ".join(f"${sp.latex(p)}$" for p in self.spectrum) if self.spectrum is not None
+        latex = _readable_latex
+        target = (", ".join(f"${latex(p)}$" for p in self.spectrum) if self.spectrum is not None
                   else "from the given $K^+$")
         rows = [f"**Switched observer design** for model `{self.model.name}` (n = {self.n}, {self.choice}"
                 f"{', conditional on the coupling constraints' if self.conditional else ''})", "",
                 f"spectrum of $A^+$: {target}; observable iff: "
-                + (", ".join(f"${sp.latex(c)}$" for c in nf.observability_conditions) or "always"), "",
-                f"$$K^+ = {sp.latex(self.K_plus.T)}^\\top,\\quad K^- = {sp.latex(self.K_minus.T)}^\\top$$"]
+                + (", ".join(f"${latex(c)}$" for c in nf.observability_conditions) or "always"), "",
+                f"$$K^+ = {latex(self.K_plus.T)}^\\top,\\quad K^- = {latex(self.K_minus.T)}^\\top$$"]
         if self.n <= PRETTY_MAX_N:
-            rows += ["", f"$$A^+ = A - K^+ C = {sp.latex(self.A_plus)},\\quad "
-                         f"A^- = -A + K^- C = {sp.latex(self.A_minus)}$$",
+            rows += ["", f"$$A^+ = A - K^+ C = {latex(self.A_plus)},\\quad "
+                         f"A^- = -A + K^- C = {latex(self.A_minus)}$$",
                      "", f"common Lyapunov matrix ($A^{{\\pm\\top}} P + P A^\\pm = -C_\\pm^\\top C_\\pm$): "
-                         f"$$P = {sp.latex(self.P)}$$"]
+                         f"$$P = {latex(self.P)}$$"]
         else:
             rows += ["", "(matrices past n = 4: `str(design)`, `design.to_json()` or `design.to_numpy()`)"]
         open_conditions = [*self.hurwitz_plus, *([] if self.choice == "theorem1" else self.hurwitz_minus)]
-        rows += ["", "Routh–Hurwitz conditions left: " + (", ".join(f"${sp.latex(c)}$" for c in open_conditions)
+        rows += ["", "Routh–Hurwitz conditions left: " + (", ".join(f"${latex(c)}$" for c in open_conditions)
                                                         or "none (Hurwitz by construction)")]
+        if is_shortened([*(self.spectrum or ()), *self.K_plus, *self.K_minus, *self.P]):
+            rows += ["", ROUNDED_NOTE.replace("--exact or --json", "`design.to_json()`")]
         return "\n".join(rows)
 
     def __str__(self) -> str:
@@ -524,10 +528,13 @@ class GainDesign:
         sorting them is half the printing time of a symbolic N = 8 design.
         """
         small = self.n <= PRETTY_MAX_N
-        text = sp.sstr if small else _unsorted_sstr
+        printer = sp.sstr if small else _unsorted_sstr
+
+        def text(expr: Any) -> str:
+            return printer(readable(expr))
 
         def mat(M: sp.MatrixBase) -> str:
-            shown = sp.pretty(M, use_unicode=True) if small else text(M.tolist())
+            shown = sp.pretty(readable(M), use_unicode=True) if small else text(M.tolist())
             return "\n".join("    " + line for line in shown.splitlines())
 
         def conds(cs: Sequence[sp.Basic]) -> str:
@@ -543,19 +550,22 @@ class GainDesign:
         lines = [
             f"switched observer design for model {self.model.name!r} (n = {self.n}, choice: {self.choice}"
             f"{', conditional on the coupling constraints' if self.conditional else ''})",
-            f"  spectrum of A_plus: {', '.join(map(str, self.spectrum)) if self.spectrum else 'from the given K_plus'}",
-            f"  observable iff: {', '.join(map(str, nf.observability_conditions)) or 'always'}",
-            f"  normal form a = {list(nf.a)}",
+            f"  spectrum of A_plus: {', '.join(map(text, self.spectrum)) if self.spectrum else 'from the given K_plus'}",
+            f"  observable iff: {', '.join(map(text, nf.observability_conditions)) or 'always'}",
+            f"  normal form a = {text(list(nf.a))}",
             *gains,
             "  Routh–Hurwitz conditions for A_plus:", conds(self.hurwitz_plus),
             "  Routh–Hurwitz conditions for A_minus:", conds(self.hurwitz_minus),
             *lyapunov,
-            f"  C_plus = {list(self.C_plus)},  C_minus = {list(self.C_minus)}",
+            f"  C_plus = {text(list(self.C_plus))},  C_minus = {text(list(self.C_minus))}",
             "  coupling constraints on K_minus (Hoang family):",
             "\n".join(f"    {text(c)}" for c in self.gain_constraints) or "    (none)",
         ]
         if not full:
             lines.append("  (compact: full matrices with `switchobs design --full` or in `--json`)")
+        if is_shortened([*(self.spectrum or ()), *nf.a, *self.K_plus, *self.K_minus, *self.P, *self.C_plus,
+                         *self.C_minus]):
+            lines.append("  " + ROUNDED_NOTE)
         return "\n".join(lines)
 
     def _compact_P(self, text: Callable[[Any], str]) -> list[str]:
@@ -569,6 +579,10 @@ class GainDesign:
             return [*head, f"    u_m = N_m / D,  D = {text(dens.pop())}",
                     *(f"    N_{m + 1} = {text(num)}" for m, (num, _) in enumerate(parts))]
         return [*head, *(f"    u_{m + 1} = {text(self.P[m, m])}" for m in range(self.n))]
+
+
+def _readable_latex(expr: Any) -> str:
+    return sp.latex(readable(expr))
 
 
 def _unsorted_sstr(expr: Any) -> str:

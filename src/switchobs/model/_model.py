@@ -391,17 +391,17 @@ class Model:
         rows = [f"**Model `{self.name}`** (n = {self.n}){': ' + self.description if self.description else ''}",
                 "",
                 r"$$\dot z = s(y, t)\,\big(A z + d(y)\big) + b(y)\,u,\qquad y = C z,\qquad "
-                f"s = {sp.latex(self.time_scale)}$$",
+                f"s = {_latex(self.time_scale)}$$",
                 "",
-                rf"$$A = {sp.latex(self.A)},\quad C = {sp.latex(self.C)}"
-                + (rf",\quad d = {sp.latex(self.d)}" if any(e != 0 for e in self.d) else "")
-                + (rf",\quad b = {sp.latex(self.b)}" if self.inputs else "") + "$$",
+                rf"$$A = {_latex(self.A)},\quad C = {_latex(self.C)}"
+                + (rf",\quad d = {_latex(self.d)}" if any(e != 0 for e in self.d) else "")
+                + (rf",\quad b = {_latex(self.b)}" if self.inputs else "") + "$$",
                 "",
                 f"states: {', '.join(f'`{z}`' for z in self.states)}; signals: "
                 f"{', '.join(f'`{x}`' for x in self.signals)}"]
         if self.parameters:
-            vals = ", ".join(f"${sp.latex(self.symbols[k])} = {sp.latex(self.values[k])}$" if k in self.values
-                             else f"${sp.latex(self.symbols[k])}$" for k in self.parameters)
+            vals = ", ".join(f"${_latex(self.symbols[k])} = {_latex(self.values[k])}$" if k in self.values
+                             else f"${_latex(self.symbols[k])}$" for k in self.parameters)
             rows[-1] += f"; parameters: {vals}"
         return "\n".join(rows)
 
@@ -588,3 +588,10 @@ def numeric(expr: Any, values: Mapping[Any, Any] | None = None, *, what: str = "
                            "and logarithms")
     out = out.real.astype(float)
     return out[0, 0] if scalar else out
+
+
+def _latex(expr: Any) -> str:
+    """LaTeX of ``expr`` with long rationals to 6 digits (a float entry ``-2.1`` is a 52-bit fraction)."""
+    from .._display import readable
+
+    return sp.latex(readable(expr))
