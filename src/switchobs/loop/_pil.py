@@ -21,7 +21,7 @@ from ..exceptions import ObserverInputError, SimulationError
 from ..plants import BrakingScenario, RoadChange, RoadSchedule, simulate
 from ._adapter import ObserverXbsEstimator, SteppingObserver
 
-__all__ = ["PilRecord", "braking_record", "reference_run", "PilComparison", "compare_with_reference",
+__all__ = ["PilRecord", "braking_record", "reference_run", "reference_observer", "PilComparison", "compare_with_reference",
            "PIL_SCENARIO", "PIL_TOLERANCE"]
 
 #: The braking of the record: dry asphalt, snow from 0.6 s, 60 km/h down to 10 km/h, five-phase ABS.
@@ -199,3 +199,20 @@ def compare_with_reference(result: Any, observer: SteppingObserver, rows: npt.Ar
                          status_equal=bool(np.array_equal(ref_status, np.array(result.target_status))),
                          max_relative_error=err,
                          tolerance=PIL_TOLERANCE[result.real] if tolerance is None else tolerance)
+
+
+def reference_observer(model: Any, generated: Any, *, unknown: tuple[str, ...] = ()) -> Any:
+    """The Python reference observer of a generated one: its model, default parameters and gains, method and
+    step bound (``unknown``: the adaptive observer's estimated parameters)."""
+    from ..observers import AdaptiveSwitchedObserver, SwitchedObserver
+
+    vals = dict(zip(generated.param_names, generated.default_params))
+    params = {p: vals[p] for p in model.parameters if p in vals}
+    K_plus = [vals[f"K_plus_{s}"] for s in model.states]
+    K_minus = [vals[f"K_minus_{s}"] for s in model.states]
+    common: dict[str, Any] = dict(params=params, method=generated.method, h_max=generated.h_max,
+                                  max_substeps=generated.max_substeps)
+    if unknown:
+        Gamma = [[vals[f"Gamma_{u}_{v}"] for v in unknown] for u in unknown]
+        return AdaptiveSwitchedObserver(model, K_plus, K_minus, unknown=unknown, Gamma=Gamma, **common)
+    return SwitchedObserver(model, K_plus, K_minus, **common)
