@@ -177,6 +177,10 @@ class PilComparison(JsonRecord, error=SimulationError):
     max_relative_error: float
     tolerance: float
 
+    def to_json(self) -> dict[str, Any]:
+        return {"rows": self.rows, "identical_rows": self.identical_rows, "status_equal": self.status_equal,
+                "max_relative_error": self.max_relative_error, "tolerance": self.tolerance}
+
     @property
     def passed(self) -> bool:
         return self.identical_rows == self.rows and self.status_equal and self.max_relative_error <= self.tolerance
