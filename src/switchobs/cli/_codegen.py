@@ -3,13 +3,16 @@
 from __future__ import annotations
 
 import argparse
+import io
 import shlex
+import warnings
 import sys
 from typing import Any
 
 import sympy as sp
 
 from .._atomic import check_output_directory
+from .._limits import MAX_INPUT_FILE_BYTES, read_text
 from ..design import GainDesign, design
 from ..exceptions import CodegenError, FreeSymbolError, PrerequisiteError, SpectrumError
 from ..model import Model, load_model, rational_value
@@ -227,9 +230,12 @@ def _record(args: argparse.Namespace, gen: Any, model: Model | None, unknown: tu
     from ..loop import PilRecord, braking_record, reference_observer
 
     if args.record:
+        text, _ = read_text(args.record, what="the --record file", max_bytes=MAX_INPUT_FILE_BYTES, error=CodegenError)
         try:
-            table = np.genfromtxt(args.record, delimiter=",", names=True, dtype=float)
-        except (OSError, ValueError) as exc:
+            with warnings.catch_warnings():  # a ragged row is an error here, not a warning
+                warnings.simplefilter("error")
+                table = np.genfromtxt(io.StringIO(text), delimiter=",", names=True, dtype=float)
+        except (ValueError, UserWarning) as exc:
             raise CodegenError(f"--record {args.record!r} cannot be read as CSV with a header: {exc}") from None
         names = table.dtype.names or ()
         missing = [n for n in gen.signal_names if n not in names]

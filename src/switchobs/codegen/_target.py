@@ -38,6 +38,7 @@ import numpy.typing as npt
 
 from .._atomic import write_files
 from .._json import JsonRecord
+from .._limits import MAX_PIL_ROWS
 from ..exceptions import CodegenError, DimensionError, PrerequisiteError
 from ._generate import GeneratedObserver
 
@@ -478,7 +479,14 @@ def _record(gen: GeneratedObserver, signal_rows: npt.ArrayLike, dt: npt.ArrayLik
     if rows.ndim != 2 or rows.shape[1] != gen.ns or rows.shape[0] == 0:
         raise DimensionError(f"the record must have rows of {gen.ns} signals ({', '.join(gen.signal_names)}), got "
                              f"shape {rows.shape}")
-    dts = np.broadcast_to(np.asarray(dt, dtype=float), (rows.shape[0],))
+    if rows.shape[0] > MAX_PIL_ROWS:
+        raise DimensionError(f"the record has {rows.shape[0]} rows (limit MAX_PIL_ROWS = {MAX_PIL_ROWS}: the harness "
+                             "holds it in the board's memory); split it")
+    try:
+        dts = np.broadcast_to(np.asarray(dt, dtype=float), (rows.shape[0],))
+    except ValueError:
+        raise DimensionError(f"dt must be one number or one per row ({rows.shape[0]}), got shape "
+                             f"{np.shape(dt)}") from None
     x = np.asarray(x0, dtype=float).reshape(-1)
     if x.shape != (gen.nx,):
         raise DimensionError(f"x0 must have {gen.nx} entries ({', '.join(gen.state_names)}), got {x.size}")
