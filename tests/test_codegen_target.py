@@ -259,3 +259,19 @@ def test_pil_needs_a_cortex_m_target_and_a_record_of_the_right_shape():
         run_pil(gen, "cortex-m4f", np.ones((3, 2)), 1e-3, np.zeros(3))
     with pytest.raises(CodegenError, match="single-precision FPU"):
         measure_footprint(CObserver.like(case("abs-xbs3-radau3-float-m4f")[0]).generated, "cortex-m4f")
+
+
+@pytest.mark.slow
+def test_docs_on_the_target_section_equals_a_fresh_run():
+    """docs/codegen.md "On the target" (sizes, stack, instructions, PIL) is what the runs give today."""
+    need("arm-none-eabi-gcc", "qemu-system-arm")
+    from switchobs.report._repro_runs import _Runs
+    from switchobs.report._repro_target import TARGET_SECTIONS
+
+    (name, page, section), = TARGET_SECTIONS
+    text = (ROOT / page).read_text("utf-8")
+    begin, end = f"<!-- begin generated: {name} (switchobs reproduce) -->", f"<!-- end generated: {name} -->"
+    committed = text[text.index(begin):text.index(end)]
+    fresh = "\n".join(section(_Runs()))
+    assert fresh in committed, "docs/codegen.md 'On the target' differs from a fresh run: run `switchobs reproduce`"
+    assert "| abs-xbs3 | radau3 | float | cortex-m4f |" in fresh and "1510/1510" in fresh
