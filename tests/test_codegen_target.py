@@ -23,7 +23,10 @@ from switchobs.codegen import (TARGETS, CObserver, GeneratedObserver, StepStatus
                                target_build, target_real)
 from switchobs.codegen._target import WARNING_FLAGS, build_files
 from switchobs.exceptions import CodegenError
-from switchobs.loop import PIL_SCENARIO, PIL_TOLERANCE, braking_record, compare_with_reference
+from switchobs.codegen import generate_observer
+from switchobs.design import design
+from switchobs.loop import PIL_SCENARIO, PIL_TOLERANCE, braking_record, compare_with_reference, reference_observer
+from switchobs.model import builtin_model
 from switchobs.observers import adaptive_xbs_observer, xbs3_observer, xbs4_observer
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -49,7 +52,15 @@ CASES = {
                                   {"z2": 0.5}),
     "abs-adaptive2-rk4-float-m4f": (lambda: adaptive_xbs_observer(100.0, [1e4, 1e4]), "float", "cortex-m4f",
                                     {"c": 30.0, "d": 15.0}),
+    # sub-stepped: the step calls libm's ceilf on the M4F (newlib's), the host glibc's: both exact
+    "abs-xbs3-rk4-substeps-float-m4f": (lambda: substepped_reference(), "float", "cortex-m4f", {"z2": 0.5}),
 }
+
+
+def substepped_reference():
+    model = builtin_model("abs-xbs3")
+    gen = generate_observer(model, design(model, "-100,-100,-100"), real="float", h_max="1/100")
+    return reference_observer(model, gen)
 
 
 @functools.cache
@@ -206,6 +217,10 @@ def test_pil_on_qemu_is_bit_identical_to_the_host_build_and_close_to_the_referen
     states = np.array(res.target_states)
     assert np.ptp(states[:, 0]) > 1.0 and np.all(np.isfinite(states))
     assert 100 < res.instructions_per_step < 3000
+    if gen.h_max is not None:  # some rows of the record take sub-steps, and the step calls ceilf
+        assert any(abs(r[0] / r[1]) * h > gen.h_max_c for r, h in zip(rec.rows, rec.dt) if np.isfinite(r[0]))
+        step = [f for f in measure_footprint(gen, target).stack if f.function.endswith("_step")][0]
+        assert step.calls_out == ("ceilf",) and step.worst_bytes > step.frame_bytes
 
 
 def test_a_host_state_that_differs_in_one_bit_is_seen():

@@ -5,8 +5,9 @@ from __future__ import annotations
 import argparse
 import io
 import shlex
-import warnings
 import sys
+import warnings
+from pathlib import Path
 from typing import Any
 
 import sympy as sp
@@ -219,7 +220,10 @@ def run(args: argparse.Namespace) -> int:
             print(f"  {build.pil}")
             print(f"  record: {record}")
             print(f"  {comparison}" if comparison is not None else "  (no Python reference for this observer)")
-    return 1 if comparison is not None and not comparison.passed else 0
+    if build is not None and build.pil is not None and record is not None:
+        passed = comparison.passed if comparison is not None else build.pil.bit_identical
+        return 0 if passed else 1
+    return 0
 
 
 def _record(args: argparse.Namespace, gen: Any, model: Model | None, unknown: tuple[str, ...]) -> Any:
@@ -245,7 +249,7 @@ def _record(args: argparse.Namespace, gen: Any, model: Model | None, unknown: tu
         table = np.atleast_1d(table)
         rows = np.column_stack([table[n] for n in gen.signal_names])
         dt = table["dt"] if "dt" in names else np.full(rows.shape[0], 1e-3)
-        return PilRecord(rows, dt, np.zeros(gen.nx), f"{rows.shape[0]} rows of {args.record}")
+        return PilRecord(rows, dt, np.zeros(gen.nx), f"{rows.shape[0]} rows of {Path(args.record).name!r}")
     if model is not None and tuple(gen.signal_names)[1:] == ("vx", "u"):
         return braking_record(reference_observer(model, gen, unknown=unknown))
     rows, dt, x0 = default_record(gen)

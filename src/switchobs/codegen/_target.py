@@ -132,6 +132,11 @@ def target_real(target: Target | str, real: str | None) -> str:
     CodegenError
         ``real`` is not computed in hardware by the target (``double`` on a Cortex-M4F); the message says why
         and what to choose instead.
+
+    Examples
+    --------
+    >>> target_real("cortex-m4f", None), target_real("cortex-m7", None), target_real("cortex-m7", "float")
+    ('float', 'double', 'float')
     """
     t = _target(target)
     if real is None:
@@ -170,6 +175,15 @@ def build_files(gen: GeneratedObserver, target: Target | str) -> dict[str, str]:
 
     ``make`` builds for the host, ``make TARGET=<name>`` for a Cortex-M target; ``cmake -B build`` for the
     host, ``cmake -B build -DSWITCHOBS_TARGET=<name>`` for a Cortex-M target (the compiler set from it).
+
+    Examples
+    --------
+    >>> from switchobs.codegen import generate_observer
+    >>> from switchobs.model import builtin_model
+    >>> gen = generate_observer(builtin_model("abs-xbs3"), ([84.0, -19.5, -21.3], [-16.0, -4.4, 21.3]), real="float")
+    >>> files = build_files(gen, "cortex-m4f")
+    >>> sorted(files), "CPU_FLAGS = -mcpu=cortex-m4 -mthumb -mfpu=fpv4-sp-d16 -mfloat-abi=hard" in files["Makefile"]
+    (['CMakeLists.txt', 'Makefile'], True)
     """
     t = _target(target)
     p = gen.prefix
