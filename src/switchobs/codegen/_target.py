@@ -1,8 +1,8 @@
 """Targets of the generated C: build files, sizes and stack measured by building, processor-in-the-loop on qemu.
 
 A :class:`Target` fixes what an ECU build fixes: the CPU and FPU flags, the real type (a Cortex-M4F has a
-single-precision FPU only, so ``double`` there is refused: it would run in software floating point, about
-33x slower), and the flags every build uses (:data:`COMMON_FLAGS`: ``-ffp-contract=off`` so that no
+single-precision FPU only, so ``double`` there is refused: it would run in software floating point, tens of
+times the instructions of the float step), and the flags every build uses (:data:`COMMON_FLAGS`: ``-ffp-contract=off`` so that no
 multiply-add is fused and the target computes bit for bit what the host build and the Python reference
 compute; ``-fno-math-errno`` so that ``sqrt`` is one FPU instruction, not a call into libm that sets
 ``errno``).  :func:`target_build` adds to a :class:`~switchobs.codegen.GeneratedObserver` a ``Makefile``
@@ -107,7 +107,8 @@ TARGETS: Mapping[str, Target] = {
         ("-mcpu=cortex-m4", "-mthumb", "-mfpu=fpv4-sp-d16", "-mfloat-abi=hard"), "arm-none-eabi-gcc",
         "arm-none-eabi-size", "mps2-an386", "cortex-m4",
         refusal="a Cortex-M4F has a single-precision FPU (fpv4-sp-d16): double would run in software floating "
-                "point (about 33x slower per step); use --real float, or --target cortex-m7 for double"),
+                "point (tens of times the instructions of the float step, benchmarks/target.py); use --real "
+                "float, or --target cortex-m7 for double"),
     "cortex-m7": Target(
         "cortex-m7", "Arm Cortex-M7, double-precision FPU (fpv5-d16), hard-float ABI", ("double", "float"),
         ("-mcpu=cortex-m7", "-mthumb", "-mfpu=fpv5-d16", "-mfloat-abi=hard"), "arm-none-eabi-gcc",
