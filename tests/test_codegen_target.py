@@ -252,10 +252,13 @@ def test_cli_pil_for_a_user_model_prints_the_comparison_and_the_instructions(tmp
     csv = tmp_path / "rec.csv"
     csv.write_text("vx,y,u,dt\n" + "".join(f"{20 - k * 0.01},{(-1) ** k * 2.0},{50.0},0.001\n" for k in range(50))
                    + "0,1,1,0.001\n")
-    proc = subprocess.run([*base, "--record", str(csv), "--out", str(tmp_path / "b")], capture_output=True,
-                          text=True, check=False)
+    proc = subprocess.run([*base, "--record", str(csv), "--json", "--out", str(tmp_path / "b")],
+                          capture_output=True, text=True, check=False)
     assert proc.returncode == 0, proc.stderr
-    assert "51/51 rows bit-identical" in proc.stdout and "(1 refused)" in proc.stdout  # vx = 0 in the last row
+    data = __import__("json").loads(proc.stdout)
+    assert data["pil"]["rows"] == data["pil"]["identical_rows"] == 51 and data["pil"]["status_equal"]
+    assert data["pil"]["passed"] and data["target"]["instructions_per_step"] > 100
+    assert data["target"]["footprint"]["text_bytes"] > 1000 and "51 rows of 'rec.csv'" in data["target"]["record"]
     bad = tmp_path / "bad.csv"
     bad.write_text("y,u\n1,2\n")
     proc = subprocess.run([*base, "--record", str(bad), "--out", str(tmp_path / "c")], capture_output=True,
@@ -290,3 +293,15 @@ def test_docs_on_the_target_section_equals_a_fresh_run():
     fresh = "\n".join(section(_Runs()))
     assert fresh in committed, "docs/codegen.md 'On the target' differs from a fresh run: run `switchobs reproduce`"
     assert "| abs-xbs3 | radau3 | float | cortex-m4f |" in fresh and "1510/1510" in fresh
+
+
+def test_a_step_that_faults_on_the_target_is_reported_not_hung():
+    """A store to an address the board does not decode: the fault handler reports it, qemu exits, one error."""
+    need("arm-none-eabi-gcc", "qemu-system-arm")
+    _, gen, _, _ = case("abs-xbs3-radau3-float-m4f")
+    bad = ("bad_step", f'#include <stdint.h>\n#include "{gen.prefix}.h"\n'
+           "int32_t bad_step(float *x, const float *s, const float *p, float dt);\n"
+           "int32_t bad_step(float *x, const float *s, const float *p, float dt)\n"
+           "{ (void)x; (void)s; (void)p; (void)dt; *(volatile uint32_t *)0xF0000000u = 1u; return 0; }\n")
+    with pytest.raises(CodegenError, match="the harness faulted on cortex-m4f"):
+        run_pil(gen, "cortex-m4f", np.ones((4, 3)), 1e-3, np.zeros(3), step=bad)

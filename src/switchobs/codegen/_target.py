@@ -578,10 +578,16 @@ def run_pil(gen: GeneratedObserver, target: Target | str, signal_rows: npt.Array
         _run([host_cc, *COMMON_FLAGS, "-Wall", "-Wextra", "-Werror", *common, "pil_host.c", "-lm", "-o", "pil_host"],
              "gcc (host harness)", cwd=d)
         # the semihosting console into a file: qemu writes it to stderr or stdout depending on what they are
-        _run([qemu, *qemu_arguments(t), "-chardev", "file,id=pil,path=pil.out", "-semihosting-config",
-              "enable=on,target=native,chardev=pil", "-kernel", "pil.elf"], f"qemu-system-arm -M {t.machine}", cwd=d,
-             timeout=_QEMU_TIMEOUT_S)
-        out = (d / "pil.out").read_text(encoding="ascii", errors="replace")
+        try:
+            _run([qemu, *qemu_arguments(t), "-chardev", "file,id=pil,path=pil.out", "-semihosting-config",
+                  "enable=on,target=native,chardev=pil", "-kernel", "pil.elf"], f"qemu-system-arm -M {t.machine}",
+                 cwd=d, timeout=_QEMU_TIMEOUT_S)
+        finally:
+            out = (d / "pil.out").read_text(encoding="ascii", errors="replace") if (d / "pil.out").exists() else ""
+            if "FAULT" in out:
+                raise CodegenError(f"the harness faulted on {t.name} (qemu {t.machine}): a HardFault, MemManage, "
+                                   "BusFault or UsageFault handler ran after "
+                                   f"{out.count(chr(10) + 'R ')} rows were written") from None
         host = _run([str(d / "pil_host")], "the host harness", cwd=d, timeout=_QEMU_TIMEOUT_S)
     t_status, t_states, counts = _parse_pil(out, gen, n)
     h_status, h_states, _ = _parse_pil(host, gen, n)
