@@ -19,12 +19,11 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from switchobs.codegen import (TARGETS, CObserver, GeneratedObserver, StepStatus, measure_footprint, run_pil,
-                               target_build, target_real)
+from switchobs.codegen import (TARGETS, CObserver, GeneratedObserver, StepStatus, generate_observer, measure_footprint,
+                               run_pil, target_build, target_real)
 from switchobs.codegen._target import WARNING_FLAGS, build_files
-from switchobs.exceptions import CodegenError
-from switchobs.codegen import generate_observer
 from switchobs.design import design
+from switchobs.exceptions import CodegenError
 from switchobs.loop import PIL_SCENARIO, PIL_TOLERANCE, braking_record, compare_with_reference, reference_observer
 from switchobs.model import builtin_model
 from switchobs.observers import adaptive_xbs_observer, xbs3_observer, xbs4_observer
