@@ -30,13 +30,20 @@ from switchobs.observers import adaptive_xbs_observer, xbs3_observer, xbs4_obser
 
 ROOT = Path(__file__).resolve().parents[1]
 PACKAGES = {"arm-none-eabi-gcc": "gcc-arm-none-eabi libnewlib-arm-none-eabi", "qemu-system-arm": "qemu-system-arm",
-            "cmake": "cmake", "arm-none-eabi-nm": "gcc-arm-none-eabi"}
+            "cmake": "cmake", "arm-none-eabi-nm": "gcc-arm-none-eabi", "newlib": "libnewlib-arm-none-eabi"}
+
+
+def _missing(tool: str) -> bool:
+    if tool == "newlib":  # the harness links newlib's libm: the cross compiler alone does not bring it
+        return shutil.which("arm-none-eabi-gcc") is None or "/" not in subprocess.run(
+            ["arm-none-eabi-gcc", "-print-file-name=libm.a"], capture_output=True, text=True, check=False).stdout
+    return shutil.which(tool) is None
 
 
 def need(*tools: str) -> None:
     """A loud skip when a tool is missing: the check is NOT made."""
-    for tool in tools:
-        if shutil.which(tool) is None:
+    for tool in (*tools, *(("newlib",) if "qemu-system-arm" in tools else ())):
+        if _missing(tool):
             message = (f"!!! {tool} is NOT INSTALLED: the generated C was NOT checked on its target; run `make "
                        f"cc-tools` (as root on Debian: apt-get install -y {PACKAGES.get(tool, tool)}) !!!")
             warnings.warn(message)
