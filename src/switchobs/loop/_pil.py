@@ -102,7 +102,7 @@ class PilRecord(JsonRecord, error=SimulationError):
     __hash__ = None  # type: ignore[assignment]
 
     def __str__(self) -> str:
-        return f"{self.rows.shape[0]} rows: {self.description}"
+        return self.description
 
 
 def braking_record(observer: SteppingObserver, *, scenario: BrakingScenario = PIL_SCENARIO,
@@ -135,7 +135,7 @@ def braking_record(observer: SteppingObserver, *, scenario: BrakingScenario = PI
     rows[k, 0] = np.nan
     y = rows[:, 0]
     return PilRecord(rows, np.array(rec.dts), rec.x0,
-                     f"{scenario.name}: {rows.shape[0]} steps of a braking from {scenario.speed_m_s * 3.6:.0f} km/h, "
+                     f"{rows.shape[0]} steps of a braking simulation from {scenario.speed_m_s * 3.6:.0f} km/h, "
                      f"road change at {scenario.roads.changes[0].at_time_s:g} s, y > 0 in {int(np.sum(y > 0))} and "
                      f"y < 0 in {int(np.sum(y < 0))} rows, row {k} a sensor dropout (y NaN)")
 
