@@ -26,6 +26,7 @@ import numpy as np
 from _harness import publish
 
 from switchobs.codegen import TARGETS, CObserver, measure_footprint, run_pil
+from switchobs.exceptions import PrerequisiteError
 from switchobs.loop import braking_record
 from switchobs.observers import adaptive_xbs_observer, xbs3_observer, xbs4_observer
 
@@ -176,4 +177,8 @@ def main() -> int:
 
 
 if __name__ == "__main__":
-    raise SystemExit(main())
+    try:
+        raise SystemExit(main())
+    except PrerequisiteError as exc:  # no cross compiler or qemu here: say so, keep the published results
+        print(f"!!! benchmarks/target.py SKIPPED: {exc}; benchmarks/results/target.md is unchanged !!!")
+        raise SystemExit(0) from None
