@@ -188,6 +188,20 @@ def _demo_report():
     return DemoReport("out", DemoSettings(fast=True), (model,), braking, ("report.md",), {"design": 0.5})
 
 
+def _footprint():
+    from switchobs.codegen import FunctionStack, TargetFootprint
+
+    return TargetFootprint("cortex-m4f", "float", ("-O2", "-mcpu=cortex-m4"), "arm-none-eabi-gcc 12.2.1", 2232, 0, 0,
+                           (FunctionStack("p_step", 16, 104), FunctionStack("p_rows", 88, 88, ("ceilf",))))
+
+
+def _pil_result():
+    from switchobs.codegen import PilResult
+
+    states = ((0.5, 0.25, 0.0), (0.5, 0.25, 0.0))
+    return PilResult("cortex-m4f", "float", "p", "mps2-an386", 2, (0, 3), (0, 3), states, states, 351.0, 40.0)
+
+
 def _samples() -> dict[str, Callable[[], tuple[Any, dict[str, Any]]]]:
     """Class name -> a function returning an instance and the ``to_json`` options that keep everything."""
     from switchobs import certify, loop, plants, report, sensors, sweep
@@ -287,6 +301,13 @@ def _samples() -> dict[str, Callable[[], tuple[Any, dict[str, Any]]]]:
         "GeneratedObserver": lambda: (_c_observer().generated, {"sources": True}),
         "CObserver": lambda: (_c_observer(), {"sources": True}),
         "Transformation": lambda: plain(_transformations()[0]),
+        # the target runs need the cross compiler and qemu (tests/test_codegen_target.py): their shapes
+        "FunctionStack": lambda: plain(_footprint().stack[0]),
+        "TargetFootprint": lambda: plain(_footprint()),
+        "PilResult": lambda: plain(_pil_result()),
+        "PilRecord": lambda: plain(loop.PilRecord(np.array([[0.5, 20.0, 10.0], [math.nan, 19.9, 10.0]]),
+                                                  np.array([1e-3, 1e-3]), np.array([0.5, 0.0, 0.0]), "two rows")),
+        "PilComparison": lambda: plain(loop.PilComparison(2, 2, True, 2.5e-7, 1e-4)),
         # plants
         "FivePhaseABS": lambda: plain(plants.FivePhaseABS(tracking=True, stall_timeout_s=None)),
         "SixPhaseABS": lambda: plain(plants.SixPhaseABS(slip_threshold=0.08, hold_timeout_s=0.2)),

@@ -38,6 +38,7 @@ from ._repro_encoders import (_chain_abs_section, _chain_braking_section, _encod
                               _encoder_example_section, _orders, _super_twisting_section, _table61_section,
                               _three_stage_section)
 from ._repro_runs import _Runs
+from ._repro_target import TARGET_SECTIONS
 
 __all__ = ["ReproductionPage", "GENERATED_SECTIONS", "reproduction_pages", "write_reproductions", "stale_pages"]
 
@@ -236,6 +237,7 @@ _SECTIONS: dict[str, tuple[str, Callable[[_Runs], list[str]]]] = {
     "super_twisting": ("docs/encoders.md", _super_twisting_section),
 }
 _SECTIONS.update({name: (path, section) for name, path, section in MEASURED_SECTIONS})
+_SECTIONS.update({name: (path, section) for name, path, section in TARGET_SECTIONS})
 #: (page, section name) of every generated section, in page order.
 GENERATED_SECTIONS: tuple[tuple[str, str], ...] = tuple((path, name) for name, (path, _) in _SECTIONS.items())
 
