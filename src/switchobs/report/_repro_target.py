@@ -13,7 +13,6 @@ import shutil
 import subprocess
 from typing import TYPE_CHECKING
 
-from ..codegen import TARGETS, CObserver, measure_footprint, run_pil
 from ..loop import braking_record, compare_with_reference
 from ._markdown import md_table
 
@@ -30,6 +29,7 @@ ROWS = (("abs-xbs3", "radau3", 100.0, 100.0, "float", "cortex-m4f"),
 
 
 def _on_the_target_section(runs: _Runs) -> list[str]:  # noqa: ARG001 - the runs of the other sections
+    from ..codegen import TARGETS, CObserver, measure_footprint, run_pil   # casadi: not for `reproduce --help`
     from ..observers import xbs3_observer, xbs4_observer
 
     make = {"abs-xbs3": xbs3_observer, "abs-xbs4": xbs4_observer}
