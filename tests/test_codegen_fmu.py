@@ -1,0 +1,233 @@
+"""The generated observer as an FMU, checked by FMPy (a tool switchobs did not write).
+
+Every FMU passes ``fmpy.validation.validate_fmu``; FMPy's slave classes step it over a record of the signals a
+braking simulation (scenario hoang-fig3) fed its observer and get the C ``_run`` / ``_run_dt`` trajectory bit for
+bit; ``fmpy.simulate_fmu`` runs it with the record as its input.  Both FMI versions, each method, both real types,
+a user model with d(y) and b(y) and the adaptive observer.  One FMU per case and version per module.
+"""
+
+from __future__ import annotations
+
+import ctypes
+import shutil
+import subprocess
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+fmpy = pytest.importorskip("fmpy", reason="fmpy is not installed: the FMUs are NOT checked (pip install fmpy)")
+from fmpy import extract, read_model_description, simulate_fmu  # noqa: E402
+from fmpy import calloc, free  # noqa: E402
+from fmpy.fmi2 import (FMU2Slave, fmi2CallbackAllocateMemoryTYPE, fmi2CallbackFreeMemoryTYPE,  # noqa: E402
+                       fmi2CallbackFunctions, fmi2CallbackLoggerTYPE, fmi2StepFinishedTYPE)
+from fmpy.fmi3 import FMU3Slave  # noqa: E402
+from fmpy.validation import validate_fmu  # noqa: E402
+
+from switchobs.cli.main import main  # noqa: E402
+from switchobs.codegen import STATUS_TEXT, CObserver, StepStatus, generate_observer  # noqa: E402
+from switchobs.codegen._fmu import fmi_headers, generate_fmu  # noqa: E402
+from switchobs.design import design  # noqa: E402
+from switchobs.exceptions import CodegenError  # noqa: E402
+from switchobs.loop import ObserverXbsEstimator  # noqa: E402
+from switchobs.model import builtin_model, load_model  # noqa: E402
+from switchobs.observers import xbs3_observer  # noqa: E402
+from switchobs.plants import scenario, simulate  # noqa: E402
+
+ROOT = Path(__file__).resolve().parents[1]
+#: Rows of the record the FMUs are stepped over (the first 1.2 s of the braking).
+ROWS = 1200
+DT = 1e-3
+
+#: name -> (model, spectrum, real, method, h_max, unknown): abs-xbs3, abs-xbs4, a user model with d(y) and b(y)
+#: (examples/my_model.toml), every method and real type, sub-stepping, the adaptive observer.
+CASES = {
+    "xbs3-rk4-substeps": ("abs-xbs3", "-40,-60,-60", "double", "rk4", "1/100", ()),
+    "xbs4-euler-float": ("abs-xbs4", "-40,-60,-60,-60", "float", "euler", None, ()),
+    "user-radau3": (str(ROOT / "examples" / "my_model.toml"), "-40,-60,-60", "double", "radau3", None, ()),
+    "user-midpoint-float": (str(ROOT / "examples" / "my_model.toml"), "-40,-60,-60", "float", "midpoint", None, ()),
+}
+
+
+class _Recorder:
+    """The observer of a simulation, recording the signals and step lengths of every step it makes."""
+
+    def __init__(self, observer):
+        self.observer, self.rows, self.dts = observer, [], []
+
+    def __getattr__(self, name):
+        return getattr(self.observer, name)
+
+    def step(self, xhat, signals, dt):
+        self.rows.append(np.array(signals, dtype=float))
+        self.dts.append(float(dt))
+        return self.observer.step(xhat, signals, dt)
+
+
+@pytest.fixture(scope="module")
+def record():
+    """Signals (y, vx, u) and step lengths that the braking of hoang-fig3 gave its XBS observer (events make
+    some steps shorter than 1 ms)."""
+    rec = _Recorder(xbs3_observer(60.0, 60.0))
+    simulate(scenario("hoang-fig3"), estimator=ObserverXbsEstimator(rec, initial_state={"z2": 0.5}))
+    return np.array(rec.rows[:ROWS]), np.array(rec.dts[:ROWS])
+
+
+def _generated(case: str):
+    model_name, spectrum, real, method, h_max, unknown = CASES[case]
+    m = load_model(model_name) if model_name.endswith(".toml") else builtin_model(model_name)
+    return generate_observer(m, design(m, spectrum), real=real, method=method, h_max=h_max, unknown=unknown)
+
+
+@pytest.fixture(scope="module")
+def fmus(tmp_path_factory):
+    """Every case and FMI version, generated, written and extracted once."""
+    root = tmp_path_factory.mktemp("fmus")
+    out = {}
+    for case in CASES:
+        gen = _generated(case)
+        x0 = {name: 0.1 * (i + 1) for i, name in enumerate(gen.state_names)}
+        for version in (3, 2):
+            fmu = generate_fmu(gen, fmi_version=version, initial_state=x0)
+            path = fmu.write(root / f"{case}-{version}.fmu")
+            out[case, version] = (gen, fmu, path, extract(str(path)), x0)
+    return out
+
+
+PARAMS = [(case, version) for case in CASES for version in (3, 2)]
+
+
+def _slave(fmu, path, unzipped, name="instance", **instantiate):
+    md = read_model_description(str(path))
+    cls = FMU3Slave if fmu.fmi_version == 3 else FMU2Slave
+    slave = cls(guid=md.guid if fmu.fmi_version == 2 else md.instantiationToken, unzipDirectory=unzipped,
+                modelIdentifier=fmu.prefix, instanceName=name)
+    slave.instantiate(**instantiate)
+    if fmu.fmi_version == 2:
+        slave.setupExperiment(startTime=0.0)
+    slave.enterInitializationMode()
+    return slave
+
+
+def _names(gen, prefix):
+    return [f"{prefix}{n}" for n in gen.state_names]
+
+
+def _step_over(fmu, slave, gen, rows, dts):
+    vr = fmu.value_references
+    sig = [vr[n] for n in gen.signal_names]
+    out = [vr[n] for n in _names(gen, "xhat_")]
+    traj, t = [], 0.0
+    for row, h in zip(rows, dts):
+        slave.setReal(sig, list(row)) if fmu.fmi_version == 2 else slave.setFloat64(sig, list(row))
+        slave.doStep(currentCommunicationPoint=t, communicationStepSize=h)
+        t += h
+        traj.append(slave.getReal(out) if fmu.fmi_version == 2 else slave.getFloat64(out))
+    return np.array(traj)
+
+
+def _exit(slave, fmu, x0, gen):
+    vr = fmu.value_references
+    refs = [vr[n] for n in _names(gen, "xhat0_")]
+    values = [x0[n] for n in gen.state_names]
+    slave.setReal(refs, values) if fmu.fmi_version == 2 else slave.setFloat64(refs, values)
+    slave.exitInitializationMode()
+
+
+@pytest.mark.parametrize("case,version", PARAMS)
+def test_fmpy_validation_finds_no_problem(fmus, case, version):
+    gen, fmu, path, _, _ = fmus[case, version]
+    assert validate_fmu(str(path)) == []
+    md = read_model_description(str(path))
+    assert md.fmiVersion == f"{version}.0" and md.coSimulation.modelIdentifier == gen.prefix
+    causality = {v.name: v.causality for v in md.modelVariables}
+    assert [n for n in gen.signal_names if causality[n] == "input"] == list(gen.signal_names)
+    assert all(causality[n] == "parameter" for n in (*gen.param_names, *_names(gen, "xhat0_")))
+    assert all(causality[n] == "output" for n in (*_names(gen, "xhat_"), "status"))
+    tunable = {v.name for v in md.modelVariables if v.variability == "tunable"}
+    assert tunable == set(gen.param_names)   # the model values and K_plus / K_minus
+    starts = {v.name: float(v.start) for v in md.modelVariables if v.name in gen.param_names}
+    assert [starts[n] for n in gen.param_names] == list(gen.default_params)
+
+
+@pytest.mark.parametrize("case,version", PARAMS)
+def test_slave_steps_equal_the_c_run_bit_for_bit(fmus, record, case, version):
+    """One doStep per row with the row's signals held equals _run (fixed 1 ms) and _run_dt (the recorded,
+    irregular step lengths) of the same C, bit for bit."""
+    gen, fmu, path, unzipped, x0 = fmus[case, version]
+    rows, dts = record
+    c = CObserver(gen)
+    start = [x0[n] for n in gen.state_names]
+    for steps in (np.full(len(rows), DT), dts):
+        slave = _slave(fmu, path, unzipped)
+        _exit(slave, fmu, x0, gen)
+        got = _step_over(fmu, slave, gen, rows, steps)
+        status = slave.getInteger([fmu.value_references["status"]]) if version == 2 else \
+            slave.getInt32([fmu.value_references["status"]])
+        slave.terminate()
+        slave.freeInstance()
+        want = c.run(start, rows, DT) if steps is not dts else c.run_dt(start, rows, dts)
+        assert np.array_equal(got, want)
+        assert list(status) == [0]
+
+
+@pytest.mark.parametrize("version", (3, 2))
+def test_simulate_fmu_runs_the_record_as_input(fmus, record, version):
+    """fmpy.simulate_fmu with the record as a piecewise-constant input: the C _run of the same rows."""
+    gen, fmu, path, _, x0 = fmus["xbs3-rk4-substeps", version]
+    rows, _ = record
+    n = 400
+    t = np.arange(n) * DT
+    signal = np.zeros(n, dtype=[("time", float)] + [(s, float) for s in gen.signal_names])
+    signal["time"] = t
+    for j, s in enumerate(gen.signal_names):
+        signal[s] = rows[:n, j]
+    outputs = _names(gen, "xhat_")
+    result = simulate_fmu(str(path), start_time=0.0, stop_time=t[-1], step_size=DT, input=signal,
+                          output=outputs + ["status"], start_values={f"xhat0_{k}": v for k, v in x0.items()})
+    got = np.column_stack([result[o] for o in outputs])
+    want = CObserver(gen).run([x0[s] for s in gen.state_names], rows[:n - 1], DT)
+    assert got.shape == (n, gen.nx)
+    np.testing.assert_array_equal(got[0], [x0[s] for s in gen.state_names])   # the start values
+    # FMPy interpolates the input linearly between its samples at t_k, the times the steps start: the values
+    # it sets are the rows up to the rounding of its time grid
+    np.testing.assert_allclose(got[1:], want, rtol=1e-9, atol=1e-9 * np.abs(want).max())
+    assert np.all(result["status"] == 0)
+
+
+@pytest.mark.parametrize("version", (3, 2))
+def test_refused_step_is_discarded_with_the_status_logged_and_the_state_kept(fmus, version):
+    gen, fmu, path, unzipped, x0 = fmus["xbs3-rk4-substeps", version]
+    messages = []
+    if version == 3:
+        def log3(env, status, category, message):
+            messages.append((status, message.decode()))
+        slave = _slave(fmu, path, unzipped, logMessage=log3)
+    else:
+        def log2(env, name, status, category, message, *args):
+            messages.append((status, message.decode()))
+        callbacks = fmi2CallbackFunctions(logger=fmi2CallbackLoggerTYPE(log2),
+                                          allocateMemory=fmi2CallbackAllocateMemoryTYPE(calloc),
+                                          freeMemory=fmi2CallbackFreeMemoryTYPE(free),
+                                          stepFinished=fmi2StepFinishedTYPE(), componentEnvironment=None)
+        slave = _slave(fmu, path, unzipped, callbacks=callbacks)
+    _exit(slave, fmu, x0, gen)
+    vr = fmu.value_references
+    set_real = slave.setReal if version == 2 else slave.setFloat64
+    get_real = slave.getReal if version == 2 else slave.getFloat64
+    set_real([vr["y"], vr["vx"], vr["u"]], [1.0, -3.0, 0.0])   # vx must be > 0
+    before = get_real([vr[n] for n in _names(gen, "xhat_")])
+    with pytest.raises(Exception, match="Discard|discard|status 2"):
+        slave.doStep(currentCommunicationPoint=0.0, communicationStepSize=DT)
+    status = (slave.getInteger if version == 2 else slave.getInt32)([vr["status"]])
+    code = int(StepStatus.UNDEFINED_TIME_SCALE)   # what _step returns for vx <= 0 (a guard of s = y / vx)
+    assert list(status) == [code]
+    assert get_real([vr[n] for n in _names(gen, "xhat_")]) == before
+    text = STATUS_TEXT[StepStatus(code)]
+    assert [m for s, m in messages if s == 2 and f"status {code} ({text})" in m], messages
+    # the next step with admissible signals is made as usual
+    set_real([vr["vx"]], [3.0])
+    slave.doStep(currentCommunicationPoint=0.0, communicationStepSize=DT)
+    assert list((slave.getInteger if version == 2 else slave.getInt32)([vr["status"]])) == [0]
+    slave.terminate()
+    slave.freeInstance()
