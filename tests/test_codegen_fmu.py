@@ -231,3 +231,112 @@ def test_refused_step_is_discarded_with_the_status_logged_and_the_state_kept(fmu
     assert list((slave.getInteger if version == 2 else slave.getInt32)([vr["status"]])) == [0]
     slave.terminate()
     slave.freeInstance()
+
+
+def test_tunable_parameters_and_independent_instances(fmus, record):
+    """Two instances of one FMU, interleaved: one with its gains retuned in step mode, each equal to the C _run
+    with its own parameters (no state shared between instances)."""
+    gen, fmu, path, unzipped, x0 = fmus["xbs3-rk4-substeps", 3]
+    rows, _ = record
+    rows = rows[:300]
+    tuned = {"K_plus_z1": 150.0, "K_minus_z1": -100.0, "c": 30.0}
+    vr = fmu.value_references
+    a, b = _slave(fmu, path, unzipped, "a"), _slave(fmu, path, unzipped, "b")
+    _exit(a, fmu, x0, gen)
+    _exit(b, fmu, x0, gen)
+    b.setFloat64([vr[k] for k in tuned], list(tuned.values()))   # tunable: set in step mode
+    sig, out = [vr[n] for n in gen.signal_names], [vr[n] for n in _names(gen, "xhat_")]
+    got_a, got_b = [], []
+    for k, row in enumerate(rows):
+        for slave, got in ((a, got_a), (b, got_b)):
+            slave.setFloat64(sig, list(row))
+            slave.doStep(currentCommunicationPoint=k * DT, communicationStepSize=DT)
+            got.append(slave.getFloat64(out))
+    start = [x0[n] for n in gen.state_names]
+    np.testing.assert_array_equal(got_a, CObserver(gen).run(start, rows, DT))
+    np.testing.assert_array_equal(got_b, CObserver(gen, params=tuned).run(start, rows, DT))
+    assert not np.array_equal(got_a, got_b)
+    for slave in (a, b):
+        slave.terminate()
+        slave.freeInstance()
+
+
+def test_fmi2_instance_is_the_only_allocation_through_the_environment(fmus, record):
+    """FMI 2.0: the FMU allocates through the environment's allocateMemory, once per instance, freed once."""
+    gen, fmu, path, unzipped, x0 = fmus["xbs3-rk4-substeps", 2]
+    calls = []
+
+    def allocate(n, size):
+        calls.append(("allocate", n * size))
+        return calloc(n, size)
+
+    def release(pointer):
+        calls.append(("free", pointer))
+        free(pointer)
+    callbacks = fmi2CallbackFunctions(logger=fmi2CallbackLoggerTYPE(lambda *a: None),
+                                      allocateMemory=fmi2CallbackAllocateMemoryTYPE(allocate),
+                                      freeMemory=fmi2CallbackFreeMemoryTYPE(release),
+                                      stepFinished=fmi2StepFinishedTYPE(), componentEnvironment=None)
+    slave = _slave(fmu, path, unzipped, callbacks=callbacks)
+    _exit(slave, fmu, x0, gen)
+    _step_over(fmu, slave, gen, record[0][:100], np.full(100, DT))
+    slave.terminate()
+    assert [c[0] for c in calls] == ["allocate"]
+    slave.freeInstance()
+    assert [c[0] for c in calls] == ["allocate", "free"]
+
+
+@pytest.mark.parametrize("version", (3, 2))
+def test_wrapper_compiles_without_warnings_in_strict_c99(fmus, tmp_path, version):
+    gen, fmu, _, _, _ = fmus["user-midpoint-float", version]
+    cc = shutil.which("gcc") or shutil.which("cc")
+    if cc is None:
+        pytest.skip("no C compiler is installed: the wrapper's warnings are NOT checked")
+    files = {**gen.files, f"{gen.prefix}_fmi{version}.c": fmu.wrapper, **fmi_headers(version)}
+    for name, text in files.items():
+        (tmp_path / name).write_text(text)
+    proc = subprocess.run([cc, "-std=c99", "-pedantic", "-Wall", "-Wextra", "-Werror", "-Wconversion",
+                           "-Wno-sign-conversion", "-c", f"{gen.prefix}_fmi{version}.c"], cwd=tmp_path,
+                          capture_output=True, text=True)
+    assert proc.returncode == 0, proc.stderr
+
+
+def test_adaptive_observer_fmu_steps_like_its_c(tmp_path, record):
+    """The adaptive observer of seed 001 (3.4) (state w, theta_hat, Upsilon) as an FMU, FMI 3.0."""
+    m = builtin_model("abs-adaptive2")
+    gen = generate_observer(m, design(m, "-40,-60"), unknown=["c"], Gamma=[50.0])
+    fmu = generate_fmu(gen)
+    path = fmu.write(tmp_path / "adaptive.fmu")
+    assert validate_fmu(str(path)) == []
+    x0 = {n: 0.0 for n in gen.state_names}
+    slave = _slave(fmu, path, extract(str(path)))
+    _exit(slave, fmu, x0, gen)
+    rows = record[0][:300]
+    got = _step_over(fmu, slave, gen, rows, np.full(len(rows), DT))
+    slave.terminate()
+    slave.freeInstance()
+    np.testing.assert_array_equal(got, CObserver(gen).run(np.zeros(gen.nx), rows, DT))
+
+
+def test_cli_writes_the_fmu_and_refuses_bad_options_in_one_line(tmp_path, capsys):
+    out = tmp_path / "c"
+    assert main(["codegen", "abs-xbs3", "--spectrum=-40,-60,-60", "--fmu", "--fmi-version", "2",
+                 "--out", str(out)]) == 0
+    path = out / "switchobs_abs_xbs3.fmu"
+    assert validate_fmu(str(path)) == [] and read_model_description(str(path)).fmiVersion == "2.0"
+    capsys.readouterr()
+    for bad, says in ((["--fmu", "--fmi-version", "4"], "--fmi-version must be 2"),
+                      (["--fmi-version", "3"], "give --fmu too")):
+        target = tmp_path / "bad"
+        assert main(["codegen", "abs-xbs3", "--spectrum=-40,-60,-60", *bad, "--out", str(target)]) == 2
+        err = capsys.readouterr().err
+        assert err.count("\n") == 1 and says in err, err
+        assert not target.exists()   # nothing written
+
+
+def test_generate_fmu_refuses_an_unknown_version_and_state(fmus):
+    gen = fmus["xbs3-rk4-substeps", 3][0]
+    with pytest.raises(CodegenError, match=r"FMI version must be one of \[2, 3\], got 1"):
+        generate_fmu(gen, fmi_version=1)
+    with pytest.raises(CodegenError, match=r"initial_state names \['z9'\]"):
+        generate_fmu(gen, initial_state={"z9": 1.0})

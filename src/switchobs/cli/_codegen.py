@@ -9,12 +9,13 @@ from typing import Any
 
 import sympy as sp
 
-from .._atomic import check_output_directory
+from .._atomic import check_output_directory, write_files
 from ..design import GainDesign, design
 from ..exceptions import CodegenError, FreeSymbolError, PrerequisiteError, SpectrumError
 from ..model import Model, load_model, rational_value
 from ..spec import METHODS
 from ._common import emit_json, parse_params
+from ._integration import add_integration_arguments, integration_files
 
 __all__ = ["register"]
 
@@ -56,6 +57,7 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--prefix", help="C prefix (default switchobs_<model>, non-identifier characters as _)")
     p.add_argument("--out", required=True, metavar="DIR", help="directory for <prefix>.c, <prefix>.h, README.md")
     p.add_argument("--json", action="store_true", help="print the description as JSON")
+    add_integration_arguments(p)
     p.set_defaults(func=run)
 
 
@@ -160,7 +162,7 @@ def run(args: argparse.Namespace) -> int:
                                 prefix=args.prefix, unknown=unknown,
                                 Gamma=_gamma(args.gamma) if args.gamma else None, h_max=h_max,
                                 max_substeps=args.max_substeps, certificate=certificate, command=command)
-    paths = gen.write(args.out)
+    paths = write_files(args.out, {**gen.files, **integration_files(gen, args)}, what="the generated C into")
     if args.json:
         data = gen.to_json()
         data["written"] = [str(p) for p in paths]
