@@ -155,6 +155,9 @@ def generate_a2l(gen: GeneratedObserver, *, addresses: Mapping[str, int] | None 
         if missing:
             raise CodegenError(f"the program defines no symbol {missing}; link {gen.prefix}_calibration.c into it")
     base = {s: (addresses or {}).get(s, 0) for s in a2l_symbols(gen)}
+
+    def at(symbol: str, offset: int) -> str:   # no addresses: 0 everywhere, the SYMBOL_LINK says where
+        return f"0x{base[symbol] + offset:X}" if addresses is not None else "0x0"
     dtype, size, big, _ = _REAL[gen.real]
     layout = f"RL_{dtype}"
     segment = f"calibration of {gen.prefix}: {n['params']} in section {n['section']}"
@@ -172,7 +175,7 @@ def generate_a2l(gen: GeneratedObserver, *, addresses: Mapping[str, int] | None 
         "    /end MOD_COMMON",
         f"    /begin MOD_PAR {_text(segment)}",
         f"      /begin MEMORY_SEGMENT CAL_PARAMS {_text(n['params'])} DATA RAM INTERN "
-        f"0x{base[n['params']]:X} 0x{size * gen.np:X} -1 -1 -1 -1 -1",
+        f"{at(n['params'], 0)} 0x{size * gen.np:X} -1 -1 -1 -1 -1",
         "      /end MEMORY_SEGMENT",
         "    /end MOD_PAR",
         f'    /begin COMPU_METHOD CM_IDENTICAL "identity" IDENTICAL "%.17g" ""',
@@ -184,18 +187,18 @@ def generate_a2l(gen: GeneratedObserver, *, addresses: Mapping[str, int] | None 
     for i, name in enumerate(gen.param_names):
         lower, upper = _limits(gen, name)
         lines += [f"    /begin CHARACTERISTIC {name} {_text(_describe(name, gen))} VALUE "
-                  f"0x{base[n['params']] + i * size:X} {layout} 0 CM_IDENTICAL {lower} {upper}",
+                  f"{at(n['params'], i * size)} {layout} 0 CM_IDENTICAL {lower} {upper}",
                   f"      SYMBOL_LINK {_text(n['params'])} {i * size}",
                   "    /end CHARACTERISTIC"]
     for i, name in enumerate(gen.state_names):
         lines += [f"    /begin MEASUREMENT xhat_{name} {_text(f'estimate of {name}')} {dtype} CM_IDENTICAL 0 0 "
                   f"-{big} {big}",
-                  f"      ECU_ADDRESS 0x{base[n['xhat']] + i * size:X}",
+                  f"      ECU_ADDRESS {at(n['xhat'], i * size)}",
                   f"      SYMBOL_LINK {_text(n['xhat'])} {i * size}",
                   "    /end MEASUREMENT"]
     lines += [f"    /begin MEASUREMENT status {_text('status code of the last calibrated step')} SLONG "
               f"CM_IDENTICAL 0 0 0 {max(int(s) for s in StepStatus)}",
-              f"      ECU_ADDRESS 0x{base[n['status']]:X}",
+              f"      ECU_ADDRESS {at(n['status'], 0)}",
               f"      SYMBOL_LINK {_text(n['status'])} 0",
               "    /end MEASUREMENT",
               "  /end MODULE",
