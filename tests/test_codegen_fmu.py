@@ -15,6 +15,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from _docs_blocks import assert_page_says, matches_with_elisions, shown_output
 
 fmpy = pytest.importorskip("fmpy", reason="fmpy is not installed: the FMUs are NOT checked (pip install fmpy)")
 from fmpy import extract, read_model_description, simulate_fmu  # noqa: E402
@@ -224,7 +225,9 @@ def test_refused_step_is_discarded_with_the_status_logged_and_the_state_kept(fmu
     assert list(status) == [code]
     assert get_real([vr[n] for n in _names(gen, "xhat_")]) == before
     text = STATUS_TEXT[StepStatus(code)]
-    assert [m for s, m in messages if s == 2 and f"status {code} ({text})" in m], messages
+    logged = [m for s, m in messages if s == 2 and f"status {code} ({text})" in m]
+    assert len(logged) == 1, messages
+    assert_page_says("codegen.md", f"`{logged[0]}`")
     # the next step with admissible signals is made as usual
     set_real([vr["vx"]], [3.0])
     slave.doStep(currentCommunicationPoint=0.0, communicationStepSize=DT)
@@ -316,6 +319,24 @@ def test_adaptive_observer_fmu_steps_like_its_c(tmp_path, record):
     slave.terminate()
     slave.freeInstance()
     np.testing.assert_array_equal(got, CObserver(gen).run(np.zeros(gen.nx), rows, DT))
+
+
+def test_the_page_shows_what_the_command_prints_and_the_archive_holds(tmp_path, monkeypatch, capsys):
+    command = "switchobs codegen abs-xbs3 --spectrum=-40,-60,-60 --fmu --a2l --out gen"
+    monkeypatch.chdir(tmp_path)
+    assert main(command.split()[1:]) == 0
+    printed = capsys.readouterr().out
+    assert matches_with_elisions(shown_output("codegen.md", command), printed), printed
+    import zipfile
+    with zipfile.ZipFile(tmp_path / "gen" / "switchobs_abs_xbs3.fmu") as zf:
+        names = sorted(zf.namelist())
+    assert names == ["binaries/x86_64-linux/switchobs_abs_xbs3.so", "documentation/README.md",
+                     "modelDescription.xml", "sources/buildDescription.xml", "sources/switchobs_abs_xbs3.c",
+                     "sources/switchobs_abs_xbs3.h", "sources/switchobs_abs_xbs3_fmi3.c"] or \
+        not names[0].startswith("binaries/x86_64-linux/")   # the page names the x86-64 Linux layout
+    for name in names[1:]:
+        assert_page_says("codegen.md", f"`{name}`")
+    assert_page_says("codegen.md", f"over {ROWS} rows of the hoang-fig3 braking")
 
 
 def test_cli_writes_the_fmu_and_refuses_bad_options_in_one_line(tmp_path, capsys):

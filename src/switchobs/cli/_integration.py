@@ -31,11 +31,11 @@ def integration_files(gen: GeneratedObserver, args: argparse.Namespace) -> dict[
         raise CodegenError(f"--fmi-version must be 2 (FMI 2.0) or 3 (FMI 3.0), got {args.fmi_version!r}")
     out: dict[str, str | bytes] = {}
     if args.fmu:
-        from ..codegen._fmu import generate_fmu
+        from ..codegen import generate_fmu
         fmu = generate_fmu(gen, fmi_version=int(args.fmi_version or 3))
         out[fmu.file_name] = fmu.data
     if args.a2l:
-        from ..codegen._a2l import calibration_files, generate_a2l
+        from ..codegen import calibration_files, generate_a2l
         out.update(calibration_files(gen))
         out[f"{gen.prefix}.a2l"] = generate_a2l(gen)
     return out
