@@ -361,3 +361,44 @@ def test_generate_fmu_refuses_an_unknown_version_and_state(fmus):
         generate_fmu(gen, fmi_version=1)
     with pytest.raises(CodegenError, match=r"initial_state names \['z9'\]"):
         generate_fmu(gen, initial_state={"z9": 1.0})
+
+
+def test_original_coordinates_are_outputs_of_the_fmu(tmp_path, record):
+    """A model with an [original] table (as switchobs transform writes it): the FMU's x_<name> outputs are
+    phi^-1(xhat) of its state outputs at every step, here x1 = z1, x2 = z2 / a, x3 = log(vx) * z3."""
+    text = (ROOT / "examples" / "my_model.toml").read_text()
+    text = text.replace("[values]", '[original]\nstates = ["x1", "x2", "x3"]\n'
+                                    'inverse = ["z1", "z2 / a", "log(vx) * z3"]\n\n[values]')
+    path = tmp_path / "with_original.toml"
+    path.write_text(text)
+    m = load_model(str(path))
+    gen = generate_observer(m, design(m, "-40,-60,-60"))
+    assert gen.original_names == ("x1", "x2", "x3")
+    for version in (3, 2):
+        fmu = generate_fmu(gen, fmi_version=version)
+        fmu_path = fmu.write(tmp_path / f"original{version}.fmu")
+        assert validate_fmu(str(fmu_path)) == []
+        slave = _slave(fmu, fmu_path, extract(str(fmu_path)))
+        _exit(slave, fmu, {n: 0.0 for n in gen.state_names}, gen)
+        vr = fmu.value_references
+        get = slave.getReal if version == 2 else slave.getFloat64
+        assert get([vr["x_x3"]]) == [0.0]                    # phi^-1 of the start state at the start signals
+        rows = record[0][:200]
+        states = _step_over(fmu, slave, gen, rows, np.full(len(rows), DT))
+        originals = np.array(get([vr[f"x_{n}"] for n in gen.original_names]))
+        slave.terminate()
+        slave.freeInstance()
+        z, vx = states[-1], rows[-1, 1]
+        a = float(m.values["a"])
+        np.testing.assert_allclose(originals, [z[0], z[1] / a, np.log(vx) * z[2]], rtol=1e-15, atol=0)
+
+
+def test_without_fmpy_the_fmu_is_refused_in_one_line(tmp_path, monkeypatch, capsys):
+    import sys
+
+    monkeypatch.setitem(sys.modules, "fmpy", None)   # import fmpy raises ImportError
+    target = tmp_path / "out"
+    assert main(["codegen", "abs-xbs3", "--spectrum=-40,-60,-60", "--fmu", "--out", str(target)]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "pip install 'switchobs[fmu]'" in err, err
+    assert not target.exists()
