@@ -402,3 +402,28 @@ def test_without_fmpy_the_fmu_is_refused_in_one_line(tmp_path, monkeypatch, caps
     err = capsys.readouterr().err
     assert err.count("\n") == 1 and "pip install 'switchobs[fmu]'" in err, err
     assert not target.exists()
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("version", (3, 2))
+def test_fmpy_builds_the_binary_from_the_shipped_sources(fmus, record, tmp_path, version):
+    """The sources are complete: FMPy's build_platform_binary (CMake, from buildDescription.xml or the FMI 2.0
+    <SourceFiles>) builds a binary that steps like the shipped one."""
+    if shutil.which("cmake") is None:
+        pytest.skip("cmake is not installed: building the FMU from its sources is NOT checked")
+    from fmpy.build import build_platform_binary
+
+    gen, fmu, path, _, x0 = fmus["xbs3-rk4-substeps", version]
+    unzipped = tmp_path / "fmu"
+    shutil.unpack_archive(str(path), str(unzipped), format="zip")
+    shutil.rmtree(unzipped / "binaries")
+    (tmp_path / "build").mkdir()
+    build_platform_binary(str(unzipped.resolve()), build_dir=str(tmp_path / "build"))
+    assert (unzipped / "binaries" / fmu.platform / f"{gen.prefix}.so").is_file()
+    slave = _slave(fmu, path, str(unzipped))
+    _exit(slave, fmu, x0, gen)
+    rows = record[0][:300]
+    got = _step_over(fmu, slave, gen, rows, np.full(len(rows), DT))
+    slave.terminate()
+    slave.freeInstance()
+    np.testing.assert_array_equal(got, CObserver(gen).run([x0[n] for n in gen.state_names], rows, DT))
