@@ -3,9 +3,12 @@
 from __future__ import annotations
 
 import argparse
+from typing import TYPE_CHECKING
 
-from ..codegen import GeneratedObserver
 from ..exceptions import CodegenError
+
+if TYPE_CHECKING:  # the codegen package imports casadi: not at --help
+    from ..codegen import GeneratedObserver
 
 __all__ = ["add_integration_arguments", "integration_files"]
 
@@ -23,7 +26,7 @@ def add_integration_arguments(p: argparse.ArgumentParser) -> None:
                         "object it describes (addresses 0 with SYMBOL_LINKs, for the linker-map tool)")
 
 
-def integration_files(gen: GeneratedObserver, args: argparse.Namespace) -> dict[str, str | bytes]:
+def integration_files(gen: "GeneratedObserver", args: argparse.Namespace) -> dict[str, str | bytes]:
     """File name -> content of the artefacts the options ask for (built before anything is written)."""
     if args.fmi_version is not None and not args.fmu:
         raise CodegenError(f"--fmi-version {args.fmi_version} chooses the FMI version of --fmu; give --fmu too")
