@@ -163,3 +163,30 @@ def test_error_systems_of_both_modes_are_statespace_with_the_design_poles():
         err = gains.to_statespace(sign)
         assert isinstance(err, control.StateSpace)
         assert np.allclose(np.sort(control.poles(err).real), [-4.0, -3.0, -2.0])
+
+
+def test_to_statespace_round_trip_and_transfer_function_input():
+    A3, B3, C3 = [[0.0, 1.0], [-2.0, -3.0]], [[0.0], [1.0]], [[1.0, 0.0]]
+    m = Model.from_statespace(control.ss(A3, B3, C3, 0), time_scale="1")
+    sys = m.to_statespace()
+    assert isinstance(sys, control.StateSpace)
+    assert (sys.A.tolist(), sys.B.tolist(), sys.C.tolist(), sys.D.tolist()) == (A3, B3, C3, [[0.0]])
+    assert (sys.state_labels, sys.input_labels, sys.output_labels) == (["z1", "z2"], ["u1"], ["y"])
+    tf = control.tf([2.0], [1.0, 3.0, 2.0])
+    from_tf = Model.from_statespace(tf, time_scale="1").to_statespace()
+    assert np.allclose(np.sort(control.poles(from_tf).real), [-2.0, -1.0])
+    assert control.dcgain(from_tf) == pytest.approx(1.0)        # 2 / 2, the transfer function's
+    with pytest.raises(ModelError, match="no state-space realisation .*non-proper"):
+        Model.from_statespace(control.tf([1.0, 0.0, 0.0], [1.0, 1.0]), time_scale="1")
+    with pytest.raises(ModelError, match="must be a control.StateSpace or TransferFunction, got list"):
+        Model.from_statespace([[1.0]], time_scale="1")
+
+
+def test_to_statespace_refuses_what_is_not_linear_time_invariant():
+    from switchobs.model import builtin_model
+
+    with pytest.raises(ModelError, match=r"time scaling s = y/vx; only s = 1"):
+        builtin_model("abs-xbs3").to_statespace()
+    m = Model.from_dict({**BASE, "A": A, "C": [1, 0], "time_scale": "1", "d": ["0", "y**2"]})
+    with pytest.raises(ModelError, match=r"drift d\(y\)"):
+        m.to_statespace()
