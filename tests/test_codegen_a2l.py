@@ -66,6 +66,7 @@ def program(xbs3, tmp_path_factory):
     return _build(xbs3, tmp_path_factory.mktemp("a2l"))
 
 
+@pytest.mark.slow
 def test_pya2l_parses_the_file_and_every_address_is_the_elfs(xbs3, program, tmp_path, capfd):
     pya2l = pytest.importorskip("pya2l", reason="pya2ldb is not installed: the A2L file is NOT parsed")
     from pya2l import model as a2l

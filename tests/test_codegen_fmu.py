@@ -427,3 +427,21 @@ def test_fmpy_builds_the_binary_from_the_shipped_sources(fmus, record, tmp_path,
     slave.terminate()
     slave.freeInstance()
     np.testing.assert_array_equal(got, CObserver(gen).run([x0[n] for n in gen.state_names], rows, DT))
+
+
+def test_super_twisting_fmu_is_valid(tmp_path):
+    """The super-twisting observer of seed 003 (signals x1, f1) exports too."""
+    from switchobs.codegen import generate_super_twisting
+
+    fmu = generate_fmu(generate_super_twisting(10.0, 20.0), fmi_version=2)
+    assert validate_fmu(str(fmu.write(tmp_path / "st.fmu"))) == []
+    assert {"x1", "f1", "lam", "alpha", "status"} <= set(fmu.value_references)
+
+
+def test_a_parameter_named_like_an_output_is_refused_before_compiling(tmp_path, capsys):
+    model = tmp_path / "clash.toml"
+    model.write_text('name = "clash"\nstates = ["z1", "z2"]\nA = [["0", "1"], ["-status", "-3"]]\nC = ["1", "0"]\n'
+                     'time_scale = "y"\nparameters = ["status"]\n[values]\nstatus = "2"\n')
+    assert main(["codegen", str(model), "--spectrum=-2,-3", "--fmu", "--out", str(tmp_path / "out")]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "FMU variable names ['status'] occur twice" in err, err
