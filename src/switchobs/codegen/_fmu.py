@@ -273,6 +273,10 @@ class GeneratedFMU:
     def file_name(self) -> str:
         return f"{self.prefix}.fmu"
 
+    def __str__(self) -> str:
+        return (f"FMI {self.fmi_version}.0 co-simulation FMU {self.file_name} ({self.platform} binary, "
+                f"{len(self.value_references)} variables, {len(self.data)} bytes)")
+
     def write(self, path: str | os.PathLike) -> Path:
         """Write the archive to ``path`` atomically (:func:`switchobs._atomic.atomic_file`)."""
         from .._atomic import atomic_file
@@ -314,6 +318,16 @@ def generate_fmu(gen: GeneratedObserver, *, fmi_version: int = 3, initial_state:
     References
     ----------
     FMI 3.0 and FMI 2.0.4 standards (Modelica Association), co-simulation interface.
+
+    Examples
+    --------
+    >>> from switchobs.model import builtin_model
+    >>> from switchobs.design import design
+    >>> from switchobs.codegen import generate_observer
+    >>> m = builtin_model("abs-xbs3")
+    >>> fmu = generate_fmu(generate_observer(m, design(m, "-40,-60,-60")), fmi_version=2)
+    >>> fmu.file_name, fmu.value_references["status"]  # 0: time (FMI 3.0), 3 signals, 9 params, 2 x 3 states
+    ('switchobs_abs_xbs3.fmu', 19)
     """
     if fmi_version not in FMI_VERSIONS:
         raise CodegenError(f"FMI version must be one of {list(FMI_VERSIONS)}, got {fmi_version!r}")
