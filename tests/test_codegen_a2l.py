@@ -157,3 +157,33 @@ def test_float_a2l_is_balanced_and_links_symbols_the_object_defines(tmp_path, ca
 def test_addresses_without_the_calibration_symbols_are_refused(xbs3):
     with pytest.raises(CodegenError, match=r"defines no symbol \['switchobs_abs_xbs3_calibration'"):
         generate_a2l(xbs3, addresses={"main": 0x1000})
+
+
+def test_cortex_m4_build_addresses_are_in_the_a2l(xbs3, tmp_path):
+    """A target build (arm-none-eabi-gcc, Cortex-M4, newlib): the calibration array lands in its own section,
+    8-byte aligned, and the A2L made from arm-none-eabi-nm's symbol table addresses each element there."""
+    cc, nm = shutil.which("arm-none-eabi-gcc"), shutil.which("arm-none-eabi-nm")
+    if cc is None or nm is None:
+        pytest.skip("arm-none-eabi-gcc is not installed: the target build's A2L addresses are NOT checked")
+    files = {**xbs3.files, **calibration_files(xbs3), "main.c": MAIN.format(p=xbs3.prefix, P=xbs3.prefix.upper())}
+    for name, text in files.items():
+        (tmp_path / name).write_text(text)
+    elf = tmp_path / "observer.elf"
+    proc = subprocess.run([cc, "-std=c99", "-mcpu=cortex-m4", "-mthumb", "-mfloat-abi=hard", "-mfpu=fpv4-sp-d16",
+                           "-O2", "-Wall", "-Wextra", "-Werror", "--specs=nosys.specs", "-o", str(elf), "main.c",
+                           f"{xbs3.prefix}.c", f"{xbs3.prefix}_calibration.c", "-lm"], cwd=tmp_path,
+                          capture_output=True, text=True)
+    assert proc.returncode == 0, proc.stderr
+    symbols = elf_symbols(elf, nm=nm)
+    base = symbols[f"{xbs3.prefix}_calibration"]
+    assert base % 8 == 0
+    text = generate_a2l(xbs3, addresses=symbols)
+    found = re.findall(r"/begin CHARACTERISTIC (\w+) \"[^\"]*\" VALUE 0x([0-9A-F]+) ", text)
+    assert found == [(name, f"{base + 8 * i:X}") for i, name in enumerate(xbs3.param_names)]
+    ecu = re.findall(r"ECU_ADDRESS 0x([0-9A-F]+)", text)
+    assert ecu == [f"{symbols[f'{xbs3.prefix}_xhat'] + 8 * i:X}" for i in range(xbs3.nx)] + \
+        [f"{symbols[f'{xbs3.prefix}_status']:X}"]
+    objdump = shutil.which("arm-none-eabi-objdump")
+    if objdump:
+        table = subprocess.run([objdump, "-t", str(elf)], capture_output=True, text=True).stdout
+        assert re.search(rf"\.{xbs3.prefix}_cal\s+0*48\s+{xbs3.prefix}_calibration\b", table), table
