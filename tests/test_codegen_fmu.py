@@ -91,7 +91,7 @@ def fmus(tmp_path_factory):
         for version in (3, 2):
             fmu = generate_fmu(gen, fmi_version=version, initial_state=x0)
             path = fmu.write(root / f"{case}-{version}.fmu")
-            out[case, version] = (gen, fmu, path, extract(str(path)), x0)
+            out[case, version] = (gen, fmu, path, extract(str(path), unzipdir=str(root / f"{case}-{version}")), x0)
     return out
 
 
@@ -312,7 +312,7 @@ def test_adaptive_observer_fmu_steps_like_its_c(tmp_path, record):
     path = fmu.write(tmp_path / "adaptive.fmu")
     assert validate_fmu(str(path)) == []
     x0 = {n: 0.0 for n in gen.state_names}
-    slave = _slave(fmu, path, extract(str(path)))
+    slave = _slave(fmu, path, extract(str(path), unzipdir=str(tmp_path / "adaptive")))
     _exit(slave, fmu, x0, gen)
     rows = record[0][:300]
     got = _step_over(fmu, slave, gen, rows, np.full(len(rows), DT))
@@ -378,7 +378,7 @@ def test_original_coordinates_are_outputs_of_the_fmu(tmp_path, record):
         fmu = generate_fmu(gen, fmi_version=version)
         fmu_path = fmu.write(tmp_path / f"original{version}.fmu")
         assert validate_fmu(str(fmu_path)) == []
-        slave = _slave(fmu, fmu_path, extract(str(fmu_path)))
+        slave = _slave(fmu, fmu_path, extract(str(fmu_path), unzipdir=str(tmp_path / f"original{version}")))
         _exit(slave, fmu, {n: 0.0 for n in gen.state_names}, gen)
         vr = fmu.value_references
         get = slave.getReal if version == 2 else slave.getFloat64
