@@ -158,12 +158,16 @@ def _remove_created(created: list[Path]) -> None:
         shutil.rmtree(directory, ignore_errors=True)
 
 
-def write_files(directory: str | os.PathLike, files: Mapping[str, str], *,
+def write_files(directory: str | os.PathLike, files: Mapping[str, str | bytes], *,
                 what: str = "the directory") -> tuple[Path, ...]:
-    """Write ``{relative path: text}`` into ``directory`` all together or not at all; the paths written."""
+    """Write ``{relative path: text (UTF-8) or bytes}`` into ``directory`` all together or not at all; the
+    paths written."""
     with staged_directory(directory, what=what) as work:
-        for name, text in files.items():
+        for name, content in files.items():
             path = work / name
             path.parent.mkdir(parents=True, exist_ok=True)
-            path.write_text(text, encoding="utf-8")
+            if isinstance(content, bytes):
+                path.write_bytes(content)
+            else:
+                path.write_text(content, encoding="utf-8")
     return tuple(Path(directory) / name for name in files)

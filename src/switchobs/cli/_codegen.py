@@ -12,13 +12,14 @@ from typing import Any
 
 import sympy as sp
 
-from .._atomic import check_output_directory
+from .._atomic import check_output_directory, write_files
 from .._limits import MAX_INPUT_FILE_BYTES, read_text
 from ..design import GainDesign, design
 from ..exceptions import CodegenError, FreeSymbolError, PrerequisiteError, SpectrumError
 from ..model import Model, load_model, rational_value
 from ..spec import METHODS
 from ._common import emit_json, parse_params
+from ._integration import add_integration_arguments, integration_files
 
 __all__ = ["register"]
 
@@ -77,6 +78,7 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--prefix", help="C prefix (default switchobs_<model>, non-identifier characters as _)")
     p.add_argument("--out", required=True, metavar="DIR", help="directory for <prefix>.c, <prefix>.h, README.md")
     p.add_argument("--json", action="store_true", help="print the description as JSON")
+    add_integration_arguments(p)
     p.set_defaults(func=run)
 
 
@@ -197,7 +199,7 @@ def run(args: argparse.Namespace) -> int:
     build = None if not args.target else target_build(
         gen, args.target, record=None if record is None else (record.rows, record.dt, record.x0),
         record_description=None if record is None else record.description)
-    paths = (build or gen).write(args.out)
+    paths = write_files(args.out, {**(build or gen).files, **integration_files(gen, args)}, what="the generated C into")
     comparison = None
     if record is not None and build is not None and build.pil is not None and model is not None:
         from ..loop import compare_with_reference, reference_observer
