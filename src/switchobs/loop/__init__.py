@@ -25,7 +25,7 @@ run_braking, BrakingRun, CONTROLLER_NAMES -- one braking case from plain values 
 LogSignals, replay, ReplayResult, ReplaySummary -- recorded data in: a log's edges, speed and pressure (SI
                             units) through the encoder chain and an XBS observer (``switchobs replay``)
 zero_order_hold, pressure_from_rate, speed_from_acceleration, edges_from_counts, edges_from_wheel_speed,
-measurements_signals        -- from what loggers record to LogSignals; a simulated run's chain inputs as one
+measurements_signals, ideal_encoder -- from what loggers record to LogSignals; a simulated run's chain inputs as one
 DemoSettings, demo_scenario, demo_braking -- the braking of ``switchobs demo``
 braking_record, PilRecord, reference_run, reference_observer, compare_with_reference, PilComparison, PIL_SCENARIO, PIL_TOLERANCE
                             -- the record of a processor-in-the-loop run of the generated C (a braking with a
@@ -52,7 +52,7 @@ from ._encoder_loop import X2_MEASUREMENTS, EncoderLoopEstimator, EncoderLoopRec
 from ._pil import (PIL_SCENARIO, PIL_TOLERANCE, PilComparison, PilRecord, braking_record, compare_with_reference,
                    reference_observer, reference_run)
 from ._replay import (LogSignals, ReplayResult, ReplaySummary, edges_from_counts, edges_from_wheel_speed,
-                      measurements_signals, pressure_from_rate, replay, speed_from_acceleration, zero_order_hold)
+                      ideal_encoder, measurements_signals, pressure_from_rate, replay, speed_from_acceleration, zero_order_hold)
 from ._factory import DEFAULT_BETA, DEFAULT_GAMMA, INITIAL_STATE, OBSERVER_KINDS, EstimatorSpec, xbs_estimator
 
 __all__ = ["EstimatorSpec", "xbs_estimator", "OBSERVER_KINDS", "DEFAULT_BETA", "DEFAULT_GAMMA", "INITIAL_STATE",
@@ -63,4 +63,4 @@ __all__ = ["EstimatorSpec", "xbs_estimator", "OBSERVER_KINDS", "DEFAULT_BETA", "
            "compare_with_reference", "PilComparison", "PIL_SCENARIO", "PIL_TOLERANCE",
            "LogSignals", "replay", "ReplayResult", "ReplaySummary",
            "zero_order_hold", "pressure_from_rate", "speed_from_acceleration", "edges_from_counts",
-           "edges_from_wheel_speed", "measurements_signals"]
+           "edges_from_wheel_speed", "measurements_signals", "ideal_encoder"]

@@ -36,7 +36,7 @@ from ._factory import INITIAL_STATE, EstimatorSpec, xbs_estimator
 from ._stepping import step_through
 
 __all__ = ["LogSignals", "ReplayResult", "ReplaySummary", "replay", "zero_order_hold", "pressure_from_rate",
-           "speed_from_acceleration", "edges_from_counts", "edges_from_wheel_speed", "measurements_signals"]
+           "speed_from_acceleration", "edges_from_counts", "edges_from_wheel_speed", "measurements_signals", "ideal_encoder"]
 
 Array = npt.NDArray[np.float64]
 IntArray = npt.NDArray[np.int_]
@@ -133,12 +133,16 @@ class LogSignals:
     @property
     def encoder(self) -> Encoder:
         """An encoder of this tooth count (its nominal angles are what the chain assigns to the edges)."""
-        return Encoder(ppr=self.ppr, both_edges=self.both_edges, dnl_cycles=0.0, jitter_cycles=0.0,
-                       eccentricity=0.0)
+        return ideal_encoder(self.ppr, both_edges=self.both_edges)
 
     def __str__(self) -> str:
         return (f"{self.source}: {self.t.size} samples over {float(self.t[-1] - self.t[0]):.3f} s, "
                 f"{self.edge_times.size} edges of a {self.ppr}-ppr encoder")
+
+
+def ideal_encoder(ppr: int, *, both_edges: bool = False) -> Encoder:
+    """An encoder without transition errors or eccentricity: edges at the nominal angles."""
+    return Encoder(ppr=ppr, both_edges=both_edges, dnl_cycles=0.0, jitter_cycles=0.0, eccentricity=0.0)
 
 
 def zero_order_hold(t: npt.ArrayLike, values: npt.ArrayLike, at: npt.ArrayLike) -> Array:
