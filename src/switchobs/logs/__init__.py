@@ -14,6 +14,7 @@ ChannelMap, ChannelSpec, UNITS -- the channel map and the units it may declare
 read_log, Log, Channel    -- a log's channels, read on demand (size-checked first)
 log_signals               -- a log and a map -> LogSignals (units, counters, wheel speeds, resampling)
 write_result              -- a ReplayResult as an MDF4, Parquet or CSV log
+plot_replay               -- its figure (wheel speed, x2, XBS estimate; matplotlib)
 write_table, write_mdf, write_braking_log -- write logs (a simulated braking's chain inputs, in a layout)
 FORMATS, log_format       -- file endings of the formats
 
@@ -37,10 +38,11 @@ import numpy as np
 from ..loop import EncoderMeasurements, ReplayResult, replay
 from ._io import FORMATS, Channel, Log, log_format, read_log, write_mdf, write_table
 from ._map import UNITS, ChannelMap, ChannelSpec, log_signals
+from ._plot import plot_replay
 
 __all__ = ["replay_log", "ChannelMap", "ChannelSpec", "UNITS", "read_log", "Log", "Channel", "log_signals",
            "write_result", "write_table", "write_mdf", "write_braking_log", "FORMATS", "log_format",
-           "RESULT_UNITS"]
+           "RESULT_UNITS", "plot_replay"]
 
 #: Units of the columns :func:`write_result` writes.
 RESULT_UNITS: dict[str, str] = {"t": "s", "t_measured": "s", "x2_tsa": "m/s^2", "x2_notch": "m/s^2",

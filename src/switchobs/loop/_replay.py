@@ -24,7 +24,7 @@ from typing import Any
 import numpy as np
 import numpy.typing as npt
 
-from .._json import JsonRecord
+from .._json import JsonRecord, array_to_json
 from .._limits import MAX_LOG_SAMPLES
 from ..exceptions import LogError, ObserverInputError, SimulationError
 from ..plants import QuarterCar
@@ -261,6 +261,12 @@ class ReplaySummary(JsonRecord, error=SimulationError):
     rate_hz: float
     xbs_final: float
 
+    def to_json(self) -> dict[str, Any]:
+        """The fields (a NaN ``xbs_final`` as None)."""
+        out: dict[str, Any] = {f: getattr(self, f) for f in self.__dataclass_fields__}
+        out["xbs_final"] = None if math.isnan(self.xbs_final) else self.xbs_final
+        return out
+
     def __str__(self) -> str:
         final = "n/a" if math.isnan(self.xbs_final) else f"{self.xbs_final:.4f}"
         text = (f"replay of {self.source}: {self.samples} samples at {self.rate_hz:g} Hz ({self.measured} measured), "
@@ -282,6 +288,8 @@ class ReplayResult(JsonRecord, error=SimulationError):
     status : ndarray of int
         :class:`switchobs.spec.StepStatus` of the observer step taken at each sample (0 where none is taken).
     summary : ReplaySummary
+        What was replayed and how it ended (``summary.to_json()``: the few numbers ``switchobs replay --json``
+        prints).
     """
 
     t: Array
@@ -299,6 +307,10 @@ class ReplayResult(JsonRecord, error=SimulationError):
     #: The columns of :meth:`arrays`, in order.
     COLUMNS = ("t", "t_measured", "x2_tsa", "x2_notch", "x2_measured", "omega_tsa", "omega_measured", "vx",
                "xbs_hat", "status")
+
+    def to_json(self) -> dict[str, Any]:
+        """The signals as lists (NaN as None) and the summary."""
+        return {**{name: array_to_json(a) for name, a in self.arrays().items()}, "summary": self.summary.to_json()}
 
     def arrays(self) -> dict[str, npt.NDArray[Any]]:
         """The signals by name (:attr:`COLUMNS`)."""
