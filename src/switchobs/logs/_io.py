@@ -43,13 +43,25 @@ def log_format(path: str | Path, default: str | None = None) -> str:
     raise LogError(f"{str(path)!r}: unknown log format {suffix or '(no ending)'!r}; name it {known}")
 
 
-def _need(module: str, fmt: str) -> Any:
+def _missing(package: str, fmt: str) -> PrerequisiteError:
+    return PrerequisiteError(f"{fmt} logs need {package}: pip install \"switchobs[logs]\" (or pip install {package})")
+
+
+def _asammdf() -> Any:
     try:
-        return __import__(module, fromlist=["_"])
+        import asammdf
     except ImportError:
-        package = module.split(".")[0]
-        raise PrerequisiteError(f"{fmt} logs need {package}: pip install \"switchobs[logs]\" "
-                                f"(or pip install {package})") from None
+        raise _missing("asammdf", "MDF4") from None
+    return asammdf
+
+
+def _pyarrow() -> tuple[Any, Any]:
+    try:
+        import pyarrow
+        import pyarrow.parquet
+    except ImportError:
+        raise _missing("pyarrow", "Parquet") from None
+    return pyarrow, pyarrow.parquet
 
 
 @dataclass(frozen=True, eq=False)
@@ -91,7 +103,7 @@ class Log:
         self._table: dict[str, tuple[Array, npt.NDArray[np.bool_]]] | None = None
         self._mdf: Any = None
         if self.format == "mdf":
-            asammdf = _need("asammdf", "MDF4")
+            asammdf = _asammdf()
             try:
                 self._mdf = asammdf.MDF(str(self.path))
             except Exception as exc:  # asammdf raises many kinds for a file that is not MDF
@@ -105,7 +117,7 @@ class Log:
     # ------------------------------------------------------------------ tables
     def _read_table(self) -> dict[str, tuple[Array, npt.NDArray[np.bool_]]]:
         if self.format == "parquet":
-            pq = _need("pyarrow.parquet", "Parquet")
+            _, pq = _pyarrow()
             try:
                 meta = pq.read_metadata(str(self.path))
                 rows = meta.num_rows
@@ -213,8 +225,7 @@ def write_table(path: str | Path, columns: Mapping[str, npt.ArrayLike], *, fmt: 
     rows = max((a.size for a in arrays.values()), default=0)
     with atomic_file(path, what="the log") as partial:
         if fmt == "parquet":
-            pa = _need("pyarrow", "Parquet")
-            pq = _need("pyarrow.parquet", "Parquet")
+            pa, pq = _pyarrow()
             fields = {}
             for k, a in arrays.items():
                 mask = np.concatenate([np.zeros(a.size, dtype=bool), np.ones(rows - a.size, dtype=bool)])
@@ -243,7 +254,7 @@ def write_mdf(path: str | Path, groups: Sequence[tuple[npt.ArrayLike, Mapping[st
               ) -> Path:
     """Write an ASAM MDF 4 file atomically: each group a master time [s] and its channels ``name -> (values,
     unit)``."""
-    asammdf = _need("asammdf", "MDF4")
+    asammdf = _asammdf()
     mdf = asammdf.MDF(version="4.10")
     for t, channels in groups:
         tt = np.asarray(t, dtype=float)
