@@ -260,6 +260,11 @@ def write_mdf(path: str | Path, groups: Sequence[tuple[npt.ArrayLike, Mapping[st
         tt = np.asarray(t, dtype=float)
         mdf.append([asammdf.Signal(np.asarray(v), tt, name=name, unit=unit) for name, (v, unit) in channels.items()])
     with atomic_file(path, what="the log") as partial:
-        mdf.save(str(partial), overwrite=True)
-    mdf.close()
+        # asammdf gives a file name without the .mf4 ending that ending: save under it, then rename
+        staged = partial.with_name(partial.name + ".mf4")
+        try:
+            Path(mdf.save(str(staged), overwrite=True)).replace(partial)
+        finally:
+            staged.unlink(missing_ok=True)
+            mdf.close()
     return Path(path)

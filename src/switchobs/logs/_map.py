@@ -16,13 +16,12 @@
     speed = { channel = "vx", unit = "km/h" }
     pressure = { channel = "p_brake", unit = "bar" }
 
-    [chain]                # optional: rate_hz, order, window, harmonics, notch_damping, resample
+    [chain]                # optional: rate_hz, order, window, harmonics, notch_damping, max_gap_s
     [vehicle]              # optional: the fields of switchobs.plants.QuarterCar
 
 ``docs/replay.md`` describes every key.  :func:`log_signals` turns a log and a map into the
 :class:`switchobs.loop.LogSignals` the replay takes: units converted to SI, edges from counters or wheel
-speeds, and the speed and pressure put on one raster (as they are when they share one; else by zero-order
-hold at the chain's rate).
+speeds, and the pressure held (zero-order hold) on the speed's samples when it was recorded on others.
 """
 
 from __future__ import annotations
@@ -43,7 +42,7 @@ from ..loop import (LogSignals, edges_from_counts, edges_from_wheel_speed, ideal
 from ..plants import QuarterCar
 from ._io import Channel, Log
 
-__all__ = ["UNITS", "ChannelSpec", "ChannelMap", "log_signals"]
+__all__ = ["UNITS", "MAX_GAP_S", "ChannelSpec", "ChannelMap", "log_signals"]
 
 #: Units each kind of channel may declare, with the factor to SI (value * factor).
 UNITS: dict[str, dict[str, float]] = {
@@ -58,7 +57,10 @@ UNITS: dict[str, dict[str, float]] = {
 _ALIASES = {"m/s²": "m/s^2", "m/s2": "m/s^2", "kph": "km/h", "kmh": "km/h", "1/min": "rpm", "U/min": "rpm",
             "µs": "us", "sec": "s"}
 _CHAIN_KEYS = {"rate_hz": float, "order": int, "window": int, "harmonics": int, "notch_damping": float,
-               "resample": str}
+               "max_gap_s": float}
+#: Default longest step of the signal raster [s] (``[chain] max_gap_s``): over a longer gap the linear
+#: interpolation of the speed and the pressure between its ends is no longer a measurement.
+MAX_GAP_S = 0.05
 
 
 def _unit(kind: str, text: Any, where: str) -> float:
@@ -125,7 +127,7 @@ class ChannelMap:
         Brake pressure, or its rate.
     chain : dict
         Chain settings (``rate_hz``, ``order``, ``window``, ``harmonics``, ``notch_damping``) and
-        ``resample`` (``auto``: only signals on different rasters; ``zoh``: always).
+        ``max_gap_s``, the longest step of the signal raster (default :data:`MAX_GAP_S`).
     vehicle : QuarterCar
     source : str
         The file the map was read from.
@@ -232,8 +234,9 @@ class ChannelMap:
                 chain[k] = v = float(v)
             if not isinstance(v, typ) or isinstance(v, bool):
                 raise LogError(f"channel map: [chain] {k} must be {typ.__name__}, got {v!r}")
-        if chain.get("resample", "auto") not in ("auto", "zoh"):
-            raise LogError(f"channel map: [chain] resample must be 'auto' or 'zoh', got {chain['resample']!r}")
+        gap = chain.get("max_gap_s", MAX_GAP_S)
+        if not (math.isfinite(gap) and gap > 0):
+            raise LogError(f"channel map: [chain] max_gap_s must be a number > 0, got {gap!r}")
         kw["chain"] = chain
         veh = _table(data, "vehicle", {f.name for f in fields(QuarterCar)}, "vehicle")
         try:
@@ -259,7 +262,7 @@ class ChannelMap:
 
     def chain_options(self) -> dict[str, Any]:
         """The chain settings as :func:`switchobs.loop.replay` takes them."""
-        return {k: v for k, v in self.chain.items() if k != "resample"}
+        return {k: v for k, v in self.chain.items() if k != "max_gap_s"}
 
 
 def _values(ch: Channel, what: str, factor: float = 1.0) -> tuple[np.ndarray, np.ndarray]:
@@ -297,16 +300,16 @@ def _unit_agrees(ch: Channel, spec: ChannelSpec, kind: str, what: str) -> None:
 def log_signals(log: Log, cmap: ChannelMap) -> LogSignals:
     """The signals of ``log`` that ``cmap`` names, in SI units, as :func:`switchobs.loop.replay` takes them.
 
-    Speed and pressure (or their accelerometer and rate) are used as they are when they share one raster
-    (the chain interpolates between their samples); on different rasters, or with ``resample = "zoh"``, each
-    is resampled by zero-order hold onto ``t_k = k / rate_hz`` over the time all of them cover (the hold of
-    the generated C step).  Edges are never resampled.
+    The speed's samples (or the accelerometer's, integrated) are the raster: the chain interpolates the speed
+    linearly between them and takes ``a_x`` as its slope, so the speed is never resampled.  A pressure (or
+    rate) recorded on other time stamps is held onto that raster by :func:`switchobs.loop.zero_order_hold`
+    (its last sample at or before each), over the time both cover.  Edges are never resampled.
 
     Raises
     ------
     LogError
         A missing channel, a unit the file contradicts, empty or non-finite samples, time stamps not
-        strictly increasing, edges that do not increase.
+        strictly increasing or a step of the raster longer than ``max_gap_s``, edges that do not increase.
     """
     def signal(spec: ChannelSpec, kind: str, what: str) -> tuple[np.ndarray, np.ndarray]:
         ch = log.channel(spec.channel, what=what)
@@ -316,23 +319,28 @@ def log_signals(log: Log, cmap: ChannelMap) -> LogSignals:
     first = ("speed", cmap.speed) if cmap.speed is not None else ("acceleration", cmap.acceleration)
     second = ("pressure", cmap.pressure) if cmap.pressure is not None else ("pressure_rate", cmap.pressure_rate)
     assert first[1] is not None and second[1] is not None
-    (t1, v1), (t2, v2) = (signal(s, kind, f"[signals] {kind}") for kind, s in (first, second))
+    (t, v1), (t2, v2) = (signal(s, kind, f"[signals] {kind}") for kind, s in (first, second))
     note = ""
-    if cmap.chain.get("resample", "auto") == "zoh" or not np.array_equal(t1, t2):
-        rate = cmap.rate_hz
-        lo, hi = max(t1[0], t2[0]), min(t1[-1], t2[-1])
-        if not hi > lo:
-            raise LogError(f"the {first[0]} ({t1[0]!r}..{t1[-1]!r} s) and {second[0]} ({t2[0]!r}..{t2[-1]!r} s) "
-                           "channels do not overlap in time")
-        t = np.arange(math.ceil(lo * rate - 1e-9), math.floor(hi * rate + 1e-9) + 1) / rate
-        v1, v2, t1 = zero_order_hold(t1, v1, t), zero_order_hold(t2, v2, t), t
-        note = f"; {first[0]} and {second[0]} held (ZOH) at {rate:g} Hz"
-    t = t1
+    if not np.array_equal(t, t2):
+        cover = (t >= t2[0]) & (t <= t2[-1])
+        if np.count_nonzero(cover) < 2:
+            raise LogError(f"the {first[1].channel!r} ({t[0]!r}..{t[-1]!r} s) and {second[1].channel!r} "
+                           f"({t2[0]!r}..{t2[-1]!r} s) channels do not overlap in time")
+        t, v1 = t[cover], v1[cover]
+        v2 = zero_order_hold(t2, v2, t)
+        note = f" ({second[1].channel} held on the samples of {first[1].channel})"
+    gap = float(cmap.chain.get("max_gap_s", MAX_GAP_S))
+    steps = np.diff(t)
+    if steps.size and float(steps.max()) > gap:
+        i = int(np.argmax(steps))
+        raise LogError(f"the samples of {first[1].channel!r} jump from {float(t[i])!r} s to {float(t[i + 1])!r} s, "
+                       f"a gap of {float(steps[i]):.4g} s above max_gap_s = {gap:g} s; cut the log at the gap "
+                       "or raise [chain] max_gap_s")
     vx = v1 if first[0] == "speed" else speed_from_acceleration(t, v1, float(cmap.initial_speed_m_s or 0.0))
     pressure = v2 - v2[0] if second[0] == "pressure" else pressure_from_rate(t, v2)
     stamps, teeth = _edges(log, cmap)
-    name = f"{log.path.name}{note}"
-    return LogSignals(t, vx, pressure, stamps, teeth, ppr=cmap.ppr, both_edges=cmap.both_edges, source=name)
+    return LogSignals(t, vx, pressure, stamps, teeth, ppr=cmap.ppr, both_edges=cmap.both_edges,
+                      source=f"{log.path.name}{note}")
 
 
 def _edges(log: Log, cmap: ChannelMap) -> tuple[np.ndarray, np.ndarray]:
