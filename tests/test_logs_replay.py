@@ -330,3 +330,57 @@ def test_the_channel_map_reads_its_defaults(tmp_path):
     cmap = ChannelMap.from_toml(write_map(tmp_path, EDGES_MAP))
     assert cmap.rate_hz == 1000.0 and cmap.time.channel == "t" and cmap.channels() == ["edge_time", "vx", "p",
                                                                                        "edge_tooth"]
+
+
+# ------------------------------------------------------------------ docs/replay.md runs as shown
+DOCS = Path(__file__).resolve().parents[1] / "docs"
+
+
+def _block(info: str) -> str:
+    import re
+    text = (DOCS / "replay.md").read_text("utf-8")
+    found = re.search(r"^```" + re.escape(info) + r"\n(.*?)^```", text, re.S | re.M)
+    assert found, f"docs/replay.md has no ```{info} block"
+    return found.group(1)
+
+
+def test_the_units_table_of_the_page_is_the_codes():
+    import re
+    from switchobs.logs import UNITS
+    text = (DOCS / "replay.md").read_text("utf-8")
+    rows = dict(re.findall(r"^\| (\w+) \| (`.*`) \|$", text, re.M))
+    assert {k: [u.strip("`") for u in v.split(", ")] for k, v in rows.items() if k in UNITS} == \
+        {k: list(v) for k, v in UNITS.items()}
+
+
+def test_the_pages_example_runs_as_shown(tmp_path, monkeypatch, capsys):
+    from _docs_blocks import matches_with_elisions, shown_output
+    needs("mf4")
+    needs("parquet")
+    monkeypatch.chdir(tmp_path)
+    for name in ("edges.toml", "counter.toml"):
+        (tmp_path / name).write_text(_block(f'toml title="{name}"'), encoding="utf-8")
+    exec(compile(_block('python title="make_logs.py"'), "make_logs.py", "exec"), {"__name__": "make_logs"})
+    printed = capsys.readouterr().out.strip()
+    assert f"It prints `{printed}`" in (DOCS / "replay.md").read_text("utf-8")
+    for command, stream, status in (
+            ("switchobs replay braking.mf4 --channels edges.toml --out replayed.mf4", "out", 0),
+            ("switchobs replay braking_ecu.csv --channels counter.toml --out replayed.parquet --json", "out", 0),
+            ("switchobs replay braking.mf4 --channels counter.toml", "err", 2)):
+        code = main(command.split()[1:])
+        captured = capsys.readouterr()
+        shown = getattr(captured, stream).rstrip("\n")
+        assert code == status, captured.err
+        assert matches_with_elisions(shown_output("replay.md", command), shown), f"`{command}` prints\n{shown}"
+    # the Python block, on the files the example wrote
+    scope: dict = {}
+    exec(_api_block(), scope)
+    assert scope["result"].summary.outcome == "ok" and (tmp_path / "replayed.parquet").is_file()
+
+
+def _api_block():
+    import re
+    text = (DOCS / "replay.md").read_text("utf-8")
+    found = re.search(r"^```python\n(from switchobs\.logs import replay_log.*?)^```", text, re.S | re.M)
+    assert found, "docs/replay.md has no Python API block"
+    return compile(found.group(1), "replay.md", "exec")

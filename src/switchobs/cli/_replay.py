@@ -58,10 +58,10 @@ def run(args: argparse.Namespace) -> int:
     progress(f"replay: reading {args.log}")
     log = read_log(args.log, time_channel=cmap.time.channel, time_factor=cmap.time.factor)
     signals = log_signals(log, cmap)
-    progress(f"replay: encoder chain and {args.observer} observer over {signals.edge_times.size} edges")
     result = replay(signals, observer=args.observer, method=args.method, beta=args.beta, impl=args.observer_impl,
                     vehicle=cmap.vehicle, **cmap.chain_options())
     if args.out is not None:
+        progress(f"replay: writing {args.out}")
         write_result(result, args.out, fmt=fmt)
     if args.plot:
         from .._figures import save_figure

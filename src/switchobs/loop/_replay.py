@@ -26,6 +26,7 @@ import numpy.typing as npt
 
 from .._json import JsonRecord, array_to_json
 from .._limits import MAX_LOG_SAMPLES
+from .._progress import progress
 from ..exceptions import LogError, ObserverInputError, SimulationError
 from ..plants import QuarterCar
 from ..sensors import Encoder
@@ -372,6 +373,10 @@ def replay(signals: LogSignals, *, observer: str = "xbs4", method: str = "radau3
     ('ok', True, True)
     """
     vehicle = QuarterCar() if vehicle is None else vehicle
+    spec = EstimatorSpec(observer, beta=beta, impl=impl, method=method)
+    progress(f"replay: building the {spec}")
+    est = xbs_estimator(spec, vehicle, "dry-asphalt") if observer != "none" else None
+    progress(f"replay: encoder chain over {signals.edge_times.size} edges at {rate_hz:g} Hz")
     angles = edge_angles(signals.encoder, signals.edge_teeth)
     m = measure_edges(signals.t, signals.vx, signals.pressure, signals.edge_times, angles, signals.edge_teeth,
                       radius_m=vehicle.radius_m, rate_hz=rate_hz, order=order, window=window,
@@ -381,13 +386,12 @@ def replay(signals: LogSignals, *, observer: str = "xbs4", method: str = "radau3
         raise LogError(f"the log is shorter than the chain's warm-up: {signals.edge_times.size} edges give "
                        f"{int(np.count_nonzero(np.isfinite(m.t_measured)))} measurements at {rate_hz:g} Hz "
                        f"(a TSA window of {window} edges, then two measurements for one observer step)")
-    spec = EstimatorSpec(observer, beta=beta, impl=impl, method=method)
-    est = xbs_estimator(spec, vehicle, "dry-asphalt") if observer != "none" else None
     hat = np.full(m.t.size, np.nan)
     status = np.zeros(m.t.size, dtype=np.int_)
     outcome, message, steps = "ok", "", 0
     if isinstance(est, ObserverXbsEstimator):
         obs = est.observer
+        progress(f"replay: {rows.shape[0]} observer steps")
         x0 = initial_xbs_state(obs, float(m.x2_measured[first]), INITIAL_STATE[observer])
         states, refused, code, message = _step(obs, x0, rows, span)
         steps = states.shape[0] - 1
