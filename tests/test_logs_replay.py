@@ -384,3 +384,12 @@ def _api_block():
     found = re.search(r"^```python\n(from switchobs\.logs import replay_log.*?)^```", text, re.S | re.M)
     assert found, "docs/replay.md has no Python API block"
     return compile(found.group(1), "replay.md", "exec")
+
+
+@pytest.mark.parametrize("module", ["switchobs.loop._replay", "switchobs.logs"])
+def test_docstring_examples(module):
+    import doctest
+    import importlib
+
+    result = doctest.testmod(importlib.import_module(module), optionflags=doctest.ELLIPSIS)
+    assert result.attempted > 0 and result.failed == 0
