@@ -317,7 +317,7 @@ def test_a_unit_the_mdf4_contradicts_and_channels_in_several_groups(tmp_path, ca
     twice = write_mdf(tmp_path / "twice.mf4", [(t, {"vx": (np.full(200, 20.0), "m/s"), "p": (np.zeros(200), "bar")}),
                                                (t, {"vx": (np.full(200, 20.0), "m/s")}),
                                                (e, {"edge_time": (e, "s"), "edge_tooth": (np.arange(1, 61), "")})])
-    assert "channel 'vx'" in _bad(tmp_path, capsys, twice, EDGES_MAP)
+    assert "channel 'vx' is in 2 groups" in _bad(tmp_path, capsys, twice, EDGES_MAP)
 
 
 def test_log_signals_refuse_teeth_that_do_not_increase():

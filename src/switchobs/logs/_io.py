@@ -188,6 +188,11 @@ class Log:
             shown = ", ".join(repr(n) for n in self.names[:30]) + (" ..." if len(self.names) > 30 else "")
             raise LogError(f"{what}: channel {name!r} is not in the log {str(self.path)!r}; it has {shown}")
         if self._mdf is not None:
+            groups = sorted({g for g, _ in self._mdf.channels_db[name]})
+            if len(groups) > 1:  # asammdf would ask for a group (and log to stderr): the map names channels only
+                raise LogError(f"{what}: channel {name!r} is in {len(groups)} groups of {str(self.path)!r} (groups "
+                               f"{', '.join(map(str, groups))}); the channel map cannot choose: give the log "
+                               "unique channel names")
             try:
                 sig = self._mdf.get(name)
             except Exception as exc:

@@ -93,7 +93,8 @@ def _table(data: Mapping[str, Any], key: str, allowed: set[str], where: str) -> 
     return dict(value)
 
 
-def _spec(value: Any, kind: str, where: str, extra: set[str] = frozenset()) -> tuple[ChannelSpec, dict[str, Any]]:
+def _spec(value: Any, kind: str, where: str, extra: frozenset[str] = frozenset()
+          ) -> tuple[ChannelSpec, dict[str, Any]]:
     if not isinstance(value, Mapping) or not isinstance(value.get("channel"), str) or not value["channel"]:
         raise LogError(f"channel map: {where} must be a table {{ channel = \"NAME\", unit = \"...\" }}, got {value!r}")
     unknown = sorted(set(value) - {"channel", "unit"} - set(extra))
@@ -194,7 +195,7 @@ class ChannelMap:
             raise LogError(f"channel map: [encoder] first_tooth must be an integer >= 0, got {first!r}")
         kw["first_tooth"] = first
         if "edges" in enc:
-            kw["edges"], more = _spec(enc["edges"], "time", "[encoder] edges", {"teeth"})
+            kw["edges"], more = _spec(enc["edges"], "time", "[encoder] edges", frozenset({"teeth"}))
             kw["teeth"] = more.get("teeth")
         elif "counter" in enc:
             c = enc["counter"]
@@ -217,7 +218,7 @@ class ChannelMap:
             kw["speed"] = _spec(sig["speed"], "speed", "[signals] speed")[0]
         else:
             kw["acceleration"], more = _spec(sig["acceleration"], "acceleration", "[signals] acceleration",
-                                             {"initial_speed"})
+                                             frozenset({"initial_speed"}))
             v0 = more.get("initial_speed")
             if not isinstance(v0, Mapping) or set(v0) != {"value", "unit"} or not isinstance(v0["value"], (int, float)):
                 raise LogError("channel map: [signals] acceleration needs initial_speed = { value = 16.7, "
