@@ -131,7 +131,7 @@ def test_the_command_writes_the_estimates_status_and_chain_signals_in_the_logs_f
     code = main(["replay", str(log), "--channels", str(write_map(tmp_path, EDGES_MAP)), "--out", str(out),
                  "--plot", str(plot)])
     printed = capsys.readouterr().out
-    assert code == 0 and "408 observer steps" in printed and f"signals written to {out}" in printed
+    assert code == 0 and "(python, radau3): 408 steps, ok" in printed and f"signals written to {out}" in printed
     back = read_log(out)
     assert set(ReplayResult.COLUMNS) - {"t"} <= set(back.names)
     xbs = back.channel("xbs_hat", what="check")
@@ -210,6 +210,20 @@ def test_tier2_a_raster_with_gaps(run, tmp_path):
     # a gap longer than max_gap_s is refused
     with pytest.raises(LogError, match=r"a gap of 0.0[23]\d* s above max_gap_s = 0.02 s"):
         replay_log(tmp_path / "gaps.parquet", write_map(tmp_path, EDGES_MAP + "[chain]\nmax_gap_s = 0.02\n"))
+
+
+def test_edges_without_teeth_count_from_first_tooth_and_the_chain_runs_without_an_observer(run, tmp_path, capsys):
+    needs("parquet")
+    m = run.m
+    assert np.all(np.diff(m.edge_teeth) == 1)       # no edge missed: the count from the first tooth is the teeth
+    write_table(tmp_path / "b.parquet", {"t": m.steps_t, "vx": m.vx_steps, "p": m.pressure_steps,
+                                         "edge_time": m.edge_times})
+    cmap = EDGES_MAP.replace(', teeth = "edge_tooth" }', " }\nfirst_tooth = %d" % m.edge_teeth[0])
+    res = replay_log(tmp_path / "b.parquet", write_map(tmp_path, cmap))
+    assert np.array_equal(res.xbs_hat, run.estimates, equal_nan=True)
+    assert main(["replay", str(tmp_path / "b.parquet"), "--channels", str(write_map(tmp_path, cmap)),
+                 "--observer", "none"]) == 0
+    assert "no observer (the chain only): 0 steps, ok; final XBS estimate n/a" in capsys.readouterr().out
 
 
 def test_a_counter_that_skips_edges_between_samples_spreads_them_evenly():

@@ -271,8 +271,7 @@ class ReplaySummary(JsonRecord, error=SimulationError):
     def __str__(self) -> str:
         final = "n/a" if math.isnan(self.xbs_final) else f"{self.xbs_final:.4f}"
         text = (f"replay of {self.source}: {self.samples} samples at {self.rate_hz:g} Hz ({self.measured} measured), "
-                f"{self.edges} edges, {self.steps} observer steps of the {self.observer}: "
-                f"{self.outcome}; final XBS estimate {final}")
+                f"{self.edges} edges; {self.observer}: {self.steps} steps, {self.outcome}; final XBS estimate {final}")
         return text + (f"\n{self.message}" if self.message else "")
 
 
@@ -406,7 +405,7 @@ def replay(signals: LogSignals, *, observer: str = "xbs4", method: str = "radau3
             outcome = "observer-failed"
         described = str(spec)
     else:
-        described = "none (the chain only)"
+        described = "no observer (the chain only)"
     summary = ReplaySummary(source=signals.source, observer=described, method=method, samples=int(m.t.size),
                             measured=int(np.count_nonzero(np.isfinite(m.t_measured))), steps=steps,
                             edges=m.events, outcome=outcome, message=message, rate_hz=float(rate_hz),
