@@ -30,7 +30,6 @@ from .._progress import progress
 from ..exceptions import LogError, ObserverInputError, SimulationError
 from ..plants import QuarterCar
 from ..sensors import Encoder
-from ..spec import STATUS_TEXT, StepStatus
 from ._adapter import ObserverXbsEstimator, initial_xbs_state
 from ._encoder_batch import EncoderMeasurements, edge_angles, measure_edges, wheel_edges
 from ._factory import INITIAL_STATE, EstimatorSpec, xbs_estimator
@@ -427,12 +426,8 @@ def _step(obs: Any, x0: Array, rows: Array, span: Array) -> tuple[Array, int | N
     for i, (row, dt) in enumerate(zip(rows.tolist(), span.tolist())):
         try:
             x = np.asarray(obs.step(x, row, dt), dtype=float)
-        except ObserverInputError as exc:
-            try:
-                named = f"{StepStatus(exc.code).name} ({STATUS_TEXT[StepStatus(exc.code)]})"
-            except ValueError:
-                named = f"status {exc.code}"
-            return np.vstack(out), i, int(exc.code), f"step {i + 1} refused: {named}: {exc}"
+        except ObserverInputError as exc:   # its message names the StepStatus and its code
+            return np.vstack(out), i, int(exc.code), f"step {i + 1} of {span.size} refused: {exc}"
         out.append(x)
     return np.vstack(out), None, 0, ""
 
