@@ -407,3 +407,15 @@ def test_docstring_examples(module):
 
     result = doctest.testmod(importlib.import_module(module), optionflags=doctest.ELLIPSIS)
     assert result.attempted > 0 and result.failed == 0
+
+
+def test_more_samples_than_the_limit_are_refused(tmp_path, monkeypatch):
+    import switchobs.logs._io as io
+    import switchobs.loop._replay as replay_module
+    monkeypatch.setattr(replay_module, "MAX_LOG_SAMPLES", 150)
+    t = np.arange(151) * 1e-3
+    with pytest.raises(LogError, match=r"t has 151 samples \(limit MAX_LOG_SAMPLES = 150\)"):
+        LogSignals(t, np.ones(151), np.zeros(151), np.zeros(0), np.zeros(0, dtype=int), ppr=60)
+    monkeypatch.setattr(io, "MAX_LOG_SAMPLES", 150)
+    with pytest.raises(LogError, match=r"more than 150 rows \(limit MAX_LOG_SAMPLES\)"):
+        read_log(_table(tmp_path))

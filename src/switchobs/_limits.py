@@ -52,8 +52,10 @@ MAX_PIL_ROWS = 20_000
 #: Size of a measurement log replayed (MDF4, CSV, Parquet): refused by its size before it is opened, so a
 #: huge file is never read whole.
 MAX_LOG_BYTES = 1_000_000_000
-#: Samples of one channel of a replayed log, and encoder edges (a one-hour log at 1 kHz has 3.6 million).
-MAX_LOG_SAMPLES = 20_000_000
+#: Samples of one channel of a replayed log, and encoder edges: a one-hour log at 1 kHz (3.6 million) fits.  The
+#: log is read whole, and the chain's arrays grow with it (a 10-minute log at 1 kHz with a 60-ppr encoder peaks
+#: at about 0.5 GB: ``/usr/bin/time -f %M switchobs replay``), so an hour stays within about 2 GB.
+MAX_LOG_SAMPLES = 4_000_000
 #: Largest state dimension and number of modes in a certificate's family.
 MAX_CERTIFICATE_DIMENSION = 100
 #: A dwell-time certificate is checked while ``||A_p||_inf * tau_D <= 2**MAX_DWELL_BITS`` (the enclosure of
