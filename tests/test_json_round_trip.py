@@ -271,6 +271,11 @@ def _samples() -> dict[str, Callable[[], tuple[Any, dict[str, Any]]]]:
         return loop.encoder_measurements(t, -30.0 * np.exp(-t / 0.1), 20.0 - 2.0 * t, np.full(300, 100.0),
                                          encoder=sensors.Encoder(ppr=60, seed=1), radius_m=0.3)
 
+    def replayed():  # free rolling from edges of an ideal 60-ppr wheel: the chain's warm-up leaves NaN samples
+        t = np.linspace(0.0, 0.2, 201)
+        stamps, teeth = loop.edges_from_wheel_speed(t, np.full(t.size, 20.0 / 0.3), loop.ideal_encoder(60))
+        return loop.replay(loop.LogSignals(t, np.full(t.size, 20.0), np.zeros(t.size), stamps, teeth, ppr=60))
+
     def observer():
         return xbs4_observer(100.0, 60.0, method="radau3")
 
@@ -334,6 +339,8 @@ def _samples() -> dict[str, Callable[[], tuple[Any, dict[str, Any]]]]:
         "BrakingRun": lambda: series(_braking_run()),
         "EncoderLoopRecord": lambda: plain(encoder_loop()),
         "EncoderMeasurements": lambda: plain(encoder_measurements()),
+        "ReplayResult": lambda: plain(replayed()),
+        "ReplaySummary": lambda: plain(replayed().summary),
         "DemoSettings": lambda: plain(loop.DemoSettings(fast=True)),
         "ErrorRow": lambda: plain(_demo_report().braking.errors[1]),
         "BrakingSummary": lambda: plain(_demo_report().braking),

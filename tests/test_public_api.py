@@ -8,12 +8,13 @@ import pytest
 import switchobs
 
 LAYERS = ["model", "transform", "design", "spec", "certify", "codegen", "observers", "plants", "sensors", "loop", "sweep",
-          "report", "cli"]
+          "logs", "report", "cli"]
 # spec is the observer contract shared by the Python engine and the C translator; observers are generic (model,
 # design, spec); plants hold the physics and the hybrid integrator; sensors use the plants' vehicle, roads and
-# integrator; the loop wires observers and sensors to the plants; sweeps run the loop over families of cases
+# integrator; the loop wires observers and sensors to the plants; sweeps run the loop over families of cases;
+# logs read and write measurement files for the loop's replay
 RANK = {"model": 0, "transform": 1, "design": 1, "spec": 2, "certify": 2, "codegen": 3, "observers": 4, "plants": 5,
-        "sensors": 6, "loop": 7, "sweep": 8, "report": 8, "cli": 9}
+        "sensors": 6, "loop": 7, "sweep": 8, "logs": 8, "report": 8, "cli": 9}
 
 
 @pytest.mark.parametrize("name", switchobs.__all__)

@@ -25,6 +25,7 @@ from .exceptions import SwitchobsError
 __all__ = ["MAX_EXPRESSION_LENGTH", "MAX_EXPRESSION_DEPTH", "MAX_EXPRESSION_TERMS", "MAX_EXPONENT",
            "MAX_NUMBER_DIGITS", "MAX_CERTIFICATE_DIGITS", "MAX_CERTIFICATE_BYTES", "MAX_CERTIFICATE_DIMENSION",
            "MAX_DWELL_BITS", "MAX_BOX_VERTICES", "MAX_INPUT_FILE_BYTES", "MAX_PIL_ROWS",
+           "MAX_LOG_BYTES", "MAX_LOG_SAMPLES",
            "DOUBLE_MAX", "DOUBLE_MIN", "LIMITS", "decimal_fraction", "check_double", "digits", "read_text"]
 
 #: Characters in one expression string (a matrix entry, a pole, a gain).
@@ -48,6 +49,13 @@ MAX_INPUT_FILE_BYTES = 10_000_000
 #: Rows of a processor-in-the-loop record: compiled into the harness, they and the states must fit the 4 MB code and
 #: 4 MB data memories of the emulated MPS2 boards (20000 rows of 3 doubles are 480 kB).
 MAX_PIL_ROWS = 20_000
+#: Size of a measurement log replayed (MDF4, CSV, Parquet): refused by its size before it is opened, so a
+#: huge file is never read whole.
+MAX_LOG_BYTES = 1_000_000_000
+#: Samples of one channel of a replayed log, and encoder edges: a one-hour log at 1 kHz (3.6 million) fits.  The
+#: log is read whole, and the chain's arrays grow with it (a 10-minute log at 1 kHz with a 60-ppr encoder peaks
+#: at about 0.5 GB: ``/usr/bin/time -f %M switchobs replay``), so an hour stays within about 2 GB.
+MAX_LOG_SAMPLES = 4_000_000
 #: Largest state dimension and number of modes in a certificate's family.
 MAX_CERTIFICATE_DIMENSION = 100
 #: A dwell-time certificate is checked while ``||A_p||_inf * tau_D <= 2**MAX_DWELL_BITS`` (the enclosure of
@@ -68,6 +76,7 @@ LIMITS: dict[str, int | float] = {
     "MAX_CERTIFICATE_BYTES": MAX_CERTIFICATE_BYTES, "MAX_CERTIFICATE_DIMENSION": MAX_CERTIFICATE_DIMENSION,
     "MAX_DWELL_BITS": MAX_DWELL_BITS, "MAX_BOX_VERTICES": MAX_BOX_VERTICES,
     "MAX_INPUT_FILE_BYTES": MAX_INPUT_FILE_BYTES, "MAX_PIL_ROWS": MAX_PIL_ROWS,
+    "MAX_LOG_BYTES": MAX_LOG_BYTES, "MAX_LOG_SAMPLES": MAX_LOG_SAMPLES,
 }
 
 _FRACTION = re.compile(r"^([+-]?)(\d+)\s*/\s*(\d+)$")
