@@ -142,6 +142,8 @@ def main() -> None:
     parser.add_argument("--old", required=True, metavar="REV", help="git revision of the emitter to compare with")
     parser.add_argument("--quick", action="store_true", help="abs-xbs3 double, gcc, 5 runs")
     parser.add_argument("--repeats", type=int, default=REPEATS)
+    parser.add_argument("--branch-hints", action="store_true",
+                        help="compile this tree's files with -DSWITCHOBS_BRANCH_HINTS (__builtin_expect, clang)")
     args = parser.parse_args()
     variants = VARIANTS[:3] if args.quick else VARIANTS
     repeats = 5 if args.quick else args.repeats
@@ -169,7 +171,8 @@ def main() -> None:
                                                  .replace("@REPEATS@", str(repeats)).replace("@STEPS@", str(STEPS)))
                 objs = []
                 for name in (f"old_{i}", f"new_{i}", f"driver_{i}"):
-                    _run([cc, *CFLAGS, "-c", f"{name}.c", "-o", f"{name}-{cc}.o"], d)
+                    hints = ["-DSWITCHOBS_BRANCH_HINTS"] if args.branch_hints and name.startswith("new") else []
+                    _run([cc, *CFLAGS, *hints, "-c", f"{name}.c", "-o", f"{name}-{cc}.o"], d)
                     objs.append(f"{name}-{cc}.o")
                 _run([cc, "-o", f"bench_{i}_{cc}", *objs, "-lm"], d)
                 out = _run([f"./bench_{i}_{cc}"], d)
