@@ -90,6 +90,9 @@ def functions(source: str) -> dict[str, tuple[int, int]]:
     for number, line in enumerate(source.splitlines(), start=1):
         if line[:1].isalpha() and not line.startswith(("typedef", "extern")) and "(" in line and name is None:
             name, start = _NAME.search(line).group(1), number
+            if line.endswith("}"):  # a one-line helper
+                out[name] = (number, number)
+                name = None
         elif line == "}" and name is not None:
             out[name] = (start, number)
             name = None
