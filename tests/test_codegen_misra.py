@@ -4,7 +4,8 @@ required guideline in any generated .c or .h, and every advisory finding listed 
 ``<prefix>_misra.md`` -- which lists nothing that cppcheck does not find, besides the guidelines it marks as not
 checked by the addon.  The default run checks abs-xbs3 with every method (sub-stepped rk4 too) and both real
 types, and keeps the table of docs/codegen.md equal to that run; the slow matrix adds abs-xbs4, abs-adaptive2, a
-user model with d(y) and b(y), the adaptive and the super-twisting observers.
+user model with d(y) and b(y), the adaptive and the super-twisting observers.  clang-tidy's narrowing checks run
+on float variants.
 """
 
 from __future__ import annotations
@@ -245,3 +246,22 @@ def test_boolean_temporaries_give_casadi_s_value_for_every_input(real):
         ref = np.asarray(fn(xs.astype(float))).ravel().astype(dtype)
         assert np.array_equal(res, ref, equal_nan=True), (a, b, res, ref)
         assert np.array_equal(np.signbit(res), np.signbit(ref)), (a, b, res, ref)
+
+
+# ----------------------------------------------------------------------------- clang-tidy narrowing, float
+@pytest.mark.parametrize("name, method, h_max", [("abs-xbs3", "radau3", "1/100"), ("abs-xbs4", "rk4", None),
+                                                 ("abs-adaptive2", "rk4", "1/50")])
+def test_float_variants_have_no_narrowing_conversion_for_clang_tidy(tmp_path, name, method, h_max):
+    """clang-tidy's narrowing checks (bugprone- and cppcoreguidelines-narrowing-conversions) on the float C."""
+    exe = shutil.which("clang-tidy")
+    if exe is None:
+        message = ("!!! clang-tidy is NOT INSTALLED: the float C was NOT checked for narrowing conversions; "
+                   "as root on Debian: apt-get install -y clang-tidy !!!")
+        warnings.warn(message)
+        pytest.skip(message)
+    gen = adaptive("float", h_max) if name == "abs-adaptive2" else builtin(name, "float", method, h_max)
+    gen.write(tmp_path)
+    proc = subprocess.run([exe, "-checks=-*,bugprone-narrowing-conversions,cppcoreguidelines-narrowing-conversions",
+                           "--warnings-as-errors=*", f"{gen.prefix}.c", "--", "-std=c99"], cwd=tmp_path,
+                          capture_output=True, text=True, check=False, timeout=300)
+    assert proc.returncode == 0 and "warning:" not in proc.stdout, proc.stdout + proc.stderr
