@@ -157,7 +157,8 @@ def test_abs_xbs3_has_no_required_finding_and_its_advisory_ones_are_recorded(xbs
 
 def docs_table(runs: dict) -> list[str]:
     """The table of docs/codegen.md: cppcheck's findings on abs-xbs3 by category and rule."""
-    advisory = sorted({r for _, found in runs.values() for _, _, r in found}, key=lambda r: tuple(map(int, r.split("."))))
+    advisory = sorted({r for _, found in runs.values() for _, _, r in found},
+                      key=lambda r: tuple(map(int, r.split("."))))
     lines = ["| real | method | mandatory | required | " + " | ".join(f"advisory {r}" for r in advisory) + " |",
              "| --- | --- | ---: | ---: | " + " | ".join("---:" for _ in advisory) + " |"]
     for (real, step), (_, found) in runs.items():
@@ -233,7 +234,8 @@ def test_boolean_temporaries_give_casadi_s_value_for_every_input(real):
     k = kernel("k", [("x", x)], out, real=real, prefix="p")
     assert not re.search(r"[!=]=", k.body)
     source = (f"#include <math.h>\n#include <stdbool.h>\ntypedef {real} p_real;\n{k.body}\n"
-              f"void k_eval(const p_real *x, p_real *out);\nvoid k_eval(const p_real *x, p_real *out) {{ k(x, out); }}\n")
+              "void k_eval(const p_real *x, p_real *out);\n"
+              "void k_eval(const p_real *x, p_real *out) { k(x, out); }\n")
     lib = ctypes.CDLL(str(compile_sources({"k.c": source}, ("k.c",), f"misra_bool_{real}",
                                           flags=("-std=c99", "-O2", "-fPIC", "-shared"))))
     ctype, dtype = (ctypes.c_double, np.float64) if real == "double" else (ctypes.c_float, np.float32)

@@ -180,7 +180,8 @@ def misra_record(prefix: str, header: str, source: str) -> str:
         lines += ["**Not met (required):** identifiers that C99 need not tell apart, because of a long prefix: "
                   + "; ".join(f"rule {r}: `{a}` and `{b}`" for r, a, b in clashes)
                   + f".  Regenerate with a prefix of at most {_EXTERNAL - 5} characters (`--prefix`).", ""]
-    lines += ["| guideline | category | file | where | why | reported by cppcheck |", "| --- | --- | --- | --- | --- | --- |"]
+    lines += ["| guideline | category | file | where | why | reported by cppcheck |",
+              "| --- | --- | --- | --- | --- | --- |"]
     for d in devs:
         name = d.rule if d.rule.startswith("Dir") else f"Rule {d.rule}"
         lines.append(f"| {name} | {d.category} | `{d.file}` | {', '.join(f'`{w}`' for w in d.where)} | {d.why} | "
