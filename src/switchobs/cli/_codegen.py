@@ -76,7 +76,9 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--max-substeps", type=int, metavar="N",
                    help="most sub-steps per step with --h-max, 1..16777216 (default 64); beyond: status SUBSTEP_LIMIT")
     p.add_argument("--prefix", help="C prefix (default switchobs_<model>, non-identifier characters as _)")
-    p.add_argument("--out", required=True, metavar="DIR", help="directory for <prefix>.c, <prefix>.h, README.md")
+    p.add_argument("--out", required=True, metavar="DIR",
+                   help="directory for <prefix>.c, <prefix>.h, README.md and <prefix>_misra.md (the MISRA C:2012 "
+                        "deviation record)")
     p.add_argument("--json", action="store_true", help="print the description as JSON")
     add_integration_arguments(p)
     p.set_defaults(func=run)
