@@ -99,19 +99,10 @@ def cross_compile(gen: GeneratedObserver, target: str, flags: list[str], tmp: Pa
 
 # ----------------------------------------------------------------------------- builds
 @pytest.mark.parametrize("name", sorted(CASES))
-def test_cortex_m_build_is_clean_with_the_strict_warnings_but_float_equal(tmp_path, name):
+def test_cortex_m_build_is_clean_with_the_strict_warnings(tmp_path, name):
+    # -Wfloat-equal included: the MISRA emitter writes casadi's truth tests as ordered comparisons
     need("arm-none-eabi-gcc")
     _, gen, target, _ = case(name)
-    flags = ["-Werror", *(f for f in WARNING_FLAGS if f != "-Wfloat-equal")]
-    proc = cross_compile(gen, target, flags, tmp_path)
-    assert proc.returncode == 0, proc.stderr
-
-
-@pytest.mark.xfail(strict=True, reason="the emitter compares reals with == and != (casadi's truth tests, 9-16 per "
-                                       "kernel): -Wfloat-equal fails until the MISRA emitter writes them otherwise")
-def test_cortex_m_build_is_clean_with_float_equal(tmp_path):
-    need("arm-none-eabi-gcc")
-    _, gen, target, _ = case("abs-xbs3-radau3-float-m4f")
     proc = cross_compile(gen, target, ["-Werror", *WARNING_FLAGS], tmp_path)
     assert proc.returncode == 0, proc.stderr
 
