@@ -854,10 +854,10 @@ def _source(*, tr: Translation, info: _Info, kind: str, real: str, method: str, 
     signal_in = _range_test("sig", tr.signal_names, s_macros, "S", ranges, P, "        ")
     param_in = _range_test("par", tr.param_names, p_macros, "P", ranges, P, "        ")
 
-    def dt_bad(v: str) -> str:
-        """C condition true for a step length the step refuses (BAD_DT)."""
-        return f"!({v} > {zero}) || !isfinite({v})" + (
-            f" || !({v} >= {P}_DT_MIN && {v} <= {P}_DT_MAX)" if "dt" in ranges else "")
+    # a declared dt range (DT_MIN > 0) is checked in every step, not skipped with valid: the proof then sees
+    # the bound of dt where it is used, without the relation between valid and dt
+    dt_check = (f"!(dt >= {P}_DT_MIN && dt <= {P}_DT_MAX)" if "dt" in ranges
+                else f"!valid && (!(dt > {zero}) || !isfinite(dt))")
     implicit = not STEP_METHODS[method].explicit
     f = "f" if real == "float" else ""
     state_out = _range_test("next", tr.state_names, x_macros, "X", ranges, P, "        ")
@@ -885,7 +885,7 @@ def _source(*, tr: Translation, info: _Info, kind: str, real: str, method: str, 
                     "    for (j = 0;;) {  /* n sub-steps of h, signals held */",
                     "        " + call("next", x="cur", sig="sig", par="par", dt="h", s="s"),
                     *("        " + c for c in singular("cur", "h")),
-                    "        if (++j == n) break;",
+                    "        if (++j >= n) break;  /* >=: j stays below n <= MAX_SUBSTEPS, visibly */",
                     # a sub-step's state stays in the declared box, so that the next sub-step starts from
                     # a state the proof covers (the loop needs no global argument)
                     *([] if state_out is None else [
@@ -933,7 +933,7 @@ def _source(*, tr: Translation, info: _Info, kind: str, real: str, method: str, 
         None if bound is None else f"    {real} cur[{nx}], a, q, h = dt;",
         f"    {real} det, adet;" if implicit else None,
         "    int32_t i;" if bound is None else "    int32_t i, j, n = 1;",
-        f"    if ({P}_UNLIKELY(!valid && ({dt_bad('dt')}))) return {P}_ERR_BAD_DT;",
+        f"    if ({P}_UNLIKELY({dt_check})) return {P}_ERR_BAD_DT;",
         f"    if ({P}_UNLIKELY({_unrolled('!isfinite(x[{i}])', n_x, '        ', ' || ')})) "
         f"return {P}_ERR_NONFINITE_STATE;",
         None if state_in is None else f"    if ({P}_UNLIKELY({state_in})) return {P}_ERR_STATE_RANGE;",
@@ -960,7 +960,9 @@ def _source(*, tr: Translation, info: _Info, kind: str, real: str, method: str, 
         f"static int32_t {prefix}_rows({real} *xhat, const {real} *signals, int32_t n_steps, const {real} *params,",
         f"    {real} dt, const {real} *dts, {real} *trajectory)",
         "{",
-        f"    {real} cur[{nx}], next[{size}];",
+        # with ranges (the proved build) next starts initialised: that a row's state is written exactly when
+        # _advance returns 0 is a relation between paths the proof would otherwise have to keep apart
+        f"    {real} cur[{nx}], next[{size}]{' = {' + zero + '}' if ranges else ''};",
         "    /* one loop for both: row k reads h[k * stride], stride 0 for a fixed dt (h stepped by stride:",
         "     * faster than indexing h with gcc 12 -O2) */",
         f"    const {real} *h = dts != NULL ? dts : &dt;",
