@@ -236,8 +236,8 @@ class GeneratedObserver:
             out[self.param_index(name)] = float(value)
         return out
 
-    def write(self, directory: str | Path) -> tuple[Path, ...]:
-        """Write ``<prefix>.h``, ``<prefix>.c`` and ``README.md`` into ``directory`` (created if needed).
+    def write(self, directory: str | Path, *, extra: Mapping[str, str] | None = None) -> tuple[Path, ...]:
+        """Write :attr:`files` (and ``extra``, name -> text) into ``directory`` (created if needed).
 
         All files appear together or none does (:func:`switchobs._atomic.write_files`).
 
@@ -246,7 +246,7 @@ class GeneratedObserver:
         OutputError
             If a file cannot be written (the message names it); nothing is left behind.
         """
-        return write_files(directory, self.files, what="the generated C into")
+        return write_files(directory, {**self.files, **(extra or {})}, what="the generated C into")
 
     def to_json(self, *, sources: bool = False) -> dict[str, Any]:
         """What the files hold and mean (and the files' text if ``sources``: what :meth:`from_json` reads)."""
