@@ -14,13 +14,15 @@ StepStatus          -- status codes of ``<prefix>_step`` / ``<prefix>_run`` / ``
 default_prefix      -- ``switchobs_<model>`` with non-identifier characters as ``_``
 prove, ProofResult  -- Frama-C EVA proof that the step has no run-time errors over its declared ranges
 proof_driver, proof_record -- the EVA driver ``<prefix>_proof.c`` and the record ``<prefix>_proof.md``
+fuzz_harness        -- a libFuzzer harness of the C API with the API contract as its oracle
 """
 
 from ..spec import METHODS, STATUS_TEXT, Guard, StepStatus, domain_guards
 from ._build import CObserver, cache_directory, compile_observer, compile_sources, find_compiler
 from ._generate import REALS, GeneratedObserver, default_prefix, generate_observer, generate_super_twisting
+from ._fuzz import fuzz_harness
 from ._proof import ProofResult, proof_driver, proof_record, prove
 
 __all__ = ["CObserver", "GeneratedObserver", "Guard", "METHODS", "REALS", "STATUS_TEXT", "StepStatus",
            "cache_directory", "compile_observer", "compile_sources", "find_compiler", "default_prefix", "domain_guards", "generate_observer",
-           "generate_super_twisting", "ProofResult", "proof_driver", "proof_record", "prove"]
+           "generate_super_twisting", "ProofResult", "fuzz_harness", "proof_driver", "proof_record", "prove"]
