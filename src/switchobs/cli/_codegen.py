@@ -54,8 +54,8 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--max-substeps", type=int, metavar="N",
                    help="most sub-steps per step with --h-max, 1..16777216 (default 64); beyond: status SUBSTEP_LIMIT")
     p.add_argument("--range", action="append", default=[], metavar="NAME=LO:HI", dest="ranges",
-                   help="declared range of a state, signal, parameter or dt (repeatable), e.g. --range vx=1:70 "
-                        "--range dt=1e-4:1e-2: the step refuses a value outside (STATE_RANGE, also for a new "
+                   help="declared range of a state, signal, parameter or dt (repeatable, or comma-separated; on "
+                        "top of the model file's [ranges]), e.g. --range vx=1:70,dt=1e-4:1e-2: the step refuses a value outside (STATE_RANGE, also for a new "
                         "state, SIGNAL_RANGE, BAD_PARAM, BAD_DT); with a range for every one of them the files "
                         "include the Frama-C EVA proof driver <prefix>_proof.c")
     p.add_argument("--prove", action="store_true",
@@ -92,7 +92,7 @@ def _command(args: argparse.Namespace) -> str:
 def _ranges(items: list[str]) -> dict[str, tuple[float, float]]:
     """``--range NAME=LO:HI`` options as a mapping (the generator checks the names and the bounds)."""
     out: dict[str, tuple[float, float]] = {}
-    for item in items:
+    for item in (part for text in items for part in text.split(",") if part.strip()):
         name, eq, span = item.partition("=")
         lo, colon, hi = span.partition(":")
         try:

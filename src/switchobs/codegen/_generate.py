@@ -611,7 +611,8 @@ def generate_observer(model: Model, gains: GainDesign | tuple[Sequence[float], S
     command : str, optional
         Command line recorded in the files' comments.
     ranges : mapping name -> (lo, hi), optional
-        Declared ranges of states, signals, parameters and ``dt`` (name ``dt``, seconds): the step refuses a
+        Declared ranges of states, signals, parameters and ``dt`` (name ``dt``, seconds), on top of the
+        model's ``[ranges]`` (:attr:`switchobs.model.Model.ranges`): the step refuses a
         value outside its range (``STATE_RANGE``, also for a new state outside it, ``SIGNAL_RANGE``,
         ``BAD_PARAM``, ``BAD_DT``).  With a range for every one of them the step is proved free of run-time
         errors by Frama-C EVA (:func:`switchobs.codegen.prove`, driver ``<prefix>_proof.c``).
@@ -669,7 +670,8 @@ def generate_observer(model: Model, gains: GainDesign | tuple[Sequence[float], S
         if model.original:
             original = (tuple(name for name, _ in model.original), translate_original(model, tr))
     return _assemble(tr, info=_model_info(model, kind), kind=kind, real=real, method=method, prefix=prefix,
-                     command=command, bound=bound, certificate=certificate, original=original, ranges=ranges)
+                     command=command, bound=bound, certificate=certificate, original=original,
+                     ranges={**model.ranges, **(ranges or {})})
 
 
 def generate_super_twisting(lam: float, alpha: float, *, real: str = "double",
@@ -882,7 +884,7 @@ def _source(*, tr: Translation, info: _Info, kind: str, real: str, method: str, 
         # one call of the kernel, so that compilers inline it as in the step without sub-steps (two calls,
         # the first from x, kept it out of line with gcc 12 -O2: 1.2x slower non-stiff steps of abs-xbs3)
         stepping = [f"    for (i = 0; i < {nx}; ++i) cur[i] = x[i];",
-                    "    for (j = 0;;) {  /* n sub-steps of h, signals held */",
+                    "    for (j = 0; j < n;) {  /* n <= MAX_SUBSTEPS sub-steps of h, signals held */",
                     "        " + call("next", x="cur", sig="sig", par="par", dt="h", s="s"),
                     *("        " + c for c in singular("cur", "h")),
                     "        if (++j >= n) break;  /* >=: j stays below n <= MAX_SUBSTEPS, visibly */",
