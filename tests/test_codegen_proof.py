@@ -7,9 +7,12 @@ errors").  A mutant without the determinant check shows that the analysis does f
 
 from __future__ import annotations
 
+import re
+import shlex
 import shutil
 import subprocess
 import sys
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -19,23 +22,26 @@ from switchobs.design import design
 from switchobs.exceptions import CodegenError
 from switchobs.model import builtin_model
 
+ROOT = Path(__file__).resolve().parents[1]
+
 pytestmark = pytest.mark.skipif(shutil.which("frama-c") is None,
                                 reason="frama-c is not installed: the proof of no run-time errors is NOT checked")
 
-#: Declared ranges of abs-xbs3 (ours): wheel acceleration offset and XBS state, speed 1-70 m/s, 0.01-10 ms
-#: steps; every parameter within a factor 2 of its default (below).
-XBS3_RANGES = {"z1": (-200.0, 200.0), "z2": (-100.0, 100.0), "z3": (-1e5, 1e5), "y": (-200.0, 200.0),
-               "vx": (1.0, 70.0), "u": (-1e4, 1e4), "dt": (1e-5, 1e-2)}
+#: Declared ranges of abs-xbs3 (ours): wheel acceleration offset and XBS states, speed 1-70 m/s, 0.01-10 ms
+#: steps, every parameter within about a factor 2 of its default (poles at -100).  docs/codegen.md shows them.
+XBS3_RANGES = {"z1": (-200, 200), "z2": (-100, 100), "z3": (-1e5, 1e5), "y": (-200, 200), "vx": (1, 70),
+               "u": (-1e4, 1e4), "dt": (1e-5, 1e-2), "a": (100, 300), "b": (-8, -2), "c": (17, 68),
+               "K_plus_z1": (167, 668), "K_plus_z2": (-441, -110), "K_plus_z3": (-10667, -2666),
+               "K_minus_z1": (-532, -133), "K_minus_z2": (-224, -55), "K_minus_z3": (2666, 10667)}
+#: The same as ``switchobs codegen --range`` (the command of docs/codegen.md).
+RANGE_OPTION = "--range=" + ",".join(f"{n}={lo:g}:{hi:g}" for n, (lo, hi) in XBS3_RANGES.items())
+PAGE_COMMAND = f"switchobs codegen abs-xbs3 --spectrum=-100,-100,-100 --method=radau3 {RANGE_OPTION} --prove --out gen"
 
 
 def xbs3(method: str, real: str = "double", **options):
     m = builtin_model("abs-xbs3")
-    gains = design(m, "-100,-100,-100")
-    plain = generate_observer(m, gains)
-    ranges = dict(XBS3_RANGES)
-    for name, v in zip(plain.param_names, plain.default_params):
-        ranges[name] = (min(0.5 * v, 2 * v), max(0.5 * v, 2 * v))
-    return generate_observer(m, gains, method=method, real=real, ranges=ranges, **options)
+    return generate_observer(m, design(m, "-100,-100,-100"), method=method, real=real, ranges=XBS3_RANGES,
+                             **options)
 
 
 @pytest.mark.parametrize("method, real, options", [
@@ -94,9 +100,8 @@ def test_the_proof_needs_a_range_of_every_input():
 
 def test_cli_prove_writes_the_record_and_exits_0(tmp_path):
     gen = xbs3("radau3", "float")
-    ranges = [f"--range={n}={lo!r}:{hi!r}" for n, (lo, hi) in gen.ranges.items()]
     cmd = [sys.executable, "-m", "switchobs.cli.main", "codegen", "abs-xbs3", "--spectrum=-100,-100,-100",
-           "--method=radau3", "--real=float", *ranges, "--prove", "--out", str(tmp_path)]
+           "--method=radau3", "--real=float", RANGE_OPTION, "--prove", "--out", str(tmp_path)]
     proc = subprocess.run(cmd, capture_output=True, text=True, timeout=600)
     assert proc.returncode == 0, proc.stderr
     assert "no alarm" in proc.stdout
@@ -106,3 +111,33 @@ def test_cli_prove_writes_the_record_and_exits_0(tmp_path):
     bad = subprocess.run([*cmd[:-3], "--range=vx=1", "--out", str(tmp_path / "b")], capture_output=True,
                          text=True, timeout=120)
     assert bad.returncode == 2 and "NAME=LO:HI" in bad.stderr and len(bad.stderr.splitlines()) == 1
+
+
+def test_the_proof_shown_on_the_codegen_page_is_what_the_command_prints(tmp_path, monkeypatch, capsys):
+    from _docs_blocks import matches_with_elisions, shown_output
+
+    from switchobs.cli.main import main
+
+    monkeypatch.chdir(tmp_path)
+    assert main(shlex.split(PAGE_COMMAND)[1:]) == 0
+    out = capsys.readouterr().out.rstrip("\n")
+    assert matches_with_elisions(shown_output("codegen.md", PAGE_COMMAND), out), out
+    shown_record = re.search(r"```text\n(# Proof of no run-time errors.*?)```", (ROOT / "docs/codegen.md").read_text(),
+                             re.S)
+    assert shown_record, "docs/codegen.md shows no proof record"
+    record = (tmp_path / "gen/switchobs_abs_xbs3_proof.md").read_text()
+    assert matches_with_elisions(shown_record.group(1), record), record
+
+
+def test_the_ranged_files_compile_clean_with_strict_warnings(tmp_path):
+    cc = shutil.which("gcc")
+    if cc is None:
+        pytest.skip("gcc is not installed: the strict compile of the ranged step is NOT checked")
+    for method, real, options in [("radau3", "float", {}), ("rk4", "double", {"h_max": "1/100"})]:
+        gen = xbs3(method, real, **options)
+        for name, text in gen.files.items():
+            (tmp_path / name).write_text(text)
+        proc = subprocess.run([cc, "-std=c99", "-Wall", "-Wextra", "-Wpedantic", "-Wconversion", "-Wfloat-conversion",
+                               "-Wdouble-promotion", "-Werror", "-c", str(tmp_path / f"{gen.prefix}.c"), "-o",
+                               str(tmp_path / "x.o")], capture_output=True, text=True)
+        assert proc.returncode == 0, proc.stderr

@@ -251,9 +251,7 @@ def proof_record(gen: GeneratedObserver, result: ProofResult) -> str:
         "",
         "Command (in this directory):",
         "",
-        "```sh",
-        result.command,
-        "```",
+        "    " + result.command,
         "",
         f"Result: **{result.alarms} alarm(s)**, {result.proved} properties valid, {result.seconds:.1f} s wall.",
     ]
