@@ -884,7 +884,9 @@ def _source(*, tr: Translation, info: _Info, kind: str, real: str, method: str, 
         # one call of the kernel, so that compilers inline it as in the step without sub-steps (two calls,
         # the first from x, kept it out of line with gcc 12 -O2: 1.2x slower non-stiff steps of abs-xbs3)
         stepping = [f"    for (i = 0; i < {nx}; ++i) cur[i] = x[i];",
-                    "    for (j = 0; j < n;) {  /* n <= MAX_SUBSTEPS sub-steps of h, signals held */",
+                    # the constant bound is visible to a proof tool (j < n <= MAX_SUBSTEPS) and tells compilers
+                    # that the loop runs (j < n there left gcc 12 unsure that next is written)
+                    f"    for (j = 0; j < {P}_MAX_SUBSTEPS;) {{  /* n <= MAX_SUBSTEPS sub-steps of h, signals held */",
                     "        " + call("next", x="cur", sig="sig", par="par", dt="h", s="s"),
                     *("        " + c for c in singular("cur", "h")),
                     "        if (++j >= n) break;  /* >=: j stays below n <= MAX_SUBSTEPS, visibly */",
