@@ -17,9 +17,9 @@ scheme as the Python reference observers, so that the two agree to rounding.
 The implicit midpoint rule and 2-stage Radau IIA (switched observer only, whose
 held-signal right-hand side ``f = J x + c``, ``J = s A - g C``, is affine) step
 ``x+ = x + dt D(Z)^-1 F(Z) f(x)``, ``Z = dt J`` (``switchobs.spec.implicit_increment``
-on casadi SX: cofactors, one division by ``det D(Z)`` made safe); the kernel
-returns ``det D(Z)`` after the new state and a zero or non-finite determinant is
-``NONFINITE_RESULT``.  They keep the design's Lyapunov function decreasing at
+on casadi SX: cofactors); the kernel returns the undivided solve and ``det D(Z)``
+after it, and the step refuses ``|det D(Z)| < DET_FLOOR`` or a non-finite one
+(``NONFINITE_RESULT``) before its one division, ``1 / det D(Z)``.  They keep the design's Lyapunov function decreasing at
 every step length, so they need no step bound.
 
 With a certified step bound ``h_max`` (in the rescaled time ``tau = ∫|s| dt``,
@@ -360,14 +360,21 @@ def _defaults(model: Model, values: Mapping[str, Any], extra_names: Sequence[str
 
 
 # ----------------------------------------------------------------------------- assembly
-def _step_expression(tr: Translation, method: str) -> ca.SX:
-    """The step ``x_next``; for an implicit method the undivided solve ``(numerators, det D(Z))``, the
-    determinant last (the step divides after its check of ``det``)."""
+def _step_expression(tr: Translation, method: str, *, split: bool = False) -> ca.SX:
+    """The step ``x_next``; for an implicit method ``(x_next, det D(Z))``, or with ``split`` (the proved
+    build) ``(det D(Z), numerators)``: the undivided solve, which the step divides after its check of ``det``.
+
+    Without ranges the division stays in the kernel, by ``det`` where ``|det| >= DET_FLOOR`` (else by 1,
+    and the step refuses): divided outside, abs-xbs4's radau3 step was 1.1-1.15x slower with gcc 12 -O2.
+    """
     if tr.advance is not None:
         return tr.advance(method)
     if not STEP_METHODS[method].explicit:
         num, det = tr.implicit(method)
-        return ca.vertcat(num, det)
+        if split:
+            return ca.vertcat(det, num)
+        floor = STEP_METHODS[method].det_floor(len(tr.state_names))
+        return ca.vertcat(tr.x + tr.dt * (num * (1.0 / ca.if_else(ca.fabs(det) >= floor, det, 1))), det)
     x, dt = tr.x, tr.dt
     k1 = tr.rhs(x)
     if method == "euler":
@@ -481,7 +488,7 @@ def _assemble(tr: Translation, *, info: _Info, kind: str, real: str, method: str
     p_macros = _macro_names("parameter", tr.param_names)
     rng = _check_ranges(ranges, tr, real)
     det_floor = None if STEP_METHODS[method].explicit else STEP_METHODS[method].det_floor(len(tr.state_names))
-    step_expr = _step_expression(tr, method)
+    step_expr = _step_expression(tr, method, split=bool(rng))
     inputs = [("x", tr.x), ("sig", tr.signals), ("par", tr.params), ("dt", tr.dt)]
     if tr.s is not None and tr.scale.is_constant():  # a constant time scaling needs no check: fold it in
         step_expr = ca.substitute(step_expr, tr.s, tr.scale)
@@ -525,13 +532,13 @@ def _assemble(tr: Translation, *, info: _Info, kind: str, real: str, method: str
 
     full = step_expr if tr.s is None else ca.substitute(step_expr, tr.s, tr.scale)
     x_next = full[:len(tr.state_names)]
-    if not STEP_METHODS[method].explicit:  # the step's division, after its check of det
-        x_next = tr.x + tr.dt * (x_next / full[len(tr.state_names)])
+    if not STEP_METHODS[method].explicit and rng:  # the step's division, after its check of det
+        x_next = tr.x + tr.dt * (full[1:] * (1.0 / full[0]))
     step_fn = ca.Function(f"{prefix}_step", [tr.x, tr.signals, tr.params, tr.dt], [x_next],
                           ["x", "signals", "params", "dt"], ["x_next"])
     # kernel temporaries, the state _run holds and the new state, s, one guard value
     stack_reals = max(k.temporaries for k in kernels) + 2 * len(tr.state_names) + 2
-    if not STEP_METHODS[method].explicit:  # det D(Z) after the new state
+    if not STEP_METHODS[method].explicit:  # det D(Z) after the solve
         stack_reals += 1
     if bound is not None:  # the sub-step's input state, a, q, h
         stack_reals += len(tr.state_names) + 3
@@ -865,16 +872,21 @@ def _source(*, tr: Translation, info: _Info, kind: str, real: str, method: str, 
     state_out = _range_test("next", tr.state_names, x_macros, "X", ranges, P, "        ")
 
     def singular(x: str, dt: str) -> list[str]:
-        """An implicit kernel writes the undivided solve and det D(Z) after it: |det| is checked against its
-        floor, then divided by (the quotient by |det| with det's sign: the bits of a division by det)."""
+        """The implicit kernel's det D(Z) checked against DET_FLOOR.  In the ranged build the kernel wrote det
+        D(Z) and the undivided solve after it: the one division, 1 / det, is then taken as 1 / |det| with det's
+        sign (the same bits), its divisor visibly at least DET_FLOOR, and the step is x + dt (solve * (1 / det)),
+        the operations of the Python reference (switchobs.spec.implicit_increment)."""
         if not implicit:
             return []
-        return [f"det = next[{nx}];  /* det D(Z) */",
-                f"adet = fabs{f}(det);",
-                f"if ({P}_UNLIKELY(!(adet >= {P}_DET_FLOOR) || !isfinite(adet))) return {P}_ERR_NONFINITE_RESULT;  "
+        if not ranges:  # the kernel divided where |det| >= DET_FLOOR: refuse the others
+            return [f"if ({P}_UNLIKELY(!(fabs{f}(next[{nx}]) >= {P}_DET_FLOOR) || !isfinite(next[{nx}]))) "
+                    f"return {P}_ERR_NONFINITE_RESULT;  /* D(Z) singular, or J not Hurwitz */"]
+        return [f"det = next[0];  /* det D(Z), then the undivided solve */",
+                f"inv = fabs{f}(det);",
+                f"if ({P}_UNLIKELY(!(inv >= {P}_DET_FLOOR) || !isfinite(inv))) return {P}_ERR_NONFINITE_RESULT;  "
                 "/* D(Z) singular, or J not Hurwitz */",
-                *(f"next[{i}] = {x}[{i}] + {dt} * (det < {zero} ? -(next[{i}] / adet) : next[{i}] / adet);"
-                  for i in range(n_x))]
+                f"inv = det < {zero} ? -{one} / inv : {one} / inv;",
+                *(f"next[{i}] = {x}[{i}] + {dt} * (next[{i + 1}] * inv);" for i in range(n_x))]
 
     size = f"{nx} + 1" if implicit else nx
     if bound is None:
@@ -884,12 +896,15 @@ def _source(*, tr: Translation, info: _Info, kind: str, real: str, method: str, 
         # one call of the kernel, so that compilers inline it as in the step without sub-steps (two calls,
         # the first from x, kept it out of line with gcc 12 -O2: 1.2x slower non-stiff steps of abs-xbs3)
         stepping = [f"    for (i = 0; i < {nx}; ++i) cur[i] = x[i];",
-                    # the constant bound is visible to a proof tool (j < n <= MAX_SUBSTEPS) and tells compilers
-                    # that the loop runs (j < n there left gcc 12 unsure that next is written)
-                    f"    for (j = 0; j < {P}_MAX_SUBSTEPS;) {{  /* n <= MAX_SUBSTEPS sub-steps of h, signals held */",
+                    # ranged (proved) build: a constant bound visible to a proof tool (j < n <= MAX_SUBSTEPS),
+                    # which also tells compilers that the loop runs (j < n left gcc 12 unsure that next is
+                    # written); without ranges today's loop: with the head check abs-xbs3's sub-stepped step
+                    # was 1.1x slower with gcc 12 -O2
+                    f"    for (j = 0; j < {P}_MAX_SUBSTEPS;) {{  /* n <= MAX_SUBSTEPS sub-steps of h, signals held */"
+                    if ranges else "    for (j = 0;;) {  /* n sub-steps of h, signals held */",
                     "        " + call("next", x="cur", sig="sig", par="par", dt="h", s="s"),
                     *("        " + c for c in singular("cur", "h")),
-                    "        if (++j >= n) break;  /* >=: j stays below n <= MAX_SUBSTEPS, visibly */",
+                    "        if (++j == n) break;",
                     # a sub-step's state stays in the declared box, so that the next sub-step starts from
                     # a state the proof covers (the loop needs no global argument)
                     *([] if state_out is None else [
@@ -935,7 +950,7 @@ def _source(*, tr: Translation, info: _Info, kind: str, real: str, method: str, 
         f"    {real} g;" if any("&g" in c for c in checks) else None,
         f"    {real} s;" if any("&s" in c for c in checks) else None,
         None if bound is None else f"    {real} cur[{nx}], a, q, h = dt;",
-        f"    {real} det, adet;" if implicit else None,
+        f"    {real} det, inv;" if implicit and ranges else None,
         "    int32_t i;" if bound is None else "    int32_t i, j, n = 1;",
         f"    if ({P}_UNLIKELY({dt_check})) return {P}_ERR_BAD_DT;",
         f"    if ({P}_UNLIKELY({_unrolled('!isfinite(x[{i}])', n_x, '        ', ' || ')})) "
