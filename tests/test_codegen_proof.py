@@ -90,6 +90,7 @@ def test_the_proof_needs_a_range_of_every_input():
     m = builtin_model("abs-xbs3")
     gen = generate_observer(m, design(m, "-100,-100,-100"), ranges={"vx": (1.0, 70.0)})
     assert f"{gen.prefix}_proof.c" not in gen.files and "z1" in gen.unranged and "dt" in gen.unranged
+    assert "No proof driver: `z1`, `z2`, `z3`, `y`, `u`," in gen.readme and "| `vx` | 1.0 | 70.0 |" in gen.readme
     with pytest.raises(CodegenError, match="none for z1, z2, z3, y, u"):
         proof_driver(gen)
     with pytest.raises(CodegenError, match=r"range of dt .* lo > 0"):
@@ -108,9 +109,16 @@ def test_cli_prove_writes_the_record_and_exits_0(tmp_path):
     record = (tmp_path / f"{gen.prefix}_proof.md").read_text()
     assert "**0 alarm(s)**" in record
     assert (tmp_path / f"{gen.prefix}_proof.c").read_text() == gen.files[f"{gen.prefix}_proof.c"]
+    assert result_command(gen) in (tmp_path / "README.md").read_text() and result_command(gen) in record
     bad = subprocess.run([*cmd[:-3], "--range=vx=1", "--out", str(tmp_path / "b")], capture_output=True,
                          text=True, timeout=120)
     assert bad.returncode == 2 and "NAME=LO:HI" in bad.stderr and len(bad.stderr.splitlines()) == 1
+
+
+def result_command(gen) -> str:
+    from switchobs.codegen._proof import proof_command
+
+    return " ".join(proof_command(gen.prefix))
 
 
 def test_the_proof_shown_on_the_codegen_page_is_what_the_command_prints(tmp_path, monkeypatch, capsys):
