@@ -13,6 +13,7 @@ a command starts its long work (a certification, the demo), so a typo in
 from __future__ import annotations
 
 import os
+import re
 import secrets
 import shutil
 from collections.abc import Iterator, Mapping
@@ -22,7 +23,11 @@ from pathlib import Path
 from .exceptions import OutputError
 
 __all__ = ["check_output_file", "check_output_directory", "atomic_file", "write_text", "staged_directory",
-           "write_files"]
+           "write_files", "safe_file_name", "MAX_NAME_LENGTH"]
+
+#: Characters kept of a name from a file when it becomes a file name (the suffix is added after).
+MAX_NAME_LENGTH = 100
+_UNSAFE = re.compile(r"[^A-Za-z0-9._-]+")
 
 
 def _fail(path: Path, what: str, reason: str) -> OutputError:
@@ -167,3 +172,21 @@ def write_files(directory: str | os.PathLike, files: Mapping[str, str], *,
             path.parent.mkdir(parents=True, exist_ok=True)
             path.write_text(text, encoding="utf-8")
     return tuple(Path(directory) / name for name in files)
+
+
+def safe_file_name(text: str, *, suffix: str = "", fallback: str = "output") -> str:
+    """A plain file name made of ``text`` (a name read from a user's file), ending in ``suffix``.
+
+    A name from a file is not a path: every run of characters other than ASCII letters, digits, ``.``, ``_``
+    and ``-`` (a ``/``, a ``\\``, a NUL, a space, non-ASCII) becomes one ``_``, leading dots, dashes and
+    underscores go (no ``..``, no hidden file, no option-like name), and the rest is cut to
+    :data:`MAX_NAME_LENGTH` characters; an empty result is ``fallback``.  The result names a file in the
+    current directory, never elsewhere.
+
+    Examples
+    --------
+    >>> safe_file_name("../../evil", suffix=".jsonl"), safe_file_name("/tmp/x y", suffix=".png")
+    ('evil.jsonl', 'tmp_x_y.png')
+    """
+    name = _UNSAFE.sub("_", str(text)).lstrip("._-")[:MAX_NAME_LENGTH].rstrip(".")
+    return (name or fallback) + suffix
