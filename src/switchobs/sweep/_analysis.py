@@ -67,8 +67,8 @@ def check_summary(cases: Sequence[Any], *, rows: Sequence[str], column: str, met
                               f"averages; choose one of {', '.join(numbers)}")
     need = numbers[metric]
     if need is not None and not any(getattr(c, need, None) not in (None, "none", ()) for c in cases):
-        raise SimulationError(f"{where}: metric {metric!r} exists only for cases with {need} set, and no case "
-                              f"sets it")
+        raise SimulationError(f"{where}: metric {metric!r} exists only for cases that set {need}, and every case "
+                              f"has {need} = {getattr(cases[0], need, None)!r}")
 
 
 def _mean(values: Sequence[Any]) -> float | None:
