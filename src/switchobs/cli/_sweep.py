@@ -4,13 +4,14 @@ The spec file (TOML, ``docs/sweeps.md``) lists the cases (a grid, Monte-Carlo dr
 what to show of them.  Rows stream to ``--out`` (JSON Lines, one per case, keyed by its hash);
 ``--resume`` continues a killed sweep; ``--scheduler`` picks the engine: ``local`` (a LocalCluster, one
 process per core), ``tcp://HOST:PORT`` (an existing Dask cluster) or ``none`` (serially, in-process).
-Exit status 1 when a case failed (its row holds the error).
+Exit status 1 when a case failed (its row holds the error; one ``failed:`` line on stderr says how many).
 """
 
 from __future__ import annotations
 
 import argparse
 import math
+import sys
 from pathlib import Path
 
 from .._atomic import check_output_directory, staged_directory
@@ -108,4 +109,9 @@ def run(args: argparse.Namespace) -> int:
             print(tuned)
         for p in written:
             print(f"wrote {p}")
-    return 1 if sweep.failed else 0
+    if not sweep.failed:
+        return 0
+    # a failed run's one line on stderr (docs/errors.md), after the results
+    print(f"switchobs sweep: failed: {len(sweep.failed)} of {len(sweep.results)} cases failed (their rows in "
+          f"{sweep.path or 'the results'} hold the errors)", file=sys.stderr)
+    return 1
