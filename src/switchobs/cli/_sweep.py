@@ -19,7 +19,7 @@ from .._figures import save_figure
 from .._limits import MAX_SWEEP_CASES, MAX_SWEEP_STEPS
 from ..exceptions import SimulationError
 from ..sweep import (check_tunable, load_sweep_spec, plot_heatmap, plot_pareto, run_sweep, summary_table, tune_betas)
-from ._common import emit_json
+from ._common import STDIO, emit_json
 
 __all__ = ["register"]
 
@@ -67,6 +67,12 @@ def run(args: argparse.Namespace) -> int:
         raise SimulationError(f"--workers must be >= 1, got {args.workers}")
     if args.batch_size is not None and args.batch_size < 1:
         raise SimulationError(f"--batch-size must be >= 1, got {args.batch_size}")
+    for option, value in (("--out", args.out), ("--plots", args.plots)):
+        if value is not None and not value.strip():
+            raise SimulationError(f"{option} {value!r}: give a file or directory name")
+    if args.out == STDIO:
+        raise SimulationError("--out -: the results file of a sweep is rewritten in case order and resumed, so it "
+                              "cannot be standard output; give a file name (--json prints the summary)")
     plots = None if args.plots is None else Path(args.plots)
     if plots is not None and not plots.is_dir():
         raise SimulationError(f"--plots {str(plots)!r} is not a directory; create it first")
@@ -74,7 +80,7 @@ def run(args: argparse.Namespace) -> int:
         check_output_directory(plots, what="the --plots directory")
     spec = load_sweep_spec(args.spec, max_cases=args.max_cases)  # every case, table and heatmap checked
     # the spec's name is reduced to a plain file name in the current directory: never a path from a file
-    out = Path(args.out) if args.out else Path(spec.results_file)
+    out = Path(args.out) if args.out is not None else Path(spec.results_file)
     if args.tune:
         check_tunable(spec.cases)  # before the cases run, not after
     sweep = run_sweep(spec.cases, path=out, resume=args.resume, scheduler=args.scheduler, workers=args.workers,
