@@ -510,3 +510,15 @@ def test_ctrl_c_during_a_dask_sweep_is_one_line_and_exit_130(tmp_path):
     else:
         left = subprocess.run(["ps", "-o", "pid,stat,etime,cmd", "-g", str(proc.pid)], capture_output=True, text=True)
         pytest.fail(f"processes of the sweep still run 20 s after it ended:\n{left.stdout}")
+
+
+def test_the_sweeps_page_names_the_numeric_metrics_and_the_limits():
+    from switchobs import _limits
+
+    page = (ROOT / "docs" / "sweeps.md").read_text("utf-8")
+    paragraph = page.split("A table or heatmap averages", 1)[1].split("(`switchobs.sweep._run.NUMERIC_METRICS`)")[0]
+    assert set(__import__("re").findall(r"`(\w+)`", paragraph)) == {
+        name for metrics in _run.NUMERIC_METRICS.values() for name in metrics}
+    named = set(__import__("re").findall(r"`(MAX_\w+)`", page))
+    assert named == {"MAX_SWEEP_CASES", "MAX_SWEEP_STEPS", "MAX_WORKERS_PER_CORE", "MAX_ROAD_CHANGES"}
+    assert named <= set(_limits.LIMITS)
