@@ -210,6 +210,19 @@ metric = "stopping_distance_m"
     ('colour = "red"', r"unknown key\(s\) \['colour'\]"),
     ('name = ', "is not valid TOML"),
     ('[base]\nobserver = "xbs4"\n[tune]', r"tuning needs beta1 \(and beta2\) in every case"),  # before running
+    ('[monte_carlo]\ncount = 2\n[monte_carlo.draw]\nspeed_kmh = {uniform = [40, 30]}',
+     r"monte_carlo.draw.speed_kmh: a uniform draw needs low <= high, got \[40, 30\]"),
+    ('[monte_carlo]\ncount = 2\n[monte_carlo.draw]\nspeed_kmh = {uniform = [30, inf]}',
+     r"a uniform draw: high must be a finite number, got inf"),
+    ('[monte_carlo]\ncount = 2\n[monte_carlo.draw]\nchanges = {roads = ["snow"], count = [1, 1], window_s = [2, 1]}',
+     r"window_s = \[t0, t1\] with 0 <= t0 <= t1, got \[2, 1\]"),
+    ('[monte_carlo]\ncount = 2\n[monte_carlo.draw]\nencoder_seed = {integers = [5, 1]}',
+     r"an integer draw needs low <= high, got \[5, 1\]"),
+    ('[monte_carlo]\ncount = true', r"monte_carlo.count must be an integer >= 1, got True"),
+    ('name = 3', r"name must be a text, got 3"),
+    ('[grid]\nspeed_kmh = {start = "a", stop = 2, num = 3}', r"grid.speed_kmh: .*start must be a finite number"),
+    ('[base]\nchanges = 3', r"changes is a list of at most 100 \(road, time_s\) pairs"),
+    ('kind = "certify"\n[grid]\n"../x" = [1.0]', r"'../x' is not a name"),
 ])
 def test_cli_sweep_refuses_bad_spec_files_in_one_line(tmp_path, capsys, text, match):
     spec = _write_spec(tmp_path, text)

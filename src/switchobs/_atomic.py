@@ -34,6 +34,13 @@ def _fail(path: Path, what: str, reason: str) -> OutputError:
     return OutputError(f"cannot write {what} {str(path)!r}: {reason}")
 
 
+def _target(path: str | os.PathLike, what: str) -> Path:
+    target = Path(path)
+    if "\x00" in str(target):  # no system call takes it: refused here, not as an internal error later
+        raise _fail(target, what, "a path cannot hold a NUL character")
+    return target
+
+
 def _probe(directory: Path, target: Path, what: str) -> None:
     """Create and remove a file in ``directory``: the one sure test (read-only file systems, root, quotas)."""
     probe = directory / f".switchobs-probe-{secrets.token_hex(4)}"
@@ -51,7 +58,7 @@ def check_output_file(path: str | os.PathLike, *, what: str = "the file") -> Pat
     directory or a special file (``/dev/full``, a pipe): the file is replaced
     by a rename, which would replace a device node.
     """
-    target = Path(path)
+    target = _target(path, what)
     if target.is_dir():
         raise _fail(target, what, "it is a directory; give a file name")
     if target.exists() and not target.is_file():
@@ -74,7 +81,7 @@ def _nearest_existing(path: Path) -> Path:
 
 def check_output_directory(path: str | os.PathLike, *, what: str = "the directory") -> Path:
     """``path`` as a Path if files can be written into it (created if missing), else :class:`OutputError`."""
-    target = Path(path)
+    target = _target(path, what)
     if target.exists() and not target.is_dir():
         raise _fail(target, what, "it exists and is not a directory")
     base = _nearest_existing(target)

@@ -73,11 +73,9 @@ def run(args: argparse.Namespace) -> int:
     if args.out == STDIO:
         raise SimulationError("--out -: the results file of a sweep is rewritten in case order and resumed, so it "
                               "cannot be standard output; give a file name (--json prints the summary)")
-    plots = None if args.plots is None else Path(args.plots)
+    plots = None if args.plots is None else check_output_directory(args.plots, what="the --plots directory")
     if plots is not None and not plots.is_dir():
         raise SimulationError(f"--plots {str(plots)!r} is not a directory; create it first")
-    if plots is not None:
-        check_output_directory(plots, what="the --plots directory")
     spec = load_sweep_spec(args.spec, max_cases=args.max_cases)  # every case, table and heatmap checked
     # the spec's name is reduced to a plain file name in the current directory: never a path from a file
     out = Path(args.out) if args.out is not None else Path(spec.results_file)
