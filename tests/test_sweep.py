@@ -223,6 +223,9 @@ metric = "stopping_distance_m"
     ('[grid]\nspeed_kmh = {start = "a", stop = 2, num = 3}', r"grid.speed_kmh: .*start must be a finite number"),
     ('[base]\nchanges = 3', r"changes is a list of at most 100 \(road, time_s\) pairs"),
     ('kind = "certify"\n[grid]\n"../x" = [1.0]', r"'../x' is not a name"),
+    ('kind = "certify"\n[base]\nspectrum = "-beta1,-bogus"\n[grid]\nbeta1 = [1.0]',
+     r"spectrum '-beta1,-bogus': spectrum pole '-bogus': unknown name 'bogus'"),
+    ('kind = "certify"\n[base]\nspectrum = "-beta1,1/0"\n[grid]\nbeta1 = [1.0]', r"the pole zoo is not finite"),
 ])
 def test_cli_sweep_refuses_bad_spec_files_in_one_line(tmp_path, capsys, text, match):
     spec = _write_spec(tmp_path, text)
@@ -485,10 +488,13 @@ def test_case_warnings_and_c_output_do_not_reach_the_user(tmp_path, capfd, monke
 
 def test_a_failed_case_gives_exit_1_and_one_failed_line(tmp_path, capsys, monkeypatch):
     monkeypatch.chdir(tmp_path)
-    spec = _write_spec(tmp_path, '[base]\nspeed_kmh = 2.0\n')  # below the stop speed: the case raises
-    assert main(["sweep", str(spec), "--scheduler", "none"]) == 1
+    spec = _write_spec(tmp_path, '[base]\nspeed_kmh = 2.0\n[[heatmap]]\nx = "speed_kmh"\ny = "road"\n'
+                                 'metric = "stop_time_s"')  # below the stop speed: the case raises
+    (tmp_path / "figures").mkdir()
+    assert main(["sweep", str(spec), "--scheduler", "none", "--plots", "figures"]) == 1
     err = capsys.readouterr().err
     assert err == "switchobs sweep: failed: 1 of 1 cases failed (their rows in spec.jsonl hold the errors)\n"
+    assert list((tmp_path / "figures").iterdir()) == []  # nothing to draw, and no partial folder
 
 
 @pytest.mark.slow

@@ -86,7 +86,8 @@ def run(args: argparse.Namespace) -> int:
     tables = [summary_table(sweep.results, rows=t.rows, column=t.column, metric=t.metric) for t in spec.tables]
     tuned = tune_betas(sweep.results) if (args.tune or spec.tune) else None
     written = []
-    if plots is not None and (spec.heatmaps or tuned is not None):
+    # every case failed: no figure to draw, and the failure is reported below (not as an error of the figures)
+    if plots is not None and (spec.heatmaps or tuned is not None) and any(r.ok for r in sweep.results):
         figures = [(h.filename, lambda h=h: plot_heatmap(sweep.results, x=h.x, y=h.y, metric=h.metric))
                    for h in spec.heatmaps]
         if tuned is not None:

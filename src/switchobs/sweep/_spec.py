@@ -277,7 +277,7 @@ def sweep_spec_from_dict(data: Mapping[str, Any], *, source: str = "sweep spec",
 
 
 def _certify_cases(base_data: dict[str, Any], axes: dict[str, list[Any]], source: str,
-                   max_cases: int) -> tuple[Case, ...]:
+                   max_cases: int) -> tuple[CertifyCase, ...]:
     load = base_data.pop("load_n", None)
     load_range = base_data.pop("load_range_n", None)
     names = {f.name for f in fields(CertifyCase)}
@@ -296,4 +296,24 @@ def _certify_cases(base_data: dict[str, Any], axes: dict[str, list[Any]], source
             from None
     base_data["values"], base_data["box"] = tuple(values.items()), tuple(box)
     base = CertifyCase(**base_data)
-    return certify_grid(base, max_cases=max_cases, **axes) if axes else (base,)
+    cases = certify_grid(base, max_cases=max_cases, **axes) if axes else (base,)
+    _check_spectra(cases, source)
+    return cases
+
+
+def _check_spectra(cases: tuple[CertifyCase, ...], source: str) -> None:
+    """Each distinct spectrum parsed in the names of its case's ``betas`` (as the case will), before any runs."""
+    import sympy
+
+    from ..model import make_symbol, parse_expression
+
+    for spectrum, names in {(c.spectrum, tuple(k for k, _ in c.betas)) for c in cases}:
+        try:
+            symbols = {k: make_symbol(k) for k in names}
+            poles = [parse_expression(p.strip(), symbols, what=f"spectrum pole {p.strip()!r}")
+                     for p in spectrum.split(",")]
+        except SwitchobsError as exc:
+            raise SimulationError(f"{source}: [base] spectrum {spectrum!r}: {exc}") from None
+        bad = [p for p in poles if p.has(sympy.zoo, sympy.nan, sympy.oo, -sympy.oo)]
+        if bad:
+            raise SimulationError(f"{source}: [base] spectrum {spectrum!r}: the pole {bad[0]} is not finite")
