@@ -506,7 +506,7 @@ def test_ctrl_c_during_a_dask_sweep_is_one_line_and_exit_130(tmp_path):
     spec = _write_spec(tmp_path, '[base]\nobserver = "xbs4"\ncontroller = "two-phase"\n[grid]\n'
                                  'speed_kmh = {start = 100, stop = 200, num = 40}\nroad = ["dry-asphalt", "snow"]')
     env = {**os.environ, "OPENBLAS_NUM_THREADS": "1", "PYTHONPATH": str(ROOT / "src")}
-    proc = subprocess.Popen([sys.executable, "-m", "switchobs", "sweep", str(spec), "--workers", "2",
+    proc = subprocess.Popen([sys.executable, "-m", "switchobs", "sweep", str(spec), "--workers", "1",
                              "--batch-size", "1", "--out", str(tmp_path / "rows.jsonl")],
                             stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, env=env,
                             start_new_session=True)
