@@ -4,6 +4,9 @@ The spec file (TOML, ``docs/sweeps.md``) lists the cases (a grid, Monte-Carlo dr
 what to show of them.  Rows stream to ``--out`` (JSON Lines, one per case, keyed by its hash);
 ``--resume`` continues a killed sweep; ``--scheduler`` picks the engine: ``local`` (a LocalCluster, one
 process per core), ``tcp://HOST:PORT`` (an existing Dask cluster) or ``none`` (serially, in-process).
+The whole spec and the sweep's size (``--max-cases``, ``--max-steps``: :data:`switchobs._limits.MAX_SWEEP_CASES`,
+:data:`switchobs._limits.MAX_SWEEP_STEPS`) are checked before any case runs; the default ``--out`` is the spec's
+name reduced to a plain file name in the current directory.
 Exit status 1 when a case failed (its row holds the error; one ``failed:`` line on stderr says how many).
 """
 
