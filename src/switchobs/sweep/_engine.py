@@ -259,15 +259,32 @@ def dask_client(scheduler: Any = SCHEDULER_LOCAL, *, workers: int | None = None)
             client.close()
             cluster.close()
         return client, close, f"LocalCluster ({n} worker{'s' if n > 1 else ''})"
-    if not isinstance(scheduler, str):
-        raise SimulationError(f"scheduler must be 'local', 'none', an address or a distributed.Client, got "
-                              f"{scheduler!r:.80}")
+    _check_address(scheduler)
     try:
         client = distributed.Client(scheduler, timeout="20s")
     except (OSError, TimeoutError, ValueError, TypeError) as exc:
         raise PrerequisiteError(f"cannot reach the Dask scheduler {scheduler!r}: {exc}; start one with "
                                 "`dask scheduler` and `dask worker ADDRESS`, or use --scheduler local") from None
     return client, client.close, f"Dask scheduler {scheduler}"
+
+
+def _check_address(scheduler: Any) -> None:
+    """Refuse what is not ``tcp://HOST:PORT`` before a Client is made: a Client whose constructor fails is
+    closed by the garbage collector later, which can block for a minute and print a traceback."""
+    from distributed.comm.addressing import parse_address, parse_host_port
+
+    if not isinstance(scheduler, str):
+        raise SimulationError(f"scheduler must be 'local', 'none', an address or a distributed.Client, got "
+                              f"{scheduler!r:.80}")
+    try:
+        scheme, location = parse_address(scheduler)
+        port = parse_host_port(location)[1]
+    except (ValueError, TypeError) as exc:
+        raise SimulationError(f"--scheduler {scheduler!r} is not 'local', 'none' or a scheduler address "
+                              f"tcp://HOST:PORT ({exc})") from None
+    if scheme != "tcp" or not 0 < port < 65536:
+        raise SimulationError(f"--scheduler {scheduler!r}: give the address of a Dask scheduler as tcp://HOST:PORT "
+                              "(a port in 1-65535), or 'local' or 'none'")
 
 
 @contextmanager
