@@ -44,8 +44,9 @@ cc-tools:
 test: $(STAMP) cc-tools
 	$(PY) -m pytest -n 2 -q
 
-# The fuzzing suites with many more examples than `make test` runs (random, not derandomised): model files and
-# certificates (tests/test_fuzz_inputs.py, test_errors.py) and CLI option values (tests/test_fuzz_options.py).
+# The fuzzing suites with many more examples than `make test` runs (random, not derandomised): model files,
+# certificates and sweep spec files (tests/test_fuzz_inputs.py, test_errors.py) and CLI option values of encoder,
+# simulate and sweep (tests/test_fuzz_options.py).
 FUZZ_EXAMPLES ?= 300
 fuzz: $(STAMP)
 	SWITCHOBS_FUZZ_EXAMPLES=$(FUZZ_EXAMPLES) $(PY) -m pytest -q -p no:cacheprovider tests/test_fuzz_inputs.py tests/test_errors.py tests/test_fuzz_options.py

@@ -25,7 +25,8 @@ from .exceptions import SwitchobsError
 __all__ = ["MAX_EXPRESSION_LENGTH", "MAX_EXPRESSION_DEPTH", "MAX_EXPRESSION_TERMS", "MAX_EXPONENT",
            "MAX_NUMBER_DIGITS", "MAX_CERTIFICATE_DIGITS", "MAX_CERTIFICATE_BYTES", "MAX_CERTIFICATE_DIMENSION",
            "MAX_DWELL_BITS", "MAX_BOX_VERTICES", "MAX_INPUT_FILE_BYTES", "MAX_PIL_ROWS",
-           "MAX_LOG_BYTES", "MAX_LOG_SAMPLES",
+           "MAX_LOG_BYTES", "MAX_LOG_SAMPLES", "MAX_SWEEP_CASES", "MAX_SWEEP_STEPS",
+           "MAX_WORKERS_PER_CORE", "MAX_ROAD_CHANGES",
            "DOUBLE_MAX", "DOUBLE_MIN", "LIMITS", "decimal_fraction", "check_double", "digits", "read_text"]
 
 #: Characters in one expression string (a matrix entry, a pole, a gain).
@@ -63,6 +64,16 @@ MAX_CERTIFICATE_DIMENSION = 100
 MAX_DWELL_BITS = 64
 #: Vertex matrices a box certificate may ask the checker to build (sub-boxes times monomial choices).
 MAX_BOX_VERTICES = 65536
+#: Cases of one sweep (grid points times Monte-Carlo draws), counted from the spec before any case is built;
+#: ``switchobs sweep --max-cases`` raises it.  Every row is kept in memory until the sweep ends (a few kB each).
+MAX_SWEEP_CASES = 100_000
+#: Integration steps of a sweep's braking cases, each counted at its time bound over its step (an upper bound:
+#: a braking to standstill stops earlier), checked before the first case runs; ``--max-steps`` raises it.
+MAX_SWEEP_STEPS = 1_000_000_000
+#: Worker processes of a local Dask cluster per core of the machine (``--workers``).
+MAX_WORKERS_PER_CORE = 4
+#: Road changes of one braking case (each is scored alone: its errors, re-convergence and recovery time).
+MAX_ROAD_CHANGES = 100
 #: The largest finite double and the smallest positive normal double: a number meant as a double lies in
 #: ``[DOUBLE_MIN, DOUBLE_MAX]`` in magnitude, or is 0.
 DOUBLE_MAX = sys.float_info.max
@@ -76,7 +87,9 @@ LIMITS: dict[str, int | float] = {
     "MAX_CERTIFICATE_BYTES": MAX_CERTIFICATE_BYTES, "MAX_CERTIFICATE_DIMENSION": MAX_CERTIFICATE_DIMENSION,
     "MAX_DWELL_BITS": MAX_DWELL_BITS, "MAX_BOX_VERTICES": MAX_BOX_VERTICES,
     "MAX_INPUT_FILE_BYTES": MAX_INPUT_FILE_BYTES, "MAX_PIL_ROWS": MAX_PIL_ROWS,
-    "MAX_LOG_BYTES": MAX_LOG_BYTES, "MAX_LOG_SAMPLES": MAX_LOG_SAMPLES,
+    "MAX_LOG_BYTES": MAX_LOG_BYTES, "MAX_LOG_SAMPLES": MAX_LOG_SAMPLES, "MAX_SWEEP_CASES": MAX_SWEEP_CASES,
+    "MAX_SWEEP_STEPS": MAX_SWEEP_STEPS, "MAX_WORKERS_PER_CORE": MAX_WORKERS_PER_CORE,
+    "MAX_ROAD_CHANGES": MAX_ROAD_CHANGES,
 }
 
 _FRACTION = re.compile(r"^([+-]?)(\d+)\s*/\s*(\d+)$")
