@@ -12,13 +12,14 @@ from typing import Any
 
 import sympy as sp
 
-from .._atomic import check_output_directory, write_files
+from .._atomic import check_output_directory, staged_directory, write_files
 from .._limits import MAX_INPUT_FILE_BYTES, read_text
 from ..design import GainDesign, design
 from ..exceptions import CodegenError, FreeSymbolError, PrerequisiteError, SpectrumError
 from ..model import Model, load_model, rational_value
 from ..spec import METHODS
-from ._common import emit_json, parse_params
+from ._common import emit_json, output_directory, parse_params
+from ._errors import flush_stdout
 from ._integration import add_integration_arguments, integration_files
 
 __all__ = ["register"]
@@ -76,7 +77,7 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--max-substeps", type=int, metavar="N",
                    help="most sub-steps per step with --h-max, 1..16777216 (default 64); beyond: status SUBSTEP_LIMIT")
     p.add_argument("--prefix", help="C prefix (default switchobs_<model>, non-identifier characters as _)")
-    p.add_argument("--out", required=True, metavar="DIR",
+    p.add_argument("--out", required=True, metavar="DIR", type=output_directory,
                    help="directory for <prefix>.c, <prefix>.h, README.md and <prefix>_misra.md (the MISRA C:2012 "
                         "deviation record)")
     p.add_argument("--json", action="store_true", help="print the description as JSON")
@@ -101,7 +102,7 @@ def _command(args: argparse.Namespace) -> str:
         words.append(f"--h-max={args.h_max}")
     if args.max_substeps is not None:
         words.append(f"--max-substeps={args.max_substeps}")
-    if args.prefix:
+    if args.prefix is not None:
         words.append(f"--prefix={args.prefix}")
     words.append("--out=DIR")
     return shlex.join(words)
@@ -168,7 +169,8 @@ def run(args: argparse.Namespace) -> int:
         except ValueError:
             raise CodegenError(f"lam and alpha must be numbers, got {values['lam']!r}, {values['alpha']!r}") from None
         gen = generate_super_twisting(lam, alpha, real=args.real,
-                                      prefix=args.prefix or "switchobs_super_twisting", command=command)
+                                      prefix="switchobs_super_twisting" if args.prefix is None else args.prefix,
+                                      command=command)
     else:
         if not (args.spectrum or args.charpoly or args.gains_plus):
             raise SpectrumError("give the gains with --spectrum, --charpoly or --gains-plus")
@@ -201,29 +203,36 @@ def run(args: argparse.Namespace) -> int:
     build = None if not args.target else target_build(
         gen, args.target, record=None if record is None else (record.rows, record.dt, record.x0),
         record_description=None if record is None else record.description)
-    paths = write_files(args.out, {**(build or gen).files, **integration_files(gen, args)}, what="the generated C into")
     comparison = None
     if record is not None and build is not None and build.pil is not None and model is not None:
         from ..loop import compare_with_reference, reference_observer
 
         comparison = compare_with_reference(build.pil, reference_observer(model, gen, unknown=tuple(unknown)),
                                             record.rows, record.dt, record.x0)
-    if args.json:
-        data = gen.to_json()
-        if build is not None:
-            data["target"] = {"name": build.target, "footprint": build.footprint.to_json(), "record": build.record,
-                              "instructions_per_step": None if build.pil is None else build.pil.instructions_per_step}
-        if comparison is not None:
-            data["pil"] = {**comparison.to_json(), "passed": comparison.passed}
-        data["written"] = [str(p) for p in paths]
-        emit_json(data)
-    else:
-        print(build or gen)
-        print(f"  wrote {', '.join(str(p) for p in paths)}")
-        if record is not None and build is not None and build.pil is not None:
-            print(f"  {build.pil}")
-            print(f"  record: {record}")
-            print(f"  {comparison}" if comparison is not None else "  (no Python reference for this observer)")
+    files = {**(build or gen).files, **integration_files(gen, args)}
+    # The files and the report on standard output succeed together: a report that cannot be written (a full
+    # disk, /dev/full) removes the files and any directory made for them (the one cleanup of staged_directory).
+    with staged_directory(args.out, what="the generated C into") as work:
+        write_files(work, files, what="the generated C into")
+        paths = [Path(args.out) / name for name in files]
+        if args.json:
+            data = gen.to_json()
+            if build is not None:
+                data["target"] = {"name": build.target, "footprint": build.footprint.to_json(),
+                                  "record": build.record,
+                                  "instructions_per_step": None if build.pil is None else build.pil.instructions_per_step}
+            if comparison is not None:
+                data["pil"] = {**comparison.to_json(), "passed": comparison.passed}
+            data["written"] = [str(p) for p in paths]
+            emit_json(data)
+        else:
+            print(build or gen)
+            print(f"  wrote {', '.join(str(p) for p in paths)}")
+            if record is not None and build is not None and build.pil is not None:
+                print(f"  {build.pil}")
+                print(f"  record: {record}")
+                print(f"  {comparison}" if comparison is not None else "  (no Python reference for this observer)")
+        flush_stdout()
     if build is not None and build.pil is not None and record is not None:
         passed = comparison.passed if comparison is not None else build.pil.bit_identical
         return 0 if passed else 1

@@ -5,6 +5,7 @@ from __future__ import annotations
 import argparse
 
 from ..report import STAGES, Progress, run_demo
+from ._common import output_directory
 from .main import QUIET
 
 __all__ = ["register"]
@@ -20,7 +21,8 @@ def register(sub: argparse._SubParsersAction) -> None:
                     "Stage lines go to stderr (none with --quiet). Exit status 0 when every check holds, 1 when a "
                     "check fails, 2 when a stage cannot run (the message names it).")
     p.add_argument("--fast", action="store_true", help="shorter braking and timing (for CI, well under a minute)")
-    p.add_argument("--out", default="out/demo", metavar="DIR", help="output directory (default: out/demo)")
+    p.add_argument("--out", default="out/demo", metavar="DIR", type=output_directory,
+                   help="output directory (default: out/demo)")
     p.set_defaults(func=run)
 
 

@@ -18,7 +18,6 @@ from typing import Any
 
 import numpy as np
 
-from .._atomic import check_output_file
 from .._figures import save_figure
 from ..exceptions import SimulationError
 from ..loop import DEFAULT_GAMMA, OBSERVER_KINDS, EstimatorSpec, xbs_estimator
@@ -26,7 +25,7 @@ from ..plants import (TABLE41_ROADS, TABLE41_SPEEDS_KMH, BrakeActuator, BrakingR
                       ContinuousXbsControl, FivePhaseABS, SixPhaseABS, TwoPhaseABS, XbsEstimator, aguado_sec36, plot_braking,
                       plot_table41, plot_two_axle, road, road_names, scenario, scenario_description,
                       scenario_names, scenario_observer, scenario_observer_gains, simulate, simulate_two_axle, table41)
-from ._common import emit_json
+from ._common import emit_json, figure_file
 
 __all__ = ["register"]
 
@@ -69,7 +68,7 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--delay", type=float, help="actuator delay [s] (0 or >= the step)")
     p.add_argument("--json", action="store_true", help="print the result as JSON")
     p.add_argument("--series", action="store_true", help="with --json: include the time series")
-    p.add_argument("--plot", metavar="PNG", help="write the figure to this file")
+    p.add_argument("--plot", metavar="PNG", type=figure_file, help="write the figure to this file")
     p.set_defaults(func=run)
 
 
@@ -219,8 +218,6 @@ def _unfinished(args: argparse.Namespace, result: BrakingResult) -> str | None:
 
 
 def run(args: argparse.Namespace) -> int:
-    if args.plot:
-        check_output_file(args.plot, what="the plot")
     # an overflowing observer is reported once, as a failed or diverged run, not also by numpy's warnings
     with np.errstate(over="ignore", invalid="ignore", divide="ignore"):
         return _run(args)

@@ -5,10 +5,10 @@ from __future__ import annotations
 import argparse
 import math
 
-from .._atomic import check_output_file
 from ..exceptions import ModelError
 from ..model import load_model
-from ._common import STDIO, add_model_arguments, emit_json, parse_params, summary_stream, write_certificate
+from ._common import (STDIO, add_model_arguments, check_output, emit_json, output_file, parse_params, summary_stream,
+                      write_certificate)
 
 __all__ = ["register"]
 
@@ -36,7 +36,8 @@ def register(sub: argparse._SubParsersAction) -> None:
                         "checks) and certify them over it (repeatable), e.g. a=150:230")
     p.add_argument("--solver", choices=("CLARABEL", "SCS"), help="use only this cvxpy solver")
     p.add_argument("--json", action="store_true", help="print the synthesis and the certificate report as JSON")
-    p.add_argument("--out", metavar="CERT.json", help="write the certificate of the synthesised pair; - writes it "
+    p.add_argument("--out", metavar="CERT.json", type=output_file,
+                   help="write the certificate of the synthesised pair; - writes it "
                    "to standard output and the summary to stderr")
     p.set_defaults(func=run)
 
@@ -48,8 +49,7 @@ def run(args: argparse.Namespace) -> int:
         raise ModelError(f"--noise-weight must be a finite number >= 0, got {args.noise_weight!r}")
     if args.out == STDIO and args.json:
         raise ModelError("--out - writes the certificate to standard output; give --json or --out -, not both")
-    if args.out and args.out != STDIO:
-        check_output_file(args.out, what="the certificate")
+    check_output(args.out, what="the certificate", inputs=[args.model])
     model = load_model(args.model)
     values = parse_params(args.param)
     solvers = (args.solver,) if args.solver else ("CLARABEL", "SCS")

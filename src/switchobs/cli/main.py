@@ -27,11 +27,12 @@ import sys
 import time
 from collections.abc import Callable, Iterator, Sequence
 from contextlib import contextmanager
+from typing import NoReturn
 
 from .. import __version__
 from .._progress import listening
 from ..exceptions import PrerequisiteError
-from ._errors import guarded, unavailable_message
+from ._errors import EXIT_BAD_INPUT, guarded, unavailable_message
 from ._status import StatusLine, is_terminal
 
 __all__ = ["main", "build_parser"]
@@ -66,13 +67,24 @@ def _add_verbosity(parser: argparse.ArgumentParser, default: object) -> None:
                        help="print every progress note as a line with its elapsed time (also into a pipe or file)")
 
 
+class _Parser(argparse.ArgumentParser):
+    """argparse with the failure policy of every other refusal: one line ``switchobs CMD: error: ...``, exit 2.
+
+    argparse's own format (the usage, wrapped over several lines, then the error) would make a refused option
+    the one failure that is not one line; ``--help`` still shows the usage.
+    """
+
+    def error(self, message: str) -> NoReturn:
+        self.exit(EXIT_BAD_INPUT, f"{self.prog}: error: {message} (see {self.prog} --help)\n")
+
+
 def build_parser(only: str | None = None) -> argparse.ArgumentParser:
     """The ``switchobs`` parser; with ``only``, the parser of that sub-command (its module alone is imported).
 
     Without ``only`` the sub-commands are listed from :data:`COMMANDS` and none is importable: this parser
     answers ``--help``, ``--version`` and an unknown command.
     """
-    parser = argparse.ArgumentParser(
+    parser = _Parser(
         prog="switchobs",
         description="Design, certify and export switched observers via singular time-rescaling.")
     parser.add_argument("--version", action="version", version=f"switchobs {__version__}")
@@ -164,7 +176,10 @@ def main(argv: Sequence[str] | None = None) -> int:
     # Importing every command costs seconds (cvxpy, casadi, scipy.signal); a known command imports only its own.
     command = next((a for a in argv if not a.startswith("-")), None)
     parser = build_parser(command if command in COMMANDS else None)
-    args = parser.parse_args(argv)
+    args, extra = parser.parse_known_args(argv)
+    if extra:  # argparse reports them as the top parser's; they belong to the command's line
+        sub = next(a for a in parser._actions if isinstance(a, argparse._SubParsersAction))
+        sub.choices[args.command].error(f"unrecognized arguments: {' '.join(extra)}")
 
     def run() -> int:
         with progress_display(args.command, args.verbosity):

@@ -81,8 +81,9 @@ _C_KEYWORDS = frozenset(
 
 
 def default_prefix(model_name: str) -> str:
-    """``switchobs_<model>`` with every character that is not a C identifier character turned into ``_``."""
-    return "switchobs_" + re.sub(r"[^A-Za-z0-9_]", "_", model_name)
+    """``switchobs_<model>`` with every run of characters that are not C identifier characters turned into one
+    ``_`` (casadi's function names allow no ``__`` and no trailing ``_``: ``"café x"`` gives ``switchobs_caf_x``)."""
+    return ("switchobs_" + re.sub(r"[^A-Za-z0-9]+", "_", model_name)).rstrip("_")
 
 
 def _check_options(real: str, method: str) -> None:
@@ -93,8 +94,10 @@ def _check_options(real: str, method: str) -> None:
 
 
 def _check_prefix(prefix: str) -> str:
-    if not re.fullmatch(r"[A-Za-z][A-Za-z0-9_]*", prefix or ""):
-        raise CodegenError(f"prefix {prefix!r} is not a C identifier (a letter, then letters, digits or '_')")
+    # the C function names are the prefix and a suffix such as "_kernel": casadi refuses "__" in them
+    if not re.fullmatch(r"[A-Za-z][A-Za-z0-9]*(_[A-Za-z0-9]+)*", prefix or ""):
+        raise CodegenError(f"prefix {prefix!r} is not a C identifier of the generated API (a letter, then letters, "
+                           "digits or single '_' between them)")
     if prefix in _C_KEYWORDS:
         raise CodegenError(f"prefix {prefix!r} is a C keyword; choose another with --prefix")
     return prefix
@@ -730,12 +733,14 @@ def _header(*, tr: Translation, info: _Info, kind: str, real: str, method: str, 
         f"/* n_steps steps through the rows of signals (row-major, {P}_NS per row), writing each new",
         f" * state to trajectory (row-major, {P}_NX per row; may be NULL).  On error, returns the code of",
         " * the first failing step k: xhat holds the state after the k steps that succeeded and rows",
-        " * 0..k-1 of trajectory are written. */",
+        " * 0..k-1 of trajectory are written.  xhat and signals are never NULL (BAD_ARGUMENT); n_steps = 0",
+        " * changes nothing and checks what needs no row: dt (BAD_DT), then xhat (NONFINITE_STATE). */",
         f"int32_t {prefix}_run({rt} *xhat, const {rt} *signals, int32_t n_steps, const {rt} *params,",
         f"    {rt} dt, {rt} *trajectory);",
         "",
         f"/* As _run, row k a step of dt[k] seconds (dt: n_steps entries; irregular sampling).  A dt[k] that is",
-        f" * not finite or <= 0 fails step k with {P}_ERR_BAD_DT; dt may be NULL only when n_steps is 0. */",
+        f" * not finite or <= 0 fails step k with {P}_ERR_BAD_DT; dt may be NULL only when n_steps is 0, which",
+        " * checks xhat alone. */",
         f"int32_t {prefix}_run_dt({rt} *xhat, const {rt} *signals, int32_t n_steps, const {rt} *params,",
         f"    const {rt} *dt, {rt} *trajectory);",
         "",
@@ -874,8 +879,13 @@ def _source(*, tr: Translation, info: _Info, kind: str, real: str, method: str, 
         "    size_t hk = 0u;",
         f"    int32_t status = {P}_OK;",
         "    bool valid;",
-        _refuse(P, "(xhat == NULL) || (n_steps < 0) || ((signals == NULL) && (n_steps > 0))", "BAD_ARGUMENT",
-                hint=False),
+        _refuse(P, "(xhat == NULL) || (signals == NULL) || (n_steps < 0)", "BAD_ARGUMENT", hint=False),
+        "    /* no row: the state check of a step, which needs none (as the Python reference and CObserver) */",
+        "    if (n_steps == 0) {",
+        f"        for (int32_t i = 0; i < {nx}; ++i) {{",
+        _refuse(P, "!isfinite(xhat[i])", "NONFINITE_STATE", indent="            ", hint=False),
+        "        }",
+        "    }",
         "    if (dts != NULL) {",
         "        h = dts;",
         "        stride = 1u;",
@@ -917,6 +927,9 @@ def _source(*, tr: Translation, info: _Info, kind: str, real: str, method: str, 
         f"int32_t {prefix}_run({rt} *xhat, const {rt} *signals, int32_t n_steps, const {rt} *params,",
         f"    {rt} dt, {rt} *trajectory)",
         "{",
+        "    /* no row: dt is checked before the state, in _step's order */",
+        _refuse(P, f"(n_steps == 0) && (xhat != NULL) && (signals != NULL) && !((dt > {zero}) && isfinite(dt))",
+                "BAD_DT", hint=False),
         f"    return {prefix}_rows(xhat, signals, n_steps, params, dt, NULL, trajectory);",
         "}",
         "",
