@@ -17,8 +17,8 @@ from .._limits import MAX_INPUT_FILE_BYTES, read_text
 from ..design import GainDesign, design
 from ..exceptions import CodegenError, FreeSymbolError, PrerequisiteError, SpectrumError
 from ..model import Model, load_model, rational_value
-from ..spec import METHODS
-from ._common import emit_json, parse_params
+from ..spec import DEFAULT_METHOD, METHODS
+from ._common import emit_json, note_uncertified, parse_params
 from ._integration import add_integration_arguments, integration_files
 
 __all__ = ["register"]
@@ -65,8 +65,9 @@ def register(sub: argparse._SubParsersAction) -> None:
                    help="with --pil: rows of signals, a header naming them (and an optional dt column, seconds; "
                         "default 0.001); the state starts at 0")
     p.add_argument("--method", choices=METHODS, default=None,
-                   help="discretisation, signals held over the step (default rk4; super-twisting: euler); "
-                        "midpoint and radau3 are implicit and certified for every dt")
+                   help="discretisation, signals held over the step (default radau3; with --unknown rk4, as the "
+                        "adaptive observer takes explicit steps only; super-twisting: euler); midpoint and radau3 "
+                        "are implicit and certified for every dt, rk4 and euler are not (a note says so)")
     p.add_argument("--h-max", metavar="auto|VALUE",
                    help="bound on the step |s|*dt in the rescaled time: a step beyond it is split into "
                         "sub-steps (H_MAX in the header, rounded down); VALUE is exact (0.01 or 1/100); auto "
@@ -178,7 +179,9 @@ def run(args: argparse.Namespace) -> int:
         unknown = [u.strip() for u in args.unknown.split(",")] if args.unknown else []
         if args.gamma and not unknown:
             raise CodegenError("--gamma is the adaptation gain of the adaptive observer; give --unknown too")
-        method = args.method or "rk4"
+        method = args.method or ("rk4" if unknown else DEFAULT_METHOD)
+        if not unknown:   # the adaptive observer has explicit steps only and no discrete certificate at all
+            note_uncertified(args, method)
         if args.h_max == "auto" and unknown:
             raise CodegenError("--h-max auto certifies the switched observer's error dynamics (A_plus, A_minus); "
                                "the adaptive observer's error also has the parameter estimates: give --h-max VALUE")

@@ -14,7 +14,7 @@ from ..model import Model, load_model
 from .main import QUIET
 
 __all__ = ["add_model_arguments", "model_from_args", "parse_params", "emit_json", "write_or_check", "STDIO",
-           "summary_stream", "write_certificate"]
+           "summary_stream", "write_certificate", "note_uncertified"]
 
 #: The file name that means standard input (a model, a certificate) or standard output (``--out -``).
 STDIO = "-"
@@ -58,6 +58,16 @@ def summary_stream(args: argparse.Namespace) -> TextIO | None:
     if getattr(args, "out", None) != STDIO:
         return sys.stdout
     return None if args.verbosity == QUIET else sys.stderr
+
+
+def note_uncertified(args: argparse.Namespace, method: str) -> None:
+    """One line on stderr when the switched observer's step ``method`` is not certified (not an error; nothing
+    with ``--quiet``): the command goes on with it."""
+    from ..spec import uncertified_note
+
+    note = uncertified_note(method)
+    if note is not None and args.verbosity != QUIET:
+        print(f"switchobs {args.command}: note: {note}", file=sys.stderr)
 
 
 def write_certificate(report: Any, out: str) -> None:
