@@ -180,7 +180,9 @@ def run(args: argparse.Namespace) -> int:
         if args.gamma and not unknown:
             raise CodegenError("--gamma is the adaptation gain of the adaptive observer; give --unknown too")
         method = args.method or ("rk4" if unknown else DEFAULT_METHOD)
-        if not unknown:   # the adaptive observer has explicit steps only and no discrete certificate at all
+        # the adaptive observer has explicit steps only and no discrete certificate at all; --h-max auto
+        # proves or refutes the certificate itself (exit 1 with its own line)
+        if not unknown and args.h_max != "auto":
             note_uncertified(args, method)
         if args.h_max == "auto" and unknown:
             raise CodegenError("--h-max auto certifies the switched observer's error dynamics (A_plus, A_minus); "
