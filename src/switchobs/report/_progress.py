@@ -58,7 +58,7 @@ def check_prerequisites(stages: Sequence[Stage]) -> None:
                     f"stage {stage.name!r} cannot run: importing {module} failed ({exc}); "
                     f"{install_hint(getattr(exc, 'name', None) or module)}") from None
         if stage.compiler:
-            from .._compile import find_compiler
+            from ..codegen import find_compiler  # importable without casadi: the generator alone needs it
 
             try:
                 find_compiler()
