@@ -16,7 +16,7 @@ from .._atomic import check_output_directory, write_files
 from .._limits import MAX_INPUT_FILE_BYTES, read_text
 from ..design import GainDesign, design
 from ..exceptions import CodegenError, FreeSymbolError, PrerequisiteError, SpectrumError
-from ..model import Model, load_model, rational_value
+from ..model import Model, builtin_names, load_model, rational_value
 from ..spec import DEFAULT_METHOD, METHODS
 from ._common import emit_json, note_uncertified, parse_params
 from ._integration import add_integration_arguments, integration_files
@@ -35,7 +35,7 @@ def register(sub: argparse._SubParsersAction) -> None:
                                    "adaptive observer of seed 001 (3.4) with --unknown, or the super-twisting "
                                    f"observer of seed 003 with MODEL = {SUPER_TWISTING}.")
     p.add_argument("model", metavar="MODEL",
-                   help="built-in model (abs-xbs3, abs-xbs4, abs-adaptive2, normal-form-N), a TOML file, "
+                   help=f"built-in model ({', '.join(builtin_names())}), a TOML file, "
                         f"or {SUPER_TWISTING}")
     p.add_argument("--param", action="append", default=[], metavar="NAME=VALUE",
                    help="default of a runtime parameter or value of a design symbol (repeatable), e.g. "

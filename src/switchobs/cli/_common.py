@@ -10,7 +10,7 @@ from pathlib import Path
 from typing import Any, TextIO
 
 from ..exceptions import ModelError
-from ..model import Model, load_model
+from ..model import Model, builtin_names, load_model
 from .main import QUIET
 
 __all__ = ["add_model_arguments", "model_from_args", "parse_params", "emit_json", "write_or_check", "STDIO",
@@ -23,7 +23,7 @@ STDIO = "-"
 def add_model_arguments(parser: argparse.ArgumentParser) -> None:
     """MODEL positional and repeatable ``--param NAME=VALUE``."""
     parser.add_argument("model", metavar="MODEL",
-                        help="built-in model (abs-xbs3, abs-xbs4, abs-adaptive2, normal-form-N), a TOML file, "
+                        help=f"built-in model ({', '.join(builtin_names())}), a TOML file, "
                              "or - for a TOML model on standard input")
     parser.add_argument("--param", action="append", default=[], metavar="NAME=VALUE",
                         help="substitute a parameter value (repeatable), e.g. --param a=187.5")

@@ -159,12 +159,29 @@ def progress_display(command: str, verbosity: int) -> Iterator[None]:
         yield
 
 
+def _ascii_safe_streams() -> None:
+    """On streams that cannot encode Unicode (``PYTHONIOENCODING=ascii``, a ``C`` locale) a character
+    without an ASCII form (``m/s²``) is escaped instead of failing the command; matrices print as ASCII art."""
+    from .._display import unicode_output
+
+    for stream in (sys.stdout, sys.stderr):
+        if not unicode_output(stream) and hasattr(stream, "reconfigure"):
+            stream.reconfigure(errors="backslashreplace")
+
+
 def main(argv: Sequence[str] | None = None) -> int:
+    _ascii_safe_streams()
     argv = _glue_option_values(sys.argv[1:] if argv is None else argv)
     # Importing every command costs seconds (cvxpy, casadi, scipy.signal); a known command imports only its own.
     command = next((a for a in argv if not a.startswith("-")), None)
     parser = build_parser(command if command in COMMANDS else None)
-    args = parser.parse_args(argv)
+    if command is None and not {"-h", "--help", "--version"} & set(argv):
+        parser.print_help()     # no command: what there is to run
+        return 0
+    args, unknown = parser.parse_known_args(argv)
+    if unknown:   # the usage of the command they belong to, not the top-level one
+        commands = next(a for a in parser._actions if isinstance(a, argparse._SubParsersAction))
+        commands.choices[args.command].error(f"unrecognized arguments: {' '.join(unknown)}")
 
     def run() -> int:
         with progress_display(args.command, args.verbosity):

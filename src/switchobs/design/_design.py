@@ -33,7 +33,7 @@ from ..exceptions import (CertificateError, DimensionError, ExpressionError, Mod
                           NotObservableError, SpectrumError)
 from ..model import Model, entries, free_names, make_symbol, numeric, parse_expression, rational_value
 from ._lyapunov import _generic_solution, observer_form_gramian
-from .._display import ROUNDED_NOTE, is_shortened, readable
+from .._display import ROUNDED_NOTE, is_shortened, readable, unicode_output
 from .._progress import progress
 from ._normal_form import ObserverNormalForm, is_rational, observer_normal_form, rational_matrix
 from ._recheck import lyapunov_by_substitution, lyapunov_residual_is_zero
@@ -534,7 +534,7 @@ class GainDesign:
             return printer(readable(expr))
 
         def mat(M: sp.MatrixBase) -> str:
-            shown = sp.pretty(readable(M), use_unicode=True) if small else text(M.tolist())
+            shown = sp.pretty(readable(M), use_unicode=unicode_output()) if small else text(M.tolist())
             return "\n".join("    " + line for line in shown.splitlines())
 
         def conds(cs: Sequence[sp.Basic]) -> str:
