@@ -47,3 +47,32 @@ def test_an_ascii_terminal_gets_ascii_matrices_and_no_encoding_error(tmp_path):
 def test_the_model_help_lists_every_built_in_model(command):
     text = " ".join(build_parser(command)._subparsers._group_actions[0].choices[command].format_help().split())
     assert all(name in text for name in builtin_names()), text
+
+
+def test_sweep_limit_and_a_plots_directory_that_does_not_exist_yet(tmp_path, monkeypatch, capsys):
+    monkeypatch.chdir(tmp_path)
+    spec = ROOT / "examples" / "sweep_table41.toml"
+    assert main(["sweep", str(spec), "--limit", "2", "--scheduler", "none", "--out", "t.jsonl",
+                 "--plots", "figs/new"]) == 0
+    assert len(Path("t.jsonl").read_text("utf-8").splitlines()) == 2
+    assert [p.suffix for p in Path("figs/new").iterdir()] == [".png"]
+    capsys.readouterr()
+    assert main(["sweep", str(spec), "--limit", "0", "--scheduler", "none", "--out", "u.jsonl"]) == 2
+    assert "--limit must be >= 1, got 0" in capsys.readouterr().err and not Path("u.jsonl").exists()
+
+
+def test_heatmap_labels_are_human_names_with_units():
+    from switchobs.sweep import BrakingCase, plot_heatmap, run_case
+
+    results = [run_case(BrakingCase(road=r, speed_kmh=v, duration_s=0.3)) for r in ("dry-asphalt", "snow")
+               for v in (40.0, 60.0)]
+    fig = plot_heatmap(results, x="speed_kmh", y="road", metric="stopping_distance_m")
+    axis = fig.axes[0]
+    assert axis.get_xlabel() == "initial speed [km/h]" and axis.get_title() == "mean distance travelled [m]"
+    assert fig.axes[1].get_ylabel() == "distance travelled [m]"
+
+
+def test_a_run_that_did_not_stop_is_labelled_by_its_distance_travelled():
+    from switchobs.plants import distance_label
+
+    assert distance_label(False) == "distance travelled" and distance_label(True) == "stopping distance"

@@ -13,6 +13,7 @@ import argparse
 from pathlib import Path
 
 from .._figures import save_figure
+from .._atomic import check_output_directory
 from ..exceptions import SimulationError
 from ..sweep import (check_tunable, load_sweep_spec, plot_heatmap, plot_pareto, run_sweep, summary_table, tune_betas)
 from ._common import emit_json
@@ -33,7 +34,10 @@ def register(sub: argparse._SubParsersAction) -> None:
                         "(serially in this process)")
     p.add_argument("--workers", type=int, help="worker processes of the local cluster (default: one per core)")
     p.add_argument("--batch-size", type=int, help="cases per Dask task (default: about 4 batches per worker)")
-    p.add_argument("--plots", metavar="DIR", help="write the heatmaps (and pareto.png with --tune) here")
+    p.add_argument("--limit", type=int, metavar="N",
+                   help="run only the first N cases of the spec (a quick try of a large spec)")
+    p.add_argument("--plots", metavar="DIR",
+                   help="write the heatmaps (and pareto.png with --tune) here (created if missing)")
     p.add_argument("--tune", action="store_true",
                    help="pick the Pareto-optimal (beta1, beta2) of the grid and print its design command")
     p.add_argument("--json", action="store_true", help="print the summary, tables and tuned design as JSON")
@@ -45,19 +49,21 @@ def run(args: argparse.Namespace) -> int:
         raise SimulationError(f"--workers must be >= 1, got {args.workers}")
     if args.batch_size is not None and args.batch_size < 1:
         raise SimulationError(f"--batch-size must be >= 1, got {args.batch_size}")
-    plots = None if args.plots is None else Path(args.plots)
-    if plots is not None and not plots.is_dir():
-        raise SimulationError(f"--plots {str(plots)!r} is not a directory; create it first")
+    if args.limit is not None and args.limit < 1:
+        raise SimulationError(f"--limit must be >= 1, got {args.limit}")
+    plots = None if args.plots is None else check_output_directory(args.plots, what="the plots into")
     spec = load_sweep_spec(args.spec)
+    cases = spec.cases if args.limit is None else spec.cases[:args.limit]
     out = Path(args.out) if args.out else Path(f"{spec.name}.jsonl")
     if args.tune or spec.tune:
-        check_tunable(spec.cases)  # before the cases run, not after
-    sweep = run_sweep(spec.cases, path=out, resume=args.resume, scheduler=args.scheduler, workers=args.workers,
+        check_tunable(cases)  # before the cases run, not after
+    sweep = run_sweep(cases, path=out, resume=args.resume, scheduler=args.scheduler, workers=args.workers,
                       batch_size=args.batch_size)
     tables = [summary_table(sweep.results, rows=t.rows, column=t.column, metric=t.metric) for t in spec.tables]
     tuned = tune_betas(sweep.results) if (args.tune or spec.tune) else None
     written = []
     if plots is not None:
+        plots.mkdir(parents=True, exist_ok=True)   # after the run: a failed sweep leaves no directory behind
         for h in spec.heatmaps:
             written.append(save_figure(plot_heatmap(sweep.results, x=h.x, y=h.y, metric=h.metric),
                                        plots / h.filename))

@@ -170,7 +170,6 @@ def _ascii_safe_streams() -> None:
 
 
 def main(argv: Sequence[str] | None = None) -> int:
-    _ascii_safe_streams()
     argv = _glue_option_values(sys.argv[1:] if argv is None else argv)
     # Importing every command costs seconds (cvxpy, casadi, scipy.signal); a known command imports only its own.
     command = next((a for a in argv if not a.startswith("-")), None)
@@ -182,6 +181,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     if unknown:   # the usage of the command they belong to, not the top-level one
         commands = next(a for a in parser._actions if isinstance(a, argparse._SubParsersAction))
         commands.choices[args.command].error(f"unrecognized arguments: {' '.join(unknown)}")
+    _ascii_safe_streams()   # a command runs: it has imported what it prints with
 
     def run() -> int:
         with progress_display(args.command, args.verbosity):
