@@ -76,3 +76,14 @@ def test_a_run_that_did_not_stop_is_labelled_by_its_distance_travelled():
     from switchobs.plants import distance_label
 
     assert distance_label(False) == "distance travelled" and distance_label(True) == "stopping distance"
+
+
+def test_synthesize_warns_about_poles_far_beyond_the_decay_asked(capsys):
+    assert main(["synthesize", "abs-xbs3", "--decay", "99"]) == 0
+    err = capsys.readouterr().err.splitlines()
+    assert len(err) == 1 and err[0].startswith("switchobs synthesize: warning: a pole at |lambda| = ")
+    assert "--noise-weight 0.01" in err[0]
+    assert main(["synthesize", "abs-xbs3", "--decay", "99", "--noise-weight", "0.01"]) == 0   # the hint works
+    assert capsys.readouterr().err == ""
+    assert main(["-q", "synthesize", "abs-xbs3", "--decay", "99"]) == 0
+    assert capsys.readouterr().err == ""
