@@ -87,3 +87,17 @@ def test_synthesize_warns_about_poles_far_beyond_the_decay_asked(capsys):
     assert capsys.readouterr().err == ""
     assert main(["-q", "synthesize", "abs-xbs3", "--decay", "99"]) == 0
     assert capsys.readouterr().err == ""
+
+
+def test_design_json_expressions_parse_back_as_the_guide_says():
+    import sympy as sp
+
+    from switchobs.design import design
+    from switchobs.model import builtin_model, parse_expression
+
+    g = design(builtin_model("abs-adaptive2"), "-beta,-beta")
+    poly = g.characteristic_polynomial("plus")
+    text = g.to_json()["characteristic_polynomial_plus"]
+    with pytest.raises((TypeError, sp.SympifyError)):   # why the guide does not say sympify: beta is a function
+        sp.expand(sp.sympify(text) - poly)
+    assert sp.simplify(parse_expression(text, {str(x): x for x in poly.free_symbols}) - poly) == 0

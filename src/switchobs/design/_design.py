@@ -423,7 +423,8 @@ class GainDesign:
 
     # ----------------------------------------------------------- output
     def to_json(self) -> dict[str, Any]:
-        """Plain-JSON view; every expression is a string ``sympy.sympify`` parses back."""
+        """Plain-JSON view; every expression is a string that :func:`switchobs.model.parse_expression` parses back
+        with its symbols (a bare ``sympy.sympify`` reads a symbol ``beta`` as sympy's beta function)."""
         return {
             "model": self.model.name,
             "n": self.n,
