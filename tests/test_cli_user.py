@@ -101,3 +101,28 @@ def test_design_json_expressions_parse_back_as_the_guide_says():
     with pytest.raises((TypeError, sp.SympifyError)):   # why the guide does not say sympify: beta is a function
         sp.expand(sp.sympify(text) - poly)
     assert sp.simplify(parse_expression(text, {str(x): x for x in poly.free_symbols}) - poly) == 0
+
+
+def test_bash_completion_is_generated_from_the_parsers(tmp_path, capsys):
+    import shutil
+
+    with pytest.raises(SystemExit) as stop:
+        main(["--completion", "bash"])
+    assert stop.value.code == 0
+    script = tmp_path / "switchobs.bash"
+    script.write_text(capsys.readouterr().out, encoding="utf-8")
+    bash = shutil.which("bash")
+    if bash is None:
+        pytest.skip("bash is not installed: the completion script is NOT checked")
+
+    def complete(*words: str) -> list[str]:
+        probe = (f"source {script}; COMP_WORDS=({' '.join(words)}); COMP_CWORD={len(words) - 1}; _switchobs; "
+                 'printf "%s\\n" "${COMPREPLY[@]}"')
+        proc = subprocess.run([bash, "-c", probe], capture_output=True, text=True, cwd=tmp_path, timeout=60)
+        assert proc.returncode == 0, proc.stderr
+        return proc.stdout.split()
+
+    assert complete("switchobs", "synth") == ["synthesize"]
+    assert complete("switchobs", "simulate", "--met") == ["--method"]
+    assert complete("switchobs", "-q", "design", "abs-adaptive2-") == ["abs-adaptive2-load"]
+    assert "--limit" in complete("switchobs", "sweep", "--")

@@ -66,6 +66,17 @@ def _add_verbosity(parser: argparse.ArgumentParser, default: object) -> None:
                        help="print every progress note as a line with its elapsed time (also into a pipe or file)")
 
 
+class _Completion(argparse.Action):
+    """``--completion bash``: print the script and exit (the commands' modules are imported only then)."""
+
+    def __call__(self, parser: argparse.ArgumentParser, namespace: argparse.Namespace, values: object,
+                 option_string: str | None = None) -> None:
+        from ._completion import bash_completion
+
+        sys.stdout.write(bash_completion())
+        parser.exit()
+
+
 def build_parser(only: str | None = None) -> argparse.ArgumentParser:
     """The ``switchobs`` parser; with ``only``, the parser of that sub-command (its module alone is imported).
 
@@ -76,6 +87,8 @@ def build_parser(only: str | None = None) -> argparse.ArgumentParser:
         prog="switchobs",
         description="Design, certify and export switched observers via singular time-rescaling.")
     parser.add_argument("--version", action="version", version=f"switchobs {__version__}")
+    parser.add_argument("--completion", action=_Completion, choices=("bash",), metavar="SHELL",
+                        help="print a completion script for SHELL (bash), generated from the commands' parsers")
     _add_verbosity(parser, NORMAL)
     sub = parser.add_subparsers(dest="command", metavar="COMMAND")
     sub.required = True
@@ -174,7 +187,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     # Importing every command costs seconds (cvxpy, casadi, scipy.signal); a known command imports only its own.
     command = next((a for a in argv if not a.startswith("-")), None)
     parser = build_parser(command if command in COMMANDS else None)
-    if command is None and not {"-h", "--help", "--version"} & set(argv):
+    if command is None and not {"-h", "--help", "--version", "--completion"} & {a.split("=")[0] for a in argv}:
         parser.print_help()     # no command: what there is to run
         return 0
     args, unknown = parser.parse_known_args(argv)
