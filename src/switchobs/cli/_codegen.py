@@ -32,8 +32,8 @@ TARGET_NAMES = ("host", "cortex-m4f", "cortex-m7")
 def register(sub: argparse._SubParsersAction) -> None:
     p = sub.add_parser("codegen",
                        description="Generate C for the switched observer of MODEL (built-in or TOML), the "
-                                   "adaptive observer of seed 001 (3.4) with --unknown, or the super-twisting "
-                                   f"observer of seed 003 with MODEL = {SUPER_TWISTING}.")
+                                   "adaptive observer of Aguado-Rojas 2020 (3.4) with --unknown, or the super-twisting "
+                                   f"observer of M'Sirdi et al. 2008 with MODEL = {SUPER_TWISTING}.")
     p.add_argument("model", metavar="MODEL",
                    help=f"built-in model ({', '.join(builtin_names())}), a TOML file, "
                         f"or {SUPER_TWISTING}")
@@ -46,7 +46,7 @@ def register(sub: argparse._SubParsersAction) -> None:
     target.add_argument("--charpoly", help='target det(sI - A_plus) in s, e.g. "s^3 + 6*s^2 + 11*s + 6"')
     target.add_argument("--gains-plus", help="K_plus entries, comma-separated")
     p.add_argument("--gains-minus", help="K_minus entries (default: the Theorem 1 choice)")
-    p.add_argument("--unknown", help="parameters estimated by the adaptive observer of seed 001 (3.4), e.g. c,d")
+    p.add_argument("--unknown", help="parameters estimated by the adaptive observer of Aguado-Rojas 2020 (3.4), e.g. c,d")
     p.add_argument("--gamma", help="adaptation gain Gamma: its diagonal (\"50,20\") or rows (\"50,0;0,20\")")
     p.add_argument("--real", choices=("double", "float"), default=None,
                    help="C real type (default double; with --target the target's: float on cortex-m4f, whose "

@@ -38,7 +38,7 @@ TWO_AXLE_CONTROLLERS = ("six-phase", "five-phase")
 
 def register(sub: argparse._SubParsersAction) -> None:
     p = sub.add_parser("simulate",
-                       description="Simulate an emergency braking of the quarter car of seed 001 (2.1) with a "
+                       description="Simulate an emergency braking of the quarter car of Aguado-Rojas 2020 (2.1) with a "
                                    "hybrid ABS and an XBS observer; print the metrics or JSON, draw the plots.")
     p.add_argument("scenario", nargs="?", metavar="SCENARIO",
                    help=f"built-in scenario: {', '.join(scenario_names())} (default: braking on --road "
@@ -61,14 +61,14 @@ def register(sub: argparse._SubParsersAction) -> None:
                         "observer: rk4, as it takes explicit steps only); rk4 and euler are not certified for the "
                         "switched observers (a note says so)")
     p.add_argument("--parallel", action="store_true",
-                   help="run the observer beside the loop: the controller reads the true XBS (seed 001 Fig. 4.5)")
+                   help="run the observer beside the loop: the controller reads the true XBS (Aguado-Rojas 2020 Fig. 4.5)")
     p.add_argument("--beta", type=float, help="observer rate beta in the rescaled time (default: the scenario's "
                                               "for its own observer, else per observer)")
     p.add_argument("--gamma", type=float, help=f"adaptive observer: Gamma = gamma I (default: the scenario's for "
                                                f"its own observer, else {DEFAULT_GAMMA:g})")
     p.add_argument("--static-load", action="store_true",
                    help="aguado-sec36, adaptive observer: keep each wheel's static load in a = R^2 Fz / J instead "
-                        "of reading Fz from (3.36) on line (seed 001 Sec. 3.6)")
+                        "of reading Fz from (3.36) on line (Aguado-Rojas 2020 Sec. 3.6)")
     p.add_argument("--duration", type=float, help="time bound [s] (default: scenario's, or 60)")
     p.add_argument("--dt", type=float, help="integration step [s] (default 0.001)")
     p.add_argument("--delay", type=float, help="actuator delay [s] (0 or >= the step)")

@@ -131,7 +131,7 @@ def plot_table41(result: Table41Result, *, ax: Any = None) -> Any:
         ax.set_title(f"{v:.0f} km/h")
         ax.set_ylabel("braking distance [m]")
     axes[0].legend(fontsize=8)
-    fig.suptitle("seed 001 Table 4.1: braking distance vx(0)²/(2 g μ̄)")
+    fig.suptitle("Aguado-Rojas 2020 Table 4.1: braking distance vx(0)²/(2 g μ̄)")
     fig.tight_layout()
     return fig
 
