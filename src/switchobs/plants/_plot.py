@@ -7,6 +7,7 @@ Each function returns the Figure and takes ``ax=``: the Axes to draw on, or
 
 from __future__ import annotations
 
+import re
 import textwrap
 from typing import Any
 
@@ -19,6 +20,31 @@ from ._two_axle import TwoAxleResult
 
 __all__ = ["plot_braking", "plot_table41", "plot_two_axle"]
 
+
+
+_PYTHON_OBSERVER = re.compile(r"^(\w*Observer) of model '([^']+)' \((\w+)")
+_C_OBSERVER = re.compile(r"generated C (\w+) observer \S+ for model '([^']+)' \((\w+), (\w+)")
+_KINDS = {"SwitchedObserver": "switched observer", "AdaptiveSwitchedObserver": "adaptive observer"}
+
+
+def observer_title(description: str) -> str:
+    """A run's observer as a figure title says it: ``switched observer of abs-xbs4 (radau3)`` for the line
+    ``SwitchedObserver of model 'abs-xbs4' (radau3, ZOH signals y, vx, u)``; other descriptions unchanged.
+
+    Examples
+    --------
+    >>> observer_title("SwitchedObserver of model 'abs-xbs4' (radau3, ZOH signals y, vx, u)")
+    'switched observer of abs-xbs4 (radau3)'
+    >>> observer_title("none")
+    'no observer'
+    """
+    if description == "none":
+        return "no observer"
+    if (m := _C_OBSERVER.search(description)) is not None:
+        return f"generated C {m.group(1)} observer of {m.group(2)} ({m.group(3)}, {m.group(4)})"
+    if (m := _PYTHON_OBSERVER.match(description)) is not None:
+        return f"{_KINDS.get(m.group(1), m.group(1))} of {m.group(2)} ({m.group(3)})"
+    return f"observer {description}"
 
 def plot_braking(result: BrakingResult, *, ax: Any = None) -> Any:
     """Time histories and phase planes of a run (seed 000 Figs. 3-4, seed 001 Figs. 3.4, 4.5-4.7).
@@ -105,7 +131,7 @@ def plot_braking(result: BrakingResult, *, ax: Any = None) -> Any:
     p2.set_ylabel("z2 = μ'")
     p2.set_title("(z1, z2) plane")
     title = (f"{result.scenario.name}: {result.scenario.roads}, {result.scenario.speed_kmh:.0f} km/h, "
-             f"{result.scenario.controller.name}, observer {result.observer}")
+             f"{result.scenario.controller.name}, {observer_title(result.observer)}")
     fig.suptitle("\n".join(textwrap.wrap(title, 110)), fontsize=10)  # wrapped: never wider than the figure
     fig.set_layout_engine("constrained")
     return fig
