@@ -111,3 +111,20 @@ def test_simulate_method_option(capsys):
     assert status == 2 and "implicit" in err and len(err.splitlines()) == 1
     status, out, err = _cli(["simulate", "--duration", "0.05", "--method", "radau3"], capsys)
     assert status == 2 and "--observer none runs no observer" in err
+
+
+def test_beyond_the_cofactor_limit_the_default_is_rk4_and_said_to_be_uncertified(tmp_path, capsys):
+    from switchobs.spec import default_method
+    from switchobs.spec._methods import IMPLICIT_MAX_N
+
+    n = IMPLICIT_MAX_N + 1
+    assert default_method(IMPLICIT_MAX_N) == "radau3" and default_method(n) == "rk4"
+    model = builtin_model(f"normal-form-{n}")
+    spectrum = ",".join(str(-k) for k in range(1, n + 1))
+    zeros = {f"a{i}": 0 for i in range(1, n + 1)}
+    assert SwitchedObserver(model, design(model, spectrum).at(zeros), params=zeros).method == "rk4"
+    pytest.importorskip("casadi")
+    status, out, err = _cli(["codegen", f"normal-form-{n}", f"--spectrum={spectrum}"]
+                            + [f"--param=a{i}=0" for i in range(1, n + 1)] + ["--out", str(tmp_path / "c")], capsys)
+    assert status == 0 and "(double, rk4," in out
+    assert err.splitlines() == [f"switchobs codegen: note: {uncertified_note('rk4')}"]

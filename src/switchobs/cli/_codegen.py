@@ -17,7 +17,7 @@ from .._limits import MAX_INPUT_FILE_BYTES, read_text
 from ..design import GainDesign, design
 from ..exceptions import CodegenError, FreeSymbolError, PrerequisiteError, SpectrumError
 from ..model import Model, builtin_names, load_model, rational_value
-from ..spec import DEFAULT_METHOD, METHODS
+from ..spec import METHODS, default_method
 from ._common import emit_json, note_uncertified, parse_params
 from ._integration import add_integration_arguments, integration_files
 
@@ -65,8 +65,8 @@ def register(sub: argparse._SubParsersAction) -> None:
                    help="with --pil: rows of signals, a header naming them (and an optional dt column, seconds; "
                         "default 0.001); the state starts at 0")
     p.add_argument("--method", choices=METHODS, default=None,
-                   help="discretisation, signals held over the step (default radau3; with --unknown rk4, as the "
-                        "adaptive observer takes explicit steps only; super-twisting: euler); midpoint and radau3 "
+                   help="discretisation, signals held over the step (default radau3; rk4 with --unknown, as the "
+                        "adaptive observer takes explicit steps only, and beyond 12 states; super-twisting: euler); midpoint and radau3 "
                         "are implicit and certified for every dt, rk4 and euler are not (a note says so)")
     p.add_argument("--h-max", metavar="auto|VALUE",
                    help="bound on the step |s|*dt in the rescaled time: a step beyond it is split into "
@@ -179,7 +179,7 @@ def run(args: argparse.Namespace) -> int:
         unknown = [u.strip() for u in args.unknown.split(",")] if args.unknown else []
         if args.gamma and not unknown:
             raise CodegenError("--gamma is the adaptation gain of the adaptive observer; give --unknown too")
-        method = args.method or ("rk4" if unknown else DEFAULT_METHOD)
+        method = args.method or default_method(model.n, affine=not unknown)
         # the adaptive observer has explicit steps only and no discrete certificate at all; --h-max auto
         # proves or refutes the certificate itself (exit 1 with its own line)
         if not unknown and args.h_max != "auto":

@@ -50,8 +50,8 @@ from .._atomic import write_files
 from .._json import fields_from_json
 from ..exceptions import CodegenError, DimensionError, ModelError
 from ..model import Model, numeric, rational_value
-from ..spec import (DEFAULT_METHOD, METHODS, STATUS_TEXT, STEP_METHODS, Guard, ObserverSpec, StepStatus,
-                    require_explicit)
+from ..spec import (METHODS, STATUS_TEXT, STEP_METHODS, Guard, ObserverSpec, StepStatus,
+                    default_method, require_explicit)
 from ._emit import CFunction, float_literal, kernel
 from ._misra import misra_record
 from ._readme import readme
@@ -550,8 +550,8 @@ def generate_observer(model: Model, gains: GainDesign | tuple[Sequence[float], S
         The implicit methods (switched observer only) solve ``D(Z) v = F(Z) f(x)``, ``Z = dt J``, by
         cofactors; a singular ``D(Z)`` returns ``NONFINITE_RESULT``.  They keep the design's continuous
         Lyapunov matrix decreasing at every step length (``switchobs.certify.discrete_certificate``).
-        Default: radau3 (:data:`switchobs.spec.DEFAULT_METHOD`); rk4 with ``unknown``, as the adaptive
-        observer takes the explicit methods only.
+        Default :func:`switchobs.spec.default_method`: radau3; rk4 with ``unknown`` (the adaptive observer
+        takes the explicit methods only) and for more than ``IMPLICIT_MAX_N`` states.
     prefix : str, optional
         C prefix; default ``switchobs_<model>`` (:func:`default_prefix`).
     unknown : sequence of str, optional
@@ -602,7 +602,7 @@ def generate_observer(model: Model, gains: GainDesign | tuple[Sequence[float], S
     """
     unknown = tuple(unknown)
     if method is None:
-        method = "rk4" if unknown else DEFAULT_METHOD
+        method = default_method(model.n, affine=not unknown)
     _check_options(real, method)
     prefix = _check_prefix(default_prefix(model.name) if prefix is None else prefix)
     bound = substep_bound(h_max, max_substeps, error=CodegenError)

@@ -9,6 +9,7 @@ STATUS_TEXT         -- one line per status code
 REFERENCE_STATUSES  -- the codes a Python reference step can end with (0-5)
 METHODS             -- discretisations: "rk4", "euler" (explicit), "midpoint", "radau3" (implicit)
 DEFAULT_METHOD      -- "radau3", the step method when none is chosen (certified for every step length)
+default_method      -- radau3 where it applies (affine right-hand side, n <= IMPLICIT_MAX_N), else rk4
 CERTIFIED_METHODS   -- "midpoint", "radau3": the sampled observer is certified for every step length
 uncertified_note    -- one line saying that a method is not certified (None for a certified one)
 StepMethod          -- a method by its stability function R = N / D
@@ -21,9 +22,9 @@ SCALE               -- the symbol of the time scaling s in the split
 """
 
 from ._methods import (CERTIFIED_METHODS, DEFAULT_METHOD, METHODS, STEP_METHODS, StepMethod, affine_jacobian,
-                       implicit_increment, require_explicit, uncertified_note)
+                       default_method, implicit_increment, require_explicit, uncertified_note)
 from ._spec import REFERENCE_STATUSES, SCALE, STATUS_TEXT, Guard, ObserverSpec, StepStatus, domain_guards
 
 __all__ = ["CERTIFIED_METHODS", "DEFAULT_METHOD", "Guard", "METHODS", "ObserverSpec", "REFERENCE_STATUSES", "SCALE", "STATUS_TEXT", "STEP_METHODS",
-           "StepMethod", "StepStatus", "affine_jacobian", "domain_guards", "implicit_increment",
+           "StepMethod", "StepStatus", "affine_jacobian", "default_method", "domain_guards", "implicit_increment",
            "require_explicit", "uncertified_note"]

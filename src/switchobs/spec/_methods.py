@@ -26,7 +26,7 @@ from typing import Any
 from ..exceptions import ModelError
 
 __all__ = ["StepMethod", "STEP_METHODS", "METHODS", "DEFAULT_METHOD", "CERTIFIED_METHODS", "IMPLICIT_MAX_N",
-           "implicit_increment", "affine_jacobian", "require_explicit", "uncertified_note"]
+           "implicit_increment", "affine_jacobian", "require_explicit", "uncertified_note", "default_method"]
 
 #: Largest state dimension of an implicit step: the cofactor solve shares minors over subsets of rows, so its
 #: size grows like 2^n (n = 12: 1.5 s to generate, 0.14 MB of C; n = 16: 21 s, 0.33 MB).
@@ -95,6 +95,22 @@ CERTIFIED_METHODS: tuple[str, ...] = ("midpoint", "radau3")
 #: observer): certified at every step length and of higher order than midpoint.  The adaptive observer, whose
 #: right-hand side is not affine in its state, takes an explicit method (:func:`require_explicit`).
 DEFAULT_METHOD = "radau3"
+
+
+def default_method(n: int, *, affine: bool = True) -> str:
+    """The step method when none is chosen, for an observer of ``n`` states.
+
+    :data:`DEFAULT_METHOD` (radau3) wherever it applies: a right-hand side affine in the state (the switched
+    observer) and ``n <= IMPLICIT_MAX_N`` (the cofactor solve grows like 2^n).  Elsewhere rk4: the adaptive
+    observer (not affine: explicit steps only) and larger switched observers (uncertified: bound the step
+    with ``h_max``).
+
+    Examples
+    --------
+    >>> default_method(3), default_method(3, affine=False), default_method(IMPLICIT_MAX_N + 1)
+    ('radau3', 'rk4', 'rk4')
+    """
+    return DEFAULT_METHOD if affine and n <= IMPLICIT_MAX_N else "rk4"
 
 
 def uncertified_note(method: str) -> str | None:
