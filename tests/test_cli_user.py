@@ -126,3 +126,16 @@ def test_bash_completion_is_generated_from_the_parsers(tmp_path, capsys):
     assert complete("switchobs", "simulate", "--met") == ["--method"]
     assert complete("switchobs", "-q", "design", "abs-adaptive2-") == ["abs-adaptive2-load"]
     assert "--limit" in complete("switchobs", "sweep", "--")
+
+
+def test_braking_figure_labels_its_road_changes_and_names_the_observer():
+    from dataclasses import replace
+
+    from switchobs.loop import xbs_estimator
+    from switchobs.plants import plot_braking, scenario, simulate
+
+    sc = replace(scenario("hoang-fig3"), duration_s=3.5)
+    fig = plot_braking(simulate(sc, estimator=xbs_estimator("xbs4", sc.vehicle, sc.roads.initial)))
+    assert [t.get_text() for t in fig.axes[0].texts] == ["→ hoang-wet"]
+    title = fig._suptitle.get_text()
+    assert "switched observer of abs-xbs4 (radau3)" in title and "SwitchedObserver" not in title

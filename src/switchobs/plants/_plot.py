@@ -27,6 +27,17 @@ _C_OBSERVER = re.compile(r"generated C (\w+) observer \S+ for model '([^']+)' \(
 _KINDS = {"SwitchedObserver": "switched observer", "AdaptiveSwitchedObserver": "adaptive observer"}
 
 
+
+def _mark_road_changes(axes: Any, events: Any) -> None:
+    """A dotted line at every road change on every panel, labelled with the new road on the top one."""
+    for when, what in events:
+        if what.startswith("road"):
+            for a in axes:
+                a.axvline(when, color="tab:red", lw=0.6, ls=":")
+            road = what.split("-> ", 1)[-1].split(" (", 1)[0]
+            axes[0].annotate(f"→ {road}", (when, 1.0), xycoords=("data", "axes fraction"), xytext=(2, -9),
+                             textcoords="offset points", fontsize=7, color="tab:red")
+
 def observer_title(description: str) -> str:
     """A run's observer as a figure title says it: ``switched observer of abs-xbs4 (radau3)`` for the line
     ``SwitchedObserver of model 'abs-xbs4' (radau3, ZOH signals y, vx, u)``; other descriptions unchanged.
@@ -106,10 +117,7 @@ def plot_braking(result: BrakingResult, *, ax: Any = None) -> Any:
     axes[4].set_ylabel("XBS")
     axes[4].set_xlabel("t [s]")
     axes[4].legend(loc="upper right", ncols=2, fontsize=8)
-    for when, what in result.events:
-        if what.startswith("road"):
-            for a in axes:
-                a.axvline(when, color="tab:red", lw=0.6, ls=":")
+    _mark_road_changes(axes, result.events)
     p1.plot(s["lambda"][active], s["x2"][active], lw=0.6)
     p1.set_xlabel("slip λ")
     p1.set_ylabel("x2 [m/s²]")
@@ -195,9 +203,7 @@ def plot_two_axle(result: TwoAxleResult, *, ax: Any = None) -> Any:
     axes[4].set_xlabel("t [s]")
     for ax in axes:
         ax.legend(loc="upper right", fontsize=7)
-        for when, what in result.events:
-            if what.startswith("road"):
-                ax.axvline(when, color="tab:red", lw=0.6, ls=":")
+    _mark_road_changes(axes, result.events)
     fig.suptitle("\n".join(textwrap.wrap(str(result.scenario), 110)), fontsize=9)  # wrapped: never wider than the figure
     fig.tight_layout()
     return fig
