@@ -85,8 +85,10 @@ def plot_pareto(tuned: TunedDesign, *, ax: Any = None) -> Any:
     axis.scatter([p[2] for p in finite], [p[3] for p in finite], s=18, color="0.6", label="gain pairs")
     front = [tuned.pairs[i] for i in tuned.front]
     axis.plot([p[2] for p in front], [p[3] for p in front], "o-", color="C0", label="Pareto front")
-    for b1, b2, r, n, _ in front:
-        axis.annotate(f"{b1:g}/{b2:g}", (r, n), textcoords="offset points", xytext=(4, 4), fontsize=7)
+    # neighbours on the front alternate above and below it, so that their labels do not overprint
+    for k, (b1, b2, r, n, _) in enumerate(front):
+        axis.annotate(f"{b1:g}/{b2:g}", (r, n), textcoords="offset points", xytext=(4, 4 if k % 2 == 0 else -11),
+                      fontsize=7)
     axis.plot([tuned.reconvergence_s], [tuned.noise_rms], "*", color="C3", markersize=14,
               label=f"chosen: beta {tuned.beta1:g}/{tuned.beta2:g}")
     axis.set_xlabel(label("recovery_max_s"))
