@@ -239,7 +239,7 @@ def test_cli_sweep_refuses_bad_spec_files_in_one_line(tmp_path, capsys, text, ma
 
 def test_missing_dask_is_a_prerequisite_error_and_serial_runs_still_work(monkeypatch, tmp_path, capsys):
     monkeypatch.setitem(sys.modules, "distributed", None)
-    with pytest.raises(PrerequisiteError, match=r"pip install -e '.\[sweep\]'.*--scheduler none"):
+    with pytest.raises(PrerequisiteError, match=r'pip install "switchobs\[sweep\]".*--scheduler none'):
         run_sweep(QUICK[:1], scheduler="local")
     assert run_sweep(QUICK[:1], scheduler="none").results[0].ok
 

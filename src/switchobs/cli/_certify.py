@@ -29,7 +29,7 @@ def register(sub: argparse._SubParsersAction) -> None:
                     "with --box, the whole box), "
                     "1 if none does, 2 on bad input.")
     add_model_arguments(p)
-    p.add_argument("--spectrum", help='poles of A_plus, e.g. "-10,-20,-20" (gains by Theorem 1, seed 004)')
+    p.add_argument("--spectrum", help='poles of A_plus, e.g. "-10,-20,-20" (gains by Theorem 1, Pasillas-Lépine)')
     p.add_argument("--gains-plus", help='K_plus entries, e.g. "84,-7312/375,-64/3"')
     p.add_argument("--gains-minus", help="K_minus entries (default: the Theorem 1 choice)")
     p.add_argument("--solver", choices=("CLARABEL", "SCS"), help="use only this cvxpy solver "

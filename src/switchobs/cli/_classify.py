@@ -33,7 +33,7 @@ def parse_matrix(text: str, *, name: str) -> list[list[str]]:
 def register(sub: argparse._SubParsersAction) -> None:
     p = sub.add_parser("classify",
                        description="Classify the planar switched system dx/dt = A_sigma x, sigma in {1, 2} "
-                                   "(Balde, Boscain and Mason 2009, as stated in seed 004): Gamma, det, "
+                                   "(Balde, Boscain and Mason 2009, as stated in Pasillas-Lépine): Gamma, det, "
                                    "tr(A1 A2), R and the verdict. Rational entries are decided exactly.")
     p.add_argument("A1", help='first matrix, e.g. "[[-1,2],[-3,-4]]"')
     p.add_argument("A2", help="second matrix")

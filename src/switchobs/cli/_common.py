@@ -11,11 +11,12 @@ from typing import Any, TextIO
 
 from .._atomic import check_output_file
 from ..exceptions import ModelError, OutputError, SwitchobsError
-from ..model import Model, load_model
+from ..model import Model, builtin_names, load_model
 from .main import QUIET
 
 __all__ = ["add_model_arguments", "model_from_args", "parse_params", "emit_json", "write_or_check", "STDIO",
-           "summary_stream", "write_certificate", "output_file", "output_directory", "figure_file", "check_output"]
+           "summary_stream", "write_certificate", "output_file", "output_directory", "figure_file", "check_output",
+           "note_uncertified"]
 
 #: The file name that means standard input (a model, a certificate) or standard output (``--out -``).
 STDIO = "-"
@@ -64,7 +65,7 @@ def check_output(path: str | None, *, what: str, inputs: Iterable[str] = ()) -> 
 def add_model_arguments(parser: argparse.ArgumentParser) -> None:
     """MODEL positional and repeatable ``--param NAME=VALUE``."""
     parser.add_argument("model", metavar="MODEL",
-                        help="built-in model (abs-xbs3, abs-xbs4, abs-adaptive2, normal-form-N), a TOML file, "
+                        help=f"built-in model ({', '.join(builtin_names())}), a TOML file, "
                              "or - for a TOML model on standard input")
     parser.add_argument("--param", action="append", default=[], metavar="NAME=VALUE",
                         help="substitute a parameter value (repeatable), e.g. --param a=187.5")
@@ -99,6 +100,16 @@ def summary_stream(args: argparse.Namespace) -> TextIO | None:
     if getattr(args, "out", None) != STDIO:
         return sys.stdout
     return None if args.verbosity == QUIET else sys.stderr
+
+
+def note_uncertified(args: argparse.Namespace, method: str) -> None:
+    """One line on stderr when the switched observer's step ``method`` is not certified (not an error; nothing
+    with ``--quiet``): the command goes on with it."""
+    from ..spec import uncertified_note
+
+    note = uncertified_note(method)
+    if note is not None and args.verbosity != QUIET:
+        print(f"switchobs {args.command}: note: {note}", file=sys.stderr)
 
 
 def write_certificate(report: Any, out: str) -> None:

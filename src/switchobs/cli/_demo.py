@@ -14,7 +14,7 @@ __all__ = ["register"]
 def register(sub: argparse._SubParsersAction) -> None:
     p = sub.add_parser(
         "demo",
-        description="On abs-xbs3 and abs-xbs4 with the TU Delft rig of seed 000: symbolic design of K+/K-, "
+        description="On abs-xbs3 and abs-xbs4 with the TU Delft rig of Hoang et al. 2014: symbolic design of K+/K-, "
                     "exact and numeric certification (the certificate re-verified from its file), C generation "
                     "and compilation, an emergency braking dry -> wet -> snow with the generated C observer in "
                     "the loop fed by a 60-ppr encoder with three-stage compensation, and a report with figures. "

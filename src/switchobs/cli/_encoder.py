@@ -21,7 +21,7 @@ def register(sub: argparse._SubParsersAction) -> None:
         "encoder",
         description="Simulate a wheel encoder with transition noise and eccentricity, estimate the wheel "
                     "speed and acceleration at the controller rate and print the RMS errors against the "
-                    "exact trajectory (seed 001 Table 6.1 layout).")
+                    "exact trajectory (Aguado-Rojas 2020 Table 6.1 layout).")
     p.add_argument("--ppr", type=int, default=60, help="pulses per revolution N (default 60)")
     p.add_argument("--events", type=int, default=15, help="TSA window n (default 15)")
     p.add_argument("--order", type=int, default=2, help="TSA polynomial order m (default 2)")

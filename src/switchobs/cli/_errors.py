@@ -26,7 +26,7 @@ import warnings
 from collections.abc import Callable
 from typing import Any
 
-from ..exceptions import FreeSymbolError, OutputError, SwitchobsError
+from ..exceptions import EXTRAS, FreeSymbolError, OutputError, SwitchobsError, install_hint
 
 __all__ = ["EXIT_OK", "EXIT_FAILED", "EXIT_BAD_INPUT", "EXIT_INTERRUPTED", "DEBUG_ENV", "EXTRAS", "guarded",
            "install_hint", "unavailable_message", "flush_stdout"]
@@ -37,16 +37,6 @@ EXIT_BAD_INPUT = 2
 EXIT_INTERRUPTED = 130
 #: Environment variable: when set to a non-empty value other than 0, an internal error also prints its traceback.
 DEBUG_ENV = "SWITCHOBS_DEBUG"
-#: Optional third-party modules -> the extra that installs them.
-EXTRAS: dict[str, str] = {"casadi": "codegen", "matplotlib": "plots", "dask": "sweep", "distributed": "sweep"}
-
-
-def install_hint(module: str | None) -> str:
-    """How to install what ``module`` belongs to: its extra, or a reinstall."""
-    extra = EXTRAS.get((module or "").split(".")[0])
-    if extra is not None:
-        return f'install it with pip install "switchobs[{extra}]" (or `make install`)'
-    return "reinstall with `make install` (or pip install -e .)"
 
 
 def unavailable_message(command: str, exc: ImportError) -> str:

@@ -16,7 +16,7 @@ def register(sub: argparse._SubParsersAction) -> None:
     p = sub.add_parser(
         "transform",
         description="From dx/dt = f(x) + g(x) u, y = h(x) (a system file) to dz/dt = s(y)(A z + d(y)) + b(y) u, "
-                    "y = C z (seed 004, Part III). Without --s/--phi, search s and phi from f, g, h alone; with "
+                    "y = C z (Pasillas-Lépine, Part III). Without --s/--phi, search s and phi from f, g, h alone; with "
                     "them, check the candidate. The derivation is printed step by step; exit 1 names the first "
                     "condition that fails.")
     p.add_argument("system", metavar="SYSTEM.toml", help="system file (docs/transform.md)")

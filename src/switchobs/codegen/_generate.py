@@ -50,7 +50,8 @@ from .._atomic import write_files
 from .._json import fields_from_json
 from ..exceptions import CodegenError, DimensionError, ModelError
 from ..model import Model, numeric, rational_value
-from ..spec import METHODS, STATUS_TEXT, STEP_METHODS, Guard, ObserverSpec, StepStatus, require_explicit
+from ..spec import (METHODS, STATUS_TEXT, STEP_METHODS, Guard, ObserverSpec, StepStatus,
+                    default_method, require_explicit)
 from ._emit import CFunction, float_literal, kernel
 from ._misra import misra_record
 from ._readme import readme
@@ -528,7 +529,7 @@ def _assemble(tr: Translation, *, info: _Info, kind: str, real: str, method: str
 
 
 def generate_observer(model: Model, gains: GainDesign | tuple[Sequence[float], Sequence[float]], *,
-                      values: Mapping[str, Any] | None = None, real: str = "double", method: str = "rk4",
+                      values: Mapping[str, Any] | None = None, real: str = "double", method: str | None = None,
                       prefix: str | None = None, unknown: Sequence[str] = (),
                       Gamma: Sequence[Sequence[float]] | np.ndarray | None = None,
                       h_max: float | Fraction | str | None = None, max_substeps: int | None = None,
@@ -547,11 +548,13 @@ def generate_observer(model: Model, gains: GainDesign | tuple[Sequence[float], S
         Values of design symbols (``beta1``...) and overrides of the model's
         parameter values (defaults of the runtime parameters).
     real : {"double", "float"}
-    method : {"rk4", "euler", "midpoint", "radau3"}
-        Classic RK4 (default), forward Euler, the implicit midpoint rule or 2-stage Radau IIA, signals held
-        over the step.  The implicit methods (switched observer only) solve ``D(Z) v = F(Z) f(x)``, ``Z = dt J``,
-        by cofactors; a singular ``D(Z)`` returns ``NONFINITE_RESULT``.  They keep the design's continuous
+    method : {"radau3", "midpoint", "rk4", "euler"}, optional
+        2-stage Radau IIA, the implicit midpoint rule, classic RK4 or forward Euler, signals held over the step.
+        The implicit methods (switched observer only) solve ``D(Z) v = F(Z) f(x)``, ``Z = dt J``, by
+        cofactors; a singular ``D(Z)`` returns ``NONFINITE_RESULT``.  They keep the design's continuous
         Lyapunov matrix decreasing at every step length (``switchobs.certify.discrete_certificate``).
+        Default :func:`switchobs.spec.default_method`: radau3; rk4 with ``unknown`` (the adaptive observer
+        takes the explicit methods only) and for more than ``IMPLICIT_MAX_N`` states.
     prefix : str, optional
         C prefix; default ``switchobs_<model>`` (:func:`default_prefix`).
     unknown : sequence of str, optional
@@ -600,6 +603,9 @@ def generate_observer(model: Model, gains: GainDesign | tuple[Sequence[float], S
     >>> gen.prefix, gen.nx, gen.ns, gen.np
     ('switchobs_abs_xbs3', 3, 3, 9)
     """
+    unknown = tuple(unknown)
+    if method is None:
+        method = default_method(model.n, affine=not unknown)
     _check_options(real, method)
     prefix = _check_prefix(default_prefix(model.name) if prefix is None else prefix)
     bound = substep_bound(h_max, max_substeps, error=CodegenError)
@@ -609,7 +615,6 @@ def generate_observer(model: Model, gains: GainDesign | tuple[Sequence[float], S
     num_values = {**{k: v for k, v in values.items() if k not in model.parameters},
                   **{k: float(v) for k, v in defaults.items()}}
     Kp, Km = _gains(model, gains, num_values)
-    unknown = tuple(unknown)
     if unknown:
         G = tuple(map(tuple, adaptation_gain(Gamma, unknown, error=CodegenError).tolist()))
     elif Gamma is not None:
