@@ -11,7 +11,7 @@ from hypothesis import strategies as st
 from switchobs.certify import (as_family, classify_planar, common_lyapunov, infeasibility_certificate,
                                singular_sum, strict_common_lyapunov, verify_certificate)
 from switchobs.certify import _lmi
-from switchobs.certify._exact import definiteness, lyapunov_form, matmul, transpose
+from switchobs.exact import definiteness, lyapunov_form, matmul, transpose
 from switchobs.certify._verify import planar_case_exact
 from switchobs.exceptions import DimensionError, ModelError, NotHurwitzError, SolverFailure
 
