@@ -7,17 +7,9 @@ import pytest
 
 import switchobs
 
-LAYERS = ["exact", "model", "transform", "design", "spec", "lmi", "synthesis", "certify", "codegen", "observers",
-          "plants", "sensors", "loop", "experiments", "sweep", "report", "cli"]
-# exact is the rational and interval linear algebra everything exact uses; model reads models and their parameter
-# boxes; spec is the observer contract shared by the Python engine and the C translator; lmi is the floating-point
-# LMI driver of synthesis and certify; synthesis produces gains as design does (by LMIs), below the verdicts of
-# certify; observers are generic (model, design, spec); plants hold the physics and the hybrid integrator; sensors
-# use the plants' vehicle, roads and integrator; the loop wires observers and sensors to the plants; experiments
-# hold the seeds' scenarios, settings and runs; sweeps run the loop over families of cases; the report renders
-RANK = {"exact": 0, "model": 1, "transform": 2, "design": 2, "spec": 3, "lmi": 3, "synthesis": 4, "certify": 5,
-        "codegen": 6, "observers": 7, "plants": 8, "sensors": 9, "loop": 10, "experiments": 11, "sweep": 11,
-        "report": 12, "cli": 13}
+from switchobs._layers import FLOORS, RANK, layer_map
+
+LAYERS = [name for floor in FLOORS for name in floor]
 
 
 @pytest.mark.parametrize("name", switchobs.__all__)
@@ -122,3 +114,15 @@ def test_a_broken_dependency_disables_only_its_commands(tmp_path):
                             capture_output=True, text=True, env=env, timeout=120)
     assert broken.returncode == 2 and "Traceback" not in broken.stderr
     assert "command 'codegen' cannot run" in broken.stderr and "broken casadi" in broken.stderr
+
+
+def test_the_layer_map_of_the_developer_page_is_drawn_from_the_code():
+    page = (pathlib.Path(__file__).resolve().parents[1] / "docs" / "developer.md").read_text("utf-8")
+    block = page.split("<!-- begin generated: layer map -->\n", 1)[1].split("\n<!-- end generated: layer map -->", 1)[0]
+    assert block.strip("\n").splitlines() == layer_map()
+
+
+def test_every_package_is_on_a_floor():
+    root = pathlib.Path(switchobs.__file__).parent
+    packages = sorted(p.parent.name for p in root.glob("*/__init__.py"))
+    assert packages == sorted(LAYERS)
