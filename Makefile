@@ -18,24 +18,35 @@ install: $(STAMP)
 demo: $(STAMP)
 	$(VENV)/bin/switchobs demo $(DEMO_ARGS)
 
-# clang checks the generated C next to gcc (tests/test_codegen_hygiene.py): installed when missing and possible.
+# The C tools that check the generated C (tests/test_codegen_hygiene.py, test_codegen_target.py, ...): clang next
+# to gcc, cppcheck (MISRA addon), the Arm cross compiler with newlib, qemu-system-arm (processor in the loop) and
+# frama-c.  Missing ones are installed in one apt-get call when root with apt-get; otherwise (or if that fails)
+# each missing tool is named loudly and the tests that need it skip, saying so.
+CC_TOOLS := clang:clang cppcheck:cppcheck arm-none-eabi-gcc:gcc-arm-none-eabi newlib:libnewlib-arm-none-eabi \
+	qemu-system-arm:qemu-system-arm frama-c:frama-c-base
 cc-tools:
-	@command -v clang >/dev/null 2>&1 || { \
-	  if [ "$$(id -u)" = 0 ] && command -v apt-get >/dev/null 2>&1; then \
-	    echo "installing clang (checks the generated C)"; \
-	    export DEBIAN_FRONTEND=noninteractive; \
-	    apt-get install -y -q clang >/dev/null 2>&1 || \
-	      { apt-get update -q >/dev/null && apt-get install -y -q clang >/dev/null; } || \
-	      echo "!!! could not install clang: the clang checks of the generated C will be SKIPPED !!!"; \
-	  else \
-	    echo "!!! clang is missing and cannot be installed here (needs root and apt-get): the clang checks of the generated C will be SKIPPED !!!"; \
-	  fi; }
+	@missing=""; for pair in $(CC_TOOLS); do tool=$${pair%%:*}; pkg=$${pair#*:}; \
+	  if [ "$$tool" = newlib ]; then \
+	    [ -f "$$(arm-none-eabi-gcc -print-file-name=libc.a 2>/dev/null)" ] || missing="$$missing $$pkg"; \
+	  else command -v $$tool >/dev/null 2>&1 || missing="$$missing $$pkg"; fi; done; \
+	if [ -n "$$missing" ] && [ "$$(id -u)" = 0 ] && command -v apt-get >/dev/null 2>&1; then \
+	  echo "installing$$missing (they check the generated C)"; \
+	  export DEBIAN_FRONTEND=noninteractive; \
+	  apt-get install -y -q $$missing >/dev/null 2>&1 || \
+	    { apt-get update -q >/dev/null && apt-get install -y -q $$missing >/dev/null; } || true; \
+	fi; \
+	for pair in $(CC_TOOLS); do tool=$${pair%%:*}; pkg=$${pair#*:}; \
+	  if [ "$$tool" = newlib ]; then [ -f "$$(arm-none-eabi-gcc -print-file-name=libc.a 2>/dev/null)" ] && continue; \
+	  else command -v $$tool >/dev/null 2>&1 && continue; fi; \
+	  echo "!!! $$pkg is missing and could not be installed (needs root and apt-get): the tests that need $$tool are SKIPPED !!!"; \
+	done
 
 test: $(STAMP) cc-tools
 	$(PY) -m pytest -n 2 -q
 
-# The fuzzing suites with many more examples than `make test` runs (random, not derandomised): model files and
-# certificates (tests/test_fuzz_inputs.py, test_errors.py) and CLI option values (tests/test_fuzz_options.py).
+# The fuzzing suites with many more examples than `make test` runs (random, not derandomised): model files,
+# certificates and sweep spec files (tests/test_fuzz_inputs.py, test_errors.py) and CLI option values of encoder,
+# simulate and sweep (tests/test_fuzz_options.py).
 FUZZ_EXAMPLES ?= 300
 fuzz: $(STAMP)
 	SWITCHOBS_FUZZ_EXAMPLES=$(FUZZ_EXAMPLES) $(PY) -m pytest -q -p no:cacheprovider tests/test_fuzz_inputs.py tests/test_errors.py tests/test_fuzz_options.py

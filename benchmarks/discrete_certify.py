@@ -49,7 +49,7 @@ STEPS = 200_000
 REPEATS = 31
 H_MAX = Fraction(1, 100)
 DESIGNS = {"abs-xbs3": "-100,-100,-100", "abs-xbs4": "-100,-100,-100,-100"}
-CFLAGS = ["-std=c99", "-O2"]
+CFLAGS = ["-std=c99", "-O2", "-DSWITCHOBS_BRANCH_HINTS"]  # the hints clang is given on the host
 
 DRIVER = r"""
 #define _POSIX_C_SOURCE 199309L

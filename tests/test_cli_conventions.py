@@ -136,7 +136,8 @@ def test_every_third_party_import_of_the_package_is_declared():
     distribution = {"flint": "python-flint"}
     declared = {req.split(">")[0].split("[")[0].split("=")[0].strip().lower()
                 for req in project["dependencies"] + project["optional-dependencies"]["codegen"]
-                + project["optional-dependencies"]["plots"] + project["optional-dependencies"]["sweep"]}
+                + project["optional-dependencies"]["plots"] + project["optional-dependencies"]["sweep"]
+                + project["optional-dependencies"]["fmu"] + project["optional-dependencies"]["logs"]}
     imported = set()
     for path in (ROOT / "src" / "switchobs").rglob("*.py"):
         for node in ast.walk(ast.parse(path.read_text("utf-8"))):

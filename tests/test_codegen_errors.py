@@ -411,10 +411,13 @@ def test_cli_codegen_writes_the_files_and_json(tmp_path, capsys):
                  "--param", "beta2=60", "--real", "float", "--out", str(out), "--json"])
     assert code == 0
     data = json.loads(capsys.readouterr().out)
-    assert sorted(p.name for p in out.iterdir()) == ["README.md", "switchobs_abs_xbs3.c", "switchobs_abs_xbs3.h"]
+    assert sorted(p.name for p in out.iterdir()) == ["README.md", "switchobs_abs_xbs3.c", "switchobs_abs_xbs3.h",
+                                                     "switchobs_abs_xbs3_misra.md"]
     assert data["real"] == "float" and data["parameters"]["K_plus_z1"] == 194.0
     header = (out / "switchobs_abs_xbs3.h").read_text()
-    assert "int32_t switchobs_abs_xbs3_step(float *xhat, const float *signals, const float *params, float dt);" in header
+    assert "typedef float switchobs_abs_xbs3_real;" in header
+    assert ("int32_t switchobs_abs_xbs3_step(switchobs_abs_xbs3_real *xhat, const switchobs_abs_xbs3_real *signals, "
+            "const switchobs_abs_xbs3_real *params, switchobs_abs_xbs3_real dt);") in header
     assert "--spectrum=-beta1,-beta2,-beta2" in header  # the command that regenerates the files
     assert main(["codegen", "abs-adaptive2", "--spectrum", "-15,-15", "--unknown", "c,d", "--gamma", "50,0;0,20",
                  "--prefix", "adapt", "--out", str(tmp_path / "ad")]) == 0

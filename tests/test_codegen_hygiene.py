@@ -26,6 +26,10 @@ from test_codegen_translate import random_model_toml
 
 STRICT = ["-std=c99", "-Wall", "-Wextra", "-Wpedantic", "-Wconversion", "-Wfloat-conversion", "-Wdouble-promotion",
           "-Werror"]
+#: The generated observers and their README example also compile clean with the warnings an ECU build adds
+#: (no == or != between reals, no implicit sign change, no shadowing, no undefined macro in #if, ...).
+STRICT_GENERATED = STRICT + ["-Wsign-conversion", "-Wfloat-equal", "-Wshadow", "-Wundef", "-Wcast-qual",
+                             "-Wstrict-prototypes", "-Wmissing-prototypes"]
 COMPILERS = ("gcc", "clang")
 SPECTRA = {"abs-xbs3": "-40,-60,-60", "abs-xbs4": "-10,-10,-20,-20", "abs-adaptive2": "-15,-15"}
 
@@ -95,13 +99,16 @@ def constant_scale_model() -> Model:
 @pytest.mark.slow
 @pytest.mark.parametrize("cc", COMPILERS)
 def test_generated_c_compiles_clean_with_strict_flags(tmp_path, cc):
-    """-std=c99 -Wall -Wextra -Wpedantic -Wconversion -Wfloat-conversion -Wdouble-promotion -Werror, gcc and clang."""
+    """STRICT_GENERATED (-std=c99 -Wall -Wextra -Wpedantic -Wconversion -Wsign-conversion -Wdouble-promotion
+    -Wfloat-equal -Wshadow -Wundef -Wcast-qual -Wstrict-prototypes -Wmissing-prototypes -Werror), gcc and clang,
+    also with the branch hints on."""
     cc = compiler(cc)
     cases = generated_cases()
     assert len(cases) == 3 * 2 * len(METHODS) + 2 + 2 + 12 + 6 + 2 + 2
-    for label, gen in cases:
+    for i, (label, gen) in enumerate(cases):
         src = written(gen, tmp_path / label)
-        compile_c(cc, STRICT + ["-O2"], [src], tmp_path / label / "obj.o")
+        hints = ["-DSWITCHOBS_BRANCH_HINTS"] if i % 2 else []
+        compile_c(cc, STRICT_GENERATED + ["-O2", *hints], [src], tmp_path / label / "obj.o")
         if gen.real == "float":
             assert not re.search(r"\bdouble\b", gen.source + gen.header), label
             assert not re.search(r"(?<![\w.])\d+\.\d*(?:e[+-]?\d+)?(?![\w.]|f)", _code(gen.source)), label
@@ -112,12 +119,13 @@ def _code(text: str) -> str:
     return re.sub(r"/\*.*?\*/", "", text, flags=re.S)
 
 
-def test_casadi_truth_tests_become_comparisons_and_other_logic_is_refused():
-    """clang -Wfloat-conversion refuses a real used as a boolean: `(a0?`, `(!a0)` are written as comparisons."""
+def test_casadi_truth_tests_become_booleans_and_other_logic_is_refused():
+    """casadi keeps comparisons in real temporaries and tests reals for truth (`a0=(a0<a1); (a0?a2:0); (!a0)`):
+    they become bool temporaries, with real literals in the ternaries and no == or != between reals."""
     x = ca.SX.sym("x", 2)
     k = kernel("k", [("x", x)], ca.if_else(x[0] > 0, x[1], 2 * x[0]), real="float", prefix="p")
-    assert "(a0!=0?" in k.body and "(a0==0)" in k.body
-    assert not re.search(r"\(a\d+\?|\(!a\d+\)", k.body)
+    assert "bool b0;" in k.body and "b0=(a0<a1);" in k.body and "(b0?a2:0.0f)" in k.body and "b0=(!b0);" in k.body
+    assert not re.search(r"\(a\d+\?|\(!a\d+\)|[!=]=|\bdouble\b|\?\w+:0\)", k.body)
     with pytest.raises(CodegenError, match="unexpected logical operator"):
         kernel("k", [("x", x)], ca.logic_and(x[0], x[1]), real="double", prefix="p")
 
@@ -182,7 +190,8 @@ def test_readme_example_program_compiles_strict_and_runs(tmp_path, name, real, c
     src = written(gen, tmp_path)
     example = re.search(r"## Example\n\n```c\n(.*?)```", gen.readme, flags=re.S).group(1)
     (tmp_path / "example.c").write_text(example)
-    compile_c(cc, STRICT + ["-O2", f"-I{tmp_path}"], [tmp_path / "example.c", src], tmp_path / "example", link=True)
+    compile_c(cc, STRICT_GENERATED + ["-O2", f"-I{tmp_path}"], [tmp_path / "example.c", src], tmp_path / "example",
+              link=True)
     proc = subprocess.run([str(tmp_path / "example")], capture_output=True, text=True, check=False)
     assert proc.returncode == 0, proc.stdout
     values = [float(v) for v in re.findall(r"xhat\[\d+\] = (\S+)", proc.stdout)]

@@ -1,7 +1,9 @@
-"""Fuzzing the input boundaries: random model files and mutated certificates (issue 13, docs/errors.md).
+"""Fuzzing the input boundaries: random model files, mutated certificates and hostile sweep spec files
+(issues 13 and 25, docs/errors.md).
 
 Every generated input is run through the real command line (``design`` for a model file, ``verify``
-for a certificate); each run must end with exit 0, 1 or 2, and a failure must be exactly one line on
+for a certificate, ``sweep`` for a sweep spec, under small ``--max-cases`` and ``--max-steps`` so that an
+accepted sweep stays a few short runs); each run must end with exit 0, 1 or 2, and a failure must be exactly one line on
 stderr, never a traceback or an internal error. Hypothesis draws ``SWITCHOBS_FUZZ_EXAMPLES`` inputs
 per test (10 by default, derandomised so that ``make test`` is repeatable; ``make fuzz`` draws many
 more, at random); a subprocess per input would cost seconds of start-up each, so the inputs are
@@ -86,10 +88,10 @@ def _toml(data: dict) -> str:
         if v is None:
             return '""'
         if isinstance(v, dict):
-            return "{" + ", ".join(f"{json.dumps(str(k))} = {value(x)}" for k, x in v.items()) + "}"
+            return "{" + ", ".join(f"{json.dumps(str(k), ensure_ascii=False)} = {value(x)}" for k, x in v.items()) + "}"
         if isinstance(v, list):
             return "[" + ", ".join(value(x) for x in v) + "]"
-        return json.dumps(v)
+        return json.dumps(v, ensure_ascii=False)  # astral characters as they are, not as surrogate pairs
     return "".join(f"{k} = {value(v)}\n" for k, v in data.items())
 
 
@@ -165,3 +167,88 @@ def test_mutated_certificates_end_in_one_line_and_a_documented_status():
     cases = [{"argv": ["verify", "c.json", *f], "files": {"c.json": text}}
              for text, f in _draw(st.tuples(certificates(), flags))]
     _check(cases, run_batch(cases, timeout=30 + SECONDS_PER_INPUT * len(cases)), "certificates")
+
+
+#: Field names a table, heatmap or grid may name: real ones, near misses and hostile ones.
+SWEEP_FIELDS = st.sampled_from(["road", "speed_kmh", "beta1", "observer", "status", "controller", "load_n", "speed",
+                                "case_id", "kind", "to_json", "", "../x", "a\x00b", "é"])
+SWEEP_METRICS = st.sampled_from(["braking_distance_m", "stop_time_s", "xbs_rms", "certified", "verdict", "segments",
+                                 "bogus", "", "box_certified", "../../m"])
+SWEEP_NAMES = st.one_of(st.sampled_from(["../../evil", "/tmp/evil", "a/b", "a\x00b", "..", "", "-", "x" * 3000,
+                                         "é" * 200, "C:\\x", ".hidden"]),
+                        st.text(st.characters(blacklist_categories=("Cs",)), max_size=20))
+SWEEP_NUMBERS = st.one_of(st.sampled_from([0, -1, 1, 2, 10**6, 10**18, 1e-300, 1e300, -1e308, 0.5, 10.0, 30.0]),
+                          st.floats(allow_nan=False, allow_infinity=False), st.integers(-10**6, 10**6))
+SWEEP_JUNK = st.one_of(JUNK.filter(lambda v: not isinstance(v, str) or v.isprintable()), SWEEP_NUMBERS,
+                       st.lists(SWEEP_NUMBERS, max_size=3))
+#: Each part of a spec is well-formed three times in four, so that most inputs fail in one place (or not at all).
+HOSTILE = st.integers(0, 3).map(lambda k: k == 0)
+
+
+@st.composite
+def sweep_axes(draw: st.DrawFn) -> object:
+    """A grid axis: a list, a {start, stop, num} or {start, stop, step} range with hostile bounds, or junk."""
+    start, stop = draw(SWEEP_NUMBERS), draw(SWEEP_NUMBERS)
+    return draw(st.sampled_from([
+        [draw(SWEEP_NUMBERS) for _ in range(draw(st.integers(0, 3)))],
+        {"start": start, "stop": stop, "num": draw(st.one_of(st.integers(-2, 10**12), SWEEP_NUMBERS))},
+        {"start": start, "stop": stop, "step": draw(SWEEP_NUMBERS)},
+        {"start": start}, draw(SWEEP_JUNK), ["dry-asphalt", "snow", "mud"]]))
+
+
+@st.composite
+def sweep_draws(draw: st.DrawFn) -> dict:
+    pair = st.lists(SWEEP_NUMBERS, min_size=0, max_size=3)
+    return {draw(st.sampled_from(["speed_kmh", "road", "changes", "encoder_seed", "load_n", "bogus"])): draw(
+        st.sampled_from([{"uniform": draw(pair)}, {"integers": draw(pair)}, {"choice": draw(st.lists(SWEEP_JUNK,
+                         max_size=2))}, {"roads": ["snow", draw(SWEEP_FIELDS)], "count": draw(pair),
+                         "window_s": draw(pair)}, {"normal": [1, 2]}, draw(SWEEP_JUNK)]))}
+
+
+@st.composite
+def sweep_specs(draw: st.DrawFn) -> str:
+    """A small sweep spec (a few short brakings or certifications) with hostile names, sizes, ranges, draws,
+    tables and heatmaps; sometimes a structural mutation."""
+    certify = draw(st.integers(0, 4)) == 0
+    data: dict = {"name": draw(SWEEP_NAMES) if draw(st.booleans()) else "fuzz",
+                  "kind": "certify" if certify else "braking"}
+    if certify:
+        data["base"] = {"model": "abs-xbs3", "spectrum": "-beta1,-beta1,-beta1", "betas": [["beta1", 10.0]]}
+        axis, values, fields, metric = "beta1", [10.0, 20.0], ["beta1", "model"], "certified"
+    else:
+        data["base"] = {"speed_kmh": draw(st.sampled_from([10.0, 20.0, 2.0])),
+                        "duration_s": draw(st.sampled_from([1.0, 2.0, 0.5])),
+                        "observer": draw(st.sampled_from(["none", "none", "xbs4", "adaptive"]))}
+        axis, values, fields, metric = "road", ["dry-asphalt", "snow"], ["road", "speed_kmh"], "stop_time_s"
+        if draw(HOSTILE):
+            data["base"][draw(st.sampled_from(["changes", "dt_s", "encoder_ppr", "load_n", "duration_s", "bogus"]))] \
+                = draw(SWEEP_JUNK)
+    if draw(st.booleans()):
+        data["grid"] = ({draw(st.sampled_from(["beta1", "speed_kmh", "load_n", "road", "bogus", "../x"])):
+                         draw(sweep_axes())} if draw(HOSTILE) else {axis: values})
+    if not certify and draw(st.booleans()):
+        hostile = draw(HOSTILE)
+        data["monte_carlo"] = {
+            "count": draw(st.one_of(st.integers(-1, 10**7), SWEEP_JUNK)) if hostile else draw(st.integers(1, 2)),
+            "root_seed": draw(st.one_of(st.integers(-1, 2**64), SWEEP_JUNK)) if draw(HOSTILE) else 7,
+            "draw": draw(sweep_draws()) if draw(HOSTILE) else {"speed_kmh": {"uniform": [10.0, 20.0]}}}
+    for key, names in (("table", ("rows", "column", "metric")), ("heatmap", ("y", "x", "metric"))):
+        if draw(st.booleans()):
+            entry = dict(zip(names, [[fields[0]] if key == "table" else fields[0], fields[1], metric]))
+            if draw(HOSTILE):
+                part = draw(st.sampled_from(names))
+                entry[part] = draw(SWEEP_METRICS if part == "metric" else SWEEP_FIELDS)
+            data[key] = [entry]
+    if draw(st.integers(0, 4)) == 0:
+        data["tune"] = draw(st.sampled_from([{}, {"enabled": True}, {"enabled": "yes"}, {"x": 1}]))
+    if draw(st.integers(0, 5)) == 0:  # a structural mutation
+        data[draw(st.sampled_from(["base", "grid", "monte_carlo", "table", "heatmap", "tune", "kind", "name",
+                                   "description", "bogus"]))] = draw(SWEEP_JUNK)
+    return _toml(data)
+
+
+def test_random_sweep_spec_files_end_in_one_line_and_a_documented_status():
+    flags = st.sampled_from([[], ["--json"], ["--tune"], ["--plots", "."], ["--resume"]])
+    cases = [{"argv": ["sweep", "s.toml", "--scheduler", "none", "--max-cases", "4", "--max-steps", "20000", *f],
+              "files": {"s.toml": text}} for text, f in _draw(st.tuples(sweep_specs(), flags))]
+    _check(cases, run_batch(cases, timeout=30 + SECONDS_PER_INPUT * len(cases)), "sweep specs")

@@ -118,3 +118,75 @@ def test_certify_takes_numpy_sympy_and_statespace():
     cert = discrete_certificate(np.array([[-2, 1], [-1, 0]]), sp.Matrix([[-2, -1], [1, 0]]), np.array([[1, 0]]),
                                 np.eye(2), method="radau3")
     assert cert.certified
+
+
+def _chain3():
+    """The python-control model of examples/python_control_notebook.py: dz/dt = v (A z) + B u, y = C z."""
+    A3 = np.array([[0.0, 1.0, 0.0], [0.0, 0.0, 1.0], [-1.0, -2.0, -2.0]])
+    B3, C3 = np.array([[0.0], [0.0], [1.0]]), np.array([[1.0, 0.0, 0.0]])
+    model = Model.from_statespace(control.ss(A3, B3, C3, 0), time_scale="v", external=["v"], name="chain3")
+    plant = control.nlsys(lambda t, x, u, p: u[0] * (A3 @ x) + B3[:, 0] * u[1], lambda t, x, u, p: C3 @ x,
+                          inputs=["v", "u1"], outputs=["y"], states=3, name="plant")
+    return model, plant
+
+
+def test_observer_to_nlsys_interconnected_with_a_plant_equals_its_own_run():
+    """Seed 004 Theorem 1 on the python-control side: the observer (to_nlsys) interconnected with the plant,
+    v = cos t crossing zero, simulated by input_output_response, equals SwitchedObserver.run on the same
+    measurements (held at the step midpoints) up to the error of holding them over the 2 ms steps."""
+    from switchobs.observers import SwitchedObserver
+
+    model, plant = _chain3()
+    observer = SwitchedObserver(model, design_gains(model, np.array([-2.0, -3.0, -4.0])))
+    nl = observer.to_nlsys()
+    assert (nl.input_labels, nl.output_labels, nl.state_labels) == (["y", "v", "u1"],
+                                                                    ["z1_hat", "z2_hat", "z3_hat"], ["z1", "z2", "z3"])
+    loop = control.interconnect([plant, nl], inputs=["v", "u1"], outputs=["y", *nl.output_labels])
+    dt = 2e-3
+    t = np.arange(0.0, 4.0, dt)
+    v, u = np.cos(t), 0.5 * np.sin(0.7 * t)
+    resp = control.input_output_response(loop, t, np.vstack([v, u]), X0=[1.0, -1.0, 0.5, 0.0, 0.0, 0.0],
+                                         solve_ivp_kwargs={"max_step": 5 * dt, "rtol": 1e-9, "atol": 1e-12})
+    y, xhat = resp.outputs[0], resp.outputs[1:].T
+    mid = lambda s: (s[:-1] + s[1:]) / 2  # noqa: E731
+    own = observer.run(np.zeros(3), np.column_stack([mid(y), mid(v), mid(u)]), dt)
+    scale = np.abs(xhat).max()
+    assert np.abs(own - xhat[1:]).max() <= 2e-5 * scale
+    # and the estimate converges to the plant's state while v changes sign twice (tau = 2.24 at t = 4 s)
+    assert np.linalg.norm(resp.states[:3, -1] - xhat[-1]) < 0.2 * np.linalg.norm(resp.states[:3, 0])
+
+
+def test_error_systems_of_both_modes_are_statespace_with_the_design_poles():
+    model, _ = _chain3()
+    gains = design_gains(model, np.array([-2.0, -3.0, -4.0]))
+    for sign in ("plus", "minus"):
+        err = gains.to_statespace(sign)
+        assert isinstance(err, control.StateSpace)
+        assert np.allclose(np.sort(control.poles(err).real), [-4.0, -3.0, -2.0])
+
+
+def test_to_statespace_round_trip_and_transfer_function_input():
+    A3, B3, C3 = [[0.0, 1.0], [-2.0, -3.0]], [[0.0], [1.0]], [[1.0, 0.0]]
+    m = Model.from_statespace(control.ss(A3, B3, C3, 0), time_scale="1")
+    sys = m.to_statespace()
+    assert isinstance(sys, control.StateSpace)
+    assert (sys.A.tolist(), sys.B.tolist(), sys.C.tolist(), sys.D.tolist()) == (A3, B3, C3, [[0.0]])
+    assert (sys.state_labels, sys.input_labels, sys.output_labels) == (["z1", "z2"], ["u1"], ["y"])
+    tf = control.tf([2.0], [1.0, 3.0, 2.0])
+    from_tf = Model.from_statespace(tf, time_scale="1").to_statespace()
+    assert np.allclose(np.sort(control.poles(from_tf).real), [-2.0, -1.0])
+    assert control.dcgain(from_tf) == pytest.approx(1.0)        # 2 / 2, the transfer function's
+    with pytest.raises(ModelError, match="no state-space realisation .*non-proper"):
+        Model.from_statespace(control.tf([1.0, 0.0, 0.0], [1.0, 1.0]), time_scale="1")
+    with pytest.raises(ModelError, match="must be a control.StateSpace or TransferFunction, got list"):
+        Model.from_statespace([[1.0]], time_scale="1")
+
+
+def test_to_statespace_refuses_what_is_not_linear_time_invariant():
+    from switchobs.model import builtin_model
+
+    with pytest.raises(ModelError, match=r"time scaling s = y/vx; only s = 1"):
+        builtin_model("abs-xbs3").to_statespace()
+    m = Model.from_dict({**BASE, "A": A, "C": [1, 0], "time_scale": "1", "d": ["0", "y**2"]})
+    with pytest.raises(ModelError, match=r"drift d\(y\)"):
+        m.to_statespace()

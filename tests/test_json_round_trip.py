@@ -188,6 +188,20 @@ def _demo_report():
     return DemoReport("out", DemoSettings(fast=True), (model,), braking, ("report.md",), {"design": 0.5})
 
 
+def _footprint():
+    from switchobs.codegen import FunctionStack, TargetFootprint
+
+    return TargetFootprint("cortex-m4f", "float", ("-O2", "-mcpu=cortex-m4"), "arm-none-eabi-gcc 12.2.1", 2232, 0, 0,
+                           (FunctionStack("p_step", 16, 104), FunctionStack("p_rows", 88, 88, ("ceilf",))))
+
+
+def _pil_result():
+    from switchobs.codegen import PilResult
+
+    states = ((0.5, 0.25, 0.0), (0.5, 0.25, 0.0))
+    return PilResult("cortex-m4f", "float", "p", "mps2-an386", 2, (0, 3), (0, 3), states, states, 351.0, 40.0)
+
+
 def _samples() -> dict[str, Callable[[], tuple[Any, dict[str, Any]]]]:
     """Class name -> a function returning an instance and the ``to_json`` options that keep everything."""
     from switchobs import certify, loop, plants, report, sensors, sweep
@@ -257,6 +271,11 @@ def _samples() -> dict[str, Callable[[], tuple[Any, dict[str, Any]]]]:
         return loop.encoder_measurements(t, -30.0 * np.exp(-t / 0.1), 20.0 - 2.0 * t, np.full(300, 100.0),
                                          encoder=sensors.Encoder(ppr=60, seed=1), radius_m=0.3)
 
+    def replayed():  # free rolling from edges of an ideal 60-ppr wheel: the chain's warm-up leaves NaN samples
+        t = np.linspace(0.0, 0.2, 201)
+        stamps, teeth = loop.edges_from_wheel_speed(t, np.full(t.size, 20.0 / 0.3), loop.ideal_encoder(60))
+        return loop.replay(loop.LogSignals(t, np.full(t.size, 20.0), np.zeros(t.size), stamps, teeth, ppr=60))
+
     def observer():
         return xbs4_observer(100.0, 60.0, method="radau3")
 
@@ -287,6 +306,13 @@ def _samples() -> dict[str, Callable[[], tuple[Any, dict[str, Any]]]]:
         "GeneratedObserver": lambda: (_c_observer().generated, {"sources": True}),
         "CObserver": lambda: (_c_observer(), {"sources": True}),
         "Transformation": lambda: plain(_transformations()[0]),
+        # the target runs need the cross compiler and qemu (tests/test_codegen_target.py): their shapes
+        "FunctionStack": lambda: plain(_footprint().stack[0]),
+        "TargetFootprint": lambda: plain(_footprint()),
+        "PilResult": lambda: plain(_pil_result()),
+        "PilRecord": lambda: plain(loop.PilRecord(np.array([[0.5, 20.0, 10.0], [math.nan, 19.9, 10.0]]),
+                                                  np.array([1e-3, 1e-3]), np.array([0.5, 0.0, 0.0]), "two rows")),
+        "PilComparison": lambda: plain(loop.PilComparison(2, 2, True, 2.5e-7, 1e-4)),
         # plants
         "FivePhaseABS": lambda: plain(plants.FivePhaseABS(tracking=True, stall_timeout_s=None)),
         "SixPhaseABS": lambda: plain(plants.SixPhaseABS(slip_threshold=0.08, hold_timeout_s=0.2)),
@@ -313,6 +339,8 @@ def _samples() -> dict[str, Callable[[], tuple[Any, dict[str, Any]]]]:
         "BrakingRun": lambda: series(_braking_run()),
         "EncoderLoopRecord": lambda: plain(encoder_loop()),
         "EncoderMeasurements": lambda: plain(encoder_measurements()),
+        "ReplayResult": lambda: plain(replayed()),
+        "ReplaySummary": lambda: plain(replayed().summary),
         "DemoSettings": lambda: plain(loop.DemoSettings(fast=True)),
         "ErrorRow": lambda: plain(_demo_report().braking.errors[1]),
         "BrakingSummary": lambda: plain(_demo_report().braking),

@@ -46,5 +46,6 @@ def test_the_quick_start_commands_run_from_the_repository_root(tmp_path, monkeyp
         assert code == 0, f"{shlex.join(words)} exited {code}: {err}"
     assert sorted(p.name for p in tmp_path.iterdir()) == ["examples", "out"]
     written = sorted(str(p.relative_to(tmp_path / "out")) for p in (tmp_path / "out").rglob("*") if p.is_file())
-    assert written == ["c/README.md", "c/switchobs_abs_xbs3.c", "c/switchobs_abs_xbs3.h", "cert.json", "fig4.png"]
+    assert written == ["c/README.md", "c/switchobs_abs_xbs3.c", "c/switchobs_abs_xbs3.h", "c/switchobs_abs_xbs3_misra.md",
+                       "cert.json", "fig4.png"]
     assert (tmp_path / "out" / "fig4.png").read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"

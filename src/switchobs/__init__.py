@@ -24,6 +24,7 @@ Encoder, encoder_chain, ThreeStageEstimator, super_twisting
                                             -- switchobs.sensors (wheel encoders)
 EstimatorSpec, xbs_estimator, ObserverXbsEstimator, EncoderLoopEstimator, demo_scenario
                                             -- switchobs.loop (observers in the ABS loop)
+replay, replay_log                          -- switchobs.loop, switchobs.logs (measurement logs replayed)
 run_demo, write_theory, theory_documents    -- switchobs.report (main job, theory/)
 
 Example: the 4D XBS observer in the loop of a braking on dry asphalt::
@@ -58,7 +59,8 @@ _EXPORTS = {
     "switchobs.plants": ("simulate", "BrakingScenario", "scenario", "table41", "road", "PoincareMap"),
     "switchobs.sensors": ("Encoder", "encoder_chain", "ThreeStageEstimator", "super_twisting"),
     "switchobs.loop": ("EstimatorSpec", "xbs_estimator", "ObserverXbsEstimator", "EncoderLoopEstimator",
-                       "demo_scenario"),
+                       "demo_scenario", "replay"),
+    "switchobs.logs": ("replay_log",),
     "switchobs.report": ("run_demo", "write_theory", "theory_documents"),
 }
 _WHERE = {name: module for module, names in _EXPORTS.items() for name in names}

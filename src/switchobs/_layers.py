@@ -23,7 +23,7 @@ FLOORS: tuple[tuple[str, ...], ...] = (
     ("plants",),
     ("sensors",),
     ("loop",),
-    ("experiments", "sweep"),
+    ("experiments", "sweep", "logs"),
     ("report",),
     ("cli",),
 )

@@ -24,7 +24,9 @@ from .exceptions import SwitchobsError
 
 __all__ = ["MAX_EXPRESSION_LENGTH", "MAX_EXPRESSION_DEPTH", "MAX_EXPRESSION_TERMS", "MAX_EXPONENT",
            "MAX_NUMBER_DIGITS", "MAX_CERTIFICATE_DIGITS", "MAX_CERTIFICATE_BYTES", "MAX_CERTIFICATE_DIMENSION",
-           "MAX_DWELL_BITS", "MAX_BOX_VERTICES", "MAX_INPUT_FILE_BYTES",
+           "MAX_DWELL_BITS", "MAX_BOX_VERTICES", "MAX_INPUT_FILE_BYTES", "MAX_PIL_ROWS",
+           "MAX_LOG_BYTES", "MAX_LOG_SAMPLES", "MAX_SWEEP_CASES", "MAX_SWEEP_STEPS",
+           "MAX_WORKERS_PER_CORE", "MAX_ROAD_CHANGES",
            "DOUBLE_MAX", "DOUBLE_MIN", "LIMITS", "decimal_fraction", "check_double", "digits", "read_text"]
 
 #: Characters in one expression string (a matrix entry, a pole, a gain).
@@ -45,6 +47,16 @@ MAX_CERTIFICATE_DIGITS = 4000
 MAX_CERTIFICATE_BYTES = 50_000_000
 #: Size of a model, system or sweep file (TOML): a 64-state model of longest entries is about 8 MB.
 MAX_INPUT_FILE_BYTES = 10_000_000
+#: Rows of a processor-in-the-loop record: compiled into the harness, they and the states must fit the 4 MB code and
+#: 4 MB data memories of the emulated MPS2 boards (20000 rows of 3 doubles are 480 kB).
+MAX_PIL_ROWS = 20_000
+#: Size of a measurement log replayed (MDF4, CSV, Parquet): refused by its size before it is opened, so a
+#: huge file is never read whole.
+MAX_LOG_BYTES = 1_000_000_000
+#: Samples of one channel of a replayed log, and encoder edges: a one-hour log at 1 kHz (3.6 million) fits.  The
+#: log is read whole, and the chain's arrays grow with it (a 10-minute log at 1 kHz with a 60-ppr encoder peaks
+#: at about 0.5 GB: ``/usr/bin/time -f %M switchobs replay``), so an hour stays within about 2 GB.
+MAX_LOG_SAMPLES = 4_000_000
 #: Largest state dimension and number of modes in a certificate's family.
 MAX_CERTIFICATE_DIMENSION = 100
 #: A dwell-time certificate is checked while ``||A_p||_inf * tau_D <= 2**MAX_DWELL_BITS`` (the enclosure of
@@ -52,6 +64,16 @@ MAX_CERTIFICATE_DIMENSION = 100
 MAX_DWELL_BITS = 64
 #: Vertex matrices a box certificate may ask the checker to build (sub-boxes times monomial choices).
 MAX_BOX_VERTICES = 65536
+#: Cases of one sweep (grid points times Monte-Carlo draws), counted from the spec before any case is built;
+#: ``switchobs sweep --max-cases`` raises it.  Every row is kept in memory until the sweep ends (a few kB each).
+MAX_SWEEP_CASES = 100_000
+#: Integration steps of a sweep's braking cases, each counted at its time bound over its step (an upper bound:
+#: a braking to standstill stops earlier), checked before the first case runs; ``--max-steps`` raises it.
+MAX_SWEEP_STEPS = 1_000_000_000
+#: Worker processes of a local Dask cluster per core of the machine (``--workers``).
+MAX_WORKERS_PER_CORE = 4
+#: Road changes of one braking case (each is scored alone: its errors, re-convergence and recovery time).
+MAX_ROAD_CHANGES = 100
 #: The largest finite double and the smallest positive normal double: a number meant as a double lies in
 #: ``[DOUBLE_MIN, DOUBLE_MAX]`` in magnitude, or is 0.
 DOUBLE_MAX = sys.float_info.max
@@ -64,7 +86,10 @@ LIMITS: dict[str, int | float] = {
     "MAX_NUMBER_DIGITS": MAX_NUMBER_DIGITS, "MAX_CERTIFICATE_DIGITS": MAX_CERTIFICATE_DIGITS,
     "MAX_CERTIFICATE_BYTES": MAX_CERTIFICATE_BYTES, "MAX_CERTIFICATE_DIMENSION": MAX_CERTIFICATE_DIMENSION,
     "MAX_DWELL_BITS": MAX_DWELL_BITS, "MAX_BOX_VERTICES": MAX_BOX_VERTICES,
-    "MAX_INPUT_FILE_BYTES": MAX_INPUT_FILE_BYTES,
+    "MAX_INPUT_FILE_BYTES": MAX_INPUT_FILE_BYTES, "MAX_PIL_ROWS": MAX_PIL_ROWS,
+    "MAX_LOG_BYTES": MAX_LOG_BYTES, "MAX_LOG_SAMPLES": MAX_LOG_SAMPLES, "MAX_SWEEP_CASES": MAX_SWEEP_CASES,
+    "MAX_SWEEP_STEPS": MAX_SWEEP_STEPS, "MAX_WORKERS_PER_CORE": MAX_WORKERS_PER_CORE,
+    "MAX_ROAD_CHANGES": MAX_ROAD_CHANGES,
 }
 
 _FRACTION = re.compile(r"^([+-]?)(\d+)\s*/\s*(\d+)$")

@@ -26,6 +26,7 @@ __all__ = [
     "PrerequisiteError",
     "TransformError",
     "OutputError",
+    "LogError",
 ]
 
 
@@ -104,3 +105,8 @@ class TransformError(SwitchobsError, ValueError):
 
 class OutputError(SwitchobsError, OSError):
     """An output file or directory cannot be written (missing directory, a directory in the way, no space)."""
+
+
+class LogError(SwitchobsError, ValueError):
+    """A measurement log or channel map that cannot be replayed (a channel missing, an unknown unit, time stamps
+    that are not increasing, NaN samples, a file beyond the limits)."""

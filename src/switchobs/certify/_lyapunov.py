@@ -440,6 +440,13 @@ def common_lyapunov(family: FamilyLike, *, output: Any = None, names: Sequence[s
                                   f"facial projection (face tol {tol:g})", time.perf_counter() - t0)
         detail = check.detail
     detail = detail or "rounding broke the inequalities and no exact face projection succeeded"
+    # a first-order solver's "optimal" (SCS, ~1e-4) can be too coarse to read the face from, where the
+    # interior-point solver's "optimal_inaccurate" answer is not: the other solvers' answers get their turn
+    others = tuple(name for name in solvers if name != (info.solver if info is not None else None))
+    if info is not None and others and len(others) < len(solvers):
+        retry = common_lyapunov(fam, output=output, names=names, eps=eps, solvers=others, dual=dual)
+        if retry.certified:
+            return retry
     return LyapunovResult("hespanha", fam, True, False, float(t), eps, None, None, info, "",
                           time.perf_counter() - t0, detail)
 

@@ -3,23 +3,30 @@
 from __future__ import annotations
 
 import argparse
+import io
 import shlex
 import sys
+import warnings
+from pathlib import Path
 from typing import Any
 
 import sympy as sp
 
-from .._atomic import check_output_directory
+from .._atomic import check_output_directory, write_files
+from .._limits import MAX_INPUT_FILE_BYTES, read_text
 from ..design import GainDesign, design
 from ..exceptions import CodegenError, FreeSymbolError, PrerequisiteError, SpectrumError
 from ..model import Model, load_model, rational_value
 from ..spec import METHODS
 from ._common import emit_json, parse_params
+from ._integration import add_integration_arguments, integration_files
 
 __all__ = ["register"]
 
 #: Pseudo-model name of the super-twisting observer of seed 003 (not a switchobs model).
 SUPER_TWISTING = "super-twisting"
+#: The names of ``switchobs.codegen.TARGETS`` (listed here so that ``--help`` imports no numpy).
+TARGET_NAMES = ("host", "cortex-m4f", "cortex-m7")
 
 
 def register(sub: argparse._SubParsersAction) -> None:
@@ -41,7 +48,22 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--gains-minus", help="K_minus entries (default: the Theorem 1 choice)")
     p.add_argument("--unknown", help="parameters estimated by the adaptive observer of seed 001 (3.4), e.g. c,d")
     p.add_argument("--gamma", help="adaptation gain Gamma: its diagonal (\"50,20\") or rows (\"50,0;0,20\")")
-    p.add_argument("--real", choices=("double", "float"), default="double", help="C real type (default double)")
+    p.add_argument("--real", choices=("double", "float"), default=None,
+                   help="C real type (default double; with --target the target's: float on cortex-m4f, whose "
+                        "single-precision FPU refuses double)")
+    p.add_argument("--target", choices=TARGET_NAMES, default=None,
+                   help="build target: writes a Makefile and a CMakeLists.txt (static library for the host and the "
+                        "target) and states in the README the text, data and worst-case stack per function, "
+                        "measured by building, and the instructions per step counted on qemu-system-arm "
+                        "(cortex-m4f: mps2-an386, cortex-m7: mps2-an500)")
+    p.add_argument("--pil", action="store_true",
+                   help="with a Cortex-M --target: processor in the loop, the step over a record on qemu-system-arm "
+                        "compared bit for bit with the host build and within a tolerance with the Python reference "
+                        "(exit 1 when it differs); the record is --record, else for signals (y, vx, u) a braking "
+                        "simulation with a road change and a sensor dropout, else constant signals")
+    p.add_argument("--record", metavar="CSV",
+                   help="with --pil: rows of signals, a header naming them (and an optional dt column, seconds; "
+                        "default 0.001); the state starts at 0")
     p.add_argument("--method", choices=METHODS, default=None,
                    help="discretisation, signals held over the step (default rk4; super-twisting: euler); "
                         "midpoint and radau3 are implicit and certified for every dt")
@@ -54,8 +76,11 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--max-substeps", type=int, metavar="N",
                    help="most sub-steps per step with --h-max, 1..16777216 (default 64); beyond: status SUBSTEP_LIMIT")
     p.add_argument("--prefix", help="C prefix (default switchobs_<model>, non-identifier characters as _)")
-    p.add_argument("--out", required=True, metavar="DIR", help="directory for <prefix>.c, <prefix>.h, README.md")
+    p.add_argument("--out", required=True, metavar="DIR",
+                   help="directory for <prefix>.c, <prefix>.h, README.md and <prefix>_misra.md (the MISRA C:2012 "
+                        "deviation record)")
     p.add_argument("--json", action="store_true", help="print the description as JSON")
+    add_integration_arguments(p)
     p.set_defaults(func=run)
 
 
@@ -68,6 +93,8 @@ def _command(args: argparse.Namespace) -> str:
             words.append(f"--{opt.replace('_', '-')}={value}")
     words += [f"--param={item}" for item in args.param]
     words += [f"--real={args.real}"]
+    if args.target:
+        words.append(f"--target={args.target}")
     if args.method:
         words.append(f"--method={args.method}")
     if args.h_max is not None:
@@ -112,8 +139,16 @@ def run(args: argparse.Namespace) -> int:
     check_output_directory(args.out, what="the generated C into")
     from ..codegen import generate_observer, generate_super_twisting
 
+    from ..codegen import target_real
+
+    if args.pil and args.target in (None, "host"):
+        raise CodegenError("--pil runs the step on an emulated Cortex-M: give --target cortex-m4f or cortex-m7")
+    if args.record and not args.pil:
+        raise CodegenError("--record is the record of the processor-in-the-loop run: give --pil too")
+    args.real = target_real(args.target, args.real) if args.target else (args.real or "double")
     values = parse_params(args.param)
     command = _command(args)
+    model, unknown = None, []
     if args.model == SUPER_TWISTING:
         extra = sorted(set(values) - {"lam", "alpha"})
         missing = [k for k in ("lam", "alpha") if k not in values]
@@ -160,12 +195,69 @@ def run(args: argparse.Namespace) -> int:
                                 prefix=args.prefix, unknown=unknown,
                                 Gamma=_gamma(args.gamma) if args.gamma else None, h_max=h_max,
                                 max_substeps=args.max_substeps, certificate=certificate, command=command)
-    paths = gen.write(args.out)
+    from ..codegen import target_build
+
+    record = _record(args, gen, model, tuple(unknown)) if args.pil else None
+    build = None if not args.target else target_build(
+        gen, args.target, record=None if record is None else (record.rows, record.dt, record.x0),
+        record_description=None if record is None else record.description)
+    paths = write_files(args.out, {**(build or gen).files, **integration_files(gen, args)}, what="the generated C into")
+    comparison = None
+    if record is not None and build is not None and build.pil is not None and model is not None:
+        from ..loop import compare_with_reference, reference_observer
+
+        comparison = compare_with_reference(build.pil, reference_observer(model, gen, unknown=tuple(unknown)),
+                                            record.rows, record.dt, record.x0)
     if args.json:
         data = gen.to_json()
+        if build is not None:
+            data["target"] = {"name": build.target, "footprint": build.footprint.to_json(), "record": build.record,
+                              "instructions_per_step": None if build.pil is None else build.pil.instructions_per_step}
+        if comparison is not None:
+            data["pil"] = {**comparison.to_json(), "passed": comparison.passed}
         data["written"] = [str(p) for p in paths]
         emit_json(data)
     else:
-        print(gen)
+        print(build or gen)
         print(f"  wrote {', '.join(str(p) for p in paths)}")
+        if record is not None and build is not None and build.pil is not None:
+            print(f"  {build.pil}")
+            print(f"  record: {record}")
+            print(f"  {comparison}" if comparison is not None else "  (no Python reference for this observer)")
+    if build is not None and build.pil is not None and record is not None:
+        passed = comparison.passed if comparison is not None else build.pil.bit_identical
+        return 0 if passed else 1
     return 0
+
+
+def _record(args: argparse.Namespace, gen: Any, model: Model | None, unknown: tuple[str, ...]) -> Any:
+    """The record of the run: the --record file, a braking simulation (signals y, vx, u), or constant signals."""
+    import numpy as np
+
+    from ..codegen._target import default_record
+    from ..loop import PilRecord, braking_record, reference_observer
+
+    if args.record:
+        text, _ = read_text(args.record, what="the --record file", max_bytes=MAX_INPUT_FILE_BYTES, error=CodegenError)
+        try:
+            with warnings.catch_warnings():  # a ragged row is an error here, not a warning
+                warnings.simplefilter("error")
+                table = np.genfromtxt(io.StringIO(text), delimiter=",", names=True, dtype=float)
+        except (ValueError, UserWarning) as exc:
+            raise CodegenError(f"--record {args.record!r} cannot be read as CSV with a header: {exc}") from None
+        names = table.dtype.names or ()
+        missing = [n for n in gen.signal_names if n not in names]
+        if missing or table.size == 0:
+            raise CodegenError(f"--record {args.record!r} needs a header row and columns {list(gen.signal_names)} "
+                               f"(and optionally dt); missing {missing}, has {list(names)}")
+        table = np.atleast_1d(table)
+        rows = np.column_stack([table[n] for n in gen.signal_names])
+        dt = table["dt"] if "dt" in names else np.full(rows.shape[0], 1e-3)
+        return PilRecord(rows, dt, np.zeros(gen.nx), f"{rows.shape[0]} rows of {Path(args.record).name!r}")
+    if model is not None and tuple(gen.signal_names)[1:] == ("vx", "u"):
+        return braking_record(reference_observer(model, gen, unknown=unknown))
+    rows, dt, x0 = default_record(gen)
+    return PilRecord(rows, np.full(rows.shape[0], dt), x0, f"{rows.shape[0]} rows of constant signals, the sign of "
+                     "the measured output alternating")
+
+

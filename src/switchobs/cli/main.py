@@ -51,6 +51,7 @@ COMMANDS: dict[str, str] = {
     "reproduce": "regenerate docs/reproductions.md and the Table 4.1 / 6.1 sections from runs",
     "sweep": "design-space and robustness sweeps on Dask (tables, heatmaps, gain tuning)",
     "transform": "find (or check) s(y) and z = phi(x) putting dx/dt = f + g u, y = h into the normal form",
+    "replay": "replay a measurement log (MDF4, CSV, Parquet) through the encoder chain and an XBS observer",
 }
 
 #: Verbosity levels (``args.verbosity``).

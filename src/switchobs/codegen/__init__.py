@@ -14,12 +14,27 @@ load_library        -- load a library that compile_sources built and verified (n
 cache_directory     -- where compiled libraries are cached: the user's own cache directory
 StepStatus          -- status codes of ``<prefix>_step`` / ``<prefix>_run`` / ``<prefix>_run_dt``
 default_prefix      -- ``switchobs_<model>`` with non-identifier characters as ``_``
+TARGETS, Target, target_real -- build targets (host, cortex-m4f, cortex-m7): flags, real type, emulator
+target_build, TargetBuild -- the files for a target: Makefile, CMakeLists.txt, README with measured sizes,
+                       stack per function and instructions per step on the emulator
+measure_footprint, TargetFootprint, FunctionStack -- text/data/bss and worst-case stack, measured by building
+run_pil, PilResult  -- processor in the loop: the step over a record on qemu-system-arm and on the host
+generate_fmu        -- the observer as an FMI 3.0 / 2.0 co-simulation FMU (GeneratedFMU), binary for this platform
+generate_a2l        -- ASAP2 1.71 description of the calibration object of ``calibration_files``
+calibration_files   -- ``<prefix>_calibration.c/.h``: the named parameter array a calibration tool writes
+elf_symbols         -- symbol addresses of a linked program (``nm``), for ``generate_a2l(addresses=...)``
 """
 
 from ..spec import METHODS, STATUS_TEXT, Guard, StepStatus, domain_guards
+from ._a2l import a2l_symbols, calibration_files, elf_symbols, generate_a2l
 from ._build import CObserver, cache_directory, compile_observer, compile_sources, find_compiler, load_library
+from ._fmu import FMI_VERSIONS, GeneratedFMU, generate_fmu
 from ._generate import REALS, GeneratedObserver, default_prefix, generate_observer, generate_super_twisting
+from ._target import (TARGETS, FunctionStack, PilResult, Target, TargetBuild, TargetFootprint, measure_footprint,
+                      run_pil, target_build, target_real)
 
-__all__ = ["CObserver", "GeneratedObserver", "Guard", "METHODS", "REALS", "STATUS_TEXT", "StepStatus",
+__all__ = ["CObserver", "FMI_VERSIONS", "GeneratedFMU", "GeneratedObserver", "a2l_symbols", "calibration_files",
+           "elf_symbols", "generate_a2l", "generate_fmu", "Guard", "METHODS", "REALS", "STATUS_TEXT", "StepStatus",
            "cache_directory", "compile_observer", "compile_sources", "find_compiler", "default_prefix", "domain_guards",
-           "generate_observer", "generate_super_twisting", "load_library"]
+           "generate_observer", "generate_super_twisting", "load_library", "TARGETS", "Target", "target_real",
+           "target_build", "TargetBuild", "measure_footprint", "TargetFootprint", "FunctionStack", "run_pil", "PilResult"]

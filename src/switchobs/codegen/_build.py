@@ -41,14 +41,15 @@ import numpy.typing as npt
 
 from .._validate import named_vector, signal_matrix
 from ..exceptions import CodegenError, DimensionError, ModelError, ObserverInputError
-from ._generate import GeneratedObserver, generate_observer
+from ._generate import BRANCH_HINTS, GeneratedObserver, generate_observer
 from ..spec import STATUS_TEXT, StepStatus
 
 __all__ = ["CObserver", "compile_observer", "compile_shared", "compile_sources", "cache_directory", "find_compiler",
            "load_library", "BUILD_FLAGS", "HOST_FLAGS", "CACHE_MAX_LIBRARIES", "CACHE_MAX_BYTES"]
 
-#: Flags of the shared library the binding loads (the strict warning set is exercised by the tests).
-BUILD_FLAGS: tuple[str, ...] = ("-std=c99", "-O2", "-fPIC", "-shared")
+#: Flags of the shared library the binding loads (the strict warning set is exercised by the tests); the
+#: branch hints, which only clang reads, are wanted on the host (``_generate.BRANCH_HINTS``).
+BUILD_FLAGS: tuple[str, ...] = ("-std=c99", "-O2", "-fPIC", "-shared", f"-D{BRANCH_HINTS}")
 #: Added to the flags when the compiler accepts them (else the library is built without): the host's
 #: instruction set (3-operand AVX instead of SSE2 moves on x86-64), and no contraction into fused
 #: multiply-adds, so that every result equals the portable build's and the Python reference's.

@@ -52,6 +52,7 @@ from ..exceptions import CodegenError, DimensionError, ModelError
 from ..model import Model, numeric, rational_value
 from ..spec import METHODS, STATUS_TEXT, STEP_METHODS, Guard, ObserverSpec, StepStatus, require_explicit
 from ._emit import CFunction, float_literal, kernel
+from ._misra import misra_record
 from ._readme import readme
 from ._text import c_comment
 from ._translate import (GUARD_TESTS, Translation, translate_adaptive, translate_original, translate_super_twisting,
@@ -60,6 +61,8 @@ from ._translate import (GUARD_TESTS, Translation, translate_adaptive, translate
 __all__ = ["GeneratedObserver", "generate_observer", "generate_super_twisting", "default_prefix", "REALS", "METHODS"]
 
 REALS = ("double", "float")
+#: The macro that switches on the branch hints of every generated file (clang only; MISRA C:2012 rule 1.2).
+BRANCH_HINTS = "SWITCHOBS_BRANCH_HINTS"
 
 #: Per method: the discretisation as the header states it, the step's name in the source comment.
 _SCHEMES = {
@@ -131,7 +134,8 @@ class GeneratedObserver:
         Upper bound of the reals one ``_step`` call keeps on the stack
         (temporaries + the new state + ``s`` + one guard value).
     header, source, readme : str
-        Text of ``<prefix>.h``, ``<prefix>.c`` and ``README.md``.
+        Text of ``<prefix>.h``, ``<prefix>.c`` and ``README.md`` (the fourth file, ``<prefix>_misra.md``, is
+        :attr:`misra`, made from the two C files).
     casadi_version : str
     description : str
         What is observed (the model's description).
@@ -197,9 +201,15 @@ class GeneratedObserver:
         return len(self.param_names)
 
     @property
+    def misra(self) -> str:
+        """Text of ``<prefix>_misra.md``: the MISRA C:2012 deviation record of the two C files."""
+        return misra_record(self.prefix, self.header, self.source)
+
+    @property
     def files(self) -> dict[str, str]:
         """File name -> text."""
-        return {f"{self.prefix}.h": self.header, f"{self.prefix}.c": self.source, "README.md": self.readme}
+        return {f"{self.prefix}.h": self.header, f"{self.prefix}.c": self.source, "README.md": self.readme,
+                f"{self.prefix}_misra.md": self.misra}
 
     def param_index(self, name: str) -> int:
         """Index of a parameter in ``params`` (the value of ``<PREFIX>_P_<NAME>``)."""
@@ -217,7 +227,8 @@ class GeneratedObserver:
         return out
 
     def write(self, directory: str | Path) -> tuple[Path, ...]:
-        """Write ``<prefix>.h``, ``<prefix>.c`` and ``README.md`` into ``directory`` (created if needed).
+        """Write ``<prefix>.h``, ``<prefix>.c``, ``README.md`` and ``<prefix>_misra.md`` into ``directory``
+        (created if needed).
 
         All files appear together or none does (:func:`switchobs._atomic.write_files`).
 
@@ -397,7 +408,7 @@ def _model_info(model: Model, kind: str) -> _Info:
                  signal_roles=tuple(roles), references=dict(model.references))
 
 
-def _substep_check(tr: Translation, real: str, P: str) -> list[str]:
+def _substep_check(tr: Translation, real: str, prefix: str, P: str) -> list[str]:
     """C lines choosing the sub-steps: ``a = |s| dt`` (the step in tau), ``n``, ``h = dt / n``.
 
     The non-stiff path costs a multiplication and two comparisons (bound, sub-step loop); the Python
@@ -408,11 +419,20 @@ def _substep_check(tr: Translation, real: str, P: str) -> list[str]:
     scale = f"fabs{f}(s)" if not tr.scale.is_constant() else float_literal(abs(float(tr.scale)), real)
     return [f"    a = {scale} * dt;  /* this step in the rescaled time tau */",
             f"    if (!(a <= {P}_H_MAX)) {{",
-            f"        q = a / {P}_H_MAX;",
-            f"        if ({P}_UNLIKELY(!(q <= ({real}){P}_MAX_SUBSTEPS))) return {P}_ERR_SUBSTEP_LIMIT;",
+            f"        {prefix}_real q = a / {P}_H_MAX;",
+            _refuse(P, f"!(q <= ({prefix}_real){P}_MAX_SUBSTEPS)", "SUBSTEP_LIMIT", indent="        "),
             f"        n = (int32_t)ceil{f}(q);",
-            f"        h = dt / ({real})n;",
+            f"        h = dt / ({prefix}_real)n;",
             "    }"]
+
+
+def _refuse(P: str, test: str, status: str, comment: str | None = None, indent: str = "    ", *,
+            hint: bool = True) -> str:
+    """``if (test) { return <P>_ERR_<status>; }``, braced (MISRA C:2012 rule 15.6); ``hint``: the test is
+    marked unlikely (``<P>_UNLIKELY``, the checks of the step)."""
+    note = "" if comment is None else f"  /* {c_comment(comment)} */"
+    cond = f"{P}_UNLIKELY({test})" if hint else test
+    return f"{indent}if ({cond}) {{\n{indent}    return {P}_ERR_{status};{note}\n{indent}}}"
 
 
 def _assemble(tr: Translation, *, info: _Info, kind: str, real: str, method: str, prefix: str,
@@ -448,12 +468,11 @@ def _assemble(tr: Translation, *, info: _Info, kind: str, real: str, method: str
                          prefix=prefix)
         kernels.append(scale_k)
         scale_check = ["    " + scale_k.call("&s", sig="sig", par="par"),
-                       f"    if ({P}_UNLIKELY(!isfinite(s))) return {P}_ERR_UNDEFINED_TIME_SCALE;  "
-                       "/* s must be finite */"]
+                       _refuse(P, "!isfinite(s)", "UNDEFINED_TIME_SCALE", "s must be finite")]
     h_max_c = None
     if bound is not None:
         # after s is known and before the domain of d and b: the order of the Python reference's checks
-        scale_check += _substep_check(tr, real, P)
+        scale_check += _substep_check(tr, real, prefix, P)
         h_max_c = round_down(bound[0], real, error=CodegenError)
     checks: list[str] = []
     param_checks: list[str] = []  # the original coordinates use the parameters too: the same sign checks
@@ -467,9 +486,8 @@ def _assemble(tr: Translation, *, info: _Info, kind: str, real: str, method: str
         if k is not None:
             kernels.append(k)
             checks.append("    " + k.call("&g", sig="sig", par="par"))
-        test = GUARD_TESTS[guard.kind].format(g=value)
-        checks.append(f"    if ({P}_UNLIKELY(!({test}))) return {P}_ERR_{guard.status.name};  "
-                      f"/* {c_comment(guard.reason)} */")
+        test = GUARD_TESTS[guard.kind].format(g=value, zero=float_literal(0.0, real))
+        checks.append(_refuse(P, f"!({test})", guard.status.name, guard.reason))
         if guard.status == StepStatus.BAD_PARAM:
             param_checks += checks[-2:] if k is not None else checks[-1:]
     if not scale_done:
@@ -654,6 +672,7 @@ def _header(*, tr: Translation, info: _Info, kind: str, real: str, method: str, 
             temporaries: int, stack_reals: int, bound: tuple[Fraction, int] | None, h_max_c: float | None,
             certificate: str | None, original_names: Sequence[str], o_macros: Sequence[str]) -> str:
     guard = f"{P}_H"
+    rt = f"{prefix}_real"
     scheme = _SCHEMES[method][0] + ", signals held over the step (zero-order hold)"
     lines = [
         f"/* {prefix}.h -- generated by switchobs with casadi {ca.__version__}; do not edit.",
@@ -698,33 +717,34 @@ def _header(*, tr: Translation, info: _Info, kind: str, real: str, method: str, 
               for s in StepStatus]
     lines += [
         "",
+        f"/* The real type of every real of the API (MISRA C:2012 Dir 4.6: no basic numerical type). */",
         f"typedef {real} {prefix}_real;",
         "",
         f"/* The model values and designed gains used at generation. */",
-        f"extern const {real} {prefix}_default_params[{P}_NP];",
+        f"extern const {rt} {prefix}_default_params[{P}_NP];",
         "",
         f"/* Advance xhat[{P}_NX] in place by one step of dt seconds with signals[{P}_NS] held;",
         f" * params[{P}_NP] may be NULL for the defaults.  Returns {P}_OK or an error code. */",
-        f"int32_t {prefix}_step({real} *xhat, const {real} *signals, const {real} *params, {real} dt);",
+        f"int32_t {prefix}_step({rt} *xhat, const {rt} *signals, const {rt} *params, {rt} dt);",
         "",
         f"/* n_steps steps through the rows of signals (row-major, {P}_NS per row), writing each new",
         f" * state to trajectory (row-major, {P}_NX per row; may be NULL).  On error, returns the code of",
         " * the first failing step k: xhat holds the state after the k steps that succeeded and rows",
         " * 0..k-1 of trajectory are written. */",
-        f"int32_t {prefix}_run({real} *xhat, const {real} *signals, int32_t n_steps, const {real} *params,",
-        f"    {real} dt, {real} *trajectory);",
+        f"int32_t {prefix}_run({rt} *xhat, const {rt} *signals, int32_t n_steps, const {rt} *params,",
+        f"    {rt} dt, {rt} *trajectory);",
         "",
         f"/* As _run, row k a step of dt[k] seconds (dt: n_steps entries; irregular sampling).  A dt[k] that is",
         f" * not finite or <= 0 fails step k with {P}_ERR_BAD_DT; dt may be NULL only when n_steps is 0. */",
-        f"int32_t {prefix}_run_dt({real} *xhat, const {real} *signals, int32_t n_steps, const {real} *params,",
-        f"    const {real} *dt, {real} *trajectory);",
+        f"int32_t {prefix}_run_dt({rt} *xhat, const {rt} *signals, int32_t n_steps, const {rt} *params,",
+        f"    const {rt} *dt, {rt} *trajectory);",
         "",
         *([] if not original_names else [
             f"/* The estimate in the original coordinates: x[{P}_NO] = phi^-1(xhat[{P}_NX]), with the step's",
             f" * signals[{P}_NS] (phi^-1 may use the external signals); params may be NULL.  Returns {P}_OK, or",
             f" * an error code with x unchanged: NULL pointers, non-finite inputs, a parameter of the wrong sign, or",
             f" * {P}_ERR_NONFINITE_RESULT where phi^-1 is undefined (log of a non-positive number, ...). */",
-            f"int32_t {prefix}_original(const {real} *xhat, const {real} *signals, const {real} *params, {real} *x);",
+            f"int32_t {prefix}_original(const {rt} *xhat, const {rt} *signals, const {rt} *params, {rt} *x);",
             ""]),
         "/* A static description of a status code. */",
         f"const char *{prefix}_status_message(int32_t status);",
@@ -747,44 +767,57 @@ def _source(*, tr: Translation, info: _Info, kind: str, real: str, method: str, 
             bound: tuple[Fraction, int] | None, original_k: CFunction | None, param_checks: Sequence[str],
             **_: Any) -> str:
     nx = f"{P}_NX"
+    rt = f"{prefix}_real"
     n_x, n_s = len(tr.state_names), len(tr.signal_names)
     used = "\n".join(k.body for k in (*kernels, *([original_k] if original_k else [])))
     helpers = []
     zero, one = float_literal(0.0, real), float_literal(1.0, real)
     if f"{prefix}_sq(" in used:
-        helpers.append(f"static {real} {prefix}_sq({real} v) {{ return v * v; }}")
+        helpers.append(f"static {rt} {prefix}_sq({rt} v) {{ return v * v; }}")
     if f"{prefix}_sign(" in used:
-        helpers.append(f"static {real} {prefix}_sign({real} v) {{ return v < {zero} ? -{one} : "
-                       f"(v > {zero} ? {one} : v); }}")
+        helpers.append(f"static {rt} {prefix}_sign({rt} v) {{ return (v < {zero}) ? -{one} : "
+                       f"((v > {zero}) ? {one} : v); }}")
     defaults = ",\n".join(f"    {float_literal(v, real)}  /* {n} */" for n, v in zip(tr.param_names,
                                                                                        tr.default_params))
-    status_cases = "\n".join(f"    case {int(s)}: return \"{STATUS_TEXT[s]}\";" for s in StepStatus)
+    status_cases = "\n".join(f"    case {int(s)}:\n        message = \"{STATUS_TEXT[s]}\";\n        break;"
+                             for s in StepStatus)
     call = kernels[0].call
     implicit = not STEP_METHODS[method].explicit
     # an implicit kernel writes det D(Z) after the new state; the solve divided by it only where it is nonzero
-    singular = [f"if ({P}_UNLIKELY(!(next[{nx}] < {zero} || next[{nx}] > {zero}) || !isfinite(next[{nx}]))) "
-                f"return {P}_ERR_NONFINITE_RESULT;  /* D(Z) singular */"] if implicit else []
+    singular = [_refuse(P, f"(!((next[{nx}] < {zero}) || (next[{nx}] > {zero}))) || (!isfinite(next[{nx}]))",
+                        "NONFINITE_RESULT", "D(Z) singular", indent)
+                for indent in ("    ", "        ")] if implicit else [None, None]
     size = f"{nx} + 1" if implicit else nx
     if bound is None:
-        stepping = ["    " + call("next", x="x", sig="sig", par="par", dt="dt", s="s"),
-                    *("    " + c for c in singular)]
+        stepping = ["    " + call("next", x="x", sig="sig", par="par", dt="dt", s="s"), singular[0]]
     else:
         # one call of the kernel, so that compilers inline it as in the step without sub-steps (two calls,
-        # the first from x, kept it out of line with gcc 12 -O2: 1.2x slower non-stiff steps of abs-xbs3)
-        stepping = [f"    for (i = 0; i < {nx}; ++i) cur[i] = x[i];",
-                    "    for (j = 0;;) {  /* n sub-steps of h, signals held */",
+        # the first from x, kept it out of line with gcc 12 -O2: 1.2x slower non-stiff steps of abs-xbs3).
+        # The loop's bound is the constant MAX_SUBSTEPS, so compilers and proof tools see that it runs at least
+        # once and writes next (over j < n, gcc 12 -O2 warns that next may be used uninitialized).
+        stepping = [f"    for (int32_t i = 0; i < {nx}; ++i) {{",
+                    "        cur[i] = x[i];",
+                    "    }",
+                    f"    for (int32_t j = 1; j <= {P}_MAX_SUBSTEPS; ++j) {{  /* sub-step j of n <= MAX_SUBSTEPS, "
+                    "signals held */",
                     "        " + call("next", x="cur", sig="sig", par="par", dt="h", s="s"),
-                    *("        " + c for c in singular),
-                    "        if (++j == n) break;",
-                    f"        for (i = 0; i < {nx}; ++i) cur[i] = next[i];",
+                    singular[1],
+                    "        if (j >= n) {",
+                    "            break;",
+                    "        }",
+                    f"        for (int32_t i = 0; i < {nx}; ++i) {{",
+                    "            cur[i] = next[i];",
+                    "        }",
                     "    }"]
     body = [
         f"/* {prefix}.c -- generated by switchobs with casadi {ca.__version__}; do not edit.",
         f" * Kernels: casadi C of the {_SCHEMES[method][1]} step, post-processed for {real}.",
+        f" * MISRA C:2012: the remaining advisory findings and why are in {prefix}_misra.md.",
         " */",
         f'#include "{prefix}.h"',
         "",
         "#include <math.h>",
+        "#include <stdbool.h>",
         "#include <stddef.h>",
         "",
         "#if defined(__FAST_MATH__) || (defined(__FINITE_MATH_ONLY__) && __FINITE_MATH_ONLY__)",
@@ -793,40 +826,34 @@ def _source(*, tr: Translation, info: _Info, kind: str, real: str, method: str, 
         '(a NaN speed would then return OK with a NaN state)"',
         "#endif",
         "",
-        "/* The refusals are rare.  Told so, clang 14 -O2 inlines the kernel into the step: it judged the call cold",
-        " * behind a dozen checks and kept it out of line (1.4x slower steps).  gcc 12 -O2 inlines it anyway and",
-        " * lays the step out worse with the hint (abs-xbs4's step 1.15x slower), so gcc is not told. */",
-        "#if defined(__clang__)",
-        f"#define {P}_UNLIKELY(c) __builtin_expect(!!(c), 0)",
-        "#else",
-        f"#define {P}_UNLIKELY(c) (c)",
-        "#endif",
+        *_branch_hints(P),
         "",
         *helpers,
         "" if helpers else None,
-        f"const {real} {prefix}_default_params[{P}_NP] = {{\n{defaults}\n}};",
+        f"const {rt} {prefix}_default_params[{P}_NP] = {{\n{defaults}\n}};",
         "",
         used,
         "/* All checks of one step, then the step into next; nothing is written unless every check passes.",
         " * valid: dt and par are already known to pass their checks (see _rows), which are then skipped. */",
-        f"static int32_t {prefix}_advance(const {real} *x, const {real} *sig, const {real} *par, {real} dt, "
-        f"{real} *next, int32_t valid)",
+        f"static int32_t {prefix}_advance(const {rt} *x, const {rt} *sig, const {rt} *par, {rt} dt, "
+        f"{rt} *next, bool valid)",
         "{",
-        f"    {real} g;" if any("&g" in c for c in checks) else None,
-        f"    {real} s;" if any("&s" in c for c in checks) else None,
-        None if bound is None else f"    {real} cur[{nx}], a, q, h = dt;",
-        "    int32_t i;" if bound is None else "    int32_t i, j, n = 1;",
-        f"    if ({P}_UNLIKELY(!valid && (!(dt > {zero}) || !isfinite(dt)))) return {P}_ERR_BAD_DT;",
-        f"    if ({P}_UNLIKELY({_unrolled('!isfinite(x[{i}])', n_x, '        ', ' || ')})) "
-        f"return {P}_ERR_NONFINITE_STATE;",
-        f"    if ({P}_UNLIKELY({_unrolled('!isfinite(sig[{i}])', n_s, '        ', ' || ')})) "
-        f"return {P}_ERR_NONFINITE_SIGNAL;",
-        f"    if (!valid) for (i = 0; i < {P}_NP; ++i) if ({P}_UNLIKELY(!isfinite(par[i]))) return {P}_ERR_BAD_PARAM;",
+        f"    {rt} g;" if any("&g" in c for c in checks) else None,
+        f"    {rt} s;" if any("&s" in c for c in checks) else None,
+        *([] if bound is None else [f"    {rt} cur[{nx}];", f"    {rt} a;", f"    {rt} h = dt;",
+                                    "    int32_t n = 1;"]),
+        _refuse(P, f"(!valid) && ((!(dt > {zero})) || (!isfinite(dt)))", "BAD_DT"),
+        _refuse(P, _unrolled('(!isfinite(x[{i}]))', n_x, '        ', ' || '), "NONFINITE_STATE"),
+        _refuse(P, _unrolled('(!isfinite(sig[{i}]))', n_s, '        ', ' || '), "NONFINITE_SIGNAL"),
+        "    if (!valid) {",
+        f"        for (int32_t i = 0; i < {P}_NP; ++i) {{",
+        _refuse(P, "!isfinite(par[i])", "BAD_PARAM", indent="            "),
+        "        }",
+        "    }",
         *checks,
         *stepping,
-        f"    if ({P}_UNLIKELY({_unrolled('!isfinite(next[{i}])', n_x, '        ', ' || ')})) "
-        f"return {P}_ERR_NONFINITE_RESULT;",
-        "    return 0;",
+        _refuse(P, _unrolled('(!isfinite(next[{i}]))', n_x, '        ', ' || '), "NONFINITE_RESULT"),
+        f"    return {P}_OK;",
         "}",
         "",
         "/* The rows of _step, _run and _run_dt: row k a step of dts[k] seconds, or of dt when dts is NULL.",
@@ -834,52 +861,77 @@ def _source(*, tr: Translation, info: _Info, kind: str, real: str, method: str, 
         " * a second caller, made _run up to 1.15x slower with gcc 12 -O2).  Six pointers and integers and a",
         " * real, which the System V x86-64 ABI passes in registers: a seventh integer would be pushed, and",
         " * gcc -fstack-usage reports the callers' frames as dynamic. */",
-        f"static int32_t {prefix}_rows({real} *xhat, const {real} *signals, int32_t n_steps, const {real} *params,",
-        f"    {real} dt, const {real} *dts, {real} *trajectory)",
+        f"static int32_t {prefix}_rows({rt} *xhat, const {rt} *signals, int32_t n_steps, const {rt} *params,",
+        f"    {rt} dt, const {rt} *dts, {rt} *trajectory)",
         "{",
-        f"    {real} cur[{nx}], next[{size}];",
-        "    /* one loop for both: row k reads h[k * stride], stride 0 for a fixed dt (h stepped by stride:",
-        "     * faster than indexing h with gcc 12 -O2) */",
-        f"    const {real} *h = dts != NULL ? dts : &dt;",
-        "    size_t stride = dts != NULL ? 1u : 0u;",
-        "    int32_t i, k, status = 0, valid;",
-        f"    if (xhat == NULL || n_steps < 0 || (signals == NULL && n_steps > 0)) return {P}_ERR_BAD_ARGUMENT;",
-        f"    if (params == NULL) params = {prefix}_default_params;",
+        f"    {rt} cur[{nx}];",
+        f"    {rt} next[{size}];",
+        "    /* one loop for both: row k reads h[hk], hk stepped by stride, 0 for a fixed dt (stepped:",
+        "     * faster than indexing h with k * stride with gcc 12 -O2) */",
+        f"    const {rt} *h = &dt;",
+        f"    const {rt} *par = {prefix}_default_params;",
+        "    size_t stride = 0u;",
+        "    size_t hk = 0u;",
+        f"    int32_t status = {P}_OK;",
+        "    bool valid;",
+        _refuse(P, "(xhat == NULL) || (n_steps < 0) || ((signals == NULL) && (n_steps > 0))", "BAD_ARGUMENT",
+                hint=False),
+        "    if (dts != NULL) {",
+        "        h = dts;",
+        "        stride = 1u;",
+        "    }",
+        "    if (params != NULL) {",
+        "        par = params;",
+        "    }",
         "    /* the step lengths and params are checked once here.  If one fails, every row checks them again",
         "     * in _step's order, so a failing row reports exactly the status that _step reports. */",
-        f"    valid = {_unrolled('isfinite(params[{i}])', len(tr.param_names), '        ', ' && ')};",
-        f"    for (k = 0; valid && k < (stride ? n_steps : 1); ++k) valid = h[k] > {zero} && isfinite(h[k]);",
+        f"    valid = {_unrolled('isfinite(par[{i}])', len(tr.param_names), '        ', ' && ')};",
+        "    for (int32_t k = 0; valid && (k < ((stride > 0u) ? n_steps : 1)); ++k) {",
+        f"        valid = (h[k] > {zero}) && isfinite(h[k]);",
+        "    }",
         "    /* the state is carried in a local array, which no store to trajectory can alias, and written to xhat",
         "     * once at the end; the copies in the loop are written out (measured fastest with gcc 12 -O2) */",
-        f"    for (i = 0; i < {nx}; ++i) cur[i] = xhat[i];",
-        "    for (k = 0; k < n_steps; ++k, h += stride) {",
-        f"        status = {prefix}_advance(cur, signals + (size_t)k * {P}_NS, params, *h, next, valid);",
-        "        if (status != 0) break;",
+        f"    for (int32_t i = 0; i < {nx}; ++i) {{",
+        "        cur[i] = xhat[i];",
+        "    }",
+        "    /* k is an int32_t like n_steps, its row offset a size_t (a size_t k made gcc 12 -O2's _step 1.04x",
+        "     * slower on abs-xbs4) */",
+        "    for (int32_t k = 0; k < n_steps; ++k) {",
+        f"        status = {prefix}_advance(cur, &signals[(size_t)k * (size_t){P}_NS], par, h[hk], next, valid);",
+        f"        if (status != {P}_OK) {{",
+        "            break;",
+        "        }",
         f"        {_unrolled('cur[{i}] = next[{i}];', n_x, '        ', ' ')}",
         "        if (trajectory != NULL) {",
-        f"            {real} *row = trajectory + (size_t)k * {nx};",
+        f"            {rt} *row = &trajectory[(size_t)k * (size_t){nx}];",
         f"            {_unrolled('row[{i}] = next[{i}];', n_x, '            ', ' ')}",
         "        }",
+        "        hk += stride;",
         "    }",
-        f"    for (i = 0; i < {nx}; ++i) xhat[i] = cur[i];",
+        f"    for (int32_t i = 0; i < {nx}; ++i) {{",
+        "        xhat[i] = cur[i];",
+        "    }",
         "    return status;",
         "}",
         "",
-        f"int32_t {prefix}_run({real} *xhat, const {real} *signals, int32_t n_steps, const {real} *params,",
-        f"    {real} dt, {real} *trajectory)",
+        f"int32_t {prefix}_run({rt} *xhat, const {rt} *signals, int32_t n_steps, const {rt} *params,",
+        f"    {rt} dt, {rt} *trajectory)",
         "{",
         f"    return {prefix}_rows(xhat, signals, n_steps, params, dt, NULL, trajectory);",
         "}",
         "",
-        f"int32_t {prefix}_run_dt({real} *xhat, const {real} *signals, int32_t n_steps, const {real} *params,",
-        f"    const {real} *dt, {real} *trajectory)",
+        f"int32_t {prefix}_run_dt({rt} *xhat, const {rt} *signals, int32_t n_steps, const {rt} *params,",
+        f"    const {rt} *dt, {rt} *trajectory)",
         "{",
-        f"    if (dt == NULL && n_steps > 0) return {P}_ERR_BAD_ARGUMENT;",
-        f"    return {prefix}_rows(xhat, signals, n_steps, params, {zero}, dt, trajectory);",
+        f"    int32_t status = {P}_ERR_BAD_ARGUMENT;",
+        "    if ((dt != NULL) || (n_steps <= 0)) {",
+        f"        status = {prefix}_rows(xhat, signals, n_steps, params, {zero}, dt, trajectory);",
+        "    }",
+        "    return status;",
         "}",
         "",
         "/* One row of _run. */",
-        f"int32_t {prefix}_step({real} *xhat, const {real} *signals, const {real} *params, {real} dt)",
+        f"int32_t {prefix}_step({rt} *xhat, const {rt} *signals, const {rt} *params, {rt} dt)",
         "{",
         f"    return {prefix}_rows(xhat, signals, 1, params, dt, NULL, NULL);",
         "}",
@@ -887,14 +939,40 @@ def _source(*, tr: Translation, info: _Info, kind: str, real: str, method: str, 
         *_original_function(original_k, param_checks, real=real, prefix=prefix, P=P),
         f"const char *{prefix}_status_message(int32_t status)",
         "{",
+        "    const char *message;",
         "    switch (status) {",
         status_cases,
-        "    default: return \"unknown status code\";",
+        "    default:",
+        "        message = \"unknown status code\";",
+        "        break;",
         "    }",
+        "    return message;",
         "}",
         "",
     ]
     return "\n".join(line for line in body if line is not None)
+
+
+def _branch_hints(P: str) -> list[str]:
+    """The macro that marks a refusal unlikely: the condition itself unless the integrator asks for the hint.
+
+    ``__builtin_expect`` is a language extension (MISRA C:2012 rule 1.2), so the file uses it only when
+    compiled with ``-DSWITCHOBS_BRANCH_HINTS`` by clang (:data:`BRANCH_HINTS`).
+    """
+    return [
+        f"/* {P}_UNLIKELY(c) is c.  Compiled by clang with -D{BRANCH_HINTS}, it also tells the compiler that",
+        " * the refusals are rare (__builtin_expect: a language extension, MISRA C:2012 rule 1.2, so off unless",
+        " * asked for).  Told so, clang 14 -O2 inlines the kernel into the step: it judges the call cold behind a",
+        " * dozen checks and keeps it out of line (1.2-1.4x slower steps).  gcc 12 -O2 inlines it anyway and lays",
+        " * the step out worse with the hint (abs-xbs4's step 1.15x slower), so gcc is never told. */",
+        f"#if defined({BRANCH_HINTS}) && defined(__clang__)",
+        # the comparison keeps the if's condition boolean (rule 14.4); with (c) ? 1L : 0L as the argument
+        # instead of !!(c), clang 14 lost the hint in abs-xbs4's _run (1.22x slower)
+        f"#define {P}_UNLIKELY(c) (__builtin_expect(!!(c), 0) != 0)",
+        "#else",
+        f"#define {P}_UNLIKELY(c) (c)",
+        "#endif",
+    ]
 
 
 def _original_function(original_k: CFunction | None, param_checks: Sequence[str], *, real: str, prefix: str,
@@ -902,23 +980,32 @@ def _original_function(original_k: CFunction | None, param_checks: Sequence[str]
     """``<prefix>_original``: the checks of the step's inputs and parameters, phi^-1, then its finiteness."""
     if original_k is None:
         return []
+    rt = f"{prefix}_real"
     return [
-        f"int32_t {prefix}_original(const {real} *xhat, const {real} *signals, const {real} *params, {real} *x)",
+        f"int32_t {prefix}_original(const {rt} *xhat, const {rt} *signals, const {rt} *params, {rt} *x)",
         "{",
-        f"    {real} out[{P}_NO];",
-        f"    {real} g;" if any("&g" in c for c in param_checks) else None,
-        f"    const {real} *sig = signals, *par = params != NULL ? params : {prefix}_default_params;",
-        "    int32_t i;",
-        f"    if (xhat == NULL || signals == NULL || x == NULL) return {P}_ERR_BAD_ARGUMENT;",
-        f"    for (i = 0; i < {P}_NX; ++i) if (!isfinite(xhat[i])) return {P}_ERR_NONFINITE_STATE;",
-        f"    for (i = 0; i < {P}_NS; ++i) if (!isfinite(sig[i])) return {P}_ERR_NONFINITE_SIGNAL;",
-        f"    for (i = 0; i < {P}_NP; ++i) if (!isfinite(par[i])) return {P}_ERR_BAD_PARAM;",
+        f"    {rt} out[{P}_NO];",
+        f"    {rt} g;" if any("&g" in c for c in param_checks) else None,
+        f"    const {rt} *sig = signals;",
+        f"    const {rt} *par = {prefix}_default_params;",
+        _refuse(P, "(xhat == NULL) || (signals == NULL) || (x == NULL)", "BAD_ARGUMENT", hint=False),
+        "    if (params != NULL) {",
+        "        par = params;",
+        "    }",
+        *(line for name, array, status in (("NX", "xhat", "NONFINITE_STATE"), ("NS", "sig", "NONFINITE_SIGNAL"),
+                                           ("NP", "par", "BAD_PARAM"))
+          for line in (f"    for (int32_t i = 0; i < {P}_{name}; ++i) {{",
+                       _refuse(P, f"!isfinite({array}[i])", status, indent="        ", hint=False), "    }")),
         *param_checks,
         "    " + original_k.call("out", x="xhat", sig="sig", par="par"),
-        f"    for (i = 0; i < {P}_NO; ++i) if (!isfinite(out[i])) return {P}_ERR_NONFINITE_RESULT;  "
-        "/* phi^-1 undefined here */",
-        f"    for (i = 0; i < {P}_NO; ++i) x[i] = out[i];",
-        "    return 0;",
+        f"    for (int32_t i = 0; i < {P}_NO; ++i) {{",
+        _refuse(P, "!isfinite(out[i])", "NONFINITE_RESULT", "phi^-1 undefined here", indent="        ",
+                hint=False),
+        "    }",
+        f"    for (int32_t i = 0; i < {P}_NO; ++i) {{",
+        "        x[i] = out[i];",
+        "    }",
+        f"    return {P}_OK;",
         "}",
         "",
     ]

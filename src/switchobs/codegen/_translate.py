@@ -40,12 +40,13 @@ from ..spec import (METHODS, SCALE, STEP_METHODS, Guard, ObserverSpec, StepStatu
 __all__ = ["Translation", "to_casadi", "translate_original", "translate_switched", "translate_adaptive",
            "translate_super_twisting"]
 
-#: Guard kinds and the C comparison that holds when the guard is satisfied (NaN fails every one).
+#: Guard kinds and the C comparison that holds when the guard is satisfied (NaN fails every one); ``{zero}`` is
+#: the literal 0 of the C real type (MISRA C:2012 rule 10.4: no int operand beside a real one).
 GUARD_TESTS: Mapping[str, str] = {
-    "positive": "{g} > 0",
-    "negative": "{g} < 0",
-    "nonzero": "({g} < 0 || {g} > 0)",
-    "nonnegative": "{g} >= 0",
+    "positive": "{g} > {zero}",
+    "negative": "{g} < {zero}",
+    "nonzero": "({g} < {zero}) || ({g} > {zero})",
+    "nonnegative": "{g} >= {zero}",
 }
 
 _FUNCTIONS: Mapping[type, Callable[[ca.SX], ca.SX]] = {

@@ -22,7 +22,14 @@ encoder_measurements, EncoderMeasurements -- the same chain over a whole recorde
                             when the controller does not read the estimate), with the observer's steps
 run_braking, BrakingRun, CONTROLLER_NAMES -- one braking case from plain values (road, speed, controller,
                             observer), compiled to C when possible, metrics back (what a sweep calls)
+LogSignals, replay, ReplayResult, ReplaySummary -- recorded data in: a log's edges, speed and pressure (SI
+                            units) through the encoder chain and an XBS observer (``switchobs replay``)
+zero_order_hold, pressure_from_rate, speed_from_acceleration, edges_from_counts, edges_from_wheel_speed,
+measurements_signals, ideal_encoder -- from what loggers record to LogSignals; a simulated run's chain inputs as one
 DemoSettings, demo_scenario, demo_braking -- the braking of ``switchobs demo``
+braking_record, PilRecord, reference_run, reference_observer, compare_with_reference, PilComparison, PIL_SCENARIO, PIL_TOLERANCE
+                            -- the record of a processor-in-the-loop run of the generated C (a braking with a
+                            road change and a sensor dropout) and its comparison with the Python reference
 road_segments, segment_errors, ErrorRow, summarise_braking, BrakingSummary, SETTLE_S
                             -- estimation errors per road segment and the demo's braking summary
 
@@ -42,10 +49,18 @@ from ._demo import (SETTLE_S, BrakingSummary, DemoSettings, ErrorRow, demo_braki
                     segment_errors, summarise_braking)
 from ._encoder_batch import EncoderMeasurements, encoder_measurements
 from ._encoder_loop import X2_MEASUREMENTS, EncoderLoopEstimator, EncoderLoopRecord, EncoderX2
+from ._pil import (PIL_SCENARIO, PIL_TOLERANCE, PilComparison, PilRecord, braking_record, compare_with_reference,
+                   reference_observer, reference_run)
+from ._replay import (LogSignals, ReplayResult, ReplaySummary, edges_from_counts, edges_from_wheel_speed,
+                      ideal_encoder, measurements_signals, pressure_from_rate, replay, speed_from_acceleration, zero_order_hold)
 from ._factory import DEFAULT_BETA, DEFAULT_GAMMA, INITIAL_STATE, OBSERVER_KINDS, EstimatorSpec, xbs_estimator
 
 __all__ = ["EstimatorSpec", "xbs_estimator", "OBSERVER_KINDS", "DEFAULT_BETA", "DEFAULT_GAMMA", "INITIAL_STATE",
            "ObserverXbsEstimator", "LoadXbsEstimator", "SteppingObserver", "run_braking", "BrakingRun", "CONTROLLER_NAMES", "EncoderLoopEstimator", "EncoderLoopRecord",
            "EncoderX2", "X2_MEASUREMENTS", "encoder_measurements", "EncoderMeasurements",
            "DemoSettings", "demo_scenario", "demo_braking", "road_segments", "segment_errors", "ErrorRow",
-           "summarise_braking", "BrakingSummary", "SETTLE_S"]
+           "summarise_braking", "BrakingSummary", "SETTLE_S", "braking_record", "PilRecord", "reference_run", "reference_observer",
+           "compare_with_reference", "PilComparison", "PIL_SCENARIO", "PIL_TOLERANCE",
+           "LogSignals", "replay", "ReplayResult", "ReplaySummary",
+           "zero_order_hold", "pressure_from_rate", "speed_from_acceleration", "edges_from_counts",
+           "edges_from_wheel_speed", "measurements_signals", "ideal_encoder"]

@@ -23,7 +23,7 @@ from ..exceptions import SimulationError
 from ..sensors import Encoder, ThreeStageEstimator, notch_series
 from ..sensors._tsa import check_order_window, fit_windows
 
-__all__ = ["EncoderMeasurements", "encoder_measurements"]
+__all__ = ["EncoderMeasurements", "encoder_measurements", "measure_edges", "edge_angles"]
 
 Array = npt.NDArray[np.float64]
 
@@ -49,6 +49,15 @@ class EncoderMeasurements(JsonRecord, error=SimulationError):
     steps_t, omega_steps : ndarray
         Plant step ends (the start first, without the skipped steps) and the wheel speed
         reconstructed there [rad/s].
+    vx_steps, pressure_steps : ndarray
+        What the chain read at ``steps_t``: vehicle speed [m/s] and ``∫ u dt`` from the start [bar].
+    edge_times : ndarray
+        Time stamps of the encoder edges [s] (``events`` of them).
+    edge_teeth : ndarray of int
+        Each edge's count from tooth 0 of revolution 0: its nominal angle is
+        ``nominal[k % E] + 2 π (k // E)`` for the ``E`` edges per revolution.
+        With ``steps_t``, ``vx_steps`` and ``pressure_steps`` they are everything the chain measured
+        from: a log of them replays to the same measurements (:func:`switchobs.loop.replay`).
     """
 
     t: Array
@@ -65,6 +74,10 @@ class EncoderMeasurements(JsonRecord, error=SimulationError):
     events: int
     steps_t: Array
     omega_steps: Array
+    vx_steps: Array
+    pressure_steps: Array
+    edge_times: Array
+    edge_teeth: npt.NDArray[np.int_]
 
     def observer_steps(self) -> tuple[int, npt.NDArray[np.int_], Array, Array]:
         """The observer steps of :class:`EncoderLoopEstimator` on these measurements.
@@ -103,8 +116,9 @@ class EncoderMeasurements(JsonRecord, error=SimulationError):
             return [None if math.isnan(v) else float(v) for v in np.asarray(a, dtype=float)]
         out: dict[str, Any] = {k: clean(getattr(self, k)) for k in (
             "t", "t_measured", "x2_tsa", "x2_notch", "x2_measured", "omega_tsa", "omega_measured", "vx",
-            "vx_measured", "pressure_measured", "steps_t", "omega_steps")}
-        out.update(sample_step=self.sample_step.tolist(), events=self.events)
+            "vx_measured", "pressure_measured", "steps_t", "omega_steps", "vx_steps", "pressure_steps",
+            "edge_times")}
+        out.update(sample_step=self.sample_step.tolist(), events=self.events, edge_teeth=self.edge_teeth.tolist())
         return out
 
     def __str__(self) -> str:
@@ -161,14 +175,27 @@ def fixed_edges(encoder: Encoder) -> Array:
     return encoder.rotation_angles()
 
 
-def _edges(encoder: Encoder, t: Array, h: Array, om: Array, theta: Array) -> tuple[Array, Array, npt.NDArray[np.int_]]:
-    """Time stamps, assigned angles and generating steps of the edges, as ``EncoderLoopEstimator._edges``."""
+def edge_angles(encoder: Encoder, teeth: npt.ArrayLike) -> Array:
+    """Nominal angles of the edges counted ``teeth`` from tooth 0 of revolution 0 [rad] (seed 001 Sec. 5.3.1):
+    ``nominal[k % E] + 2 π (k // E)``, the angles the chain assigns to the edges it generates."""
+    nominal = encoder.nominal_angles()
+    k = np.asarray(teeth, dtype=np.int64)
+    rev, j = np.divmod(k, nominal.size)
+    return nominal[j] + 2.0 * math.pi * rev.astype(float)
+
+
+def wheel_edges(encoder: Encoder, t: Array, h: Array, om: Array, theta: Array
+                ) -> tuple[Array, Array, npt.NDArray[np.int_], npt.NDArray[np.int_]]:
+    """Time stamps, assigned angles, generating steps and tooth counts of the edges the wheel crosses while its
+    angle goes through ``theta`` at the step ends ``t`` (speed ``om``, linear over each step of length ``h``),
+    as ``EncoderLoopEstimator._edges`` generates them."""
     two_pi = 2.0 * math.pi
     base, nominal = fixed_edges(encoder), encoder.nominal_angles()
     revs = np.arange(int(theta[-1] // two_pi) + 2, dtype=float)
     levels = (base[None, :] + two_pi * revs[:, None]).ravel()
     angles = (nominal[None, :] + two_pi * revs[:, None]).ravel()
     fired = (levels > 0.0) & (levels <= theta[-1])
+    teeth = np.flatnonzero(fired)
     levels, angles = levels[fired], angles[fired]
     step = np.searchsorted(theta, levels, side="left")       # first step end at or past the level
     t0, hs, om0, om1, th0 = t[step - 1], h[step - 1], om[step - 1], om[step], theta[step - 1]
@@ -182,7 +209,7 @@ def _edges(encoder: Encoder, t: Array, h: Array, om: Array, theta: Array) -> tup
     stamps = t0 + tau
     if encoder.clock_hz is not None:
         stamps = np.floor(stamps * encoder.clock_hz) / encoder.clock_hz
-    return stamps, angles, step
+    return stamps, angles, step, teeth
 
 
 def encoder_measurements(t: npt.ArrayLike, x2: npt.ArrayLike, vx: npt.ArrayLike, u: npt.ArrayLike,
@@ -235,17 +262,60 @@ def encoder_measurements(t: npt.ArrayLike, x2: npt.ArrayLike, vx: npt.ArrayLike,
     >>> m.events, round(float(np.nanmean(m.omega_measured)), 6)
     (636, 66.666667)
     """
-    m, n = check_order_window(order, window)
+    _check_chain(radius_m, rate_hz)
+    tt, yy, vv, uu, hh, kept = _steps(t, x2, vx, u, dt)
+    om, theta = _wheel(yy, vv, hh, float(radius_m))
+    stamps, angles, edge_step, teeth = wheel_edges(encoder, tt, hh, om, theta)
+    pressure = np.cumsum(np.concatenate([[0.0], uu * hh]))
+    return measure_edges(tt, vv, pressure, stamps, angles, teeth, generated=edge_step, kept=kept, omega=om,
+                         radius_m=radius_m, rate_hz=rate_hz, order=order, window=window, harmonics=harmonics,
+                         notch_damping=notch_damping, compiled=compiled)
+
+
+def _check_chain(radius_m: float, rate_hz: float) -> None:
     if not (isinstance(radius_m, (int, float)) and math.isfinite(radius_m) and radius_m > 0):
         raise SimulationError(f"radius_m must be finite and > 0, got {radius_m!r}")
     if not (isinstance(rate_hz, (int, float)) and math.isfinite(rate_hz) and rate_hz > 0):
         raise SimulationError(f"rate_hz must be finite and > 0, got {rate_hz!r}")
+
+
+def measure_edges(tt: Array, vv: Array, pressure: Array, stamps: Array, angles: Array,
+                  teeth: npt.NDArray[np.int_], *, radius_m: float, generated: npt.NDArray[np.int_] | None = None,
+                  kept: npt.NDArray[np.int_] | None = None, omega: Array | None = None, rate_hz: float = 1000.0,
+                  order: int = 2, window: int = 15, harmonics: int = 5, notch_damping: float = 0.5,
+                  compiled: bool | None = None) -> EncoderMeasurements:
+    """The chain of :func:`encoder_measurements` from the edges on: TSA, three-stage, notch at the samples.
+
+    Parameters
+    ----------
+    tt, vv, pressure : ndarray
+        Signal raster (strictly increasing) [s], vehicle speed there [m/s] and ``∫ u dt`` from the start
+        [bar]; linear in between (the plant's step ends in a simulation, the samples of a log in a replay).
+    stamps, angles, teeth : ndarray
+        Edge time stamps (strictly increasing) [s], their angles [rad] and tooth counts.
+    generated : ndarray of int, optional
+        The raster index at which each edge became known (a simulated edge: the step that crossed it); without
+        it, an edge is known at its time stamp.
+    kept : ndarray of int, optional
+        Index of each raster point in the caller's arrays (for ``sample_step``); default ``arange``.
+    omega : ndarray, optional
+        The wheel speed at the raster (``omega_steps``); NaN without it.
+    radius_m, rate_hz, order, window, harmonics, notch_damping, compiled
+        As :func:`encoder_measurements`.
+
+    Raises
+    ------
+    SimulationError
+        Bad settings, or two edges on one timer tick.
+    """
+    m, n = check_order_window(order, window)
+    _check_chain(radius_m, rate_hz)
     rate, radius = float(rate_hz), float(radius_m)
     comp = ThreeStageEstimator(harmonics, dt_s=1.0 / rate, compiled=compiled)
-    tt, yy, vv, uu, hh, kept = _steps(t, x2, vx, u, dt)
-    om, theta = _wheel(yy, vv, hh, radius)
-    stamps, angles, edge_step = _edges(encoder, tt, hh, om, theta)
-    pressure = np.cumsum(np.concatenate([[0.0], uu * hh]))
+    vv, pressure = np.asarray(vv, dtype=float), np.asarray(pressure, dtype=float)
+    if kept is None:
+        kept = np.arange(tt.size)
+    om = np.full(tt.size, np.nan) if omega is None else omega
 
     # controller samples k / rate, each processed by the first step whose end reaches it
     k0 = math.floor(tt[0] * rate + 1e-9) + 1
@@ -255,8 +325,9 @@ def encoder_measurements(t: npt.ArrayLike, x2: npt.ArrayLike, vx: npt.ArrayLike,
     ts = ts[ts <= reach[-1]] if reach.size else ts[:0]
     step = np.searchsorted(reach, ts, side="left") + 1
     # edges pushed by each sample: those generated by then, up to the first stamped after it
-    pushed = np.minimum(np.searchsorted(edge_step, step, side="right"),
-                        np.searchsorted(stamps, ts, side="right"))
+    pushed = np.searchsorted(stamps, ts, side="right")
+    if generated is not None:
+        pushed = np.minimum(np.searchsorted(generated, step, side="right"), pushed)
     if pushed.size:
         clash = np.flatnonzero(np.diff(stamps[:int(pushed[-1])]) <= 0.0)
         if clash.size:
@@ -294,4 +365,5 @@ def encoder_measurements(t: npt.ArrayLike, x2: npt.ArrayLike, vx: npt.ArrayLike,
         t=ts, t_measured=tc, x2_tsa=at_samples(radius * al_m - ax_c), x2_notch=at_samples(radius * notched - ax_c),
         x2_measured=at_samples(radius * al_c - ax_c), omega_tsa=at_samples(om_m), omega_measured=at_samples(om_c),
         vx=history(ts, step)[0], vx_measured=at_samples(vx_c), pressure_measured=at_samples(p_c),
-        sample_step=kept[step], events=int(stamps.size), steps_t=tt, omega_steps=om)
+        sample_step=kept[step], events=int(stamps.size), steps_t=tt, omega_steps=om, vx_steps=vv,
+        pressure_steps=pressure, edge_times=stamps, edge_teeth=np.asarray(teeth, dtype=np.int_))

@@ -236,6 +236,9 @@ class EncoderLoopEstimator:
         for _, est in self._beside:
             est.reset(t0, y0, vx0)
         self._beside_rows.append([est.estimate for _, est in self._beside])
+        #: the batch chain's measurements of the run, kept by :meth:`replay` (with the edges and the signals it
+        #: read: what a log of the run carries, :func:`switchobs.loop.replay`); None after the per-step loop
+        self.measurements: EncoderMeasurements | None = None
 
     def update(self, t: float, y: float, vx: float, u: float, dt: float) -> float:
         """Advance the wheel over ``[t - dt, t]``, process the controller samples in it, return the estimate."""
@@ -360,6 +363,7 @@ class EncoderLoopEstimator:
                                 m.pressure_measured[ok]) for _, obs, init in self._observers]
         except SimulationError:
             return replay_updates(self, t, y, vx, u, dt)
+        self.measurements = m
         columns = (m.t, m.t_measured, m.x2_tsa, m.x2_notch, m.x2_measured, m.omega_tsa, m.omega_measured, m.vx)
         estimates = np.full((m.t.size, len(self._observers)), np.nan)
         for k, (states, _) in enumerate(stepped):

@@ -30,15 +30,28 @@ def is_statespace(value: Any) -> bool:
 
 
 def statespace_matrices(sys: Any, *, what: str = "system") -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
-    """``(A, B, C, D)`` of a continuous-time single-output ``control.StateSpace``.
+    """``(A, B, C, D)`` of a continuous-time single-output ``control.StateSpace`` (a ``TransferFunction`` is
+    converted by ``control.tf2ss``, its controllable canonical realisation).
 
     Raises
     ------
     DimensionError
         More than one output: a switchobs model measures one ``y = C z``.
     ModelError
-        A discrete-time system (the model is ``dz/dt = ...``).
+        A discrete-time system (the model is ``dz/dt = ...``), an improper transfer function, or neither a
+        StateSpace nor a TransferFunction.
     """
+    if not hasattr(sys, "A") and hasattr(sys, "num") and hasattr(sys, "den"):
+        import control
+
+        try:
+            sys = control.tf2ss(sys)
+        except ValueError as exc:
+            raise ModelError(f"{what}: the TransferFunction has no state-space realisation ({exc}); give a "
+                             "proper one") from None
+    missing = [k for k in ("A", "B", "C", "D") if not hasattr(sys, k)]
+    if missing:
+        raise ModelError(f"{what} must be a control.StateSpace or TransferFunction, got {type(sys).__name__}")
     A, B, C, D = (np.asarray(getattr(sys, k)) for k in ("A", "B", "C", "D"))
     if C.shape[0] != 1:
         raise DimensionError(f"{what} has {C.shape[0]} outputs; a switchobs model measures one output y = C z "

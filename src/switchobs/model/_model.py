@@ -227,8 +227,8 @@ class Model:
 
         Parameters
         ----------
-        sys : control.StateSpace
-            Continuous-time, one output, ``D = 0``.
+        sys : control.StateSpace or control.TransferFunction
+            Continuous-time, one output, ``D = 0``; a transfer function is realised by ``control.tf2ss``.
         time_scale : str or sympy expression
             ``s(y, t)``, the singular time scaling (seed 004 eq. (1)); in ``y``, the ``external``
             signals and ``t``.
@@ -333,6 +333,45 @@ class Model:
     def numeric(self) -> "Model":
         """The model with all its stored :attr:`values` substituted."""
         return self.with_values(dict(self.values))
+
+    def to_statespace(self, values: Mapping[str, Any] | None = None) -> Any:
+        """The model as a python-control ``StateSpace`` ``dz/dt = A z + B u, y = C z``, where that is the model.
+
+        Only a model whose time scaling is 1, whose drift ``d`` is 0 and whose input matrix ``b`` is constant
+        is linear time-invariant; the parameters take their :attr:`values`, overridden by ``values``.
+
+        Raises
+        ------
+        ModelError
+            ``s`` is not 1, ``d`` is not 0, or ``b`` depends on ``y`` or a signal (the message names it).
+        FreeSymbolError
+            A parameter has no value.
+
+        Examples
+        --------
+        >>> import control
+        >>> m = Model.from_statespace(control.ss([[0, 1], [-2, -3]], [[0], [1]], [[1, 0]], 0), time_scale="1")
+        >>> m.to_statespace().A.tolist()
+        [[0.0, 1.0], [-2.0, -3.0]]
+        """
+        import control
+
+        merged = {**self.values, **dict(values or {})}
+        if sp.simplify(self.time_scale - 1) != 0:
+            raise ModelError(f"model {self.name!r} has the time scaling s = {self.time_scale}; only s = 1 is a "
+                             "StateSpace (a singular s is what the observers handle: use them, or to_nlsys)")
+        if any(e != 0 for e in self.d):
+            raise ModelError(f"model {self.name!r} has a drift d(y) = {list(self.d)}; only d = 0 is a StateSpace")
+        signals = {self.symbols[k] for k in self.signals}
+        if self.b.free_symbols & signals:
+            raise ModelError(f"model {self.name!r} has an input matrix b(y) = {self.b.tolist()} depending on "
+                             f"{sorted(str(x) for x in self.b.free_symbols & signals)}; only a constant b is a "
+                             "StateSpace")
+        A = numeric(self.A, merged, what="A")
+        C = numeric(self.C, merged, what="C").reshape(1, -1)
+        B = numeric(self.b, merged, what="b").reshape(self.n, -1) if self.inputs else np.zeros((self.n, 0))
+        return control.ss(A, B, C, np.zeros((1, B.shape[1])), states=list(self.states), outputs=[self.output],
+                          inputs=list(self.inputs) or None, name=self.name)
 
     def to_dict(self) -> dict[str, Any]:
         """The model in the TOML key format, every expression as a string."""

@@ -11,7 +11,7 @@ This module assembles ``docs/reproductions.md``, splices the generated sections
 into the hand-written pages and writes or checks them; the sections come from
 ``_repro_adaptive`` (seed 001 Secs. 3.4, 3.6), ``_repro_abs`` (scenarios, step
 halving, Table 4.1, Figs. 6.7-6.9), ``_repro_encoders`` (Table 6.1, the
-wheel-encoder page) and ``_measured``, the runs they share from ``_repro_runs``.
+wheel-encoder page) and ``_measured``, the runs they share from :class:`switchobs.experiments.Runs`.
 """
 
 from __future__ import annotations
@@ -38,6 +38,7 @@ from ._repro_cells import _fmt_s, _pct, _row
 from ._repro_encoders import (_chain_abs_section, _chain_braking_section, _encoder_cli_section,
                               _encoder_example_section, tsa_orders, _super_twisting_section, _table61_section,
                               _three_stage_section)
+from ._repro_target import TARGET_SECTIONS
 
 __all__ = ["ReproductionPage", "GENERATED_SECTIONS", "reproduction_pages", "write_reproductions", "stale_pages"]
 
@@ -236,6 +237,7 @@ _SECTIONS: dict[str, tuple[str, Callable[[Runs], list[str]]]] = {
     "super_twisting": ("docs/encoders.md", _super_twisting_section),
 }
 _SECTIONS.update({name: (path, section) for name, path, section in MEASURED_SECTIONS})
+_SECTIONS.update({name: (path, section) for name, path, section in TARGET_SECTIONS})
 #: (page, section name) of every generated section, in page order.
 GENERATED_SECTIONS: tuple[tuple[str, str], ...] = tuple((path, name) for name, (path, _) in _SECTIONS.items())
 

@@ -14,6 +14,7 @@ import math
 from dataclasses import dataclass, fields
 from typing import Any, ClassVar
 
+from .._limits import MAX_ROAD_CHANGES
 from ..exceptions import SimulationError
 from ..loop import OBSERVER_KINDS
 from ..model import builtin_names
@@ -44,6 +45,11 @@ def _integer(owner: str, key: str, value: Any, *, minimum: int = 0) -> int:
     if isinstance(value, bool) or not isinstance(value, int) or value < minimum:
         raise SimulationError(f"{owner}: {key} must be an integer >= {minimum}, got {value!r}")
     return value
+
+
+def _short(value: Any) -> str:
+    text = repr(value)
+    return text if len(text) <= 80 else f"{text[:60]}... ({len(value) if hasattr(value, '__len__') else '?'} items)"
 
 
 def _choice(owner: str, key: str, value: Any, choices: tuple[str, ...]) -> str:
@@ -164,6 +170,9 @@ class BrakingCase(_CaseBase):
         roads = road_names()
         _choice(owner, "road", self.road, roads)
         set_ = object.__setattr__
+        if not isinstance(self.changes, (tuple, list)) or len(self.changes) > MAX_ROAD_CHANGES:
+            raise SimulationError(f"{owner}: changes is a list of at most {MAX_ROAD_CHANGES} (road, time_s) "
+                                  f"pairs (MAX_ROAD_CHANGES), got {_short(self.changes)}")
         changes = []
         for item in self.changes:
             if not (isinstance(item, (tuple, list)) and len(item) == 2):
@@ -254,6 +263,9 @@ class CertifyCase(_CaseBase):
             raise SimulationError(f"{owner}: spectrum must be a text of comma-separated poles, got "
                                   f"{self.spectrum!r}")
         set_ = object.__setattr__
+        for key in ("betas", "values", "box"):
+            if not isinstance(getattr(self, key), (tuple, list)):
+                raise SimulationError(f"{owner}: {key} must be a list, got {_short(getattr(self, key))}")
         for key in ("betas", "values"):
             pairs = []
             for item in getattr(self, key):

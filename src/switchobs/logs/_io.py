@@ -1,0 +1,278 @@
+"""Reading and writing measurement logs: ASAM MDF 4 (asammdf), Parquet (pyarrow) and CSV (standard library).
+
+A log is read as named channels, each with its own time stamps (an MDF4 channel has its group's master; a
+column of a table has the table's time column).  The file's size is checked before it is opened
+(``MAX_LOG_BYTES``) and a channel's length before it is converted (``MAX_LOG_SAMPLES``), so a huge log is
+refused by its size, never read whole.  Cells left empty (a null in Parquet, an empty field in CSV) are
+kept as a mask: a column of encoder edges is shorter than the signals beside it in one table.
+"""
+
+from __future__ import annotations
+
+import csv
+import math
+from array import array
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import numpy.typing as npt
+
+from .._atomic import atomic_file
+from .._limits import MAX_LOG_BYTES, MAX_LOG_SAMPLES
+from ..exceptions import LogError, PrerequisiteError
+
+__all__ = ["FORMATS", "Channel", "Log", "log_format", "read_log", "write_table", "write_mdf"]
+
+Array = npt.NDArray[np.float64]
+
+#: File name endings of each log format.
+FORMATS: dict[str, tuple[str, ...]] = {"mdf": (".mf4", ".mdf"), "parquet": (".parquet", ".pq"), "csv": (".csv",)}
+
+
+def log_format(path: str | Path, default: str | None = None) -> str:
+    """The format of a log by its file name ending (``mdf``, ``parquet``, ``csv``); ``default`` if unknown."""
+    suffix = Path(path).suffix.lower()
+    for fmt, endings in FORMATS.items():
+        if suffix in endings:
+            return fmt
+    if default is not None:
+        return default
+    known = ", ".join(e for endings in FORMATS.values() for e in endings)
+    raise LogError(f"{str(path)!r}: unknown log format {suffix or '(no ending)'!r}; name it {known}")
+
+
+def _missing(package: str, fmt: str) -> PrerequisiteError:
+    return PrerequisiteError(f"{fmt} logs need {package}: pip install \"switchobs[logs]\" (or pip install {package})")
+
+
+def _asammdf() -> Any:
+    try:
+        import asammdf
+    except ImportError:
+        raise _missing("asammdf", "MDF4") from None
+    return asammdf
+
+
+def _pyarrow() -> tuple[Any, Any]:
+    try:
+        import pyarrow
+        import pyarrow.parquet
+    except ImportError:
+        raise _missing("pyarrow", "Parquet") from None
+    return pyarrow, pyarrow.parquet
+
+
+@dataclass(frozen=True, eq=False)
+class Channel:
+    """One channel of a log: time stamps [s], values in the file's unit, and which cells hold a value."""
+
+    name: str
+    t: Array
+    values: Array
+    present: npt.NDArray[np.bool_]
+    unit: str
+
+
+class Log:
+    """A log opened for reading: its channels by name (read when asked for).
+
+    Parameters
+    ----------
+    path : str or Path
+    time_channel : str
+        The time column of a table (CSV, Parquet); an MDF4 channel has its group's master.
+    time_factor : float
+        Seconds per unit of the time column.
+    """
+
+    def __init__(self, path: str | Path, *, time_channel: str = "t", time_factor: float = 1.0):
+        self.path = Path(path)
+        self.format = log_format(path)
+        try:
+            size = self.path.stat().st_size
+        except OSError as exc:
+            raise LogError(f"cannot read the log {str(path)!r}: {exc.strerror}") from None
+        if not self.path.is_file():
+            raise LogError(f"the log {str(path)!r} is not a regular file")
+        if size > MAX_LOG_BYTES:
+            raise LogError(f"the log {str(path)!r} has {size} bytes (limit MAX_LOG_BYTES = {MAX_LOG_BYTES}); "
+                           "cut it into shorter logs")
+        self._time, self._factor = time_channel, time_factor
+        self._table: dict[str, tuple[Array, npt.NDArray[np.bool_]]] | None = None
+        self._mdf: Any = None
+        if self.format == "mdf":
+            asammdf = _asammdf()
+            try:
+                self._mdf = asammdf.MDF(str(self.path))
+            except Exception as exc:  # asammdf raises many kinds for a file that is not MDF
+                raise LogError(f"the log {str(path)!r} is not a readable MDF file: {exc}") from None
+            # asammdf names each group's master "time"; a channel of the map is never the master
+            self.names = sorted(n for n in self._mdf.channels_db if n != "time")
+        else:
+            self._table = self._read_table()
+            self.names = [n for n in self._table if n != self._time]
+
+    # ------------------------------------------------------------------ tables
+    def _read_table(self) -> dict[str, tuple[Array, npt.NDArray[np.bool_]]]:
+        if self.format == "parquet":
+            _, pq = _pyarrow()
+            try:
+                meta = pq.read_metadata(str(self.path))
+                rows = meta.num_rows
+                if rows > MAX_LOG_SAMPLES:
+                    raise LogError(f"the log {str(self.path)!r} has {rows} rows (limit MAX_LOG_SAMPLES = "
+                                   f"{MAX_LOG_SAMPLES}); cut it into shorter logs")
+                table = pq.read_table(str(self.path))
+            except LogError:
+                raise
+            except Exception as exc:
+                raise LogError(f"the log {str(self.path)!r} is not a readable Parquet file: {exc}") from None
+            out = {}
+            for name in table.column_names:
+                col = table.column(name)
+                try:
+                    present = ~np.asarray(col.is_null().to_numpy(zero_copy_only=False), dtype=bool)
+                    out[name] = (np.asarray(col.to_numpy(zero_copy_only=False), dtype=float), present)
+                except (TypeError, ValueError, NotImplementedError):
+                    raise LogError(f"column {name!r} of {str(self.path)!r} is not numeric "
+                                   f"({col.type})") from None
+            return out
+        return self._read_csv()
+
+    def _read_csv(self) -> dict[str, tuple[Array, npt.NDArray[np.bool_]]]:
+        try:
+            with open(self.path, newline="", encoding="utf-8") as f:
+                reader = csv.reader(f)
+                header = next(reader, None)
+                if not header:
+                    raise LogError(f"the log {str(self.path)!r} is empty; a CSV log starts with a header row")
+                header = [h.strip() for h in header]
+                dup = sorted({h for h in header if header.count(h) > 1})
+                if dup:
+                    raise LogError(f"the log {str(self.path)!r} has the column {dup[0]!r} twice")
+                # 8 bytes a value and 1 a flag (lists of floats would take 5 times that for a large log)
+                cols = [array("d") for _ in header]
+                filled = [bytearray() for _ in header]
+                for line, row in enumerate(reader, start=2):
+                    if line - 1 > MAX_LOG_SAMPLES:
+                        raise LogError(f"the log {str(self.path)!r} has more than {MAX_LOG_SAMPLES} rows "
+                                       f"(limit MAX_LOG_SAMPLES); cut it into shorter logs")
+                    if len(row) != len(header):
+                        raise LogError(f"{str(self.path)!r} line {line}: {len(row)} fields, the header has "
+                                       f"{len(header)}")
+                    for c, fill, cell in zip(cols, filled, row):
+                        cell = cell.strip()
+                        fill.append(1 if cell else 0)
+                        try:
+                            c.append(float(cell) if cell else math.nan)
+                        except ValueError:
+                            raise LogError(f"{str(self.path)!r} line {line}: {cell[:40]!r} is not a number") from None
+        except UnicodeDecodeError as exc:
+            raise LogError(f"the log {str(self.path)!r} is not UTF-8 text ({exc.reason} at byte {exc.start})") from None
+        except OSError as exc:
+            raise LogError(f"cannot read the log {str(self.path)!r}: {exc.strerror}") from None
+        # an empty cell is a missing value; "nan" written out is a NaN sample (refused where a value is needed)
+        return {h: (np.frombuffer(c, dtype=float).copy(), np.frombuffer(f, dtype=np.uint8).astype(bool))
+                for h, c, f in zip(header, cols, filled)}
+
+    # ------------------------------------------------------------------ channels
+    def channel(self, name: str, *, what: str) -> Channel:
+        """The channel ``name`` (``what`` it is for, for the message).
+
+        Raises
+        ------
+        LogError
+            The channel is not in the log (the message lists those that are), or in several groups of an MDF4.
+        """
+        if name not in self.names:
+            shown = ", ".join(repr(n) for n in self.names[:30]) + (" ..." if len(self.names) > 30 else "")
+            raise LogError(f"{what}: channel {name!r} is not in the log {str(self.path)!r}; it has {shown}")
+        if self._mdf is not None:
+            groups = sorted({g for g, _ in self._mdf.channels_db[name]})
+            if len(groups) > 1:  # asammdf would ask for a group (and log to stderr): the map names channels only
+                raise LogError(f"{what}: channel {name!r} is in {len(groups)} groups of {str(self.path)!r} (groups "
+                               f"{', '.join(map(str, groups))}); the channel map cannot choose: give the log "
+                               "unique channel names")
+            try:
+                sig = self._mdf.get(name)
+            except Exception as exc:
+                raise LogError(f"{what}: channel {name!r} of {str(self.path)!r} cannot be read: {exc}") from None
+            if sig.samples.size > MAX_LOG_SAMPLES:
+                raise LogError(f"{what}: channel {name!r} has {sig.samples.size} samples "
+                               f"(limit MAX_LOG_SAMPLES = {MAX_LOG_SAMPLES})")
+            samples = sig.samples
+            mask = np.ma.getmaskarray(samples) if isinstance(samples, np.ma.MaskedArray) else None
+            try:
+                values = np.asarray(np.ma.getdata(samples), dtype=float)
+            except (TypeError, ValueError):
+                raise LogError(f"{what}: channel {name!r} is not numeric ({samples.dtype})") from None
+            present = np.ones(values.size, dtype=bool) if mask is None else ~mask
+            return Channel(name, np.asarray(sig.timestamps, dtype=float), values, present, str(sig.unit or ""))
+        assert self._table is not None
+        if self._time not in self._table:
+            raise LogError(f"the time column {self._time!r} is not in the log {str(self.path)!r}; it has "
+                           + ", ".join(repr(n) for n in self._table) + " (set [time] channel in the channel map)")
+        values, present = self._table[name]
+        t = self._table[self._time][0]
+        return Channel(name, t * self._factor if self._factor != 1.0 else t, values, present, "")
+
+
+def read_log(path: str | Path, *, time_channel: str = "t", time_factor: float = 1.0) -> Log:
+    """Open a log for reading its channels (:class:`Log`)."""
+    return Log(path, time_channel=time_channel, time_factor=time_factor)
+
+
+def write_table(path: str | Path, columns: Mapping[str, npt.ArrayLike], *, fmt: str | None = None) -> Path:
+    """Write columns as a CSV or Parquet table, atomically; a column shorter than the first is padded with
+    empty cells (nulls), as a column of encoder edges beside the signals is."""
+    fmt = fmt or log_format(path)
+    arrays = {k: np.asarray(v) for k, v in columns.items()}
+    rows = max((a.size for a in arrays.values()), default=0)
+    with atomic_file(path, what="the log") as partial:
+        if fmt == "parquet":
+            pa, pq = _pyarrow()
+            fields = {}
+            for k, a in arrays.items():
+                mask = np.concatenate([np.zeros(a.size, dtype=bool), np.ones(rows - a.size, dtype=bool)])
+                full = np.concatenate([a, np.zeros(rows - a.size, dtype=a.dtype)])
+                fields[k] = pa.array(full, mask=mask)
+            pq.write_table(pa.table(fields), str(partial))
+        elif fmt == "csv":
+            with open(partial, "w", newline="", encoding="utf-8") as f:
+                w = csv.writer(f)
+                w.writerow(list(arrays))
+                cols = [a.tolist() for a in arrays.values()]
+                for i in range(rows):
+                    w.writerow([_cell(c[i]) if i < len(c) else "" for c in cols])
+        else:
+            raise LogError(f"write_table writes csv or parquet, not {fmt!r} (use write_mdf)")
+    return Path(path)
+
+
+def _cell(v: Any) -> str:
+    if isinstance(v, float):
+        return "" if math.isnan(v) else repr(v)
+    return str(v)
+
+
+def write_mdf(path: str | Path, groups: Sequence[tuple[npt.ArrayLike, Mapping[str, tuple[npt.ArrayLike, str]]]]
+              ) -> Path:
+    """Write an ASAM MDF 4 file atomically: each group a master time [s] and its channels ``name -> (values,
+    unit)``."""
+    asammdf = _asammdf()
+    mdf = asammdf.MDF(version="4.10")
+    for t, channels in groups:
+        tt = np.asarray(t, dtype=float)
+        mdf.append([asammdf.Signal(np.asarray(v), tt, name=name, unit=unit) for name, (v, unit) in channels.items()])
+    with atomic_file(path, what="the log") as partial:
+        # asammdf gives a file name without the .mf4 ending that ending: save under it, then rename
+        staged = partial.with_name(partial.name + ".mf4")
+        try:
+            Path(mdf.save(str(staged), overwrite=True)).replace(partial)
+        finally:
+            staged.unlink(missing_ok=True)
+            mdf.close()
+    return Path(path)
