@@ -43,17 +43,16 @@ from fractions import Fraction
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
-import sympy as sp
 
 if TYPE_CHECKING:  # imported where an LMI is built (see _lmi)
     import cvxpy as cp
 
-from .._limits import check_double
-from ..exceptions import CertificateError, FreeSymbolError, ModelError
-from ..model import Model, ParameterBox, matrix_rows, model_terms, parse_box
-from ._box_check import check_dwell, check_strict
-from ..exact import (Matrix, dyadic, float_matrix, fraction_matrix, matrix_strings, to_fraction)
+from ..exact import Matrix, dyadic, float_matrix, fraction_matrix, matrix_strings, to_fraction, vertex_matrices
+from ..exceptions import ModelError
 from ..lmi import DEFAULT_SOLVERS, SolveInfo, balance, primal_margin, solve
+from ..model import Model, ParameterBox, matrix_rows, model_terms, parse_box
+from ..model._box import bound_text
+from ._box_check import check_dwell, check_strict
 from ._dwell import _round_up
 from ._lyapunov import DEFAULT_EPS, _reading
 
@@ -147,7 +146,7 @@ class BoxCertificate:
         head = (f"box {self.box}: certified exactly at {self.vertices} vertices per mode, {what}"
                 if self.certified else
                 f"box {self.requested}: NOT certified ({self.detail}); largest certified sub-box "
-                f"(scale {_num(self.scale)}): {self.box}, {what}")
+                f"(scale {bound_text(self.scale)}): {self.box}, {what}")
         if self.inactive:
             head += f"\n  {', '.join(self.inactive)} enter(s) only d or b, not the error dynamics: no effect"
         return head

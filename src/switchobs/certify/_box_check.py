@@ -38,8 +38,8 @@ from typing import Any
 
 from .._limits import MAX_BOX_VERTICES, MAX_EXPONENT
 from ..exceptions import CertificateError
-from ..exact import (Interval, Matrix, add, definiteness, fraction_matrix, lyapunov_form, matmul, scale, sub,
-                     to_fraction, vertex_matrices, zeros)
+from ..exact import (Interval, Matrix, add, definiteness, evaluate_terms, fraction_matrix, lyapunov_form,
+                     observer_pair, scale, sub, to_fraction, vertex_matrices)
 
 __all__ = ["check_box_data", "check_strict", "check_dwell"]
 

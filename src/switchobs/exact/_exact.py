@@ -185,8 +185,8 @@ def integer_form(M: Sequence[Sequence[Fraction]]) -> tuple[list[list[int]], int]
     return [[int(x * d) for x in row] for row in M], d
 
 
-def float_matrix(M: Sequence[Sequence[Any]]) -> "np.ndarray":
-    """The exact matrix ``M`` as a float array (each entry rounded to nearest)."""
+def float_matrix(M: Sequence[Sequence[Any]]) -> Any:
+    """The exact matrix ``M`` as a NumPy float array (each entry rounded to nearest)."""
     import numpy as np
 
     return np.array([[float(x) for x in row] for row in M])

@@ -21,7 +21,7 @@ from ..exact import Interval, Matrix, to_fraction
 from ..exceptions import CertificateError, FreeSymbolError, ModelError
 from ._model import Model
 
-__all__ = ["ParameterBox", "parse_box", "model_terms"]
+__all__ = ["ParameterBox", "parse_box", "model_terms", "bound_text"]
 
 
 @dataclass(frozen=True)
@@ -63,10 +63,11 @@ class ParameterBox:
                    tuple(to_fraction(v[1], what=f"box {nm} upper") for nm, v in data.items()))
 
     def __str__(self) -> str:
-        return ", ".join(f"{nm} in [{_num(lo)}, {_num(hi)}]" for nm, lo, hi in zip(self.names, self.lower, self.upper))
+        return ", ".join(f"{nm} in [{bound_text(lo)}, {bound_text(hi)}]" for nm, lo, hi in zip(self.names, self.lower, self.upper))
 
 
-def _num(x: Fraction) -> str:
+def bound_text(x: Fraction) -> str:
+    """A box bound as printed: an integer exactly, else 6 significant digits."""
     return str(x) if x.denominator == 1 else f"{float(x):.6g}"
 
 

@@ -4,7 +4,7 @@ The uncertain parameters ``theta`` enter ``A`` polynomially (:func:`model_terms`
 ``{A(theta)}`` lies in the convex hull of the vertex matrices ``A_v`` (the box's
 vertices when ``A`` is affine, monomial lifting otherwise,
 :mod:`switchobs.certify._box_check`).  With ``Y_p = X_p K_p`` the conditions
-(in the rescaled time, see :mod:`switchobs.certify._synthesis`)
+(in the rescaled time, see :mod:`switchobs.synthesis._synthesis`)
 
     He(X_p A_p(v)) + 2 rate X_p <= 0,     He(X_p A_p(v)) + E'E <= 0,
     [[Z_p, Y_p'], [Y_p, X_p]] >= 0,       A_plus(v) = A_v - K_plus C,  A_minus(v) = -A_v + K_minus C,
