@@ -16,6 +16,7 @@ from __future__ import annotations
 import json
 import os
 import random
+from pathlib import Path
 
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
@@ -252,3 +253,74 @@ def test_random_sweep_spec_files_end_in_one_line_and_a_documented_status():
     cases = [{"argv": ["sweep", "s.toml", "--scheduler", "none", "--max-cases", "4", "--max-steps", "20000", *f],
               "files": {"s.toml": text}} for text, f in _draw(st.tuples(sweep_specs(), flags))]
     _check(cases, run_batch(cases, timeout=30 + SECONDS_PER_INPUT * len(cases)), "sweep specs")
+
+
+#: Text a model's name or description may hold in a hostile file: comment ends, quotes, control characters,
+#: line breaks, non-ASCII letters, C and shell metacharacters.
+HOSTILE_TEXT = st.text(alphabet=st.sampled_from(list("aZ_09 */\\\"'\n\r\t\x00\x1b{};#<>$`\u00e9\u2013\u202e")),
+                       min_size=0, max_size=40)
+
+
+@st.composite
+def named_models(draw: st.DrawFn) -> str:
+    """A well-formed 2-state model whose name and description are hostile text."""
+    name, description = draw(HOSTILE_TEXT), draw(HOSTILE_TEXT)
+    return (f"name = {json.dumps(name)}\ndescription = {json.dumps(description)}\nstates = [\"z1\", \"z2\"]\n"
+            "A = [[0, 1], [0, 0]]\nC = [1, 0]\ntime_scale = \"y\"\n")
+
+
+def test_codegen_of_hostile_names_and_descriptions_ends_in_one_line_or_writes_the_files():
+    prefixes = st.one_of(st.none(), st.sampled_from(["", "a__b", "x_", "9x", "ok", "int", "a-b"]))
+    drawn = _draw(st.tuples(named_models(), prefixes))[:max(3, EXAMPLES // 2)]  # each one designs and generates
+    # first a name casadi refused before (non-ASCII, a space: "__" in the default prefix), which must now generate
+    unicode = (f"name = {json.dumps('caf' + chr(233) + ' ' + chr(8211) + ' x')}\nstates = [\"z1\", \"z2\"]\n"
+               "A = [[0, 1], [0, 0]]\nC = [1, 0]\ntime_scale = \"y\"\n")
+    cases = [{"argv": ["codegen", "m.toml", "--spectrum=-1,-2", "--out", "c", *([] if p is None else ["--prefix", p])],
+              "files": {"m.toml": text}} for text, p in [(unicode, None), *drawn]]
+    results = run_batch(cases, timeout=30 + SECONDS_PER_INPUT * len(cases))
+    _check(cases, results, "codegen names")
+    assert results[0]["rc"] == 0, results[0]
+
+
+def test_devices_directories_and_empty_inputs_end_in_one_line():
+    """The one bounded reader: devices are read up to the limit plus one byte, never by their stat size."""
+    inputs = [p for p in ("/dev/zero", "/dev/urandom", "/dev/null") if Path(p).exists()] + [".", "missing.toml",
+                                                                                            "empty.toml"]
+    cases = [{"argv": [command, path, *extra], "files": {"empty.toml": ""}}
+             for path in inputs for command, extra in (("design", ["--spectrum=-1"]), ("verify", []),
+                                                       ("transform", []))]
+    results = run_batch(cases, timeout=30 + SECONDS_PER_INPUT * len(cases))
+    _check(cases, results, "devices")
+    assert all(r["rc"] == 2 for r in results), results
+    assert all(r["seconds"] < SECONDS_PER_INPUT for r in results), [(c["argv"], r["seconds"])
+                                                                     for c, r in zip(cases, results)]
+
+
+def _big_certificate(n: int, digits: int) -> str:
+    """A strict-cqlf certificate of n states whose matrices hold integers of ``digits`` digits."""
+    big = 10 ** (digits - 1)
+    A = [[str(-3 * n * big) if i == j else str(big + i * n + j) for j in range(n)] for i in range(n)]
+    P = [[str(3 * n * big) if i == j else "0" for j in range(n)] for i in range(n)]
+    return json.dumps({"format": "switchobs-certificate", "version": 1,
+                       "family": {"names": ["A_plus", "A_minus"], "matrices": [A, A]},
+                       "certificates": [{"kind": "strict-cqlf", "P": P}],
+                       "verdict": {"arbitrary_switching": "UGES", "dwell_time": "any", "strict_cqlf": "exists",
+                                   "common_lyapunov": "exists"}, "provenance": {}})
+
+
+def test_certificates_near_the_size_limits_end_in_bounded_time():
+    """Sizes around MAX_DIMENSION, MAX_CERTIFICATE_DIGITS and MAX_CERTIFICATE_WORK: each is checked or refused
+    within the time bound (the work estimate refuses the expensive ones before any arithmetic)."""
+    from switchobs._limits import MAX_CERTIFICATE_DIGITS, MAX_DIMENSION
+
+    sizes = st.tuples(st.sampled_from([1, 2, 8, 16, MAX_DIMENSION + 1]),
+                      st.sampled_from([1, 20, MAX_CERTIFICATE_DIGITS - 1, MAX_CERTIFICATE_DIGITS + 1]))
+    # at the dimension limit, only numbers the work estimate refuses: a dense 64 x 64 check takes a minute
+    drawn = sorted(set(_draw(sizes)) | {(MAX_DIMENSION, MAX_CERTIFICATE_DIGITS - 1), (MAX_DIMENSION, 400)})
+    cases = [{"argv": ["verify", "c.json", *flag], "files": {"c.json": _big_certificate(n, d)}}
+             for (n, d), flag in zip(drawn, [[], ["--arithmetic", "interval"]] * len(drawn))
+             if n * d < 2_000_000]  # a file of n*n*d bytes: at most some 50 MB
+    results = run_batch(cases, timeout=30 + SECONDS_PER_INPUT * len(cases), memory=2 << 30)
+    _check(cases, results, "certificate sizes")
+    assert all(r["seconds"] < SECONDS_PER_INPUT for r in results), [(c["argv"], r["seconds"])
+                                                                     for c, r in zip(cases, results)]

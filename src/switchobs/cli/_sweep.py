@@ -40,7 +40,10 @@ def register(sub: argparse._SubParsersAction) -> None:
                         "(serially in this process)")
     p.add_argument("--workers", type=int, help="worker processes of the local cluster (default: one per core)")
     p.add_argument("--batch-size", type=int, help="cases per Dask task (default: about 4 batches per worker)")
-    p.add_argument("--plots", metavar="DIR", help="write the heatmaps (and pareto.png with --tune) here")
+    p.add_argument("--limit", type=int, metavar="N",
+                   help="run only the first N cases of the spec (a quick try of a large spec)")
+    p.add_argument("--plots", metavar="DIR",
+                   help="write the heatmaps (and pareto.png with --tune) here (created if missing)")
     p.add_argument("--tune", action="store_true",
                    help="pick the Pareto-optimal (beta1, beta2) of the grid and print its design command")
     p.add_argument("--json", action="store_true", help="print the summary, tables and tuned design as JSON")
@@ -70,6 +73,8 @@ def run(args: argparse.Namespace) -> int:
         raise SimulationError(f"--workers must be >= 1, got {args.workers}")
     if args.batch_size is not None and args.batch_size < 1:
         raise SimulationError(f"--batch-size must be >= 1, got {args.batch_size}")
+    if args.limit is not None and args.limit < 1:
+        raise SimulationError(f"--limit must be >= 1, got {args.limit}")
     for option, value in (("--out", args.out), ("--plots", args.plots)):
         if value is not None and not value.strip():
             raise SimulationError(f"{option} {value!r}: give a file or directory name")
@@ -77,14 +82,13 @@ def run(args: argparse.Namespace) -> int:
         raise SimulationError("--out -: the results file of a sweep is rewritten in case order and resumed, so it "
                               "cannot be standard output; give a file name (--json prints the summary)")
     plots = None if args.plots is None else check_output_directory(args.plots, what="the --plots directory")
-    if plots is not None and not plots.is_dir():
-        raise SimulationError(f"--plots {str(plots)!r} is not a directory; create it first")
     spec = load_sweep_spec(args.spec, max_cases=args.max_cases)  # every case, table and heatmap checked
     # the spec's name is reduced to a plain file name in the current directory: never a path from a file
     out = Path(args.out) if args.out is not None else Path(spec.results_file)
+    cases = spec.cases if args.limit is None else spec.cases[:args.limit]
     if args.tune:
-        check_tunable(spec.cases)  # before the cases run, not after
-    sweep = run_sweep(spec.cases, path=out, resume=args.resume, scheduler=args.scheduler, workers=args.workers,
+        check_tunable(cases)  # before the cases run, not after
+    sweep = run_sweep(cases, path=out, resume=args.resume, scheduler=args.scheduler, workers=args.workers,
                       batch_size=args.batch_size, max_cases=args.max_cases, max_steps=args.max_steps)
     tables = [summary_table(sweep.results, rows=t.rows, column=t.column, metric=t.metric) for t in spec.tables]
     tuned = tune_betas(sweep.results) if (args.tune or spec.tune) else None

@@ -14,7 +14,7 @@ import re
 
 import numpy as np
 
-from ..loop import DEFAULT_BETA, DEFAULT_GAMMA, EstimatorSpec, xbs_estimator
+from ..loop import DEFAULT_BETA, DEFAULT_GAMMA, EstimatorSpec, default_method, xbs_estimator
 from ..plants import (D1_HOANG, D2_HOANG, BrakingScenario, ContinuousXbsControl, FivePhaseABS, PoincareMap,
                       SixPhaseABS, TwoPhaseABS, fit_exponential, road, road_names, scenario, simulate,
                       simulate_return_map)
@@ -83,7 +83,9 @@ def _quarter_car_section(runs: Runs) -> list[str]:
     truth = simulate(BrakingScenario("dry-asphalt", speed_m_s=25.0, dt_s=QUARTER_CAR_STEPS[0]))
     xbs = truth.series["xbs"][_scored(truth)]
     head = ("Measured with `switchobs.plants.simulate` (five-phase ABS, dry asphalt of seed 001 Table 2.1, "
-            "25 m/s, observer in parallel, adapter with mean hold): RMS of $\\hat\\mu' - \\mu'$ for "
+            f"25 m/s, observer in parallel, adapter with mean hold, each observer's default step: "
+            f"{default_method('xbs3')} for xbs3 and xbs4, {default_method('adaptive')} for the adaptive one, which "
+            "takes explicit steps only): RMS of $\\hat\\mu' - \\mu'$ for "
             f"$t > {_SCORED_AFTER_S:g}$ s and $v_x > {_SCORED_ABOVE_M_S:g}$ m/s (the true XBS ranges over "
             f"$[{xbs.min():.2f}, {xbs.max():.2f}]$, standard deviation {xbs.std():.2f}, there). The error is "
             "dominated by the simplification $(-a_x x_1 + x_2) \\simeq x_2$, $\\dot a_x \\simeq 0$ of the observer "

@@ -248,7 +248,8 @@ def _read_pages(root: Path) -> dict[str, str]:
     for path, name in GENERATED_SECTIONS:
         file = root / path
         if not file.is_file():
-            raise PrerequisiteError(f"{file} does not exist; give the repository root holding docs/ (--root)")
+            raise PrerequisiteError(f"{file} does not exist: reproduce rewrites the pages of a checkout of the "
+                                    "switchobs repository; run it in one, or give its root with --root")
         text = texts.setdefault(path, file.read_text("utf-8"))
         if not 0 <= text.find(_begin(name)) < text.find(_end(name)):
             raise PrerequisiteError(f"{file} has no generated section {name!r}: add the lines "

@@ -16,7 +16,7 @@ from typing import Any, ClassVar
 
 from .._limits import MAX_ROAD_CHANGES
 from ..exceptions import SimulationError
-from ..loop import OBSERVER_KINDS
+from ..loop import OBSERVER_KINDS, default_method
 from ..model import builtin_names
 from ..observers import METHODS
 from ..plants import road_names
@@ -114,9 +114,10 @@ class BrakingCase(_CaseBase):
         Observer rates (``beta2``: xbs3/xbs4 only) and adaptation gain; defaults those of the factory.
     impl : str
         ``python`` (reference observer) or ``c`` (the generated C, compiled once per process through the cache).
-    method : str
+    method : str, optional
         The observer's step method (:data:`switchobs.observers.METHODS`); an encoder feeds it one step per
         measurement, which ``radau3`` and ``midpoint`` take at any length (``switchobs certify --discrete``).
+        Default :func:`switchobs.loop.default_method` of the observer (radau3; rk4 for the adaptive one).
     in_loop : bool
         Controllers that need an XBS read the estimate (otherwise the true XBS; the observer runs beside).
     encoder_ppr : int
@@ -152,7 +153,7 @@ class BrakingCase(_CaseBase):
     beta2: float | None = None
     gamma: float | None = None
     impl: str = "python"
-    method: str = "rk4"
+    method: str | None = None
     in_loop: bool = True
     encoder_ppr: int = 0
     encoder_dnl: float = 0.01
@@ -186,6 +187,8 @@ class BrakingCase(_CaseBase):
         _choice(owner, "controller", self.controller, CONTROLLERS)
         _choice(owner, "observer", self.observer, OBSERVER_KINDS)
         _choice(owner, "impl", self.impl, _IMPLS)
+        if self.method is None:
+            set_(self, "method", default_method(self.observer))
         _choice(owner, "step method", self.method, tuple(METHODS))
         if not isinstance(self.in_loop, bool):
             raise SimulationError(f"{owner}: in_loop must be true or false, got {self.in_loop!r}")
@@ -209,7 +212,7 @@ class BrakingCase(_CaseBase):
         if self.beta1 is not None:
             obs += f", beta {self.beta1:g}" + ("" if self.beta2 is None else f"/{self.beta2:g}")
         if self.observer != "none":
-            obs += f" ({self.impl}{'' if self.method == 'rk4' else ', ' + self.method})"
+            obs += f" ({self.impl}{'' if self.method == default_method(self.observer) else ', ' + self.method})"
         if self.encoder_ppr:
             obs += f", {self.encoder_ppr}-ppr encoder (seed {self.encoder_seed})"
         return f"braking {roads}, {self.speed_kmh:g} km/h, {self.controller}, {obs}"

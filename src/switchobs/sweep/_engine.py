@@ -238,7 +238,7 @@ def dask_client(scheduler: Any = SCHEDULER_LOCAL, *, workers: int | None = None)
         import distributed
     except ImportError as exc:
         raise PrerequisiteError(f"sweeps on Dask need dask.distributed ({exc}); install the extra with "
-                                "`pip install -e '.[sweep]'` (make install does), or run serially with "
+                                "pip install \"switchobs[sweep]\", or run serially with "
                                 "--scheduler none") from None
     if isinstance(scheduler, distributed.Client):
         return scheduler, lambda: None, f"Dask client {scheduler.scheduler.address}"

@@ -64,11 +64,11 @@ if TYPE_CHECKING:  # imported where an LMI is built (see _lmi)
 
 from .._json import JsonRecord, fields_from_json
 from .._limits import check_double
-from ..exceptions import CertificateError, DimensionError, ModelError, SolverFailure
-from ..model import Model, ParameterBox, user_matrix
 from ..exact import (Matrix, add, definiteness, dyadic, float_matrix, fraction_matrix, identity, lyapunov_form, matmul,
-                     matrix_strings, rank, scale, sub, to_fraction, transpose)
+                     matrix_strings, observable, rank, scale, sub, to_fraction, transpose)
+from ..exceptions import CertificateError, DimensionError, ModelError, NotObservableError, SolverFailure
 from ..lmi import DEFAULT_SOLVERS, SolveInfo, primal_margin, solve
+from ..model import Model, ParameterBox, user_matrix
 
 
 __all__ = ["GainSynthesis", "synthesize_gains", "synthesize", "noise_gain", "decay_holds", "decay_certificate",
@@ -552,6 +552,11 @@ def synthesize_gains(A: Any, C: Any, *, decay_rate: Any, noise_weight: float = 0
         raise DimensionError(f"A must be square, got {n}x{len(A_ex[0])}")
     C_ex = user_matrix(C, what="C", part="C", cols=n)
     rate, rows = check_synthesis_inputs(decay_rate, noise_weight, estimate, n)
+    # no gain makes an unobservable mode decay: bad input, as design and certify say, not an infeasible LMI
+    obs, dim = observable(A_ex, C_ex)
+    if not obs:
+        raise NotObservableError(f"the pair (A, C) is not observable: the observable subspace has dimension {dim} "
+                                 f"< {n}; change C or A so that every state shows up in the output")
     full_rank = rank(C_ex) == n
     use_strict = full_rank if strict is None else strict
     formulation = "strict" if use_strict else "hespanha"
