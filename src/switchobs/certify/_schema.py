@@ -226,7 +226,7 @@ class ObserverSection:
         return cls(data.get("A"), data.get("C"), data.get("K_plus", []), data.get("K_minus", []))
 
     def check(self, names: Sequence[str], matrices: Sequence[Any]) -> Check:
-        from ._exact import add, fraction_matrix, matmul, scale, sub
+        from ..exact import add, fraction_matrix, matmul, scale, sub
 
         n = len(matrices[0])
         A = fraction_matrix(self.A, what="observer A", rows=n, cols=n)

@@ -7,7 +7,7 @@ A certificate is a JSON document (format ``switchobs-certificate``, version 1,
 sections in :mod:`switchobs.certify._schema`) holding the switched family
 ``{A_p}`` and, as rational strings, the matrices of one or more certificates.  :func:`verify_certificate` re-derives every
 inequality from those matrices alone, decides each in exact rational
-arithmetic (:mod:`switchobs.certify._exact`), recomputes the verdict they
+arithmetic (:mod:`switchobs.exact`), recomputes the verdict they
 imply and compares it with the verdict the document claims.  It never looks
 at margins, solver names or statuses: those are provenance, not evidence.
 
@@ -60,7 +60,7 @@ from .._limits import (MAX_CERTIFICATE_BYTES, MAX_CERTIFICATE_DIGITS, MAX_CERTIF
                        digits, read_text)
 from .._progress import progress
 from ..exceptions import CertificateError, SwitchobsError
-from ._exact import (Matrix, add, definiteness, expm_enclosure, fraction_matrix, inf_norm,
+from ..exact import (Matrix, add, definiteness, expm_enclosure, fraction_matrix, inf_norm,
                      integer_form, is_zero, lyapunov_form, matmul, observable, scale, sqrt_upper,
                      to_fraction, transpose, arithmetic as _arithmetic)
 from ._schema import (ANY_DWELL, ArbitrarySwitching, CertificateDocument, CertificateKind, Check, DualEntry,

@@ -46,7 +46,8 @@ def register(sub: argparse._SubParsersAction) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    from ..certify import certify_model, synthesize, synthesize_box
+    from ..certify import certify_model
+    from ..synthesis import synthesize, synthesize_box
 
     if not (math.isfinite(args.noise_weight) and args.noise_weight >= 0):
         raise ModelError(f"--noise-weight must be a finite number >= 0, got {args.noise_weight!r}")

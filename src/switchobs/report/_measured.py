@@ -11,7 +11,6 @@ from __future__ import annotations
 
 import math
 import re
-from typing import TYPE_CHECKING
 
 import numpy as np
 
@@ -19,10 +18,9 @@ from ..loop import DEFAULT_BETA, DEFAULT_GAMMA, EstimatorSpec, default_method, x
 from ..plants import (D1_HOANG, D2_HOANG, BrakingScenario, ContinuousXbsControl, FivePhaseABS, PoincareMap,
                       SixPhaseABS, TwoPhaseABS, fit_exponential, road, road_names, scenario, simulate,
                       simulate_return_map)
+from ..experiments import Runs
 from ._markdown import md_table
 
-if TYPE_CHECKING:
-    from ._repro_runs import _Runs
 
 #: The observer rates and half-cycle lengths in tau of the decay-rate table of docs/observers.md.
 DECAY_BETAS = (5, 10, 20, 40, 60, 100, 150, 200, 300, 500)
@@ -51,7 +49,7 @@ def _error_matrices(obs) -> tuple[np.ndarray, np.ndarray]:
     return A - np.outer(obs.K_plus, C), -A + np.outer(obs.K_minus, C)
 
 
-def _decay_section(runs: _Runs) -> list[str]:
+def _decay_section(runs: Runs) -> list[str]:
     from ..observers import adaptive_xbs_observer, xbs3_observer, xbs4_observer
 
     build = {"abs-xbs3": lambda b: xbs3_observer(b, b), "abs-xbs4": lambda b: xbs4_observer(b, b),
@@ -80,7 +78,7 @@ def _quarter_car_rms(dt: float, kind: str, gamma: float | None, beta: float) -> 
     return f"{rms:#.3g}" if math.isfinite(rms) and rms < 1e3 else "diverges"
 
 
-def _quarter_car_section(runs: _Runs) -> list[str]:
+def _quarter_car_section(runs: Runs) -> list[str]:
     dry = road("dry-asphalt")
     truth = simulate(BrakingScenario("dry-asphalt", speed_m_s=25.0, dt_s=QUARTER_CAR_STEPS[0]))
     xbs = truth.series["xbs"][_scored(truth)]
@@ -109,7 +107,7 @@ def _quarter_car_section(runs: _Runs) -> list[str]:
     return lines
 
 
-def _trajectory_section(runs: _Runs) -> list[str]:
+def _trajectory_section(runs: Runs) -> list[str]:
     from ..certify import trajectory_conditions
 
     name = "aguado-sec34"
@@ -152,7 +150,7 @@ def _short(x: float) -> str:
     return re.sub(r"e([+-])0*(\d)", r"e\1\2", text).replace("e+", "e")
 
 
-def _table1_section(runs: _Runs) -> list[str]:
+def _table1_section(runs: Runs) -> list[str]:
     lines = [f"Least squares on 101 equally spaced slips in $[-1,0]$, $d_1={D1_HOANG:g}$, $d_2={D2_HOANG:g}$ "
              "(`fit_exponential`):", ""]
     rows = []
@@ -165,7 +163,7 @@ def _table1_section(runs: _Runs) -> list[str]:
                              rows)]
 
 
-def _poincare_section(runs: _Runs) -> list[str]:
+def _poincare_section(runs: Runs) -> list[str]:
     dry = road("dry-asphalt")
     maps = {kp: PoincareMap.from_abs(kp=kp, c=dry.c, d=dry.d, **POINCARE_SETTING) for kp in POINCARE_KPS}
     z_ref = POINCARE_SETTING["z_ref"]
@@ -187,7 +185,7 @@ def _poincare_section(runs: _Runs) -> list[str]:
                               f"largest relative error, analytic vs simulated map ($\\zeta={zetas}$)"], rows)]
 
 
-def _continuous_section(runs: _Runs) -> list[str]:
+def _continuous_section(runs: Runs) -> list[str]:
     """Seed 001 Figs. 4.1-4.2: the continuous law (4.2)-(4.3) against the two-phase ABS, adaptive observer
     beside the loop (``switchobs simulate --controller continuous --observer adaptive --parallel``)."""
     law = ContinuousXbsControl()
@@ -216,7 +214,7 @@ def _continuous_section(runs: _Runs) -> list[str]:
             "that reaches $cz_2+d\\le0$ stops the run (`controller-singular`)."]
 
 
-def _five_phase_section(runs: _Runs) -> list[str]:
+def _five_phase_section(runs: Runs) -> list[str]:
     """The printed Fig. 6.6 thresholds on the Table 2.1 characteristics, and our defaults."""
     fig66, ours = FivePhaseABS.fig66(), FivePhaseABS()
     res = simulate(BrakingScenario("dry-asphalt", speed_m_s=120.0 / 3.6, controller=fig66))
@@ -234,7 +232,7 @@ def _five_phase_section(runs: _Runs) -> list[str]:
             f"$u=({ours.u1:g},{ours.u3:g},{ours.u4:g})$ bar·m/s²."]
 
 
-def _two_phase_start_section(runs: _Runs) -> list[str]:
+def _two_phase_start_section(runs: Runs) -> list[str]:
     """How the two-phase ABS of ``table41`` (no start-up safeguard) leaves its build-up on the flattest road."""
     name, speed = "dry-cobblestones", 180.0
     sc = BrakingScenario(name, speed_m_s=speed / 3.6, controller=TwoPhaseABS(start_decel_m_s2=None))
@@ -252,7 +250,7 @@ def _two_phase_start_section(runs: _Runs) -> list[str]:
     return [text]
 
 
-def _six_phase_section(runs: _Runs) -> list[str]:
+def _six_phase_section(runs: Runs) -> list[str]:
     """Our six-phase values and the friction utilisation they give on the roads of Table 2.1 at 120 km/h."""
     ours = SixPhaseABS()
     used = [simulate(BrakingScenario(name, speed_m_s=120.0 / 3.6, controller=ours)).metrics.efficiency
