@@ -44,9 +44,10 @@ cc-tools:
 test: $(STAMP) cc-tools
 	$(PY) -m pytest -n 2 -q
 
-# The fuzzing suites with many more examples than `make test` runs (random, not derandomised): model files and
-# certificates (tests/test_fuzz_inputs.py, test_errors.py) and CLI option values (tests/test_fuzz_options.py),
-# and libFuzzer on the generated C API for FUZZ_C_SECONDS per observer (tests/test_codegen_fuzz.py; 10 s in make test).
+# The fuzzing suites with many more examples than `make test` runs (random, not derandomised): model files,
+# certificates and sweep spec files (tests/test_fuzz_inputs.py, test_errors.py), CLI option values of encoder,
+# simulate and sweep (tests/test_fuzz_options.py), and libFuzzer on the generated C API for FUZZ_C_SECONDS per
+# observer (tests/test_codegen_fuzz.py; 10 s in make test).
 FUZZ_EXAMPLES ?= 300
 FUZZ_C_SECONDS ?= 300
 fuzz: $(STAMP) cc-tools

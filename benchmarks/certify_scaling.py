@@ -10,7 +10,7 @@ integer data, so A_p' P + P A_p = -Q_p).  For Clarabel and SCS:
 * verify -- the independent checker on the JSON certificate (parse + exact re-check);
 
 and the default solver order (``solvers`` left out: Clarabel first below n = 16, SCS first from it, see
-``certify/_lmi.py``).  Run: ``python benchmarks/certify_scaling.py [--quick] [--max-n 64] [--repeats 5]``.
+``lmi/_lmi.py``).  Run: ``python benchmarks/certify_scaling.py [--quick] [--max-n 64] [--repeats 5]``.
 """
 
 from __future__ import annotations
@@ -22,8 +22,8 @@ import numpy as np
 from _harness import MIN_REPEATS, cpu, publish, ratio
 
 from switchobs.certify import as_family, strict_common_lyapunov, verify_certificate
-from switchobs.certify._lmi import DEFAULT_SOLVERS, SCS_FIRST_FROM_N, balance, by_size, primal_margin
-from switchobs.certify._rounding import dyadic
+from switchobs.lmi import DEFAULT_SOLVERS, SCS_FIRST_FROM_N, balance, by_size, primal_margin
+from switchobs.exact import dyadic
 from switchobs.certify._schema import CertificateKind, LyapunovEntry
 from switchobs.certify._verify import _check_strict
 

@@ -40,7 +40,7 @@ from _harness import MIN_REPEATS, number, publish
 
 from switchobs.certify import check_discrete, discrete_certificate
 from switchobs.certify._discrete import stability_function
-from switchobs.certify._exact import solve
+from switchobs.exact import solve
 from switchobs.codegen import generate_observer
 from switchobs.design import design
 from switchobs.model import builtin_model

@@ -29,7 +29,8 @@ from _harness import Stats, publish
 # imported here, in the parent: the forked children inherit the modules, so their CPU time leaves out the imports
 # (cvxpy too, which the library imports only when it first solves an LMI)
 import cvxpy  # noqa: F401
-from switchobs.certify import certify_box, certify_model, synthesize, synthesize_box
+from switchobs.certify import certify_box, certify_model
+from switchobs.synthesis import synthesize, synthesize_box
 from switchobs.model import builtin_model
 
 REPEATS = 5

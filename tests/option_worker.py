@@ -42,7 +42,7 @@ def main() -> None:
             with contextlib.redirect_stdout(out), contextlib.redirect_stderr(err):
                 try:
                     code = switchobs(argv)
-                except SystemExit as exc:          # argparse: usage and one error line, exit 2
+                except SystemExit as exc:          # argparse: one error line, exit 2
                     code = exc.code
         except Timeout:
             crash = f"no answer within {seconds:g} s"

@@ -87,7 +87,7 @@ def test_the_encoder_source_measures_the_cruise_and_feeds_the_controller():
 
 def test_fig67_scenario_needs_its_slow_build_up_with_the_exact_x2():
     """docs/reproductions.md, Sec. 6.4: at the default 1000 bar/s the printed Fig. 6.6 stalls in the release."""
-    from switchobs.report._repro_abs import fig67_scenario
+    from switchobs.experiments import fig67_scenario
 
     sc = replace(fig67_scenario(), duration_s=1.5)
     fast = simulate(replace(sc, controller=replace(sc.controller, initial_rate_bar_s=1000.0)))
@@ -99,7 +99,7 @@ def test_fig67_scenario_needs_its_slow_build_up_with_the_exact_x2():
 # ---------------------------------------------------------------- Figs. 6.7-6.9 (docs/reproductions.md, Sec. 6.4)
 
 def _fig67_runs(*kinds, stop_at_split=True, encoder=None):
-    from switchobs.report._repro_abs import FIG67_ENCODER, FIG67_SPLIT_M_S, HalfWindowLate, fig67_scenario
+    from switchobs.experiments import FIG67_ENCODER, FIG67_SPLIT_M_S, HalfWindowLate, fig67_scenario
 
     sc = fig67_scenario()
     if stop_at_split:                      # the seed's statements are scored above 60 km/h: stop there
@@ -121,26 +121,26 @@ def _fig67_runs(*kinds, stop_at_split=True, encoder=None):
 
 def test_fig67_the_raw_tsa_is_blocked_in_the_hold_before_the_peak_as_the_seed_s_fig67():
     """Seed: "remains blocked in an arbitrary phase ... trapped at the point (-7, 0)"; needs e/r ~ 0.006."""
-    from switchobs.report._repro_abs import (FIG67_BLOCKED_S, FIG67_ENCODER, FIG67_SMALL_ECCENTRICITY,
-                                             _excursion, _longest_stay)
+    from switchobs.experiments import (FIG67_BLOCKED_S, FIG67_ENCODER, FIG67_SMALL_ECCENTRICITY,
+                                             excursion, longest_stay)
 
     res = _fig67_runs("tsa")["tsa"]
-    dur, phase, slip, x2 = _longest_stay(res)
+    dur, phase, slip, x2 = longest_stay(res)
     assert dur >= FIG67_BLOCKED_S and phase == 5
     assert -0.12 < slip < -0.03 and abs(x2) < 5.0          # before the friction peak (-16 %), at rest in x2
-    assert res.series["phase"][-1] == 5.0 and _excursion(res) < 10.0
+    assert res.series["phase"][-1] == 5.0 and excursion(res) < 10.0
     # with our Table 6.1 eccentricity the ripple is too small to fire the hold before the peak: it cycles
     small = _fig67_runs("tsa", encoder=replace(FIG67_ENCODER, eccentricity=FIG67_SMALL_ECCENTRICITY))["tsa"]
-    assert _longest_stay(small)[0] < FIG67_BLOCKED_S and small.metrics.abs_cycles >= 3
+    assert longest_stay(small)[0] < FIG67_BLOCKED_S and small.metrics.abs_cycles >= 3
 
 
 def test_fig67_the_three_stage_loop_cycles_closer_than_the_notch_and_as_a_perfect_encoder():
-    from switchobs.report._repro_abs import FIG67_BLOCKED_S, _excursion, _longest_stay
+    from switchobs.experiments import FIG67_BLOCKED_S, excursion, longest_stay
 
     runs = _fig67_runs("notch", "three-stage", "tsa-ideal")
-    exc = {kind: _excursion(res) for kind, res in runs.items()}
+    exc = {kind: excursion(res) for kind, res in runs.items()}
     for res in runs.values():
-        assert res.status == "stopped" and _longest_stay(res)[0] < FIG67_BLOCKED_S and res.metrics.abs_cycles >= 4
+        assert res.status == "stopped" and longest_stay(res)[0] < FIG67_BLOCKED_S and res.metrics.abs_cycles >= 4
     # Fig. 6.9: about 35 m/s^2 beyond the thresholds, less than the notch's (its delay)
     assert 20.0 < exc["three-stage"] < 45.0 < exc["notch"]
     # the compensation removes the whole ripple: what is left is the TSA window's lag
@@ -149,22 +149,22 @@ def test_fig67_the_three_stage_loop_cycles_closer_than_the_notch_and_as_a_perfec
 
 def test_fig67_below_60_kmh_the_tsa_window_lag_alone_loses_the_cycle():
     """The measured reason why no TSA-fed loop (a perfect encoder's neither) keeps cycling to a stop."""
-    from switchobs.report._repro_abs import FIG67_SPLIT_M_S, _excursion
+    from switchobs.experiments import FIG67_SPLIT_M_S, excursion
 
     runs = _fig67_runs("exact", "half-window", stop_at_split=False)
     slow = {kind: res.series["vx"] < FIG67_SPLIT_M_S for kind, res in runs.items()}
     exact, late = runs["exact"], runs["half-window"]
-    assert _excursion(exact, slow["exact"]) < 1.0 and np.min(exact.series["lambda"][slow["exact"]]) > -0.5
+    assert excursion(exact, slow["exact"]) < 1.0 and np.min(exact.series["lambda"][slow["exact"]]) > -0.5
     # the same x2, only half a 12-edge window late: far outside the thresholds, and the wheel locks
-    assert _excursion(late, slow["half-window"]) > 100.0
+    assert excursion(late, slow["half-window"]) > 100.0
     assert np.min(late.series["lambda"][slow["half-window"]]) < -0.9
     # above 60 km/h the same lag costs little
-    assert _excursion(late, ~slow["half-window"]) < 45.0
+    assert excursion(late, ~slow["half-window"]) < 45.0
 
 
 def test_fig67_open_loop_the_three_stage_estimator_removes_the_ripple_during_the_braking():
     """Neither the deceleration nor the high-pass stage disturbs the identification: what is left is the lag."""
-    from switchobs.report._repro_abs import fig67_open_loop, fig67_scenario
+    from switchobs.experiments import fig67_open_loop, fig67_scenario
 
     err = fig67_open_loop(simulate(fig67_scenario()))
     centre, sample = ({kind: e[i] for kind, e in err.items()} for i in (0, 1))

@@ -10,10 +10,10 @@ import sympy as sp
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from switchobs.certify._exact import (_full_rank_mod_p, _interval_positive_definite, arithmetic, definiteness,
+from switchobs.exact._exact import (_full_rank_mod_p, _interval_positive_definite, arithmetic, definiteness,
                                       expm_enclosure, fraction_matrix, integer_form, lyapunov_form, nullspace,
                                       observable, rank, to_fraction)
-from switchobs.certify._rounding import factor_rows, range_basis, short_sqrt_lower
+from switchobs.exact import factor_rows, range_basis, short_sqrt_lower
 from switchobs.exceptions import CertificateError, DimensionError
 
 
@@ -167,7 +167,7 @@ def test_lyapunov_form_keeps_integers_integer():
 
 def _python_int_bareiss(M, strict):
     """The elimination as it was before python-flint: Python ints on d*M; (holds, failing index)."""
-    from switchobs.certify._exact import integer_form
+    from switchobs.exact import integer_form
 
     a, _ = integer_form([[Fraction(x) for x in row] for row in M])
     n, prev = len(a), 1

@@ -10,8 +10,8 @@ from hypothesis import strategies as st
 
 from switchobs.certify import (as_family, classify_planar, common_lyapunov, infeasibility_certificate,
                                singular_sum, strict_common_lyapunov, verify_certificate)
-from switchobs.certify import _lmi
-from switchobs.certify._exact import definiteness, lyapunov_form, matmul, transpose
+from switchobs import lmi
+from switchobs.exact import definiteness, lyapunov_form, matmul, transpose
 from switchobs.certify._verify import planar_case_exact
 from switchobs.exceptions import DimensionError, ModelError, NotHurwitzError, SolverFailure
 
@@ -233,7 +233,7 @@ def test_solver_failure_is_reported_not_certified(monkeypatch):
 
 def test_garbage_solution_is_never_certified(monkeypatch):
     """A solver that claims a large margin with a wrong P: the exact check refuses it."""
-    info = _lmi.SolveInfo("FAKE", "optimal", ("FAKE: optimal",), 0.0, 0.0)
+    info = lmi.SolveInfo("FAKE", "optimal", ("FAKE: optimal",), 0.0, 0.0)
 
     def fake_margin(mats, H, **kwargs):
         return np.array([[1.0, 0.0], [0.0, -1.0]]), 0.5, info
@@ -268,14 +268,14 @@ def _strict_holds(res):
 
 
 def test_default_solver_order_follows_the_measured_cross_over():
-    assert _lmi.by_size(_lmi.DEFAULT_SOLVERS, _lmi.SCS_FIRST_FROM_N - 1) == ("CLARABEL", "SCS")
-    assert _lmi.by_size(_lmi.DEFAULT_SOLVERS, _lmi.SCS_FIRST_FROM_N) == ("SCS", "CLARABEL")
-    assert _lmi.by_size(["CLARABEL"], 64) == ("CLARABEL",)  # an explicit choice is kept
-    assert _lmi.by_size(("SCS", "CLARABEL"), 2) == ("SCS", "CLARABEL")
+    assert lmi.by_size(lmi.DEFAULT_SOLVERS, lmi.SCS_FIRST_FROM_N - 1) == ("CLARABEL", "SCS")
+    assert lmi.by_size(lmi.DEFAULT_SOLVERS, lmi.SCS_FIRST_FROM_N) == ("SCS", "CLARABEL")
+    assert lmi.by_size(["CLARABEL"], 64) == ("CLARABEL",)  # an explicit choice is kept
+    assert lmi.by_size(("SCS", "CLARABEL"), 2) == ("SCS", "CLARABEL")
 
 
 def test_a_large_planted_pair_is_certified_exactly_with_scs_first():
-    n = _lmi.SCS_FIRST_FROM_N
+    n = lmi.SCS_FIRST_FROM_N
     mats, _ = _planted(n, seed=n)
     res = strict_common_lyapunov(mats, dual=False)
     assert res.certified and res.solver.solver == "SCS"

@@ -8,10 +8,11 @@ from fractions import Fraction
 import numpy as np
 import pytest
 
-from switchobs.certify import certify, certify_model, noise_gain, synthesize, synthesize_box, synthesize_gains
-from switchobs.certify._box_check import observer_pair
-from switchobs.certify._exact import fraction_matrix
-from switchobs.certify._synthesis import decay_holds, hespanha_pair_holds
+from switchobs.certify import certify, certify_model
+from switchobs.synthesis import noise_gain, synthesize, synthesize_box, synthesize_gains
+from switchobs.exact import observer_pair
+from switchobs.exact import fraction_matrix
+from switchobs.synthesis._synthesis import decay_holds, hespanha_pair_holds
 from switchobs.cli.main import main
 from switchobs.design import design_gains
 from switchobs.model import builtin_model
@@ -181,7 +182,7 @@ def test_xbs4_at_decay_40_is_certified_exactly_and_its_gains_round_trip_through_
 def test_riccati_scaling_puts_the_kalman_filters_at_the_identity():
     from scipy.linalg import solve_continuous_are
 
-    from switchobs.certify._synthesis import riccati_scaling
+    from switchobs.synthesis._synthesis import riccati_scaling
 
     A, C = _floats(XBS4.numeric().A) / 40, np.array([[1.0, 0, 0, 0]])
     S = riccati_scaling(A, C, (1, -1))
@@ -194,7 +195,7 @@ def test_riccati_scaling_puts_the_kalman_filters_at_the_identity():
 
 def test_nominal_and_box_synthesis_share_the_preconditioning_and_need_it(monkeypatch):
     """Both paths solve in the coordinates of ``riccati_scaling``; without them abs-xbs4 at rate 100 fails."""
-    from switchobs.certify import _synthesis
+    from switchobs.synthesis import _synthesis
 
     calls = []
     real = _synthesis.riccati_scaling
@@ -207,7 +208,7 @@ def test_nominal_and_box_synthesis_share_the_preconditioning_and_need_it(monkeyp
 
 
 def test_decay_certificate_re_solves_for_the_rounded_gains_and_never_certifies_a_slow_matrix():
-    from switchobs.certify._synthesis import decay_certificate
+    from switchobs.synthesis._synthesis import decay_certificate
 
     A = [[Fraction(-3), Fraction(1000)], [Fraction(0), Fraction(-4)]]   # strongly non-normal, decays at 3
     bad_start = np.eye(2)                                                # He(A) + 4 I is not negative

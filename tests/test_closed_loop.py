@@ -63,7 +63,7 @@ def test_the_compiled_loop_gives_the_python_loops_run_bit_for_bit(name):
 
 def test_a_refused_observer_step_ends_both_loops_alike():
     sc = replace(scenario("aguado-sec34"), duration_s=1.0)
-    (ref, _), (fast, _) = both(sc, EstimatorSpec("xbs4", beta=1e6, impl="c"))
+    (ref, _), (fast, _) = both(sc, EstimatorSpec("xbs4", beta=1e6, impl="c", method="rk4"))   # radau3 stays bounded
     assert ref.status == "observer-failed" and "NONFINITE_RESULT" in ref.message
     assert_same(ref, fast)
 

@@ -122,7 +122,7 @@ def test_run_stops_at_the_first_failing_row_and_names_it(xbs4):
     assert np.array_equal(traj[:6], good) and np.all(traj[6:] == -7.0) and np.array_equal(x, good[-1])
     assert run(x.ctypes.data, None, 3, None, 1e-3, None) == StepStatus.BAD_ARGUMENT
     assert run(x.ctypes.data, None, -1, None, 1e-3, None) == StepStatus.BAD_ARGUMENT
-    assert run(x.ctypes.data, None, 0, None, 1e-3, None) == 0
+    assert run(x.ctypes.data, None, 0, None, 1e-3, None) == StepStatus.BAD_ARGUMENT  # signals: never NULL
     with pytest.raises(ObserverInputError) as err:
         c.run(X0, np.empty((0, 3)), 0.0)  # dt is checked even without rows, as the reference does
     assert err.value.code == StepStatus.BAD_DT
@@ -262,7 +262,8 @@ def test_run_dt_refuses_null_pointers_and_a_dt_that_is_not_one_number_per_row(xb
     assert run_dt(x, None, 3, None, dts, None) == StepStatus.BAD_ARGUMENT
     assert run_dt(None, rows, 3, None, dts, None) == StepStatus.BAD_ARGUMENT
     assert run_dt(x, rows, -1, None, dts, None) == StepStatus.BAD_ARGUMENT
-    assert run_dt(x, None, 0, None, None, None) == 0 and np.array_equal(x, X0)
+    assert run_dt(x, None, 0, None, None, None) == StepStatus.BAD_ARGUMENT  # as the header says: never NULL
+    assert run_dt(x, rows, 0, None, None, None) == 0 and np.array_equal(x, X0)
     assert run_dt(x, rows, 3, None, dts, None) == 0 and np.array_equal(x, c.run(X0, rows, 1e-3)[-1])
     with pytest.raises(DimensionError, match="one step length per row"):
         c.run_dt(X0, rows, dts[:2])
@@ -442,3 +443,37 @@ def test_cli_codegen_errors_are_one_line_exit_2(tmp_path, capsys, argv, message)
     assert main(["codegen", *argv, "--out", str(tmp_path / "o")]) == 2
     err = capsys.readouterr().err
     assert err.startswith("switchobs codegen: error: ") and message in err and err.count("\n") == 1
+
+
+def _raw_run(c: CObserver):
+    lib = ctypes.CDLL(str(c.library_path))
+    fn = getattr(lib, f"{c.generated.prefix}_run")
+    fn.argtypes = [ctypes.c_void_p, ctypes.c_void_p, ctypes.c_int32, ctypes.c_void_p, ctypes.c_double,
+                   ctypes.c_void_p]
+    fn.restype = ctypes.c_int32
+    return lambda *args: fn(*(a.ctypes.data if isinstance(a, np.ndarray) else a for a in args))
+
+
+def test_a_run_of_zero_steps_checks_what_the_header_promises(xbs4):
+    """The header: xhat and signals are never NULL, and n_steps = 0 checks dt, then xhat (issue 25)."""
+    _, c, _ = xbs4
+    run = _raw_run(c)
+    x, rows = np.array(X0, dtype=float), np.tile(SIG, (2, 1))
+    assert run(x, None, 0, None, 1e-3, None) == StepStatus.BAD_ARGUMENT
+    assert run(None, rows, 0, None, 1e-3, None) == StepStatus.BAD_ARGUMENT
+    assert run(x, rows, 0, None, NAN, None) == StepStatus.BAD_DT
+    assert run(x, rows, 0, None, -1.0, None) == StepStatus.BAD_DT
+    bad = np.array([NAN, 0.0, 0.0, 0.0])
+    assert run(bad, rows, 0, None, 1e-3, None) == StepStatus.NONFINITE_STATE
+    assert _raw_run_dt(c)(bad, rows, 0, None, None, None) == StepStatus.NONFINITE_STATE
+    assert run(x, rows, 0, None, 1e-3, None) == 0 and np.array_equal(x, X0)
+    header = c.generated.files[f"{c.generated.prefix}.h"]
+    assert "n_steps = 0" in header and "BAD_DT" in header and "NONFINITE_STATE" in header
+    # the binding says the same, with and without rows
+    for rows_given in (rows[:0], rows):
+        with pytest.raises(ObserverInputError) as err:
+            c.run(bad, rows_given, 1e-3)
+        assert err.value.code == StepStatus.NONFINITE_STATE
+    with pytest.raises(ObserverInputError) as err:
+        c.run_dt(bad, rows[:0], [])
+    assert err.value.code == StepStatus.NONFINITE_STATE

@@ -1,5 +1,8 @@
 """Certified sub-stepping: a step with |s| dt > H_MAX is split into ceil(|s| dt / H_MAX) steps of dt / n.
 
+The tests choose rk4 (not the default radau3, certified for every step): the bound is what rk4 needs, and
+its C step makes the Python reference's operations bit for bit.
+
 The error of the switched observer evolves in the rescaled time tau = ∫|s| dt (seed 000 eq. (13), seed 004),
 so one step of dt with the signals held is a step h = |s| dt of the sampled error dynamics e+ = R(h A_sigma) e.
 For abs-xbs3 with the spectrum {-100, -100, -100} RK4 is stable per mode only for h up to ~0.0279; a braking
@@ -75,13 +78,13 @@ def test_braking_record_diverges_without_substeps_and_stays_bounded_with_h_max(x
     rows = braking_record(1e-3)
     h = np.abs(rows[:, 0] / rows[:, 1]) * 1e-3
     assert 0.149 < h.max() <= 0.15
-    plain = compile_observer(generate_observer(m, d))
+    plain = compile_observer(generate_observer(m, d, method="rk4"))
     with pytest.raises(ObserverInputError) as err:  # regression fact: one RK4 step per sample blows up
         plain.run([0.0, 0.0, 0.0], rows, 1e-3)
     assert err.value.code == StepStatus.NONFINITE_RESULT
     row = int(str(err.value).split("row ")[1].split(":")[0])
     assert h[:row].max() > 0.0279  # it failed after steps beyond the per-mode bound
-    certified = compile_observer(generate_observer(m, d, h_max=H_MAX, max_substeps=16))
+    certified = compile_observer(generate_observer(m, d, method="rk4", h_max=H_MAX, max_substeps=16))
     traj = certified.run([0.0, 0.0, 0.0], rows, 1e-3)
     assert np.isfinite(traj).all()
     error = np.abs(traj[:, 1] - XBS)
@@ -116,14 +119,14 @@ def test_substep_limit_fires_exactly_when_max_substeps_is_too_small(xbs3):
     m, d = xbs3
     rows = braking_record(1e-3)
     num = d.numeric()
-    enough = generate_observer(m, d, h_max=H_MAX, max_substeps=64)
+    enough = generate_observer(m, d, method="rk4", h_max=H_MAX, max_substeps=64)
     n = needed_substeps(rows, 1e-3, enough.h_max_c)
     most = int(n.max())
     assert most == 15  # |s| dt reaches 0.1499993 (just below 0.15): 15 sub-steps of at most H_MAX
     first = int(np.argmax(n == most))
     for limit in (most, most - 1):
-        c = compile_observer(generate_observer(m, d, h_max=H_MAX, max_substeps=limit))
-        ref = SwitchedObserver(m, num["K_plus"], num["K_minus"], h_max=H_MAX, max_substeps=limit)
+        c = compile_observer(generate_observer(m, d, method="rk4", h_max=H_MAX, max_substeps=limit))
+        ref = SwitchedObserver(m, num["K_plus"], num["K_minus"], h_max=H_MAX, max_substeps=limit, method="rk4")
         if limit == most:
             assert np.array_equal(c.run([0.0, 0.0, 0.0], rows, 1e-3), ref.run([0.0, 0.0, 0.0], rows, 1e-3))
             continue
@@ -138,8 +141,8 @@ def test_substep_limit_fires_exactly_when_max_substeps_is_too_small(xbs3):
 
 def test_nonstiff_step_is_todays_step_and_a_stiff_step_is_n_steps_of_dt_over_n(xbs3):
     m, d = xbs3
-    plain = compile_observer(generate_observer(m, d))
-    bounded = compile_observer(generate_observer(m, d, h_max=H_MAX, max_substeps=64))
+    plain = compile_observer(generate_observer(m, d, method="rk4"))
+    bounded = compile_observer(generate_observer(m, d, method="rk4", h_max=H_MAX, max_substeps=64))
     x = np.array([0.3, 0.45, -2.0])
     calm = [2.0, 20.0, 50.0]  # |s| dt = 1e-4
     assert np.array_equal(bounded.step(x, calm, 1e-3), plain.step(x, calm, 1e-3))
@@ -178,7 +181,7 @@ def test_substepped_c_equals_python_reference(name):
                                        h_max="1/50", max_substeps=8)
     else:
         g = design(m, "-40,-60,-60" if name == "abs-xbs3" else "-10,-10,-20,-20").numeric()
-        ref = SwitchedObserver(m, g["K_plus"], g["K_minus"], h_max="1/50", max_substeps=8)
+        ref = SwitchedObserver(m, g["K_plus"], g["K_minus"], h_max="1/50", max_substeps=8, method="rk4")
     c = CObserver.like(ref)
     assert c.generated.h_max == Fraction(1, 50) and c.generated.max_substeps == 8
     rng = np.random.default_rng(5)
@@ -256,7 +259,7 @@ def test_cli_h_max_value_and_auto(tmp_path, capsys, monkeypatch):
                  "--param", "beta2=100", "--h-max", "auto", "--out", str(tmp_path / "a")]) == 0
     header = (tmp_path / "a" / "switchobs_abs_xbs3.h").read_text()
     assert "H_MAX 0.009999999999999998" in header and "(a stand-in)" in header
-    assert seen["method"] == "rk4" and not seen["A_plus"].free_symbols and seen["A_minus"][0, 0] == -266
+    assert seen["method"] == "radau3" and not seen["A_plus"].free_symbols   # the default method and seen["A_minus"][0, 0] == -266
     assert not seen["P"].free_symbols and seen["P"].is_symmetric() and list(seen["C"]) == [1, 0, 0]
     capsys.readouterr()
     monkeypatch.delattr(certify, "discrete_certificate")
@@ -276,7 +279,7 @@ def test_constant_time_scale_substeps_like_the_reference():
     from test_codegen_hygiene import constant_scale_model
 
     model = constant_scale_model()
-    ref = SwitchedObserver(model, [1.0, 2.0], [3.0, 4.0], h_max="1/100", max_substeps=5)
+    ref = SwitchedObserver(model, [1.0, 2.0], [3.0, 4.0], h_max="1/100", max_substeps=5, method="rk4")
     c = CObserver.like(ref)
     assert "_scale(" not in c.generated.source and "a = 3.0 * dt;" in c.generated.source  # s is a literal
     x = [0.4, -0.2]

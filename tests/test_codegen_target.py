@@ -280,14 +280,14 @@ def test_pil_needs_a_cortex_m_target_and_a_record_of_the_right_shape():
 def test_docs_on_the_target_section_equals_a_fresh_run():
     """docs/codegen.md "On the target" (sizes, stack, instructions, PIL) is what the runs give today."""
     need("arm-none-eabi-gcc", "qemu-system-arm")
-    from switchobs.report._repro_runs import _Runs
+    from switchobs.experiments import Runs
     from switchobs.report._repro_target import TARGET_SECTIONS
 
     (name, page, section), = TARGET_SECTIONS
     text = (ROOT / page).read_text("utf-8")
     begin, end = f"<!-- begin generated: {name} (switchobs reproduce) -->", f"<!-- end generated: {name} -->"
     committed = text[text.index(begin):text.index(end)]
-    fresh = "\n".join(section(_Runs()))
+    fresh = "\n".join(section(Runs()))
     assert fresh in committed, "docs/codegen.md 'On the target' differs from a fresh run: run `switchobs reproduce`"
     assert "| abs-xbs3 | radau3 | float | cortex-m4f |" in fresh and "1510/1510" in fresh
 

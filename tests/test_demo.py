@@ -160,7 +160,7 @@ def test_demo_cli_stops_cleanly_when_matplotlib_is_broken(tmp_path):
     assert proc.returncode == 2
     assert proc.stderr.strip().splitlines() == [
         "switchobs demo: error: stage 'report' cannot run: importing matplotlib failed (matplotlib is broken "
-        "(simulated)); reinstall with `make install` (or pip install -e .)"]
+        "(simulated)); reinstall switchobs and its dependencies (pip install --force-reinstall \"switchobs\")"]
     assert not (tmp_path / "o").exists()
 
 

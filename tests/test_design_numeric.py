@@ -9,7 +9,7 @@ import pytest
 import sympy as sp
 
 from switchobs._progress import listening
-from switchobs.certify._exact import definiteness
+from switchobs.exact import definiteness
 from switchobs.cli.main import stderr_progress
 from switchobs.design import design, hurwitz_conditions, observer_normal_form
 from switchobs.design._routh import routh_first_column

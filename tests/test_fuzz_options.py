@@ -1,10 +1,10 @@
-"""Fuzzing of the options of ``switchobs encoder`` and ``switchobs simulate`` (issue 13).
+"""Fuzzing of the options of ``switchobs encoder``, ``switchobs simulate`` (issue 13) and ``switchobs sweep``
+(issue 25).
 
 Hypothesis draws command lines in which one or two options take hostile values (huge, tiny, negative,
 NaN, infinite, not a number) and the others cheap ones.  Each runs in a child process whose address
 space is capped (tests/option_worker.py) with a time bound, and must end with exit status 0, 1 or 2,
-no traceback, and on failure one line naming the command (argparse's own refusals print the usage
-first).  The number of examples per command is ``SWITCHOBS_FUZZ_EXAMPLES`` (``make fuzz`` raises it);
+no traceback, and on failure one line naming the command (argparse's refusals too).  The number of examples per command is ``SWITCHOBS_FUZZ_EXAMPLES`` (``make fuzz`` raises it);
 ``make test`` runs a small, derandomised set.
 """
 
@@ -16,6 +16,7 @@ import re
 import select
 import subprocess
 import sys
+import uuid
 from pathlib import Path
 
 import pytest
@@ -95,11 +96,39 @@ def check(argv: list[str], result: dict) -> None:
     if code == 0:
         assert lines == [], f"{argv}: exit 0 with {lines}"
         return
-    if lines and lines[0].startswith("usage:"):              # argparse: usage, then its one error line
-        lines = lines[-1:]
     assert len(lines) == 1, f"{argv}: {len(lines)} lines on stderr\n{result['err']}"
     verb = "error" if code == 2 else "failed"
     assert lines[0].startswith(f"switchobs {command}: {verb}: "), f"{argv}: {lines[0]}"
+
+
+SWEEP_OPTIONS = ("--workers", "--batch-size", "--max-cases", "--max-steps", "--scheduler", "--out", "--plots")
+#: Schedulers that answer at once (an address that is not there waits 20 s for the connection; "local" starts
+#: a cluster, drawn only with a number of workers beyond the limit, refused before any process starts).
+SCHEDULERS = ("none", "bogus", "", "tcp://", "inproc://", "tls://127.0.0.1:1", "-1", "local")
+PATHS = ("", "-", ".", "/", "/dev/full", "/dev/null", "/nonexistent/dir/x", "x\x00y", "a" * 300, "é/ü")
+#: A sweep of two short brakings (about 0.3 s simulated each) and a table.
+SWEEP_SPEC = """name = "fuzz"
+[base]
+speed_kmh = 10.0
+[grid]
+road = ["dry-asphalt", "snow"]
+[[table]]
+rows = ["road"]
+column = "speed_kmh"
+metric = "stop_time_s"
+"""
+
+
+@st.composite
+def sweep_argv(draw: st.DrawFn) -> list[str]:
+    values: dict[str, str] = {"--scheduler": "none"}
+    for option in draw(st.lists(st.sampled_from(SWEEP_OPTIONS), min_size=1, max_size=2, unique=True)):
+        values[option] = draw(st.sampled_from(SCHEDULERS) if option == "--scheduler" else
+                              st.sampled_from(PATHS) if option in ("--out", "--plots") else NUMBER)
+    if values["--scheduler"] == "local":
+        values["--workers"] = draw(st.sampled_from(("100000", "0", "-1", "10**9", "1e9", "nan", "")))
+    flags = draw(st.sampled_from(([], ["--json"], ["--resume"], ["-q"], ["--tune"])))
+    return ["sweep", "SPEC", *flags, *(f"{k}={v}" for k, v in values.items())]
 
 
 FUZZ = settings(max_examples=EXAMPLES, deadline=None, derandomize="SWITCHOBS_FUZZ_EXAMPLES" not in os.environ,
@@ -118,11 +147,29 @@ def test_fuzzed_simulate_options_end_cleanly(worker, argv):
     check(argv, worker(argv))
 
 
+@pytest.fixture(scope="module")
+def sweep_dir(tmp_path_factory):
+    folder = tmp_path_factory.mktemp("sweep")
+    (folder / "spec.toml").write_text(SWEEP_SPEC, encoding="utf-8")
+    return folder
+
+
+@FUZZ
+@given(argv=sweep_argv())
+def test_fuzzed_sweep_options_end_cleanly(worker, sweep_dir, argv):
+    argv = [str(sweep_dir / "spec.toml") if a == "SPEC" else a for a in argv]
+    if not any(a.startswith("--out=") for a in argv):  # a fresh results file per run, never in the source tree
+        argv.append(f"--out={sweep_dir / uuid.uuid4().hex}.jsonl")
+    before = set(os.listdir(Path.cwd()))
+    check(argv, worker(argv))
+    assert set(os.listdir(Path.cwd())) <= before, f"{argv}: wrote into the current directory"
+
+
 #: The cases of issue 13, replayed under the memory cap (tests/test_resource_bounds.py checks the messages).
 ISSUE_CASES = [["encoder", "--rpm", "1e9"], ["encoder", "--rate-hz", "1e9"], ["encoder", "--duration", "1e9"],
                ["encoder", "--harmonics", "1000"], ["encoder", "--events", "100000", "--duration", "2"],
                ["simulate", "--dt", "1e-9"], ["simulate", "--speed-kmh", "1e9"],
-               ["simulate", "--observer", "xbs4", "--beta", "1e9"]]
+               ["simulate", "--observer", "xbs4", "--beta", "1e9", "--method", "rk4", "-q"]]   # radau3 stays bounded
 
 
 @pytest.mark.parametrize("argv", ISSUE_CASES, ids=" ".join)

@@ -27,8 +27,8 @@ import switchobs
 from switchobs.exceptions import SwitchobsError
 
 SRC = pathlib.Path(switchobs.__file__).parent
-PACKAGES = ["model", "transform", "design", "spec", "certify", "codegen", "observers", "plants", "sensors", "loop",
-            "sweep", "report"]
+PACKAGES = ["exact", "model", "transform", "design", "spec", "lmi", "synthesis", "certify", "codegen", "observers",
+            "plants", "sensors", "loop", "sweep", "report"]
 
 
 # ------------------------------------------------------------------ every class with to_json has from_json

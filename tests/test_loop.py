@@ -35,7 +35,7 @@ def test_adapter_is_an_xbs_estimator_and_equals_run_with_mean_hold():
     before = est.state
     assert est.update(0.3, 5.0, 24.0, 0.0, 0.0) == out[-1]
     np.testing.assert_array_equal(est.state, before)
-    assert est.describe() == "SwitchedObserver of model 'abs-xbs3' (rk4, ZOH signals y, vx, u)"
+    assert est.describe() == "SwitchedObserver of model 'abs-xbs3' (radau3, ZOH signals y, vx, u)"   # the default
     with pytest.raises(ObserverInputError, match=r"vx = -1.0 must be > 0") as info:
         est.update(0.31, 5.0, -26.0, 0.0, 1e-3)      # the held (mean) speed is (24 - 26) / 2
     assert info.value.code == ErrorCode.UNDEFINED_TIME_SCALE

@@ -223,7 +223,7 @@ def test_hoang2014_appendix_common_lyapunov_function_never_increases(run3):
 
 def test_hoang2014_discretised_observer_tracks_xbs_at_1khz():
     """The RK4 step with held signals on sampled (7): XBS error floor at 1 kHz, second order in dt (mean hold)."""
-    obs = xbs3_observer(XBS3["beta"], XBS3["beta"])
+    obs = xbs3_observer(XBS3["beta"], XBS3["beta"], method="rk4")   # the page's paragraph on RK4 and Euler
     r = simulate_truth(builtin_model("abs-xbs3"), obs, np.array(XBS3["xhat0"]), XBS3["z_rest0"],
                        amplitude=20.0, freq=8.0, T=1.0, samples=250)   # 4 kHz samples
     sig = np.column_stack([r["z"][:, 0], r["vx"], r["u"]])

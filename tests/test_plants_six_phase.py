@@ -8,9 +8,9 @@ import pytest
 
 from switchobs.exceptions import SimulationError
 from switchobs.plants import BrakingScenario, SixPhaseABS, TwoAxleScenario, aguado_sec36, simulate, simulate_two_axle
-from switchobs.report._repro_adaptive import (SEC36_OBSERVER, _bosch_sequence, sec36_estimators, sec36_late_excursions,
+from switchobs.experiments import (SEC36_OBSERVER, bosch_sequence, sec36_estimators, sec36_late_excursions,
                                               sec36_settled, sec36_stays)
-from switchobs.report._repro_runs import _Runs
+from switchobs.experiments import Runs
 
 
 def _bosch(res):
@@ -23,7 +23,7 @@ def _bosch(res):
     return seq
 
 
-def _longest_stay(res):
+def longest_stay(res):
     t, ph = res.series["t"], res.series["phase"]
     starts = np.concatenate([[0], np.flatnonzero(np.diff(ph) != 0) + 1, [t.size - 1]])
     return float(np.max(np.diff(t[starts])))
@@ -51,7 +51,7 @@ def test_six_phase_never_stalls_on_the_table21_roads(name):
     for kmh in (30.0, 200.0):
         res = simulate(BrakingScenario(name, speed_m_s=kmh / 3.6, controller=SixPhaseABS(), duration_s=3.0))
         assert res.metrics.abs_cycles >= 3, (name, kmh)
-        assert _longest_stay(res) < 1.5, (name, kmh)
+        assert longest_stay(res) < 1.5, (name, kmh)
         # the wheel keeps turning while the vehicle is fast (no lock-up)
         fast = res.series["vx"] > 5.0
         assert np.mean(res.series["lambda"][fast] > -0.7) > 0.97, (name, kmh)
@@ -138,7 +138,7 @@ def test_aguado2020_fig319_strict_reading_fails_on_snow_at_the_recoveries(sec36)
 def test_aguado2020_sec36_c_hat_on_snow_moves_only_at_the_recoveries(sec36):
     # what limits the strict reading: c_hat has not converged to the snow's c = 94.1 half a second after the
     # change (front above it, rear below) and changes (almost) only while the wheel is on the stable side
-    rows = _Runs().sec36_c_hat          # the fixture's run again (deterministic), recording c_hat
+    rows = Runs().sec36_c_hat          # the fixture's run again (deterministic), recording c_hat
     t, s = sec36.series["t"], sec36.series
     for k, bounds in (("f", (1.2, 2.0)), ("r", (0.2, 0.7))):
         tt, ch = rows[k][:, 0], rows[k][:, 1]
@@ -155,7 +155,7 @@ def test_aguado2020_sec36_six_phase_with_the_adaptive_observer(sec36):
     assert isinstance(sec36.scenario.front, SixPhaseABS) and sec36.status == "stopped" and sec36.failure is None
     # the Bosch cycle on each wheel, releases throughout
     for k, axle in (("f", "front"), ("r", "rear")):
-        seq = "".join(map(str, _bosch_sequence(sec36, k)))
+        seq = "".join(map(str, bosch_sequence(sec36, k)))
         assert seq.count("34567") >= 5 and m[axle]["abs_cycles"] >= 10
     # speed underestimated on average (seed: 18 %)
     assert -25.0 < m["speed_error_mean_pct"] < -5.0

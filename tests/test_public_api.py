@@ -7,14 +7,9 @@ import pytest
 
 import switchobs
 
-LAYERS = ["model", "transform", "design", "spec", "certify", "codegen", "observers", "plants", "sensors", "loop", "sweep",
-          "logs", "report", "cli"]
-# spec is the observer contract shared by the Python engine and the C translator; observers are generic (model,
-# design, spec); plants hold the physics and the hybrid integrator; sensors use the plants' vehicle, roads and
-# integrator; the loop wires observers and sensors to the plants; sweeps run the loop over families of cases;
-# logs read and write measurement files for the loop's replay
-RANK = {"model": 0, "transform": 1, "design": 1, "spec": 2, "certify": 2, "codegen": 3, "observers": 4, "plants": 5,
-        "sensors": 6, "loop": 7, "sweep": 8, "logs": 8, "report": 8, "cli": 9}
+from switchobs._layers import FLOORS, RANK, layer_map
+
+LAYERS = [name for floor in FLOORS for name in floor]
 
 
 @pytest.mark.parametrize("name", switchobs.__all__)
@@ -61,6 +56,47 @@ def test_lower_layers_never_import_higher_ones(layer):
                 assert RANK[target] <= RANK[layer], f"{path} imports the higher layer {target}"
 
 
+def _runtime_imports(path: pathlib.Path) -> set[str]:
+    """The modules of switchobs that ``path`` imports when it runs (``if TYPE_CHECKING:`` blocks left out)."""
+    package = ["switchobs", *path.relative_to(pathlib.Path(switchobs.__file__).parent).parent.parts]
+    tree = ast.parse(path.read_text())
+    skipped = {id(n) for node in ast.walk(tree) if isinstance(node, ast.If)
+               and getattr(node.test, "id", getattr(node.test, "attr", None)) == "TYPE_CHECKING"
+               for n in ast.walk(node)}
+    out = set()
+    for node in ast.walk(tree):
+        if isinstance(node, ast.ImportFrom) and id(node) not in skipped:
+            base = package[:len(package) - node.level + 1] if node.level else []
+            module = ".".join([*base, *(node.module.split(".") if node.module else [])])
+            if module.startswith("switchobs"):
+                out.add(module)
+                out.update(f"{module}.{a.name}" for a in node.names)
+    return out
+
+
+def test_no_circle_of_imports_inside_a_room():
+    """Each file of a room imports its room's files one way: a circle means a definition sits in the wrong file."""
+    root = pathlib.Path(switchobs.__file__).parent
+    for layer in LAYERS:
+        files = {".".join(["switchobs", *p.relative_to(root).with_suffix("").parts]): p
+                 for p in (root / layer).rglob("_*.py") if p.name != "__init__.py"}
+        graph = {m: {t for t in _runtime_imports(p) if t in files and t != m} for m, p in files.items()}
+        state: dict[str, int] = {}
+
+        def visit(m: str, trail: list[str]) -> None:
+            state[m] = 1
+            for t in graph[m]:
+                if state.get(t) == 1:
+                    pytest.fail(f"import circle in {layer}: {' -> '.join(trail[trail.index(t):] + [t])}")
+                if t not in state:
+                    visit(t, trail + [t])
+            state[m] = 2
+
+        for m in sorted(files):
+            if m not in state:
+                visit(m, [m])
+
+
 def test_a_broken_dependency_disables_only_its_commands(tmp_path):
     """A casadi that fails to import must not crash `switchobs design` (which does not need it)."""
     import os
@@ -78,3 +114,15 @@ def test_a_broken_dependency_disables_only_its_commands(tmp_path):
                             capture_output=True, text=True, env=env, timeout=120)
     assert broken.returncode == 2 and "Traceback" not in broken.stderr
     assert "command 'codegen' cannot run" in broken.stderr and "broken casadi" in broken.stderr
+
+
+def test_the_layer_map_of_the_developer_page_is_drawn_from_the_code():
+    page = (pathlib.Path(__file__).resolve().parents[1] / "docs" / "developer.md").read_text("utf-8")
+    block = page.split("<!-- begin generated: layer map -->\n", 1)[1].split("\n<!-- end generated: layer map -->", 1)[0]
+    assert block.strip("\n").splitlines() == layer_map()
+
+
+def test_every_package_is_on_a_floor():
+    root = pathlib.Path(switchobs.__file__).parent
+    packages = sorted(p.parent.name for p in root.glob("*/__init__.py"))
+    assert packages == sorted(LAYERS)

@@ -49,3 +49,13 @@ def test_the_quick_start_commands_run_from_the_repository_root(tmp_path, monkeyp
     assert written == ["c/README.md", "c/switchobs_abs_xbs3.c", "c/switchobs_abs_xbs3.h", "c/switchobs_abs_xbs3_misra.md",
                        "cert.json", "fig4.png"]
     assert (tmp_path / "out" / "fig4.png").read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+
+
+def test_the_layer_table_names_every_command_and_every_layer():
+    from switchobs.cli.main import COMMANDS
+
+    readme = (ROOT / "README.md").read_text("utf-8")
+    cli_row = next(line for line in readme.splitlines() if line.startswith("| cli |"))
+    assert [c for c in COMMANDS if f"`switchobs {c}`" not in cli_row and f"`{c}`" not in cli_row] == []
+    layers = sorted(p.name for p in (ROOT / "src" / "switchobs").iterdir() if (p / "__init__.py").is_file())
+    assert [name for name in layers if f"`switchobs.{name}`" not in readme] == []

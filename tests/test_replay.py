@@ -56,7 +56,7 @@ def test_a_step_the_observer_refuses_ends_the_replay_where_it_ends_the_interleav
     vehicle = SC.vehicle
 
     def estimator():
-        return ObserverXbsEstimator(xbs4_observer(1e6, 1e6, params={"a": vehicle.a, "b": -vehicle.b}),
+        return ObserverXbsEstimator(xbs4_observer(1e6, 1e6, params={"a": vehicle.a, "b": -vehicle.b}, method="rk4"),
                                     initial_state={"z2": 0.5})
     sc = replace(SC, duration_s=1.0)
     ref, fast = simulate(sc, estimator=estimator(), compiled=False), simulate(sc, estimator=estimator())

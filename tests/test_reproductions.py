@@ -81,7 +81,7 @@ def test_table61_notch_row_start_up_transient():
     # seed 001 Table 6.1, notch row: 3.07 rad/s at constant speed, which a settled notch (unit DC gain) cannot
     # give. A notch started from a zero state and scored over the whole record gets most of it; the
     # acceleration (a fitted cell) is unchanged, and the varying row stays far off (docs/encoders.md says why)
-    from switchobs.report._repro_encoders import notch_from_zero
+    from switchobs.experiments import notch_from_zero
     from switchobs.sensors import TABLE61_ENCODER, TABLE61_PROFILES, compare_estimators
     settled = compare_estimators(TABLE61_PROFILES["constant"][1](10.0), TABLE61_ENCODER, estimators=("notch",))["notch"]
     w0, a0 = notch_from_zero("constant")
@@ -94,7 +94,7 @@ def test_table61_notch_row_start_up_transient():
 def test_table61_encoder_is_the_fit_of_three_constant_cells():
     # the encoder's two sizes are the least-squares fit to the constant row's TSA velocity and acceleration and
     # notch acceleration; no fixed per-tooth error, which the seed's notch = three-stage acceleration excludes
-    from switchobs.report._repro_encoders import fit_table61_encoder, tooth_error_bound
+    from switchobs.experiments import fit_table61_encoder, tooth_error_bound
     from switchobs.sensors import TABLE61_ENCODER
     fit = fit_table61_encoder()
     assert TABLE61_ENCODER.eccentricity == pytest.approx(fit.eccentricity, rel=5e-3)
@@ -113,7 +113,7 @@ def test_table61_varying_tsa_acceleration_needs_a_wider_speed_spread():
     # mean(w^4)/mean(w^2)^2 that no profile of equal plateaus and ramps (nor a sinusoid) reaches
     import numpy as np
 
-    from switchobs.report._repro_encoders import (seed_speed_spread, speed_exponents, speed_spread,
+    from switchobs.experiments import (seed_speed_spread, speed_exponents, speed_spread,
                                                    trapezoid_spread_bound)
     from switchobs.sensors import TABLE61_PROFILES, varying_speed
     p_w, p_a = speed_exponents(3.0)
@@ -129,7 +129,7 @@ def test_table61_varying_tsa_acceleration_needs_a_wider_speed_spread():
 def test_table61_varying_notch_is_not_the_notch_described():
     # the seed's varying notch is 37x (velocity) and 2.6x (acceleration) worse than its raw TSA; the notch it
     # describes stays far below both ratios however steep the ramps between the plateaus
-    from switchobs.report._repro_encoders import notch_to_tsa_ratios
+    from switchobs.experiments import notch_to_tsa_ratios
     from switchobs.sensors import TABLE61_SEED
     seed = TABLE61_SEED["varying"]
     ratios = notch_to_tsa_ratios(4.0)

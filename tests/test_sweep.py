@@ -210,6 +210,23 @@ metric = "stopping_distance_m"
     ('colour = "red"', r"unknown key\(s\) \['colour'\]"),
     ('name = ', "is not valid TOML"),
     ('[base]\nobserver = "xbs4"\n[tune]', r"tuning needs beta1 \(and beta2\) in every case"),  # before running
+    ('[monte_carlo]\ncount = 2\n[monte_carlo.draw]\nspeed_kmh = {uniform = [40, 30]}',
+     r"monte_carlo.draw.speed_kmh: a uniform draw needs low <= high, got \[40, 30\]"),
+    ('[monte_carlo]\ncount = 2\n[monte_carlo.draw]\nspeed_kmh = {uniform = [30, inf]}',
+     r"a uniform draw: high must be a finite number, got inf"),
+    ('[monte_carlo]\ncount = 2\n[monte_carlo.draw]\nchanges = {roads = ["snow"], count = [1, 1], window_s = [2, 1]}',
+     r"window_s = \[t0, t1\] with 0 <= t0 <= t1, got \[2, 1\]"),
+    ('[monte_carlo]\ncount = 2\n[monte_carlo.draw]\nencoder_seed = {integers = [5, 1]}',
+     r"an integer draw needs low <= high, got \[5, 1\]"),
+    ('[monte_carlo]\ncount = true', r"monte_carlo.count must be an integer >= 1, got True"),
+    ('name = 3', r"name must be a text, got 3"),
+    ('[grid]\nspeed_kmh = {start = "a", stop = 2, num = 3}', r"grid.speed_kmh: .*start must be a finite number"),
+    ('[base]\nchanges = 3', r"changes is a list of at most 100 \(road, time_s\) pairs"),
+    ('kind = "certify"\n[grid]\n"../x" = [1.0]', r"'../x' is not a name"),
+    ('kind = "certify"\n[base]\nspectrum = "-beta1,-bogus"\n[grid]\nbeta1 = [1.0]',
+     r"spectrum '-beta1,-bogus': spectrum pole '-bogus': unknown name 'bogus'"),
+    ('kind = "certify"\n[base]\nspectrum = "-beta1,1/0"\n[grid]\nbeta1 = [1.0]',
+     r"spectrum pole '1/0': the value is zoo \(a division by zero"),  # refused where it is parsed
 ])
 def test_cli_sweep_refuses_bad_spec_files_in_one_line(tmp_path, capsys, text, match):
     spec = _write_spec(tmp_path, text)
@@ -222,7 +239,7 @@ def test_cli_sweep_refuses_bad_spec_files_in_one_line(tmp_path, capsys, text, ma
 
 def test_missing_dask_is_a_prerequisite_error_and_serial_runs_still_work(monkeypatch, tmp_path, capsys):
     monkeypatch.setitem(sys.modules, "distributed", None)
-    with pytest.raises(PrerequisiteError, match=r"pip install -e '.\[sweep\]'.*--scheduler none"):
+    with pytest.raises(PrerequisiteError, match=r'pip install "switchobs\[sweep\]".*--scheduler none'):
         run_sweep(QUICK[:1], scheduler="local")
     assert run_sweep(QUICK[:1], scheduler="none").results[0].ok
 
@@ -291,3 +308,237 @@ def test_on_one_dask_local_cluster(tmp_path):
         _bit_identical_on_a_worker(client)
         _table41_through_the_engine(client)
         _a_killed_worker_does_not_lose_the_sweep(client, tmp_path / "rows.jsonl")
+
+
+# ----------------------------------------------------------------------------- hostile specs and options
+
+#: One short braking (about 0.3 s simulated): the cheapest case that runs through the engine.
+TINY = '[base]\nspeed_kmh = 10.0\n'
+
+
+@pytest.mark.parametrize("name", ["../../evil", "/ABSOLUTE/evil", "a/b/c", "a\\u0000b", "é" * 300, "x" * 5000, "..",
+                                  "", ".hidden", "-rf", "C:\\\\evil"])
+def test_a_spec_name_never_writes_outside_the_current_directory(tmp_path, monkeypatch, capsys, name):
+    cwd = tmp_path / "a" / "b"
+    cwd.mkdir(parents=True)
+    monkeypatch.chdir(cwd)
+    (tmp_path / "ABSOLUTE").mkdir()
+    name = name.replace("/ABSOLUTE", str(tmp_path / "ABSOLUTE"))
+    spec = _write_spec(tmp_path, f'name = "{name}"\n' + TINY)
+    before = sorted(p for p in tmp_path.rglob("*") if not p.is_relative_to(cwd))
+    assert main(["sweep", str(spec), "--scheduler", "none", "-q"]) == 0, capsys.readouterr().err
+    assert sorted(p for p in tmp_path.rglob("*") if not p.is_relative_to(cwd)) == before
+    written = list(cwd.iterdir())
+    assert len(written) == 1 and written[0].suffix == ".jsonl" and len(written[0].name) <= 106
+    assert set(written[0].name) <= set("abcdefghijklmnopqrstuvwxyzABCDEFGHIJKLMNOPQRSTUVWXYZ0123456789._-")
+    assert f"rows in {written[0].name}" in capsys.readouterr().out
+
+
+@pytest.mark.parametrize("names", [("../../x", "y", "m"), ("x", "/etc/y", "m\x00"), ("é", "..", "")])
+def test_heatmap_file_names_are_plain_file_names(names):
+    from switchobs.sweep._spec import HeatmapSpec
+
+    name = HeatmapSpec(*names).filename
+    assert "/" not in name and "\x00" not in name and not name.startswith(".") and name.endswith(".png")
+    assert Path(name).name == name and name.isascii()
+
+
+#: Sweeps far beyond the limits, each refused from the spec in well under a second (nothing built or run).
+HUGE = [
+    ('[monte_carlo]\ncount = 1000000\n[monte_carlo.draw]\nspeed_kmh = {uniform = [10, 20]}', [],
+     r"cases of the sweep \(1000000 Monte-Carlo draws\): about 1e\+06, above the limit of 1e\+05"),
+    ('[grid]\nspeed_kmh = {start = 10, stop = 20, num = 1000000}\nload_n = {start = 2000, stop = 3000, '
+     'num = 1000000}', [], r"grid 1e\+06 x 1e\+06\): about 1e\+12"),
+    ('[grid]\nspeed_kmh = {start = 10, stop = 20, step = 1e-300}', [], r"grid 1e\+301\): about 1e\+301"),
+    ('[grid]\nspeed_kmh = {start = -1e308, stop = 1e308, step = 1e-300}', [], r"about inf, above the limit"),
+    ('[monte_carlo]\ncount = 1\n[monte_carlo.draw]\nchanges = {roads = ["snow"], count = [1000000, 1000000], '
+     'window_s = [0.5, 2.0]}', [], r"count_min must be an integer in \[0, 100\] \(MAX_ROAD_CHANGES\), got 1000000"),
+    (TINY + '[grid]\nload_n = [2000.0, 2500.0, 3000.0]', ["--max-cases", "2"], r"about 3, above the limit of 2"),
+    ('[base]\ndt_s = 1e-6\n[grid]\nspeed_kmh = {start = 10, stop = 20, num = 20}', [],
+     r"integration steps of the 20 braking cases .*: about 1\.2e\+09, above the limit of 1e\+09.*--max-steps"),
+    (TINY, ["--workers", "100000", "--scheduler", "local"], r"worker processes of the local cluster .*above the "
+                                                            r"limit of \d+; give at most 4 per core"),
+]
+
+
+@pytest.mark.parametrize("text, options, match", HUGE)
+def test_sweeps_beyond_the_limits_are_refused_before_any_case(tmp_path, capsys, monkeypatch, text, options, match):
+    monkeypatch.chdir(tmp_path)
+    monkeypatch.setattr(_engine, "run_case", lambda *a, **k: pytest.fail("a case ran"))
+    spec = _write_spec(tmp_path, text)
+    start = time.perf_counter()
+    assert main(["sweep", str(spec), "--scheduler", "none", *options]) == 2
+    err = capsys.readouterr().err
+    assert time.perf_counter() - start < 5 and err.count("\n") == 1 and "Traceback" not in err
+    assert __import__("re").search(match, err), err
+    assert [p.name for p in tmp_path.iterdir()] == ["spec.toml"]
+
+
+def test_the_limits_can_be_raised(tmp_path, capsys, monkeypatch):
+    monkeypatch.chdir(tmp_path)
+    spec = _write_spec(tmp_path, TINY + '[grid]\nload_n = [2000.0, 2500.0, 3000.0]')
+    assert main(["sweep", str(spec), "--scheduler", "none", "--max-cases", "2"]) == 2
+    assert main(["sweep", str(spec), "--scheduler", "none", "--max-cases", "3", "--max-steps", "1.8e5"]) == 0
+    assert "sweep: 3 cases" in capsys.readouterr().out
+    with pytest.raises(SimulationError, match=r"about 3, above the limit of 2"):
+        grid(BrakingCase(), load_n=[2000.0, 2500.0, 3000.0], max_cases=2)
+
+
+#: Tables and heatmaps that could only print dashes, or fail once every case ran: refused from the spec.
+VIEWS = [
+    ('[[table]]\nrows = ["road"]\ncolumn = "speed"\nmetric = "braking_distance_m"',
+     r"\[\[table\]\] 1: braking cases have no field 'speed'; fields: beta1, "),
+    ('[[table]]\nrows = ["road"]\ncolumn = "speed_kmh"\nmetric = "bogus"',
+     r"\[\[table\]\] 1: 'bogus' is not a number of braking rows.*choose one of braking_distance_m"),
+    ('[[table]]\nrows = ["road"]\ncolumn = "speed_kmh"\nmetric = "segments"', r"'segments' is not a number"),
+    ('[[heatmap]]\nx = "case_id"\ny = "road"\nmetric = "stop_time_s"', r"\[\[heatmap\]\] 1: .*no field 'case_id'"),
+    ('[[heatmap]]\nx = "speed_kmh"\ny = "road"\nmetric = "xbs_rms"',
+     r"metric 'xbs_rms' exists only for cases that set observer, and every case has observer = 'none'"),
+    ('table = 3', r"table must be a list of tables \(\[\[table\]\]\), got 3"),
+]
+
+
+@pytest.mark.parametrize("text, match", VIEWS)
+def test_tables_and_heatmaps_are_checked_before_the_first_case(tmp_path, capsys, monkeypatch, text, match):
+    monkeypatch.chdir(tmp_path)
+    monkeypatch.setattr(_engine, "run_case", lambda *a, **k: pytest.fail("a case ran"))
+    spec = _write_spec(tmp_path, text + "\n" + TINY)
+    assert main(["sweep", str(spec), "--scheduler", "none"]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and __import__("re").search(match, err), err
+    assert [p.name for p in tmp_path.iterdir()] == ["spec.toml"]
+
+
+def test_the_numeric_metrics_are_those_run_case_returns():
+    braking = run_case(BrakingCase(road="dry-asphalt", speed_kmh=30.0, changes=(("wet-asphalt", 0.2),),
+                                   observer="xbs4"))
+    assert braking.ok and set(_run.NUMERIC_METRICS["braking"]) <= set(braking.metrics)
+    assert all(braking.metrics[k] is None or isinstance(braking.metrics[k], (int, float))
+               for k in _run.NUMERIC_METRICS["braking"])
+    certify = run_case(CertifyCase(betas=(("beta1", 100.0), ("beta2", 150.0)), discrete="radau3"))
+    numbers = {k for k, need in _run.NUMERIC_METRICS["certify"].items() if need != "box"}
+    assert certify.ok and numbers <= set(certify.metrics)
+    assert certify.metrics["certified"] is True and certify.metrics["dwell_time_value"] is None  # dwell "any"
+    assert all(v is None or isinstance(v, (bool, float)) for v in map(certify.metrics.get, numbers))
+    # the metrics that are not numbers are the ones a table cannot average
+    assert {"verdict", "spectrum"} <= set(certify.metrics) - set(_run.NUMERIC_METRICS["certify"])
+
+
+class _Unreachable:
+    def __init__(self, *args, **kwargs):
+        raise OSError("Timed out trying to connect to tcp://127.0.0.1:1 after 20 s")
+
+
+@pytest.mark.parametrize("how", ["bogus", "unreachable", "no dask", "cluster fails"])
+def test_a_sweep_that_cannot_start_leaves_no_file(tmp_path, capsys, monkeypatch, how):
+    distributed = pytest.importorskip("distributed")
+    monkeypatch.chdir(tmp_path)
+    spec = _write_spec(tmp_path, 'name = "s"\n' + TINY)
+    scheduler = {"bogus": "bogus", "unreachable": "tcp://127.0.0.1:1"}.get(how, "local")
+    if how == "unreachable":  # the real connection attempt waits 20 s: the same OSError, at once
+        monkeypatch.setattr(distributed, "Client", _Unreachable)
+    if how == "no dask":
+        monkeypatch.setitem(sys.modules, "distributed", None)
+    if how == "cluster fails":
+        monkeypatch.setattr(distributed, "LocalCluster", lambda *a, **k: (_ for _ in ()).throw(
+            RuntimeError("Worker failed to start")))
+    assert main(["sweep", str(spec), "--scheduler", scheduler, "--workers", "1"]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "Traceback" not in err and err.startswith("switchobs sweep: error: ")
+    assert [p.name for p in tmp_path.iterdir()] == ["spec.toml"]
+
+
+def test_resume_refuses_another_study_s_results_file(tmp_path, capsys, monkeypatch):
+    monkeypatch.chdir(tmp_path)
+    other = _write_spec(tmp_path, '[base]\nspeed_kmh = 12.0\n')
+    assert main(["sweep", str(other), "--scheduler", "none", "--out", "rows.jsonl", "-q"]) == 0
+    before = (tmp_path / "rows.jsonl").read_bytes()
+    spec = _write_spec(tmp_path, TINY + '[grid]\nroad = ["dry-asphalt", "snow"]')
+    capsys.readouterr()
+    assert main(["sweep", str(spec), "--scheduler", "none", "--out", "rows.jsonl", "--resume"]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "holds 1 row(s) of cases that are not in this sweep" in err
+    assert (tmp_path / "rows.jsonl").read_bytes() == before
+    # a study whose cases are all in this sweep is a killed run of it: its rows are kept
+    first = _write_spec(tmp_path, TINY)
+    assert main(["sweep", str(first), "--scheduler", "none", "--out", "sub.jsonl", "-q"]) == 0
+    capsys.readouterr()
+    assert main(["sweep", str(spec), "--scheduler", "none", "--out", "sub.jsonl", "--resume", "--json"]) == 0
+    assert json.loads(capsys.readouterr().out)["sweep"]["resumed"] == 1
+
+
+def test_case_warnings_and_c_output_do_not_reach_the_user(tmp_path, capfd, monkeypatch):
+    import warnings
+
+    real = _engine.run_case
+
+    def noisy(case, **kwargs):
+        warnings.warn("overflow encountered in multiply", RuntimeWarning)
+        os.write(1, b"KKT matrix has < n positive eigenvalues\n")  # what a C solver prints, past Python
+        os.write(2, b"ERROR: init_lin_sys_work failure\n")
+        return real(case, **kwargs)
+    monkeypatch.setattr(_engine, "run_case", noisy)
+    monkeypatch.chdir(tmp_path)
+    spec = _write_spec(tmp_path, TINY + '[grid]\nroad = ["dry-asphalt", "snow"]')
+    for flags in (["-q"], ["--json"]):
+        assert main(["sweep", str(spec), "--scheduler", "none", "--out", f"{flags[0].strip('-')}.jsonl", *flags]) == 0
+        out, err = capfd.readouterr()
+        assert err == "" and "KKT" not in out
+    assert json.loads(out)["sweep"]["cases"] == 2
+
+
+def test_a_failed_case_gives_exit_1_and_one_failed_line(tmp_path, capsys, monkeypatch):
+    monkeypatch.chdir(tmp_path)
+    spec = _write_spec(tmp_path, '[base]\nspeed_kmh = 2.0\n[[heatmap]]\nx = "speed_kmh"\ny = "road"\n'
+                                 'metric = "stop_time_s"')  # below the stop speed: the case raises
+    (tmp_path / "figures").mkdir()
+    assert main(["sweep", str(spec), "--scheduler", "none", "--plots", "figures"]) == 1
+    err = capsys.readouterr().err
+    assert err == "switchobs sweep: failed: 1 of 1 cases failed (their rows in spec.jsonl hold the errors)\n"
+    assert list((tmp_path / "figures").iterdir()) == []  # nothing to draw, and no partial folder
+
+
+@pytest.mark.slow
+def test_ctrl_c_during_a_dask_sweep_is_one_line_and_exit_130(tmp_path):
+    """The terminal sends SIGINT to every process of the command: the workers must not print tracebacks."""
+    import subprocess
+
+    pytest.importorskip("distributed")
+    spec = _write_spec(tmp_path, '[base]\nobserver = "xbs4"\ncontroller = "two-phase"\n[grid]\n'
+                                 'speed_kmh = {start = 100, stop = 200, num = 40}\nroad = ["dry-asphalt", "snow"]')
+    env = {**os.environ, "OPENBLAS_NUM_THREADS": "1", "PYTHONPATH": str(ROOT / "src")}
+    proc = subprocess.Popen([sys.executable, "-m", "switchobs", "sweep", str(spec), "--workers", "1",
+                             "--batch-size", "1", "--out", str(tmp_path / "rows.jsonl")],
+                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, env=env,
+                            start_new_session=True)
+    deadline = time.monotonic() + 240
+    while not (tmp_path / "rows.jsonl").exists() and proc.poll() is None and time.monotonic() < deadline:
+        time.sleep(0.2)  # until the workers run cases
+    assert proc.poll() is None, proc.communicate()
+    os.killpg(proc.pid, signal.SIGINT)  # as Ctrl-C: the whole process group
+    out, err = proc.communicate(timeout=120)
+    assert proc.returncode == 130 and err == "switchobs sweep: interrupted\n", err
+    rows = read_results(tmp_path / "rows.jsonl")  # the finished cases are kept for --resume
+    assert rows and all(r.ok for r in rows)
+    deadline = time.monotonic() + 20
+    while time.monotonic() < deadline:  # no worker left behind (they exit once the cluster closes)
+        try:
+            os.killpg(proc.pid, 0)
+        except ProcessLookupError:
+            break
+        time.sleep(0.2)
+    else:
+        left = subprocess.run(["ps", "-o", "pid,stat,etime,cmd", "-g", str(proc.pid)], capture_output=True, text=True)
+        pytest.fail(f"processes of the sweep still run 20 s after it ended:\n{left.stdout}")
+
+
+def test_the_sweeps_page_names_the_numeric_metrics_and_the_limits():
+    from switchobs import _limits
+
+    page = (ROOT / "docs" / "sweeps.md").read_text("utf-8")
+    paragraph = page.split("A table or heatmap averages", 1)[1].split("(`switchobs.sweep._run.NUMERIC_METRICS`)")[0]
+    assert set(__import__("re").findall(r"`(\w+)`", paragraph)) == {
+        name for metrics in _run.NUMERIC_METRICS.values() for name in metrics}
+    named = set(__import__("re").findall(r"`(MAX_\w+)`", page))
+    assert named == {"MAX_SWEEP_CASES", "MAX_SWEEP_STEPS", "MAX_WORKERS_PER_CORE", "MAX_ROAD_CHANGES"}
+    assert named <= set(_limits.LIMITS)

@@ -9,6 +9,7 @@ Public API (sub-packages follow the pipeline; each has its own ``__all__``)
 ---------------------------------------------------------------------------
 Model, builtin_model, load_model            -- switchobs.model
 design_gains, GainDesign, observer_normal_form -- switchobs.design (sympy, exact)
+synthesize, synthesize_box                  -- switchobs.synthesis (gains by LMIs, exact decay certificates)
 certify_model, common_lyapunov, strict_common_lyapunov, dwell_time,
 classify_planar, verify_certificate, trajectory_conditions, discrete_certificate
                                             -- switchobs.certify (cvxpy + exact re-check; the sampled
@@ -49,6 +50,7 @@ __version__ = "0.1.0"
 _EXPORTS = {
     "switchobs.model": ("Model", "builtin_model", "load_model"),
     "switchobs.design": ("design_gains", "GainDesign", "observer_normal_form"),
+    "switchobs.synthesis": ("synthesize", "synthesize_box"),
     "switchobs.certify": ("certify_model", "common_lyapunov", "strict_common_lyapunov", "dwell_time",
                           "classify_planar", "verify_certificate", "trajectory_conditions", "discrete_certificate"),
     "switchobs.codegen": ("generate_observer", "compile_observer", "CObserver"),

@@ -13,6 +13,7 @@ a command starts its long work (a certification, the demo), so a typo in
 from __future__ import annotations
 
 import os
+import re
 import secrets
 import shutil
 from collections.abc import Iterator, Mapping
@@ -22,11 +23,22 @@ from pathlib import Path
 from .exceptions import OutputError
 
 __all__ = ["check_output_file", "check_output_directory", "atomic_file", "write_text", "staged_directory",
-           "write_files"]
+           "write_files", "safe_file_name", "MAX_NAME_LENGTH"]
+
+#: Characters kept of a name from a file when it becomes a file name (the suffix is added after).
+MAX_NAME_LENGTH = 100
+_UNSAFE = re.compile(r"[^A-Za-z0-9._-]+")
 
 
 def _fail(path: Path, what: str, reason: str) -> OutputError:
     return OutputError(f"cannot write {what} {str(path)!r}: {reason}")
+
+
+def _target(path: str | os.PathLike, what: str) -> Path:
+    target = Path(path)
+    if "\x00" in str(target):  # no system call takes it: refused here, not as an internal error later
+        raise _fail(target, what, "a path cannot hold a NUL character")
+    return target
 
 
 def _probe(directory: Path, target: Path, what: str) -> None:
@@ -46,7 +58,7 @@ def check_output_file(path: str | os.PathLike, *, what: str = "the file") -> Pat
     directory or a special file (``/dev/full``, a pipe): the file is replaced
     by a rename, which would replace a device node.
     """
-    target = Path(path)
+    target = _target(path, what)
     if target.is_dir():
         raise _fail(target, what, "it is a directory; give a file name")
     if target.exists() and not target.is_file():
@@ -69,7 +81,7 @@ def _nearest_existing(path: Path) -> Path:
 
 def check_output_directory(path: str | os.PathLike, *, what: str = "the directory") -> Path:
     """``path`` as a Path if files can be written into it (created if missing), else :class:`OutputError`."""
-    target = Path(path)
+    target = _target(path, what)
     if target.exists() and not target.is_dir():
         raise _fail(target, what, "it exists and is not a directory")
     base = _nearest_existing(target)
@@ -171,3 +183,21 @@ def write_files(directory: str | os.PathLike, files: Mapping[str, str | bytes], 
             else:
                 path.write_text(content, encoding="utf-8")
     return tuple(Path(directory) / name for name in files)
+
+
+def safe_file_name(text: str, *, suffix: str = "", fallback: str = "output") -> str:
+    """A plain file name made of ``text`` (a name read from a user's file), ending in ``suffix``.
+
+    A name from a file is not a path: every run of characters other than ASCII letters, digits, ``.``, ``_``
+    and ``-`` (a ``/``, a ``\\``, a NUL, a space, non-ASCII) becomes one ``_``, leading dots, dashes and
+    underscores go (no ``..``, no hidden file, no option-like name), and the rest is cut to
+    :data:`MAX_NAME_LENGTH` characters; an empty result is ``fallback``.  The result names a file in the
+    current directory, never elsewhere.
+
+    Examples
+    --------
+    >>> safe_file_name("../../evil", suffix=".jsonl"), safe_file_name("/tmp/x y", suffix=".png")
+    ('evil.jsonl', 'tmp_x_y.png')
+    """
+    name = _UNSAFE.sub("_", str(text)).lstrip("._-")[:MAX_NAME_LENGTH].rstrip(".")
+    return (name or fallback) + suffix

@@ -8,6 +8,7 @@ digits and say so; the results, ``--json``, the certificates and ``--exact`` kee
 
 from __future__ import annotations
 
+import sys
 from collections.abc import Iterator
 from contextlib import contextmanager
 from contextvars import ContextVar
@@ -16,7 +17,8 @@ from typing import Any
 
 import sympy as sp
 
-__all__ = ["MAX_EXACT_CHARS", "ROUNDED_NOTE", "exact_display", "readable", "readable_number", "is_shortened"]
+__all__ = ["MAX_EXACT_CHARS", "ROUNDED_NOTE", "exact_display", "readable", "readable_number", "is_shortened",
+           "unicode_output"]
 
 #: A rational whose text is longer than this is displayed to 6 significant digits.
 MAX_EXACT_CHARS = 20
@@ -71,3 +73,25 @@ def readable_number(text: str) -> str:
     except (ValueError, ZeroDivisionError):
         return text
     return sp.sstr(sp.Float(sp.Rational(value.numerator, value.denominator), 6))
+
+
+#: Characters of sympy's Unicode pretty forms (brackets, rules, roots) and of the units the output prints.
+_UNICODE_PROBE = "\u23a1\u23a4\u23a3\u23a6\u2500\u221a\u00b7\u00b2"
+
+
+def unicode_output(stream: Any = None) -> bool:
+    """Whether ``stream`` (default ``sys.stdout``) can print the Unicode pretty forms; else ASCII art is printed
+    (``PYTHONIOENCODING=ascii``, a ``C`` locale), as sympy's own ``pprint`` decides from the terminal.
+
+    Examples
+    --------
+    >>> import io
+    >>> unicode_output(io.TextIOWrapper(io.BytesIO(), encoding="ascii"))
+    False
+    """
+    encoding = getattr(sys.stdout if stream is None else stream, "encoding", None) or "ascii"
+    try:
+        _UNICODE_PROBE.encode(encoding)
+    except (LookupError, UnicodeEncodeError):
+        return False
+    return True

@@ -19,7 +19,7 @@ import numpy as np
 from ._atomic import atomic_file
 from .exceptions import SimulationError
 
-__all__ = ["panels", "save_figure"]
+__all__ = ["panels", "save_figure", "figure_format"]
 
 
 def panels(ax: Any, count: int, *, figsize: tuple[float, float], owner: str, **subplots: Any
@@ -57,6 +57,27 @@ def panels(ax: Any, count: int, *, figsize: tuple[float, float], owner: str, **s
     return axes[0].figure, axes
 
 
+def figure_format(path: str | Path) -> str:
+    """The image format matplotlib writes ``path`` in, from its suffix (``"png"`` for ``x.png``).
+
+    Checked before any work (the command line does it when it reads ``--plot``), so a typo costs nothing.
+
+    Raises
+    ------
+    SimulationError
+        A path without a suffix or with one matplotlib does not write; the message names the path.
+    """
+    from matplotlib.backend_bases import FigureCanvasBase
+
+    supported = FigureCanvasBase.get_supported_filetypes()
+    suffix = Path(path).suffix.lstrip(".").lower()
+    if suffix not in supported:
+        got = f"the suffix {suffix!r}" if suffix else "no suffix"
+        raise SimulationError(f"cannot write the plot {str(path)!r}: {got}; give one of "
+                              f"{', '.join('.' + k for k in sorted(supported))}")
+    return suffix
+
+
 def save_figure(fig: Any, path: str | Path, *, dpi: int = 110) -> Path:
     """Write ``fig`` to ``path`` (format from the suffix); the path.
 
@@ -70,9 +91,7 @@ def save_figure(fig: Any, path: str | Path, *, dpi: int = 110) -> Path:
         For a suffix that is not an image format matplotlib writes.
     """
     path = Path(path)
+    kind = figure_format(path)
     with atomic_file(path, what="the plot") as partial:
-        try:
-            fig.savefig(partial, dpi=dpi, format=path.suffix.lstrip(".").lower() or None)
-        except ValueError as exc:
-            raise SimulationError(f"cannot write the plot {str(path)!r}: {exc}") from None
+        fig.savefig(partial, dpi=dpi, format=kind)
     return path

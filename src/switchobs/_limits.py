@@ -15,7 +15,9 @@ certificate checker use it.
 
 from __future__ import annotations
 
+import os
 import re
+import select
 import sys
 from fractions import Fraction
 from pathlib import Path
@@ -23,10 +25,13 @@ from pathlib import Path
 from .exceptions import SwitchobsError
 
 __all__ = ["MAX_EXPRESSION_LENGTH", "MAX_EXPRESSION_DEPTH", "MAX_EXPRESSION_TERMS", "MAX_EXPONENT",
-           "MAX_NUMBER_DIGITS", "MAX_CERTIFICATE_DIGITS", "MAX_CERTIFICATE_BYTES", "MAX_CERTIFICATE_DIMENSION",
+           "MAX_NUMBER_DIGITS", "MAX_CERTIFICATE_DIGITS", "MAX_CERTIFICATE_BYTES", "MAX_DIMENSION",
+           "MAX_CERTIFICATE_WORK", "MAX_READ_WAIT_S", "MAX_NAME_LENGTH",
            "MAX_DWELL_BITS", "MAX_BOX_VERTICES", "MAX_INPUT_FILE_BYTES", "MAX_PIL_ROWS",
-           "MAX_LOG_BYTES", "MAX_LOG_SAMPLES",
-           "DOUBLE_MAX", "DOUBLE_MIN", "LIMITS", "decimal_fraction", "check_double", "digits", "read_text"]
+           "MAX_LOG_BYTES", "MAX_LOG_SAMPLES", "MAX_SWEEP_CASES", "MAX_SWEEP_STEPS",
+           "MAX_WORKERS_PER_CORE", "MAX_ROAD_CHANGES",
+           "DOUBLE_MAX", "DOUBLE_MIN", "LIMITS", "decimal_fraction", "check_double", "check_dimension", "digits",
+           "read_text"]
 
 #: Characters in one expression string (a matrix entry, a pole, a gain).
 MAX_EXPRESSION_LENGTH = 2000
@@ -56,13 +61,34 @@ MAX_LOG_BYTES = 1_000_000_000
 #: log is read whole, and the chain's arrays grow with it (a 10-minute log at 1 kHz with a 60-ppr encoder peaks
 #: at about 0.5 GB: ``/usr/bin/time -f %M switchobs replay``), so an hour stays within about 2 GB.
 MAX_LOG_SAMPLES = 4_000_000
-#: Largest state dimension and number of modes in a certificate's family.
-MAX_CERTIFICATE_DIMENSION = 100
+#: States of a model (and of every file derived from one: a system, a certificate) and modes of a certificate's
+#: family: the one dimension limit, checked before any work.
+MAX_DIMENSION = 64
+#: Seconds a read of a file or standard input may wait for data (a FIFO nobody writes to).
+MAX_READ_WAIT_S = 10
+#: Characters of a model's or system's name (one line of printable text).
+MAX_NAME_LENGTH = 200
+#: Estimated work of a certificate's exact check, ``n**3 * D**2``: ``n`` states, ``D`` the digits of its largest
+#: matrix written over one common denominator (the common denominator's digits plus the longest numerator's).
+#: Elimination in exact rationals costs about ``n**3`` operations on numbers of about ``D`` digits that grow
+#: with the elimination.  The certificate ``certify`` writes for the 64-state chain of the benchmarks has
+#: ``D = 246`` (1.6e10); the bound admits ``D`` up to 338 at n = 64, 968 at n = 20, 5477 at n = 10.
+MAX_CERTIFICATE_WORK = 30_000_000_000
 #: A dwell-time certificate is checked while ``||A_p||_inf * tau_D <= 2**MAX_DWELL_BITS`` (the enclosure of
 #: ``exp(A_p tau_D)`` takes that many squarings); beyond, the check fails as undecidable in reasonable time.
 MAX_DWELL_BITS = 64
 #: Vertex matrices a box certificate may ask the checker to build (sub-boxes times monomial choices).
 MAX_BOX_VERTICES = 65536
+#: Cases of one sweep (grid points times Monte-Carlo draws), counted from the spec before any case is built;
+#: ``switchobs sweep --max-cases`` raises it.  Every row is kept in memory until the sweep ends (a few kB each).
+MAX_SWEEP_CASES = 100_000
+#: Integration steps of a sweep's braking cases, each counted at its time bound over its step (an upper bound:
+#: a braking to standstill stops earlier), checked before the first case runs; ``--max-steps`` raises it.
+MAX_SWEEP_STEPS = 1_000_000_000
+#: Worker processes of a local Dask cluster per core of the machine (``--workers``).
+MAX_WORKERS_PER_CORE = 4
+#: Road changes of one braking case (each is scored alone: its errors, re-convergence and recovery time).
+MAX_ROAD_CHANGES = 100
 #: The largest finite double and the smallest positive normal double: a number meant as a double lies in
 #: ``[DOUBLE_MIN, DOUBLE_MAX]`` in magnitude, or is 0.
 DOUBLE_MAX = sys.float_info.max
@@ -73,45 +99,105 @@ LIMITS: dict[str, int | float] = {
     "MAX_EXPRESSION_LENGTH": MAX_EXPRESSION_LENGTH, "MAX_EXPRESSION_DEPTH": MAX_EXPRESSION_DEPTH,
     "MAX_EXPRESSION_TERMS": MAX_EXPRESSION_TERMS, "MAX_EXPONENT": MAX_EXPONENT,
     "MAX_NUMBER_DIGITS": MAX_NUMBER_DIGITS, "MAX_CERTIFICATE_DIGITS": MAX_CERTIFICATE_DIGITS,
-    "MAX_CERTIFICATE_BYTES": MAX_CERTIFICATE_BYTES, "MAX_CERTIFICATE_DIMENSION": MAX_CERTIFICATE_DIMENSION,
+    "MAX_CERTIFICATE_BYTES": MAX_CERTIFICATE_BYTES, "MAX_DIMENSION": MAX_DIMENSION,
+    "MAX_CERTIFICATE_WORK": MAX_CERTIFICATE_WORK,
     "MAX_DWELL_BITS": MAX_DWELL_BITS, "MAX_BOX_VERTICES": MAX_BOX_VERTICES,
     "MAX_INPUT_FILE_BYTES": MAX_INPUT_FILE_BYTES, "MAX_PIL_ROWS": MAX_PIL_ROWS,
-    "MAX_LOG_BYTES": MAX_LOG_BYTES, "MAX_LOG_SAMPLES": MAX_LOG_SAMPLES,
+    "MAX_LOG_BYTES": MAX_LOG_BYTES, "MAX_LOG_SAMPLES": MAX_LOG_SAMPLES, "MAX_SWEEP_CASES": MAX_SWEEP_CASES,
+    "MAX_SWEEP_STEPS": MAX_SWEEP_STEPS, "MAX_WORKERS_PER_CORE": MAX_WORKERS_PER_CORE,
+    "MAX_ROAD_CHANGES": MAX_ROAD_CHANGES, "MAX_READ_WAIT_S": MAX_READ_WAIT_S, "MAX_NAME_LENGTH": MAX_NAME_LENGTH,
 }
 
 _FRACTION = re.compile(r"^([+-]?)(\d+)\s*/\s*(\d+)$")
 _DECIMAL = re.compile(r"^([+-]?)(\d*)(?:\.(\d*))?(?:[eE]([+-]?\d+))?$")
 
 
-def read_text(path: str | Path, *, what: str, max_bytes: int, error: type[SwitchobsError]) -> tuple[str, str]:
-    """The text of a user's file, ``"-"`` standard input, and the name to quote it by.
+def read_text(path: str | Path, *, what: str, max_bytes: int, error: type[SwitchobsError],
+              wait_s: float | None = None) -> tuple[str, str]:
+    """The text of a user's file, ``"-"`` standard input, and the name to quote it by: the one reader of input.
 
-    The size is checked before the file is read (at most ``max_bytes + 1`` characters from standard input), so
-    a huge input is refused in bounded memory.
+    The size is enforced by reading, never by the file's ``stat`` (``/dev/zero`` and a pipe report 0 bytes):
+    at most ``max_bytes + 1`` bytes are read, so a huge or endless input is refused in bounded memory.  A
+    read that waits more than ``wait_s`` seconds for data (a FIFO nobody writes to) is refused too; only a
+    terminal on standard input, where a person types, is waited for.
 
     Raises
     ------
     SwitchobsError
-        ``error``: the file cannot be read, is larger than ``max_bytes`` or is not UTF-8 text; the message names
-        ``what`` and the file.
+        ``error``: the file cannot be read (or standard input is closed), is larger than ``max_bytes``, waits
+        longer than ``wait_s`` or is not UTF-8 text; the message names ``what`` and the file.
     """
     stdin = str(path) == "-"
     where = "<stdin>" if stdin else str(path)
+    wait_s = MAX_READ_WAIT_S if wait_s is None else wait_s
     try:
+        if stdin and sys.stdin is None:  # `<&-`: Python then has no sys.stdin
+            raise error(f"cannot read {what} from standard input: it is closed; give a file instead of -")
         if stdin:
-            text = sys.stdin.read(max_bytes + 1)
-            size = len(text.encode("utf-8"))
+            fd = _stdin_fd()
+            if fd is None:  # a stream in memory (an embedding program's, a test's): read as text, bounded too
+                data = sys.stdin.read(max_bytes + 1).encode("utf-8", errors="surrogateescape")
+            else:
+                data = _read_bounded(fd, max_bytes, None if os.isatty(fd) else wait_s)
         else:
-            size = Path(path).stat().st_size
-        if size > max_bytes:
-            raise error(f"{what} {where!r} has {size} bytes (limit {max_bytes})")
-        if not stdin:
-            text = Path(path).read_text(encoding="utf-8")
+            # non-blocking open: opening a FIFO for reading would otherwise wait for a writer, unbounded
+            fd = os.open(path, os.O_RDONLY | os.O_NONBLOCK | getattr(os, "O_CLOEXEC", 0))
+            try:
+                data = _read_bounded(fd, max_bytes, wait_s)
+            finally:
+                os.close(fd)
+    except TimeoutError:
+        raise error(f"{what} {where!r} sent no data for {wait_s:g} s (limit MAX_READ_WAIT_S): a pipe or FIFO "
+                    "nobody writes to?") from None
     except OSError as exc:
-        raise error(f"cannot read {what} {where!r}: {exc.strerror}") from None
+        raise error(f"cannot read {what} {where!r}: {exc.strerror or exc}") from None
+    if len(data) > max_bytes:
+        raise error(f"{what} {where!r} has more than {max_bytes} bytes (limit {max_bytes})")
+    try:
+        return data.decode("utf-8"), where
     except UnicodeDecodeError as exc:
         raise error(f"{what} {where!r} is not UTF-8 text ({exc.reason} at byte {exc.start})") from None
-    return text, where
+
+
+def _stdin_fd() -> int | None:
+    """The descriptor of standard input, or None for a stream without one (``io.StringIO``)."""
+    try:
+        fd = sys.stdin.fileno()
+    except (OSError, ValueError, AttributeError):
+        return None
+    os.fstat(fd)  # a descriptor closed under Python's feet: OSError, reported as unreadable
+    return fd
+
+
+def _read_bounded(fd: int, max_bytes: int, wait_s: float | None) -> bytes:
+    """At most ``max_bytes + 1`` bytes of ``fd``; TimeoutError when no data comes for ``wait_s`` seconds."""
+    chunks: list[bytes] = []
+    left = max_bytes + 1
+    poller = select.poll()  # poll, not select: any descriptor number
+    poller.register(fd, select.POLLIN | select.POLLPRI)
+    while left > 0:
+        if wait_s is not None and not poller.poll(wait_s * 1000):
+            raise TimeoutError
+        try:
+            chunk = os.read(fd, min(left, 1 << 20))
+        except BlockingIOError:  # a FIFO whose writer has not written yet: wait again
+            continue
+        if not chunk:
+            break
+        chunks.append(chunk)
+        left -= len(chunk)
+    return b"".join(chunks)
+
+
+def check_dimension(size: int, *, what: str, error: type[Exception]) -> None:
+    """Refuse ``size`` states (or modes) above :data:`MAX_DIMENSION`, before anything of that size is built.
+
+    The one dimension check of models, systems and certificates, so that every model that can be read can be
+    certified and its certificate read back.
+    """
+    if size > MAX_DIMENSION:
+        raise error(f"{what} has {size} states (limit {MAX_DIMENSION} = MAX_DIMENSION: the exact design and "
+                    "certificate checks grow steeply with n); reduce the model")
 
 
 def _shorten(text: str, keep: int = 40) -> str:

@@ -9,7 +9,7 @@ from typing import Any
 
 import numpy as np
 
-from ._limits import decimal_fraction
+from ._limits import DOUBLE_MAX, decimal_fraction
 from .exceptions import DimensionError
 
 __all__ = ["named_vector", "signal_matrix", "adaptation_gain", "substep_bound", "round_down", "check_work",
@@ -112,6 +112,9 @@ def round_down(value: Fraction, real: str = "double", *, error: type[Exception])
     literal, so it is rounded towards zero, not to nearest.
     """
     single = real == "float"
+    largest = float(np.finfo(np.float32).max) if single else DOUBLE_MAX
+    if value > largest:  # it would silently become the largest real, another bound than the one given
+        raise error(f"h_max = {float(value):.4g} overflows a {real} (largest {largest:.4g}); give a smaller bound")
     try:
         near = float(np.float32(float(value))) if single else float(value)
     except OverflowError:

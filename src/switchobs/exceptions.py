@@ -27,6 +27,8 @@ __all__ = [
     "TransformError",
     "OutputError",
     "LogError",
+    "EXTRAS",
+    "install_hint",
 ]
 
 
@@ -110,3 +112,24 @@ class OutputError(SwitchobsError, OSError):
 class LogError(SwitchobsError, ValueError):
     """A measurement log or channel map that cannot be replayed (a channel missing, an unknown unit, time stamps
     that are not increasing, NaN samples, a file beyond the limits)."""
+
+
+#: Optional third-party packages -> the extra of switchobs that installs them (``pip install "switchobs[EXTRA]"``).
+EXTRAS: dict[str, str] = {"casadi": "codegen", "dask": "sweep", "distributed": "sweep", "fmpy": "fmu",
+                          "asammdf": "logs", "pyarrow": "logs", "pandas": "logs"}
+
+
+def install_hint(module: str | None) -> str:
+    """How to get a package that ``module`` belongs to: its extra, or a reinstall (a base dependency).
+
+    The hint of a :class:`PrerequisiteError`, for installed users: an extra, never a repository command.
+
+    Examples
+    --------
+    >>> install_hint("casadi.casadi")
+    'install it with pip install "switchobs[codegen]"'
+    """
+    extra = EXTRAS.get((module or "").split(".")[0])
+    if extra is not None:
+        return f'install it with pip install "switchobs[{extra}]"'
+    return 'reinstall switchobs and its dependencies (pip install --force-reinstall "switchobs")'

@@ -19,14 +19,6 @@ discrete_certificate      -- the sampled observer e+ = R(h A_pm) e for every ste
 check_discrete            -- the exact re-check of a stored discrete section
 certify_box               -- one certificate (strict common P or dwell time) for every parameter value of a box,
                              or the largest certified sub-box around the nominal point
-parse_box                 -- "a=150:230" items -> ParameterBox
-synthesize                -- K_plus, K_minus by LMIs (Y = X K): decay rate in tau, smallest H2 noise gain,
-                             re-checked exactly (a model at its values)
-synthesize_gains          -- the same for matrices A, C (one or more outputs)
-synthesize_box            -- K_plus, K_minus by polytopic LMIs valid at every vertex of a parameter box, checked
-                             exactly at the vertices (then certify_box certifies the switching on the box)
-noise_gain                -- H2 norm from measurement noise to the weighted estimation error of one mode
-noise_decay_front         -- Theorem 1 designs (all poles at -rate) beside LMI designs: noise gain vs decay rate
 classify_planar           -- Balde–Boscain–Mason cases i–iv with Gamma, det, tr(A1 A2) and R
 verify_certificate        -- independent exact check of a certificate document
 load_certificate          -- read a certificate JSON file
@@ -43,8 +35,11 @@ plot_certification, plot_spectra, plot_dwell_margin, plot_planar
 
 Results: CertificationReport, LyapunovResult, DualCertificate, SingularSum, DwellTimeResult,
 PlanarClassification, VerificationReport, TrajectoryReport, AdmissibleConstants, DiscreteCertificate,
-DiscreteVerdict, BoxCertificate, ParameterBox, GainSynthesis, FrontPoint,
-ZeroCrossing, Family.
+DiscreteVerdict, BoxCertificate, ZeroCrossing, Family.
+
+Moved, importable from here for one release: the gain synthesis (``synthesize``, ``synthesize_gains``,
+``synthesize_box``, ``noise_gain``, ``noise_decay_front``, ``GainSynthesis``, ``FrontPoint``) to
+:mod:`switchobs.synthesis`; ``ParameterBox`` and ``parse_box`` to :mod:`switchobs.model`.
 
 Certificate schema (one frozen class per section, ``to_json`` / ``from_json``):
 CertificateDocument, FamilySection, ObserverSection, LyapunovEntry, DualEntry,
@@ -52,8 +47,11 @@ SingularSumEntry, DwellTimeEntry, PlanarEntry, BoxSection, Verdict; enums Certif
 Existence; document_section registers a new optional section.
 """
 
-from ._box import BoxCertificate, ParameterBox, certify_box, parse_box
-from ._box_synthesis import synthesize_box
+# moved to switchobs.model and switchobs.synthesis; re-exported here for one release
+from ..model import ParameterBox, parse_box
+from ..synthesis import (FrontPoint, GainSynthesis, noise_decay_front, noise_gain, synthesize, synthesize_box,
+                         synthesize_gains)
+from ._box import BoxCertificate, certify_box
 from ._certify import CertificationReport, certify, certify_model, verdict_text
 from ._discrete import DiscreteCertificate, DiscreteVerdict, check_discrete, discrete_certificate
 from ._dwell import DwellTimeResult, dwell_time
@@ -62,7 +60,6 @@ from ._lyapunov import (DEFAULT_EPS, DualCertificate, LyapunovResult, SingularSu
                         infeasibility_certificate, singular_sum, strict_common_lyapunov)
 from ._planar import PlanarClassification, classify_planar
 from ._plot import plot_certification, plot_dwell_margin, plot_planar, plot_spectra
-from ._synthesis import FrontPoint, GainSynthesis, noise_decay_front, noise_gain, synthesize, synthesize_gains
 from ._schema import (ArbitrarySwitching, BoxSection, CertificateDocument, CertificateKind, DualEntry, DwellTimeEntry, Existence,
                       FamilySection, LyapunovEntry, ObserverSection, PlanarEntry, SingularSumEntry, Verdict,
                       document_section)

@@ -31,84 +31,17 @@ Kinds (``He(X) = X + X'``):
 
 from __future__ import annotations
 
-import itertools
 import math
-from collections.abc import Iterator, Mapping, Sequence
+from collections.abc import Mapping, Sequence
 from fractions import Fraction
 from typing import Any
 
 from .._limits import MAX_BOX_VERTICES, MAX_EXPONENT
 from ..exceptions import CertificateError
-from ._exact import (Matrix, add, definiteness, fraction_matrix, lyapunov_form, matmul, scale, sub, to_fraction,
-                     zeros)
+from ..exact import (Interval, Matrix, add, definiteness, evaluate_terms, fraction_matrix, lyapunov_form,
+                     observer_pair, scale, sub, to_fraction, vertex_matrices)
 
-__all__ = ["monomial_range", "vertex_values", "vertex_matrices", "evaluate_terms", "observer_pair",
-           "check_box_data", "box_pieces"]
-
-Interval = tuple[Fraction, Fraction]
-
-
-def monomial_range(exponents: Sequence[int], box: Sequence[Interval]) -> Interval:
-    """Exact range of ``prod theta_i^e_i`` over a box (product of the exact ranges of the powers)."""
-    lo, hi = Fraction(1), Fraction(1)
-    for e, (a, b) in zip(exponents, box):
-        if e == 0:
-            continue
-        ends = (a ** e, b ** e)
-        plo, phi = (Fraction(0), max(ends)) if e % 2 == 0 and a < 0 < b else (min(ends), max(ends))
-        cands = (lo * plo, lo * phi, hi * plo, hi * phi)
-        lo, hi = min(cands), max(cands)
-    return lo, hi
-
-
-def box_pieces(box: Sequence[Interval], degrees: Sequence[int], pieces: int) -> Iterator[list[Interval]]:
-    """The sub-boxes: parameters of degree > 1 cut into ``pieces`` equal intervals, the others kept whole."""
-    axes = []
-    for (a, b), deg in zip(box, degrees):
-        k = pieces if deg > 1 else 1
-        axes.append([(a + (b - a) * i / k, a + (b - a) * (i + 1) / k) for i in range(k)])
-    for combo in itertools.product(*axes):
-        yield list(combo)
-
-
-def vertex_values(monomials: Sequence[Sequence[int]], box: Sequence[Interval], pieces: int
-                  ) -> list[list[Fraction]]:
-    """Monomial values at the vertices of the lifted boxes (one list of values per vertex, deduplicated)."""
-    degrees = [max((m[i] for m in monomials), default=0) for i in range(len(box))]
-    seen: dict[tuple[Fraction, ...], None] = {}
-    for sub_box in box_pieces(box, degrees, pieces):
-        ranges = [monomial_range(m, sub_box) for m in monomials]
-        choices = [(r[0],) if r[0] == r[1] else r for r in ranges]
-        for values in itertools.product(*choices):
-            seen.setdefault(tuple(values), None)
-    return [list(v) for v in seen]
-
-
-def evaluate_terms(terms: Sequence[tuple[Sequence[int], Matrix]], values: Sequence[Fraction]) -> Matrix:
-    """``sum_m values[m] M_m``."""
-    n = len(terms[0][1])
-    A = zeros(n, n)
-    for (_, M), v in zip(terms, values):
-        if v:
-            A = add(A, scale(v, M))
-    return A
-
-
-def observer_pair(A: Matrix, C: Matrix, K_plus: Matrix, K_minus: Matrix) -> tuple[Matrix, Matrix]:
-    """``(A - K_plus C, -A + K_minus C)``."""
-    return sub(A, matmul(K_plus, C)), add(scale(-1, A), matmul(K_minus, C))
-
-
-def vertex_matrices(terms: Sequence[tuple[Sequence[int], Matrix]], box: Sequence[Interval], pieces: int,
-                    C: Matrix, K_plus: Matrix, K_minus: Matrix) -> tuple[list[Matrix], list[Matrix]]:
-    """``A_plus`` and ``A_minus`` at every vertex of the lifted boxes: ``(plus list, minus list)``."""
-    plus, minus = [], []
-    for values in vertex_values([m for m, _ in terms], box, pieces):
-        Ap, Am = observer_pair(evaluate_terms(terms, values), C, K_plus, K_minus)
-        plus.append(Ap)
-        minus.append(Am)
-    return plus, minus
-
+__all__ = ["check_box_data", "check_strict", "check_dwell"]
 
 def _neg_definite(M: Matrix) -> Any:
     return definiteness(scale(-1, M), strict=True)

@@ -29,18 +29,16 @@ from .._atomic import write_text
 from .._progress import progress
 from ..design import GainDesign
 from ..exceptions import CertificateError, FreeSymbolError, SpectrumError
-from ..model import Model
+from ..model import Model, user_matrix
 from ._box import BoxCertificate, certify_box
-from ._exact import arithmetic as exact_arithmetic
-from ._exact import fraction_matrix, matrix_strings
-from ._family import Family, FamilyLike, as_family, user_matrix
+from ..exact import (arithmetic as exact_arithmetic, fraction_matrix, matrix_strings, short_sqrt_lower)
+from ._family import Family, FamilyLike, as_family
 from ._discrete import DiscreteCertificate, discrete_certificate, stability_function
 from ._dwell import DwellTimeResult, dwell_time
-from ._lmi import DEFAULT_SOLVERS
+from ..lmi import DEFAULT_SOLVERS
 from ._lyapunov import (DEFAULT_EPS, LyapunovResult, SingularSum, _reading, common_lyapunov,
                         infeasibility_certificate, strict_common_lyapunov)
 from ._planar import PlanarClassification, classify_planar
-from ._rounding import short_sqrt_lower
 from ._schema import (ANY_DWELL, ArbitrarySwitching, BoxSection, CertificateDocument, CertificateKind,
                       FamilySection, DiscreteSection, ObserverSection, PlanarEntry, Verdict)
 from ._verify import VerificationReport, implied_verdict, verify_certificate

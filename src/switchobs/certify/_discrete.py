@@ -33,7 +33,7 @@ Two facts decide what can be certified (both checked exactly here):
   decrease for every ``h > 0``.
 
 Every proof is stored as data and re-checked by :func:`check_discrete`, which
-uses only :mod:`switchobs.certify._exact` (standard-library rationals).
+uses only :mod:`switchobs.exact` (standard-library rationals).
 """
 
 from __future__ import annotations
@@ -46,7 +46,7 @@ from typing import Any
 
 from ..exceptions import CertificateError, DimensionError
 from ..spec import STEP_METHODS, StepMethod
-from ._exact import (Matrix, add, definiteness, fraction_matrix, identity, is_zero, lyapunov_form, matmul,
+from ..exact import (Matrix, add, definiteness, fraction_matrix, identity, is_zero, lyapunov_form, matmul,
                      matrix_strings, nullspace, observable, scale, solve, sub, to_fraction, transpose, zeros)
 
 __all__ = ["StepMethod", "STEP_METHODS", "DiscreteVerdict", "DiscreteCertificate", "discrete_certificate",
@@ -580,7 +580,7 @@ def discrete_certificate(A_plus: Any, A_minus: Any, C: Any, P: Any, *, method: s
     >>> cert.verdict.value, cert.h_max, cert.strict
     ('certified', None, True)
     """
-    from ._family import user_matrix  # the user's boundary (NumPy, sympy); the checker itself stays stdlib-only
+    from ..model import user_matrix  # the user's boundary (NumPy, sympy); the checker itself stays stdlib-only
 
     return check_discrete(*(user_matrix(M, what=nm, part=part) for M, nm, part in
                             ((A_plus, "A_plus", "A"), (A_minus, "A_minus", "A"), (C, "C", "C"), (P, "P", "A"))), method)

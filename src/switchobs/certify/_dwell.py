@@ -28,11 +28,10 @@ from typing import Any
 import numpy as np
 
 from .._progress import progress
-from ._exact import Matrix, matrix_strings
+from ..exact import Matrix, dyadic, matrix_strings
 from ._family import Family, FamilyLike, as_family
 from ._lyapunov import _matrices, _reading
-from ._lmi import DEFAULT_SOLVERS, SolveInfo, balance, solve
-from ._rounding import dyadic
+from ..lmi import DEFAULT_SOLVERS, SolveInfo, balance, solve
 from ._schema import DwellTimeEntry
 from ._verify import _check_dwell
 

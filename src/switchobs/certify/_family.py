@@ -13,9 +13,9 @@ from sympy.polys.matrices import DomainMatrix
 from ..design import routh_first_column
 from ..exceptions import CertificateError, DimensionError, ModelError, NotHurwitzError
 from ..model import matrix_rows
-from ._exact import Matrix, fraction_matrix, matrix_strings
+from ..exact import Matrix, fraction_matrix, matrix_strings
 
-__all__ = ["Family", "as_family", "user_matrix", "format_spectrum", "FamilyLike"]
+__all__ = ["Family", "as_family", "format_spectrum", "FamilyLike"]
 
 
 @dataclass(frozen=True)
@@ -110,17 +110,6 @@ def _hurwitz_exact(M: Matrix) -> bool:
     alpha = [QQ.to_sympy(c) for c in dm.charpoly()[1:]]
     column = routh_first_column(alpha)
     return len(column) == len(alpha) + 1 and column[-1] > 0
-
-
-def user_matrix(value: Any, *, what: str, part: str = "A", rows: int | None = None,
-                cols: int | None = None) -> Matrix:
-    """A user's matrix (list of rows, NumPy, sympy, ``control.StateSpace`` for ``part``) as exact rationals.
-
-    The certify layer's boundary: :func:`switchobs.model.matrix_rows` reads the
-    container and the numbers (a float is its exact binary value), then the
-    exact layer checks the shape.  A flat sequence is one row.
-    """
-    return fraction_matrix(matrix_rows(value, name=what, part=part), what=what, rows=rows, cols=cols)
 
 
 def as_family(matrices: FamilyLike, names: Sequence[str] | None = None, *, hurwitz: bool = True) -> Family:

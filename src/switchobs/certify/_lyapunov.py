@@ -19,11 +19,11 @@ import numpy as np
 
 from .._progress import progress
 from ..exceptions import CertificateError
-from ._exact import Matrix, fraction_matrix, lyapunov_form, matrix_strings
-from ._family import Family, FamilyLike, as_family, user_matrix
-from ._lmi import DEFAULT_SOLVERS, SolveInfo, balance, dual_margin, primal_margin
-from ._rounding import (FACE_TOLERANCES, dyadic, factor_rows, kernel_vector, normalise, project_dual, project_primal,
-                        psd_dyadic, short_sqrt_lower)
+from ..model import user_matrix
+from ..exact import (FACE_TOLERANCES, Matrix, dyadic, factor_rows, fraction_matrix, kernel_vector, lyapunov_form,
+                    matrix_strings, normalise, project_dual, project_primal, psd_dyadic, short_sqrt_lower)
+from ._family import Family, FamilyLike, as_family
+from ..lmi import DEFAULT_SOLVERS, SolveInfo, balance, dual_margin, primal_margin
 from ._schema import CertificateKind, DualEntry, LyapunovEntry, SingularSumEntry
 from ._verify import _check_dual, _check_hespanha, _check_singular_sum, _check_strict
 

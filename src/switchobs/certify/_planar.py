@@ -46,7 +46,7 @@ import mpmath
 import numpy as np
 
 from ..exceptions import CertificateError, DimensionError, NotHurwitzError
-from ._exact import Matrix, matmul
+from ..exact import Matrix, matmul
 from ._family import as_family, format_spectrum
 
 __all__ = ["PlanarClassification", "classify_planar", "VERDICTS"]

@@ -16,7 +16,7 @@ from ..exceptions import CertificateError
 from ._certify import CertificationReport
 from ._dwell import gc_margin
 from ._family import as_family
-from ._lmi import balance
+from ..lmi import balance
 from ._planar import PlanarClassification
 
 __all__ = ["plot_certification", "plot_spectra", "plot_dwell_margin", "plot_planar"]

@@ -16,7 +16,7 @@ from collections.abc import Mapping
 from typing import Any
 
 from ..exceptions import SwitchobsError
-from ._exact import fraction_matrix
+from ..exact import fraction_matrix
 from ._schema import CertificateDocument, Check, ObserverSection
 
 __all__ = ["model_link"]

@@ -28,7 +28,7 @@ from dataclasses import MISSING, dataclass, field, fields
 from enum import Enum
 from typing import Any, ClassVar, Protocol
 
-from .._limits import MAX_CERTIFICATE_DIMENSION
+from .._limits import MAX_DIMENSION, check_dimension
 from ..exceptions import CertificateError
 
 __all__ = ["FORMAT", "VERSION", "CertificateKind", "ArbitrarySwitching", "Existence", "ANY_DWELL", "Verdict",
@@ -159,13 +159,13 @@ class FamilySection:
         if not isinstance(mats, list) or not mats:
             raise CertificateError(f"certificate 'family.matrices' must be a non-empty list of matrices, "
                                    f"got {_show(mats)}")
-        if len(mats) > MAX_CERTIFICATE_DIMENSION:
+        if len(mats) > MAX_DIMENSION:
             raise CertificateError(f"certificate 'family.matrices' has {len(mats)} modes "
-                                   f"(limit {MAX_CERTIFICATE_DIMENSION})")
+                                   f"(limit {MAX_DIMENSION})")
         for i, M in enumerate(mats):
-            if not isinstance(M, list) or len(M) > MAX_CERTIFICATE_DIMENSION:
-                raise CertificateError(f"certificate 'family.matrices[{i}]' must be a list of at most "
-                                       f"{MAX_CERTIFICATE_DIMENSION} rows, got {_show(M)}")
+            if not isinstance(M, list):
+                raise CertificateError(f"certificate 'family.matrices[{i}]' must be a list of rows, got {_show(M)}")
+            check_dimension(len(M), what=f"certificate 'family.matrices[{i}]'", error=CertificateError)
         names = data.get("names") or [f"A_{i + 1}" for i in range(len(mats))]
         if not isinstance(names, list) or not all(isinstance(nm, str) for nm in names):
             raise CertificateError(f"certificate 'family.names' must be a list of strings, got {_show(names)}")
@@ -226,7 +226,7 @@ class ObserverSection:
         return cls(data.get("A"), data.get("C"), data.get("K_plus", []), data.get("K_minus", []))
 
     def check(self, names: Sequence[str], matrices: Sequence[Any]) -> Check:
-        from ._exact import add, fraction_matrix, matmul, scale, sub
+        from ..exact import add, fraction_matrix, matmul, scale, sub
 
         n = len(matrices[0])
         A = fraction_matrix(self.A, what="observer A", rows=n, cols=n)
@@ -462,7 +462,8 @@ class CertificateDocument:
         if data.get("format") != FORMAT:
             raise CertificateError(f"not a switchobs certificate: format is {data.get('format')!r}, "
                                    f"expected {FORMAT!r}")
-        if data.get("version") != VERSION:
+        version = data.get("version")
+        if type(version) is not int or version != VERSION:  # JSON true and 1.0 equal 1 to Python
             raise CertificateError(f"unsupported certificate version {data.get('version')!r} "
                                    f"(this checker reads {VERSION})")
         family = FamilySection.from_json(data.get("family"))
@@ -473,5 +474,9 @@ class CertificateDocument:
         provenance = data.get("provenance") or {}
         if not isinstance(provenance, Mapping):
             raise CertificateError(f"certificate 'provenance' must be an object, got {_show(provenance)}")
+        # free-form, but the keys the model link reads must have their type: a wrong one is no link at all
+        for key, kind, what in (("model", str, "a model name (text)"), ("parameters", Mapping, "an object")):
+            if provenance.get(key) is not None and not isinstance(provenance[key], kind):
+                raise CertificateError(f"certificate 'provenance.{key}' must be {what}, got {_show(provenance[key])}")
         return cls(family, tuple(_entry(c) for c in certs), Verdict.from_json(data.get("verdict")),
                    dict(provenance), sections)

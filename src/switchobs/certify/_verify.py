@@ -7,7 +7,7 @@ A certificate is a JSON document (format ``switchobs-certificate``, version 1,
 sections in :mod:`switchobs.certify._schema`) holding the switched family
 ``{A_p}`` and, as rational strings, the matrices of one or more certificates.  :func:`verify_certificate` re-derives every
 inequality from those matrices alone, decides each in exact rational
-arithmetic (:mod:`switchobs.certify._exact`), recomputes the verdict they
+arithmetic (:mod:`switchobs.exact`), recomputes the verdict they
 imply and compares it with the verdict the document claims.  It never looks
 at margins, solver names or statuses: those are provenance, not evidence.
 
@@ -52,13 +52,15 @@ import json
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 from fractions import Fraction
+from math import gcd
 from pathlib import Path
 from typing import Any
 
-from .._limits import MAX_CERTIFICATE_BYTES, MAX_CERTIFICATE_DIGITS, MAX_DWELL_BITS, read_text
+from .._limits import (MAX_CERTIFICATE_BYTES, MAX_CERTIFICATE_DIGITS, MAX_CERTIFICATE_WORK, MAX_DWELL_BITS,
+                       digits, read_text)
 from .._progress import progress
-from ..exceptions import CertificateError
-from ._exact import (Matrix, add, definiteness, expm_enclosure, fraction_matrix, inf_norm,
+from ..exceptions import CertificateError, SwitchobsError
+from ..exact import (Matrix, add, definiteness, expm_enclosure, fraction_matrix, inf_norm,
                      integer_form, is_zero, lyapunov_form, matmul, observable, scale, sqrt_upper,
                      to_fraction, transpose, arithmetic as _arithmetic)
 from ._schema import (ANY_DWELL, ArbitrarySwitching, CertificateDocument, CertificateKind, Check, DualEntry,
@@ -456,6 +458,7 @@ def _verify(doc: Mapping[str, Any] | str | Path, how: str, model: Any) -> Verifi
     if not isinstance(doc, Mapping):
         doc = load_certificate(doc)
     document = CertificateDocument.from_json(doc)
+    _check_cost(doc, len(document.family.matrices[0]))
     names, As = _family(document.family)
     checks = [section.check(names, As) for section in document.sections.values()]
     link, unchecked = model_link(document, model)
@@ -509,6 +512,55 @@ def _verify(doc: Mapping[str, Any] | str | Path, how: str, model: Any) -> Verifi
                               parameters={_text(k): _text(v) for k, v in parameters.items()}
                               if isinstance(parameters, Mapping) else {},
                               gains=gains, unchecked=unchecked, arithmetic=how)
+
+
+def _check_cost(doc: Mapping[str, Any], n: int) -> None:
+    """Refuse a certificate whose exact check would take too long, before any of it: the estimate
+    ``n**3 * D**2`` of :data:`~switchobs._limits.MAX_CERTIFICATE_WORK` over every matrix of the document.
+
+    A 100 x 100 family of 3000-digit rationals is within the size limits but would take hours: the sums of
+    exact products over distinct denominators grow the digits with every term.
+    """
+    cap = int((MAX_CERTIFICATE_WORK / max(n, 1) ** 3) ** 0.5)  # the most digits D a matrix may have
+    for where, rows in _matrices(doc):
+        size = _common_digits(rows, cap)
+        if size > cap:
+            raise CertificateError(f"certificate '{where}': its exact check would take too long (n = {n} states, "
+                                   f"a matrix of at least {size} digits over one common denominator: about "
+                                   f"{n ** 3 * size ** 2:.2g} > {MAX_CERTIFICATE_WORK:.2g} = MAX_CERTIFICATE_WORK, "
+                                   "estimated n**3 * digits**2); round the certificate to fewer digits")
+
+
+def _matrices(data: Any, where: str = "") -> Any:
+    """``(key path, rows)`` of every matrix (a list of rows) and vector (a row) in a JSON value, provenance aside."""
+    if isinstance(data, Mapping):
+        for key, value in data.items():
+            if key != "provenance":
+                yield from _matrices(value, f"{where}.{key}" if where else str(key))
+    elif isinstance(data, list):
+        if data and all(isinstance(x, (str, int)) and not isinstance(x, bool) for x in data):
+            yield where, [data]
+        elif data and all(isinstance(r, list) and all(isinstance(x, (str, int)) for x in r) for r in data):
+            yield where, data
+        else:
+            for i, value in enumerate(data):
+                yield from _matrices(value, f"{where}[{i}]")
+
+
+def _common_digits(rows: Sequence[Sequence[Any]], cap: int) -> int:
+    """Digits of ``rows`` over one common denominator (an upper bound; stops once above ``cap``)."""
+    common, top = 1, 0
+    for row in rows:
+        for entry in row:
+            try:
+                value = to_fraction(entry)
+            except SwitchobsError:
+                continue  # not a number: the check itself names it
+            common = common * value.denominator // gcd(common, value.denominator)
+            top = max(top, digits(value.numerator))
+            if digits(common) + top > cap:
+                return digits(common) + top
+    return digits(common) + top
 
 
 def _text(value: Any, *, none: bool = False) -> Any:

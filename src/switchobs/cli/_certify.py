@@ -5,12 +5,12 @@ from __future__ import annotations
 import argparse
 import math
 
-from .._atomic import check_output_file
 from .._display import ROUNDED_NOTE, exact_display, readable_number
 from ..spec import STEP_METHODS
 from ..exceptions import CertificateError, SpectrumError
 from ..model import load_model
-from ._common import STDIO, add_model_arguments, emit_json, parse_params, summary_stream, write_certificate
+from ._common import (STDIO, add_model_arguments, check_output, emit_json, figure_file, output_file, parse_params,
+                      summary_stream, write_certificate)
 
 __all__ = ["register"]
 
@@ -29,7 +29,7 @@ def register(sub: argparse._SubParsersAction) -> None:
                     "with --box, the whole box), "
                     "1 if none does, 2 on bad input.")
     add_model_arguments(p)
-    p.add_argument("--spectrum", help='poles of A_plus, e.g. "-10,-20,-20" (gains by Theorem 1, seed 004)')
+    p.add_argument("--spectrum", help='poles of A_plus, e.g. "-10,-20,-20" (gains by Theorem 1, Pasillas-Lépine)')
     p.add_argument("--gains-plus", help='K_plus entries, e.g. "84,-7312/375,-64/3"')
     p.add_argument("--gains-minus", help="K_minus entries (default: the Theorem 1 choice)")
     p.add_argument("--solver", choices=("CLARABEL", "SCS"), help="use only this cvxpy solver "
@@ -55,9 +55,11 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--json", action="store_true", help="print the full report as JSON")
     p.add_argument("--exact", action="store_true",
                    help="print the gains in full (default: rationals longer than 20 characters to 6 digits)")
-    p.add_argument("--out", metavar="CERT.json", help="write the certificate (checkable with switchobs verify); "
+    p.add_argument("--out", metavar="CERT.json", type=output_file,
+                   help="write the certificate (checkable with switchobs verify); "
                    "- writes it to standard output and the summary to stderr")
-    p.add_argument("--plot", metavar="PATH", help="write a figure: the spectra of A_plus and A_minus and, when the "
+    p.add_argument("--plot", metavar="PATH", type=figure_file,
+                   help="write a figure: the spectra of A_plus and A_minus and, when the "
                    "verdict rests on a dwell time, the Geromel-Colaneri LMI margin against T with tau_D marked")
     p.set_defaults(func=run)
 
@@ -73,8 +75,7 @@ def run(args: argparse.Namespace) -> int:
         raise CertificateError(f"--rate-hz must be a positive number of samples per second, got {args.rate_hz!r}")
     if args.out == STDIO and args.json:
         raise CertificateError("--out - writes the certificate to standard output; give --json or --out -, not both")
-    if args.out and args.out != STDIO:
-        check_output_file(args.out, what="the certificate")
+    check_output(args.out, what="the certificate", inputs=[args.model])
     model = load_model(args.model)
     solvers = (args.solver,) if args.solver else ("CLARABEL", "SCS")
     dwell = True if args.dwell else False if args.no_dwell else "auto"

@@ -8,7 +8,7 @@ import re
 from typing import Any
 
 from ..exceptions import DimensionError
-from ._common import emit_json
+from ._common import emit_json, figure_file
 
 __all__ = ["register", "parse_matrix"]
 
@@ -33,12 +33,13 @@ def parse_matrix(text: str, *, name: str) -> list[list[str]]:
 def register(sub: argparse._SubParsersAction) -> None:
     p = sub.add_parser("classify",
                        description="Classify the planar switched system dx/dt = A_sigma x, sigma in {1, 2} "
-                                   "(Balde, Boscain and Mason 2009, as stated in seed 004): Gamma, det, "
+                                   "(Balde, Boscain and Mason 2009, as stated in Pasillas-Lépine): Gamma, det, "
                                    "tr(A1 A2), R and the verdict. Rational entries are decided exactly.")
     p.add_argument("A1", help='first matrix, e.g. "[[-1,2],[-3,-4]]"')
     p.add_argument("A2", help="second matrix")
     p.add_argument("--json", action="store_true", help='JSON with fields "case" (i, ii, iii, iv) and "verdict"')
-    p.add_argument("--plot", metavar="PATH", help="write a figure: level sets of each mode's Lyapunov function and "
+    p.add_argument("--plot", metavar="PATH", type=figure_file,
+                   help="write a figure: level sets of each mode's Lyapunov function and "
                    "the worst-case trajectory")
     p.set_defaults(func=run)
 

@@ -12,13 +12,14 @@ from typing import Any
 
 import sympy as sp
 
-from .._atomic import check_output_directory, write_files
+from .._atomic import check_output_directory, staged_directory, write_files
 from .._limits import MAX_INPUT_FILE_BYTES, read_text
 from ..design import GainDesign, design
 from ..exceptions import CodegenError, FreeSymbolError, PrerequisiteError, SpectrumError
-from ..model import Model, load_model, rational_value
-from ..spec import METHODS
-from ._common import emit_json, parse_params
+from ..model import Model, builtin_names, load_model, rational_value
+from ..spec import METHODS, default_method
+from ._common import emit_json, note_uncertified, output_directory, parse_params
+from ._errors import flush_stdout
 from ._integration import add_integration_arguments, integration_files
 
 __all__ = ["register"]
@@ -32,10 +33,10 @@ TARGET_NAMES = ("host", "cortex-m4f", "cortex-m7")
 def register(sub: argparse._SubParsersAction) -> None:
     p = sub.add_parser("codegen",
                        description="Generate C for the switched observer of MODEL (built-in or TOML), the "
-                                   "adaptive observer of seed 001 (3.4) with --unknown, or the super-twisting "
-                                   f"observer of seed 003 with MODEL = {SUPER_TWISTING}.")
+                                   "adaptive observer of Aguado-Rojas 2020 (3.4) with --unknown, or the super-twisting "
+                                   f"observer of M'Sirdi et al. 2008 with MODEL = {SUPER_TWISTING}.")
     p.add_argument("model", metavar="MODEL",
-                   help="built-in model (abs-xbs3, abs-xbs4, abs-adaptive2, normal-form-N), a TOML file, "
+                   help=f"built-in model ({', '.join(builtin_names())}), a TOML file, "
                         f"or {SUPER_TWISTING}")
     p.add_argument("--param", action="append", default=[], metavar="NAME=VALUE",
                    help="default of a runtime parameter or value of a design symbol (repeatable), e.g. "
@@ -46,7 +47,7 @@ def register(sub: argparse._SubParsersAction) -> None:
     target.add_argument("--charpoly", help='target det(sI - A_plus) in s, e.g. "s^3 + 6*s^2 + 11*s + 6"')
     target.add_argument("--gains-plus", help="K_plus entries, comma-separated")
     p.add_argument("--gains-minus", help="K_minus entries (default: the Theorem 1 choice)")
-    p.add_argument("--unknown", help="parameters estimated by the adaptive observer of seed 001 (3.4), e.g. c,d")
+    p.add_argument("--unknown", help="parameters estimated by the adaptive observer of Aguado-Rojas 2020 (3.4), e.g. c,d")
     p.add_argument("--gamma", help="adaptation gain Gamma: its diagonal (\"50,20\") or rows (\"50,0;0,20\")")
     p.add_argument("--real", choices=("double", "float"), default=None,
                    help="C real type (default double; with --target the target's: float on cortex-m4f, whose "
@@ -65,8 +66,9 @@ def register(sub: argparse._SubParsersAction) -> None:
                    help="with --pil: rows of signals, a header naming them (and an optional dt column, seconds; "
                         "default 0.001); the state starts at 0")
     p.add_argument("--method", choices=METHODS, default=None,
-                   help="discretisation, signals held over the step (default rk4; super-twisting: euler); "
-                        "midpoint and radau3 are implicit and certified for every dt")
+                   help="discretisation, signals held over the step (default radau3; rk4 with --unknown, as the "
+                        "adaptive observer takes explicit steps only, and beyond 12 states; super-twisting: euler); midpoint and radau3 "
+                        "are implicit and certified for every dt, rk4 and euler are not (a note says so)")
     p.add_argument("--h-max", metavar="auto|VALUE",
                    help="bound on the step |s|*dt in the rescaled time: a step beyond it is split into "
                         "sub-steps (H_MAX in the header, rounded down); VALUE is exact (0.01 or 1/100); auto "
@@ -85,7 +87,7 @@ def register(sub: argparse._SubParsersAction) -> None:
                    help="run the proof of no run-time errors (frama-c -eva, needs --range for every input) and "
                         "write its command and result to <prefix>_proof.md; exit 1 if EVA reports an alarm")
     p.add_argument("--prefix", help="C prefix (default switchobs_<model>, non-identifier characters as _)")
-    p.add_argument("--out", required=True, metavar="DIR",
+    p.add_argument("--out", required=True, metavar="DIR", type=output_directory,
                    help="directory for <prefix>.c, <prefix>.h, README.md and <prefix>_misra.md (the MISRA C:2012 "
                         "deviation record)")
     p.add_argument("--json", action="store_true", help="print the description as JSON")
@@ -111,7 +113,7 @@ def _command(args: argparse.Namespace) -> str:
     if args.max_substeps is not None:
         words.append(f"--max-substeps={args.max_substeps}")
     words += [f"--range={item}" for item in args.ranges]
-    if args.prefix:
+    if args.prefix is not None:
         words.append(f"--prefix={args.prefix}")
     words.append("--out=DIR")
     return shlex.join(words)
@@ -193,7 +195,8 @@ def run(args: argparse.Namespace) -> int:
         except ValueError:
             raise CodegenError(f"lam and alpha must be numbers, got {values['lam']!r}, {values['alpha']!r}") from None
         gen = generate_super_twisting(lam, alpha, real=args.real,
-                                      prefix=args.prefix or "switchobs_super_twisting", command=command)
+                                      prefix="switchobs_super_twisting" if args.prefix is None else args.prefix,
+                                      command=command)
     else:
         if not (args.spectrum or args.charpoly or args.gains_plus):
             raise SpectrumError("give the gains with --spectrum, --charpoly or --gains-plus")
@@ -203,7 +206,11 @@ def run(args: argparse.Namespace) -> int:
         unknown = [u.strip() for u in args.unknown.split(",")] if args.unknown else []
         if args.gamma and not unknown:
             raise CodegenError("--gamma is the adaptation gain of the adaptive observer; give --unknown too")
-        method = args.method or "rk4"
+        method = args.method or default_method(model.n, affine=not unknown)
+        # the adaptive observer has explicit steps only and no discrete certificate at all; --h-max auto
+        # proves or refutes the certificate itself (exit 1 with its own line)
+        if not unknown and args.h_max != "auto":
+            note_uncertified(args, method)
         if args.h_max == "auto" and unknown:
             raise CodegenError("--h-max auto certifies the switched observer's error dynamics (A_plus, A_minus); "
                                "the adaptive observer's error also has the parameter estimates: give --h-max VALUE")
@@ -232,36 +239,43 @@ def run(args: argparse.Namespace) -> int:
         from ..codegen import proof_record, prove
 
         proof = prove(gen)
-    extra = {} if proof is None else {f"{gen.prefix}_proof.md": proof_record(gen, proof)}
-    paths = write_files(args.out, {**(build or gen).files, **integration_files(gen, args), **extra},
-                        what="the generated C into")
     comparison = None
     if record is not None and build is not None and build.pil is not None and model is not None:
         from ..loop import compare_with_reference, reference_observer
 
         comparison = compare_with_reference(build.pil, reference_observer(model, gen, unknown=tuple(unknown)),
                                             record.rows, record.dt, record.x0)
-    if args.json:
-        data = gen.to_json()
-        if build is not None:
-            data["target"] = {"name": build.target, "footprint": build.footprint.to_json(), "record": build.record,
-                              "instructions_per_step": None if build.pil is None else build.pil.instructions_per_step}
-        if comparison is not None:
-            data["pil"] = {**comparison.to_json(), "passed": comparison.passed}
-        data["written"] = [str(p) for p in paths]
-        emit_json(data)
-    else:
-        print(build or gen)
-        print(f"  wrote {', '.join(str(p) for p in paths)}")
-        if record is not None and build is not None and build.pil is not None:
-            print(f"  {build.pil}")
-            print(f"  record: {record}")
-            print(f"  {comparison}" if comparison is not None else "  (no Python reference for this observer)")
+    files = {**(build or gen).files, **integration_files(gen, args),
+             **({} if proof is None else {f"{gen.prefix}_proof.md": proof_record(gen, proof)})}
+    # The files and the report on standard output succeed together: a report that cannot be written (a full
+    # disk, /dev/full) removes the files and any directory made for them (the one cleanup of staged_directory).
+    with staged_directory(args.out, what="the generated C into") as work:
+        write_files(work, files, what="the generated C into")
+        paths = [Path(args.out) / name for name in files]
+        if args.json:
+            data = gen.to_json()
+            if build is not None:
+                data["target"] = {"name": build.target, "footprint": build.footprint.to_json(),
+                                  "record": build.record,
+                                  "instructions_per_step": None if build.pil is None else build.pil.instructions_per_step}
+            if comparison is not None:
+                data["pil"] = {**comparison.to_json(), "passed": comparison.passed}
+            data["written"] = [str(p) for p in paths]
+            emit_json(data)
+        else:
+            print(build or gen)
+            print(f"  wrote {', '.join(str(p) for p in paths)}")
+            if record is not None and build is not None and build.pil is not None:
+                print(f"  {build.pil}")
+                print(f"  record: {record}")
+                print(f"  {comparison}" if comparison is not None else "  (no Python reference for this observer)")
+        if proof is not None:
+            print(proof, file=sys.stderr if args.json else sys.stdout)
+        flush_stdout()
     passed = True
     if build is not None and build.pil is not None and record is not None:
         passed = comparison.passed if comparison is not None else build.pil.bit_identical
     if proof is not None:
-        print(proof, file=sys.stderr if args.json else sys.stdout)
         passed = passed and proof.ok
     return 0 if passed else 1
 

@@ -9,21 +9,63 @@ from collections.abc import Callable, Iterable
 from pathlib import Path
 from typing import Any, TextIO
 
-from ..exceptions import ModelError
-from ..model import Model, load_model
+from .._atomic import check_output_file
+from ..exceptions import ModelError, OutputError, SwitchobsError
+from ..model import Model, builtin_names, load_model
 from .main import QUIET
 
 __all__ = ["add_model_arguments", "model_from_args", "parse_params", "emit_json", "write_or_check", "STDIO",
-           "summary_stream", "write_certificate"]
+           "summary_stream", "write_certificate", "output_file", "output_directory", "figure_file", "check_output",
+           "note_uncertified"]
 
 #: The file name that means standard input (a model, a certificate) or standard output (``--out -``).
 STDIO = "-"
 
 
+def output_file(text: str) -> str:
+    """``type=`` of an option naming an output file (``-``: standard output where the option says so): not empty."""
+    if not text.strip():
+        raise argparse.ArgumentTypeError("the path is empty; give a file name")
+    return text
+
+
+def output_directory(text: str) -> str:
+    """``type=`` of an option naming an output directory: not empty and not ``-`` (several files go there)."""
+    if not text.strip() or text == STDIO:
+        raise argparse.ArgumentTypeError(f"{text!r} is not a directory name; give one (several files are written "
+                                         "there, so standard output cannot take them)")
+    return text
+
+
+def figure_file(text: str) -> str:
+    """``type=`` of ``--plot``: a path matplotlib can write (its suffix names the format), in a writable directory,
+    checked when the command line is read, before any work."""
+    from .._figures import figure_format
+
+    output_file(text)
+    try:
+        figure_format(text)
+        check_output_file(text, what="the plot")
+    except SwitchobsError as exc:
+        raise argparse.ArgumentTypeError(str(exc)) from None
+    return text
+
+
+def check_output(path: str | None, *, what: str, inputs: Iterable[str] = ()) -> None:
+    """Before the work: ``path`` (unless absent or ``-``) can be written and is none of the command's ``inputs``
+    (``certify model.toml --out model.toml`` would replace the model by its certificate)."""
+    if path is None or path == STDIO:
+        return
+    target = check_output_file(path, what=what)
+    for source in inputs:
+        if source != STDIO and target.exists() and Path(source).exists() and target.samefile(source):
+            raise OutputError(f"cannot write {what} {path!r}: it is the input {source!r}; give another path")
+
+
 def add_model_arguments(parser: argparse.ArgumentParser) -> None:
     """MODEL positional and repeatable ``--param NAME=VALUE``."""
     parser.add_argument("model", metavar="MODEL",
-                        help="built-in model (abs-xbs3, abs-xbs4, abs-adaptive2, normal-form-N), a TOML file, "
+                        help=f"built-in model ({', '.join(builtin_names())}), a TOML file, "
                              "or - for a TOML model on standard input")
     parser.add_argument("--param", action="append", default=[], metavar="NAME=VALUE",
                         help="substitute a parameter value (repeatable), e.g. --param a=187.5")
@@ -58,6 +100,16 @@ def summary_stream(args: argparse.Namespace) -> TextIO | None:
     if getattr(args, "out", None) != STDIO:
         return sys.stdout
     return None if args.verbosity == QUIET else sys.stderr
+
+
+def note_uncertified(args: argparse.Namespace, method: str) -> None:
+    """One line on stderr when the switched observer's step ``method`` is not certified (not an error; nothing
+    with ``--quiet``): the command goes on with it."""
+    from ..spec import uncertified_note
+
+    note = uncertified_note(method)
+    if note is not None and args.verbosity != QUIET:
+        print(f"switchobs {args.command}: note: {note}", file=sys.stderr)
 
 
 def write_certificate(report: Any, out: str) -> None:

@@ -6,11 +6,10 @@ import argparse
 import sys
 
 from ..exceptions import SimulationError
-from .._atomic import check_output_file
 from .._figures import save_figure
 from ..sensors import (ESTIMATORS, TABLE61_ENCODER, AngleTrajectory, ChainSettings, Encoder, braking_trajectory,
                        compare_estimators, constant_speed, plot_comparison, varying_speed)
-from ._common import emit_json
+from ._common import emit_json, figure_file
 
 __all__ = ["register"]
 
@@ -22,7 +21,7 @@ def register(sub: argparse._SubParsersAction) -> None:
         "encoder",
         description="Simulate a wheel encoder with transition noise and eccentricity, estimate the wheel "
                     "speed and acceleration at the controller rate and print the RMS errors against the "
-                    "exact trajectory (seed 001 Table 6.1 layout).")
+                    "exact trajectory (Aguado-Rojas 2020 Table 6.1 layout).")
     p.add_argument("--ppr", type=int, default=60, help="pulses per revolution N (default 60)")
     p.add_argument("--events", type=int, default=15, help="TSA window n (default 15)")
     p.add_argument("--order", type=int, default=2, help="TSA polynomial order m (default 2)")
@@ -45,7 +44,8 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--seed", type=int, default=1, help="seed of the transition errors (default 1)")
     p.add_argument("--warmup", type=float, default=1.0, help="seconds left out of the statistics (default 1)")
     p.add_argument("--json", action="store_true", help="print the results as JSON")
-    p.add_argument("--plot", metavar="PNG", help="save the speed and acceleration estimation errors of every estimator")
+    p.add_argument("--plot", metavar="PNG", type=figure_file,
+                   help="save the speed and acceleration estimation errors of every estimator")
     p.set_defaults(func=run)
 
 
@@ -58,8 +58,6 @@ def _trajectory(args: argparse.Namespace) -> AngleTrajectory:
 
 
 def run(args: argparse.Namespace) -> int:
-    if args.plot:
-        check_output_file(args.plot, what="the plot")
     if args.warmup >= args.duration:
         raise SimulationError(f"--warmup {args.warmup:g} must be shorter than --duration {args.duration:g}")
     encoder = Encoder(ppr=args.ppr, dnl_cycles=args.dnl, jitter_cycles=args.jitter, eccentricity=args.eccentricity,

@@ -22,12 +22,14 @@ from __future__ import annotations
 import os
 import sys
 import traceback
+import warnings
 from collections.abc import Callable
+from typing import Any
 
-from ..exceptions import FreeSymbolError, SwitchobsError
+from ..exceptions import EXTRAS, FreeSymbolError, OutputError, SwitchobsError, install_hint
 
 __all__ = ["EXIT_OK", "EXIT_FAILED", "EXIT_BAD_INPUT", "EXIT_INTERRUPTED", "DEBUG_ENV", "EXTRAS", "guarded",
-           "install_hint", "unavailable_message"]
+           "install_hint", "unavailable_message", "flush_stdout"]
 
 EXIT_OK = 0
 EXIT_FAILED = 1
@@ -35,16 +37,6 @@ EXIT_BAD_INPUT = 2
 EXIT_INTERRUPTED = 130
 #: Environment variable: when set to a non-empty value other than 0, an internal error also prints its traceback.
 DEBUG_ENV = "SWITCHOBS_DEBUG"
-#: Optional third-party modules -> the extra that installs them.
-EXTRAS: dict[str, str] = {"casadi": "codegen", "matplotlib": "plots", "dask": "sweep", "distributed": "sweep"}
-
-
-def install_hint(module: str | None) -> str:
-    """How to install what ``module`` belongs to: its extra, or a reinstall."""
-    extra = EXTRAS.get((module or "").split(".")[0])
-    if extra is not None:
-        return f'install it with pip install "switchobs[{extra}]" (or `make install`)'
-    return "reinstall with `make install` (or pip install -e .)"
 
 
 def unavailable_message(command: str, exc: ImportError) -> str:
@@ -76,6 +68,9 @@ def _message(exc: BaseException, command: str) -> str:
         return "the input is nested too deeply to process (RecursionError); simplify it"
     if isinstance(exc, MemoryError):
         return "out of memory: the input or the options ask for more than this machine has; make them smaller"
+    if isinstance(exc, RuntimeWarning):
+        return (f"a numeric computation overflowed or became undefined ({exc}); the values or options are beyond "
+                "what double precision handles: make them smaller")
     if isinstance(exc, OverflowError):
         return f"a number is too large to process ({exc}); check the values and options"
     if isinstance(exc, OSError):
@@ -85,10 +80,69 @@ def _message(exc: BaseException, command: str) -> str:
             f"line; {DEBUG_ENV}=1 shows the traceback)")
 
 
+class _CheckedStdout:
+    """Standard output whose failed writes are :class:`OutputError` (exit 2): a full disk or ``/dev/full`` loses
+    the output, which is a failure, not a success reported by no one.  A closed pipe stays BrokenPipeError."""
+
+    def __init__(self, stream: Any):
+        self._stream = stream
+
+    def _failed(self, exc: OSError) -> OutputError:
+        try:  # what is still buffered goes nowhere, so that the interpreter's own flush at exit does not fail again
+            devnull = os.open(os.devnull, os.O_WRONLY)
+            os.dup2(devnull, self._stream.fileno())
+            os.close(devnull)
+        except (OSError, ValueError, AttributeError):
+            pass
+        return OutputError(f"cannot write to standard output: {exc.strerror or exc}")
+
+    def write(self, text: str) -> int:
+        try:
+            return self._stream.write(text)
+        except BrokenPipeError:
+            raise
+        except OSError as exc:
+            raise self._failed(exc) from None
+
+    def flush(self) -> None:
+        try:
+            self._stream.flush()
+        except BrokenPipeError:
+            raise
+        except OSError as exc:
+            raise self._failed(exc) from None
+
+    def __getattr__(self, name: str) -> Any:
+        return getattr(self._stream, name)
+
+
+#: The messages of numpy's floating-point warnings (``np.seterr``), also as scipy passes them on.
+_FLOATING_POINT_WARNINGS = r".*(overflow|invalid value|divide by zero|underflow) encountered"
+
+
+def flush_stdout() -> None:
+    """Push what the command printed to standard output; :class:`OutputError` if it cannot take it."""
+    sys.stdout.flush()
+
+
 def guarded(command: str, run: Callable[[], int | None]) -> int:
-    """Run one sub-command under the policy: its exit status, or one line on stderr and 1, 2 or 130."""
+    """Run one sub-command under the policy: its exit status, or one line on stderr and 1, 2 or 130.
+
+    Standard output must be open (``>&-`` would lose every result) and take all that was printed.
+    """
+    stdout = sys.stdout
     try:
-        return int(run() or EXIT_OK)
+        if stdout is None:
+            raise OutputError("standard output is closed: the results would be lost; redirect it to a file or "
+                              "/dev/null")
+        sys.stdout = _CheckedStdout(stdout)
+        with warnings.catch_warnings():
+            # numpy's floating-point warnings would print several lines (also with -q) and let a run go on with
+            # inf or NaN: they end it as bad input.  Code that overflows on purpose says so with np.errstate.
+            warnings.filterwarnings("error", message=_FLOATING_POINT_WARNINGS, category=RuntimeWarning)
+            code = int(run() or EXIT_OK)
+        flush_stdout()
+        return code
     except BrokenPipeError:  # output piped into `head`: not an error of ours
         sys.stdout = open(os.devnull, "w")
         return EXIT_OK
@@ -100,3 +154,6 @@ def guarded(command: str, run: Callable[[], int | None]) -> int:
             traceback.print_exc()
         print(f"switchobs {command}: error: {_one_line(_message(exc, command))}", file=sys.stderr)
         return EXIT_BAD_INPUT
+    finally:
+        if isinstance(sys.stdout, _CheckedStdout):
+            sys.stdout = stdout

@@ -19,7 +19,8 @@ def register(sub: argparse._SubParsersAction) -> None:
                     "seeds' scenarios, Appendix C, the "
                     "Poincaré map, the super-twisting orders) and write docs/reproductions.md and the generated "
                     f"sections of {', '.join(sorted({path for path, _ in GENERATED_SECTIONS}))}. About a minute. With --check, write nothing and "
-                    "exit 1 if a committed page differs from the fresh run.")
+                    "exit 1 if a committed page differs from the fresh run. A repository command: it needs a checkout of "
+                    "the switchobs repository (its docs/), not an installed package alone.")
     p.add_argument("--root", default=".", metavar="DIR", help="repository root holding docs/ (default: .)")
     p.add_argument("--check", action="store_true", help="compare the committed pages with a fresh run instead")
     p.set_defaults(func=run)

@@ -18,7 +18,6 @@ from typing import Any
 
 import numpy as np
 
-from .._atomic import check_output_file
 from .._figures import save_figure
 from ..exceptions import SimulationError
 from ..loop import DEFAULT_GAMMA, OBSERVER_KINDS, EstimatorSpec, xbs_estimator
@@ -26,7 +25,8 @@ from ..plants import (TABLE41_ROADS, TABLE41_SPEEDS_KMH, BrakeActuator, BrakingR
                       ContinuousXbsControl, FivePhaseABS, SixPhaseABS, TwoPhaseABS, XbsEstimator, aguado_sec36, plot_braking,
                       plot_table41, plot_two_axle, road, road_names, scenario, scenario_description,
                       scenario_names, scenario_observer, scenario_observer_gains, simulate, simulate_two_axle, table41)
-from ._common import emit_json
+from ..spec import METHODS
+from ._common import emit_json, figure_file, note_uncertified
 
 __all__ = ["register"]
 
@@ -37,7 +37,7 @@ TWO_AXLE_CONTROLLERS = ("six-phase", "five-phase")
 
 def register(sub: argparse._SubParsersAction) -> None:
     p = sub.add_parser("simulate",
-                       description="Simulate an emergency braking of the quarter car of seed 001 (2.1) with a "
+                       description="Simulate an emergency braking of the quarter car of Aguado-Rojas 2020 (2.1) with a "
                                    "hybrid ABS and an XBS observer; print the metrics or JSON, draw the plots.")
     p.add_argument("scenario", nargs="?", metavar="SCENARIO",
                    help=f"built-in scenario: {', '.join(scenario_names())} (default: braking on --road "
@@ -55,21 +55,25 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--observer-impl", choices=("python", "c"), default="python",
                    help="observer implementation: the Python reference or the generated C (switchobs codegen, "
                         "double, compiled with the system gcc)")
+    p.add_argument("--method", choices=METHODS,
+                   help="the observer's step method (default radau3, certified for every step; the adaptive "
+                        "observer: rk4, as it takes explicit steps only); rk4 and euler are not certified for the "
+                        "switched observers (a note says so)")
     p.add_argument("--parallel", action="store_true",
-                   help="run the observer beside the loop: the controller reads the true XBS (seed 001 Fig. 4.5)")
+                   help="run the observer beside the loop: the controller reads the true XBS (Aguado-Rojas 2020 Fig. 4.5)")
     p.add_argument("--beta", type=float, help="observer rate beta in the rescaled time (default: the scenario's "
                                               "for its own observer, else per observer)")
     p.add_argument("--gamma", type=float, help=f"adaptive observer: Gamma = gamma I (default: the scenario's for "
                                                f"its own observer, else {DEFAULT_GAMMA:g})")
     p.add_argument("--static-load", action="store_true",
                    help="aguado-sec36, adaptive observer: keep each wheel's static load in a = R^2 Fz / J instead "
-                        "of reading Fz from (3.36) on line (seed 001 Sec. 3.6)")
+                        "of reading Fz from (3.36) on line (Aguado-Rojas 2020 Sec. 3.6)")
     p.add_argument("--duration", type=float, help="time bound [s] (default: scenario's, or 60)")
     p.add_argument("--dt", type=float, help="integration step [s] (default 0.001)")
     p.add_argument("--delay", type=float, help="actuator delay [s] (0 or >= the step)")
     p.add_argument("--json", action="store_true", help="print the result as JSON")
     p.add_argument("--series", action="store_true", help="with --json: include the time series")
-    p.add_argument("--plot", metavar="PNG", help="write the figure to this file")
+    p.add_argument("--plot", metavar="PNG", type=figure_file, help="write the figure to this file")
     p.set_defaults(func=run)
 
 
@@ -129,7 +133,20 @@ def _spec(args: argparse.Namespace, kind: str) -> EstimatorSpec:
     if gains and kind != scenario_observer(args.scenario):
         gains = {}
     return EstimatorSpec(kind, beta=gains.get("beta") if args.beta is None else args.beta,
-                         gamma=gains.get("gamma") if args.gamma is None else args.gamma, impl=args.observer_impl)
+                         gamma=gains.get("gamma") if args.gamma is None else args.gamma, impl=args.observer_impl,
+                         method=_method(args, kind))
+
+
+def _method(args: argparse.Namespace, kind: str) -> str | None:
+    """--method, checked against the observer; a note on stderr for an uncertified step of a switched observer."""
+    if args.method is None:
+        return None
+    if kind == "none":
+        raise SimulationError(f"--method {args.method} is the observer's step method; --observer none runs no "
+                              "observer")
+    if kind != "adaptive":   # the adaptive observer has explicit steps only and no discrete certificate
+        note_uncertified(args, args.method)
+    return args.method
 
 
 def _table41(args: argparse.Namespace) -> int:
@@ -139,7 +156,9 @@ def _table41(args: argparse.Namespace) -> int:
                                   f"algorithms on the roads and speeds of seed 001 Table 4.1")
     kind = args.observer or "none"
     factory = None
-    if kind != "none":
+    if kind == "none":
+        _method(args, kind)   # refuses --method
+    else:
         spec = _spec(args, kind)
 
         def factory(sc: BrakingScenario) -> XbsEstimator | None:
@@ -219,8 +238,6 @@ def _unfinished(args: argparse.Namespace, result: BrakingResult) -> str | None:
 
 
 def run(args: argparse.Namespace) -> int:
-    if args.plot:
-        check_output_file(args.plot, what="the plot")
     # an overflowing observer is reported once, as a failed or diverged run, not also by numpy's warnings
     with np.errstate(over="ignore", invalid="ignore", divide="ignore"):
         return _run(args)

@@ -4,11 +4,14 @@ from __future__ import annotations
 
 import argparse
 import math
+import sys
+from typing import Any
 
-from .._atomic import check_output_file
 from ..exceptions import ModelError
 from ..model import load_model
-from ._common import STDIO, add_model_arguments, emit_json, parse_params, summary_stream, write_certificate
+from ._common import (STDIO, add_model_arguments, check_output, emit_json, output_file, parse_params, summary_stream,
+                      write_certificate)
+from .main import QUIET
 
 __all__ = ["register"]
 
@@ -36,20 +39,21 @@ def register(sub: argparse._SubParsersAction) -> None:
                         "checks) and certify them over it (repeatable), e.g. a=150:230")
     p.add_argument("--solver", choices=("CLARABEL", "SCS"), help="use only this cvxpy solver")
     p.add_argument("--json", action="store_true", help="print the synthesis and the certificate report as JSON")
-    p.add_argument("--out", metavar="CERT.json", help="write the certificate of the synthesised pair; - writes it "
+    p.add_argument("--out", metavar="CERT.json", type=output_file,
+                   help="write the certificate of the synthesised pair; - writes it "
                    "to standard output and the summary to stderr")
     p.set_defaults(func=run)
 
 
 def run(args: argparse.Namespace) -> int:
-    from ..certify import certify_model, synthesize, synthesize_box
+    from ..certify import certify_model
+    from ..synthesis import synthesize, synthesize_box
 
     if not (math.isfinite(args.noise_weight) and args.noise_weight >= 0):
         raise ModelError(f"--noise-weight must be a finite number >= 0, got {args.noise_weight!r}")
     if args.out == STDIO and args.json:
         raise ModelError("--out - writes the certificate to standard output; give --json or --out -, not both")
-    if args.out and args.out != STDIO:
-        check_output_file(args.out, what="the certificate")
+    check_output(args.out, what="the certificate", inputs=[args.model])
     model = load_model(args.model)
     values = parse_params(args.param)
     solvers = (args.solver,) if args.solver else ("CLARABEL", "SCS")
@@ -70,5 +74,24 @@ def run(args: argparse.Namespace) -> int:
             print(report, file=stream)
             if args.out and args.out != STDIO:
                 print(f"certificate written to {args.out}", file=stream)
+    if report is not None and args.verbosity != QUIET:
+        _warn_fast_poles(report.family, float(args.decay), args.noise_weight)
     ok = report is not None and report.certified and (report.box is None or report.box.certified)
     return 0 if ok else 1
+
+
+#: A pole this many times faster than the decay asked for means gains the decay alone does not bound.
+FAST_POLE_RATIO = 1e3
+
+
+def _warn_fast_poles(family: Any, decay: float, noise_weight: float) -> None:
+    """One line on stderr when the synthesised poles are far faster than the decay rate asked for: the LMIs
+    bound the decay from one side only, and without a noise weight nothing penalises large gains."""
+    import numpy as np
+
+    fastest = max(float(np.max(np.abs(np.linalg.eigvals(M)))) for M in family.numeric)
+    if fastest > FAST_POLE_RATIO * decay:
+        hint = ("give a noise weight to penalise them (e.g. --noise-weight 0.01)" if noise_weight == 0 else
+                "give a larger --noise-weight or a smaller --decay")
+        print(f"switchobs synthesize: warning: a pole at |lambda| = {fastest:.3g}, {fastest / decay:.3g} times the "
+              f"decay rate {decay:g}: the gains are huge; {hint}", file=sys.stderr)

@@ -7,7 +7,7 @@ from pathlib import Path
 
 from .._atomic import check_output_directory
 from ..report import theory_documents, write_theory
-from ._common import write_or_check
+from ._common import output_directory, write_or_check
 
 __all__ = ["register"]
 
@@ -18,8 +18,10 @@ def register(sub: argparse._SubParsersAction) -> None:
         description="Generate the theory documents of the built-in models (abs-xbs3, abs-xbs4, abs-adaptive2) and "
                     "of the generic normal form (N = 3) from switchobs.design, as Markdown with LaTeX math. "
                     "The output is deterministic. With --check, write nothing and exit 1 if a file in DIR "
-                    "differs from what the code generates now.")
-    p.add_argument("--out", default="theory", metavar="DIR", help="output directory (default: theory)")
+                    "differs from what the code generates now. Runs anywhere; the repository keeps its "
+                    "documents in theory/ (the default DIR) and checks them with --check.")
+    p.add_argument("--out", default="theory", metavar="DIR", type=output_directory,
+                   help="output directory (default: theory)")
     p.add_argument("--check", action="store_true", help="compare DIR with the generated documents instead")
     p.set_defaults(func=run)
 

@@ -3,13 +3,11 @@
 from __future__ import annotations
 
 import argparse
-import os
-import tempfile
-from pathlib import Path
 
-from ..exceptions import ModelError, TransformError
+from .._atomic import write_text
+from ..exceptions import TransformError
 from ..transform import System, check_transformation, search_transformation
-from ._common import emit_json
+from ._common import check_output, emit_json, output_file
 
 __all__ = ["register", "split_top_level"]
 
@@ -18,7 +16,7 @@ def register(sub: argparse._SubParsersAction) -> None:
     p = sub.add_parser(
         "transform",
         description="From dx/dt = f(x) + g(x) u, y = h(x) (a system file) to dz/dt = s(y)(A z + d(y)) + b(y) u, "
-                    "y = C z (seed 004, Part III). Without --s/--phi, search s and phi from f, g, h alone; with "
+                    "y = C z (Pasillas-Lépine, Part III). Without --s/--phi, search s and phi from f, g, h alone; with "
                     "them, check the candidate. The derivation is printed step by step; exit 1 names the first "
                     "condition that fails.")
     p.add_argument("system", metavar="SYSTEM.toml", help="system file (docs/transform.md)")
@@ -26,8 +24,10 @@ def register(sub: argparse._SubParsersAction) -> None:
                                                 'e.g. "y/vx" (check mode, with --phi)')
     p.add_argument("--phi", metavar="EXPR,...", help='candidate coordinates z1,...,zn in the states, e.g. '
                                                       '"x2,c1*c2*exp(-c2*x1)-x3,-c2*x3" (check mode, with --s)')
-    p.add_argument("--out", metavar="MODEL.toml", help="write the normal form as a model file for `switchobs design`")
-    p.add_argument("--theory", metavar="PATH", help="write the derivation as a Markdown page with LaTeX")
+    p.add_argument("--out", metavar="MODEL.toml", type=output_file,
+                   help="write the normal form as a model file for `switchobs design`")
+    p.add_argument("--theory", metavar="PATH", type=output_file,
+                   help="write the derivation as a Markdown page with LaTeX")
     p.add_argument("--json", action="store_true", help="print the verdict, the model and the steps as JSON")
     p.set_defaults(func=run)
 
@@ -44,36 +44,20 @@ def split_top_level(text: str) -> list[str]:
     return parts
 
 
-def _write_atomically(path: Path, text: str) -> None:
-    try:
-        fd, tmp = tempfile.mkstemp(dir=path.parent if str(path.parent) else ".", prefix=f".{path.name}.",
-                                   suffix=".tmp")
-    except OSError as exc:
-        raise ModelError(f"cannot write {str(path)!r}: {exc.strerror}") from None
-    try:
-        with os.fdopen(fd, "w", encoding="utf-8") as out:
-            out.write(text)
-        os.replace(tmp, path)
-    except BaseException:
-        os.unlink(tmp)
-        raise
-
-
 def run(args: argparse.Namespace) -> int:
     if (args.s is None) != (args.phi is None):
         raise TransformError("check mode needs both --s and --phi (search mode: give neither)")
-    for option in (args.out, args.theory):
-        if option is not None and not Path(option).parent.is_dir():
-            raise ModelError(f"cannot write {option!r}: the directory {str(Path(option).parent)!r} does not exist")
+    check_output(args.out, what="the model", inputs=[args.system])
+    check_output(args.theory, what="the derivation", inputs=[args.system])
     system = System.from_toml(args.system)
     if args.s is None:
         result = search_transformation(system)
     else:
         result = check_transformation(system, args.s, split_top_level(args.phi))
     if args.theory:
-        _write_atomically(Path(args.theory), result.to_markdown())
+        write_text(args.theory, result.to_markdown(), what="the derivation")
     if args.out and result.exists:
-        _write_atomically(Path(args.out), result.model_toml())
+        write_text(args.out, result.model_toml(), what="the model")
     if args.json:
         emit_json(result.to_json())
     else:

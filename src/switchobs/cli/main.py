@@ -27,11 +27,12 @@ import sys
 import time
 from collections.abc import Callable, Iterator, Sequence
 from contextlib import contextmanager
+from typing import NoReturn
 
 from .. import __version__
 from .._progress import listening
 from ..exceptions import PrerequisiteError
-from ._errors import guarded, unavailable_message
+from ._errors import EXIT_BAD_INPUT, guarded, unavailable_message
 from ._status import StatusLine, is_terminal
 
 __all__ = ["main", "build_parser"]
@@ -66,16 +67,40 @@ def _add_verbosity(parser: argparse.ArgumentParser, default: object) -> None:
                        help="print every progress note as a line with its elapsed time (also into a pipe or file)")
 
 
+class _Parser(argparse.ArgumentParser):
+    """argparse with the failure policy of every other refusal: one line ``switchobs CMD: error: ...``, exit 2.
+
+    argparse's own format (the usage, wrapped over several lines, then the error) would make a refused option
+    the one failure that is not one line; ``--help`` still shows the usage.
+    """
+
+    def error(self, message: str) -> NoReturn:
+        self.exit(EXIT_BAD_INPUT, f"{self.prog}: error: {message} (see {self.prog} --help)\n")
+
+
+class _Completion(argparse.Action):
+    """``--completion bash``: print the script and exit (the commands' modules are imported only then)."""
+
+    def __call__(self, parser: argparse.ArgumentParser, namespace: argparse.Namespace, values: object,
+                 option_string: str | None = None) -> None:
+        from ._completion import bash_completion
+
+        sys.stdout.write(bash_completion())
+        parser.exit()
+
+
 def build_parser(only: str | None = None) -> argparse.ArgumentParser:
     """The ``switchobs`` parser; with ``only``, the parser of that sub-command (its module alone is imported).
 
     Without ``only`` the sub-commands are listed from :data:`COMMANDS` and none is importable: this parser
     answers ``--help``, ``--version`` and an unknown command.
     """
-    parser = argparse.ArgumentParser(
+    parser = _Parser(
         prog="switchobs",
         description="Design, certify and export switched observers via singular time-rescaling.")
     parser.add_argument("--version", action="version", version=f"switchobs {__version__}")
+    parser.add_argument("--completion", action=_Completion, choices=("bash",), metavar="SHELL",
+                        help="print a completion script for SHELL (bash), generated from the commands' parsers")
     _add_verbosity(parser, NORMAL)
     sub = parser.add_subparsers(dest="command", metavar="COMMAND")
     sub.required = True
@@ -159,12 +184,29 @@ def progress_display(command: str, verbosity: int) -> Iterator[None]:
         yield
 
 
+def _ascii_safe_streams() -> None:
+    """On streams that cannot encode Unicode (``PYTHONIOENCODING=ascii``, a ``C`` locale) a character
+    without an ASCII form (``m/s²``) is escaped instead of failing the command; matrices print as ASCII art."""
+    from .._display import unicode_output
+
+    for stream in (sys.stdout, sys.stderr):
+        if not unicode_output(stream) and hasattr(stream, "reconfigure"):
+            stream.reconfigure(errors="backslashreplace")
+
+
 def main(argv: Sequence[str] | None = None) -> int:
     argv = _glue_option_values(sys.argv[1:] if argv is None else argv)
     # Importing every command costs seconds (cvxpy, casadi, scipy.signal); a known command imports only its own.
     command = next((a for a in argv if not a.startswith("-")), None)
     parser = build_parser(command if command in COMMANDS else None)
-    args = parser.parse_args(argv)
+    if command is None and not {"-h", "--help", "--version", "--completion"} & {a.split("=")[0] for a in argv}:
+        parser.print_help()     # no command: what there is to run
+        return 0
+    args, unknown = parser.parse_known_args(argv)
+    if unknown:   # the usage of the command they belong to, not the top-level one
+        commands = next(a for a in parser._actions if isinstance(a, argparse._SubParsersAction))
+        commands.choices[args.command].error(f"unrecognized arguments: {' '.join(unknown)}")
+    _ascii_safe_streams()   # a command runs: it has imported what it prints with
 
     def run() -> int:
         with progress_display(args.command, args.verbosity):

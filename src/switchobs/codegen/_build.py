@@ -570,7 +570,9 @@ class CObserver:
             x = np.array(self._vector(xhat0, self.state_names, "xhat0"))
             traj.fill(np.nan)
             call(x, traj)
-            done = int(np.argmin(np.isfinite(traj).all(axis=1))) if k else 0
+            if not k:  # no row: the C refused the state (the zero-row checks of _run and _run_dt)
+                raise self._fail(code, x, np.zeros(0), math.nan, 0)
+            done = int(np.argmin(np.isfinite(traj).all(axis=1)))
             raise self._fail(code, x, rows_c[done], dt_of(done), done)
         return traj if traj.dtype == np.float64 else traj.astype(float)
 

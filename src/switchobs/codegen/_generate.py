@@ -52,7 +52,8 @@ from .._atomic import write_files
 from .._json import fields_from_json
 from ..exceptions import CodegenError, DimensionError, ModelError
 from ..model import Model, numeric, rational_value
-from ..spec import METHODS, STATUS_TEXT, STEP_METHODS, Guard, ObserverSpec, StepStatus, require_explicit
+from ..spec import (METHODS, STATUS_TEXT, STEP_METHODS, Guard, ObserverSpec, StepStatus,
+                    default_method, require_explicit)
 from ._emit import CFunction, float_literal, kernel
 from ._misra import misra_record
 from ._readme import readme
@@ -83,8 +84,9 @@ _C_KEYWORDS = frozenset(
 
 
 def default_prefix(model_name: str) -> str:
-    """``switchobs_<model>`` with every character that is not a C identifier character turned into ``_``."""
-    return "switchobs_" + re.sub(r"[^A-Za-z0-9_]", "_", model_name)
+    """``switchobs_<model>`` with every run of characters that are not C identifier characters turned into one
+    ``_`` (casadi's function names allow no ``__`` and no trailing ``_``: ``"café x"`` gives ``switchobs_caf_x``)."""
+    return ("switchobs_" + re.sub(r"[^A-Za-z0-9]+", "_", model_name)).rstrip("_")
 
 
 def _check_options(real: str, method: str) -> None:
@@ -95,8 +97,10 @@ def _check_options(real: str, method: str) -> None:
 
 
 def _check_prefix(prefix: str) -> str:
-    if not re.fullmatch(r"[A-Za-z][A-Za-z0-9_]*", prefix or ""):
-        raise CodegenError(f"prefix {prefix!r} is not a C identifier (a letter, then letters, digits or '_')")
+    # the C function names are the prefix and a suffix such as "_kernel": casadi refuses "__" in them
+    if not re.fullmatch(r"[A-Za-z][A-Za-z0-9]*(_[A-Za-z0-9]+)*", prefix or ""):
+        raise CodegenError(f"prefix {prefix!r} is not a C identifier of the generated API (a letter, then letters, "
+                           "digits or single '_' between them)")
     if prefix in _C_KEYWORDS:
         raise CodegenError(f"prefix {prefix!r} is a C keyword; choose another with --prefix")
     return prefix
@@ -595,7 +599,7 @@ def _assemble(tr: Translation, *, info: _Info, kind: str, real: str, method: str
 
 
 def generate_observer(model: Model, gains: GainDesign | tuple[Sequence[float], Sequence[float]], *,
-                      values: Mapping[str, Any] | None = None, real: str = "double", method: str = "rk4",
+                      values: Mapping[str, Any] | None = None, real: str = "double", method: str | None = None,
                       prefix: str | None = None, unknown: Sequence[str] = (),
                       Gamma: Sequence[Sequence[float]] | np.ndarray | None = None,
                       h_max: float | Fraction | str | None = None, max_substeps: int | None = None,
@@ -615,11 +619,13 @@ def generate_observer(model: Model, gains: GainDesign | tuple[Sequence[float], S
         Values of design symbols (``beta1``...) and overrides of the model's
         parameter values (defaults of the runtime parameters).
     real : {"double", "float"}
-    method : {"rk4", "euler", "midpoint", "radau3"}
-        Classic RK4 (default), forward Euler, the implicit midpoint rule or 2-stage Radau IIA, signals held
-        over the step.  The implicit methods (switched observer only) solve ``D(Z) v = F(Z) f(x)``, ``Z = dt J``,
-        by cofactors; a singular ``D(Z)`` returns ``NONFINITE_RESULT``.  They keep the design's continuous
+    method : {"radau3", "midpoint", "rk4", "euler"}, optional
+        2-stage Radau IIA, the implicit midpoint rule, classic RK4 or forward Euler, signals held over the step.
+        The implicit methods (switched observer only) solve ``D(Z) v = F(Z) f(x)``, ``Z = dt J``, by
+        cofactors; a singular ``D(Z)`` returns ``NONFINITE_RESULT``.  They keep the design's continuous
         Lyapunov matrix decreasing at every step length (``switchobs.certify.discrete_certificate``).
+        Default :func:`switchobs.spec.default_method`: radau3; rk4 with ``unknown`` (the adaptive observer
+        takes the explicit methods only) and for more than ``IMPLICIT_MAX_N`` states.
     prefix : str, optional
         C prefix; default ``switchobs_<model>`` (:func:`default_prefix`).
     unknown : sequence of str, optional
@@ -674,6 +680,9 @@ def generate_observer(model: Model, gains: GainDesign | tuple[Sequence[float], S
     >>> gen.prefix, gen.nx, gen.ns, gen.np
     ('switchobs_abs_xbs3', 3, 3, 9)
     """
+    unknown = tuple(unknown)
+    if method is None:
+        method = default_method(model.n, affine=not unknown)
     _check_options(real, method)
     prefix = _check_prefix(default_prefix(model.name) if prefix is None else prefix)
     bound = substep_bound(h_max, max_substeps, error=CodegenError)
@@ -683,7 +692,6 @@ def generate_observer(model: Model, gains: GainDesign | tuple[Sequence[float], S
     num_values = {**{k: v for k, v in values.items() if k not in model.parameters},
                   **{k: float(v) for k, v in defaults.items()}}
     Kp, Km = _gains(model, gains, num_values)
-    unknown = tuple(unknown)
     if unknown:
         G = tuple(map(tuple, adaptation_gain(Gamma, unknown, error=CodegenError).tolist()))
     elif Gamma is not None:
@@ -823,12 +831,14 @@ def _header(*, tr: Translation, info: _Info, kind: str, real: str, method: str, 
         f"/* n_steps steps through the rows of signals (row-major, {P}_NS per row), writing each new",
         f" * state to trajectory (row-major, {P}_NX per row; may be NULL).  On error, returns the code of",
         " * the first failing step k: xhat holds the state after the k steps that succeeded and rows",
-        " * 0..k-1 of trajectory are written. */",
+        " * 0..k-1 of trajectory are written.  xhat and signals are never NULL (BAD_ARGUMENT); n_steps = 0",
+        " * changes nothing and checks what needs no row: dt (BAD_DT), then xhat (NONFINITE_STATE). */",
         f"int32_t {prefix}_run({rt} *xhat, const {rt} *signals, int32_t n_steps, const {rt} *params,",
         f"    {rt} dt, {rt} *trajectory);",
         "",
         f"/* As _run, row k a step of dt[k] seconds (dt: n_steps entries; irregular sampling).  A dt[k] that is",
-        f" * not finite or <= 0 fails step k with {P}_ERR_BAD_DT; dt may be NULL only when n_steps is 0. */",
+        f" * not finite or <= 0 fails step k with {P}_ERR_BAD_DT; dt may be NULL only when n_steps is 0, which",
+        " * checks xhat alone. */",
         f"int32_t {prefix}_run_dt({rt} *xhat, const {rt} *signals, int32_t n_steps, const {rt} *params,",
         f"    const {rt} *dt, {rt} *trajectory);",
         "",
@@ -1018,8 +1028,13 @@ def _source(*, tr: Translation, info: _Info, kind: str, real: str, method: str, 
         "    size_t hk = 0u;",
         f"    int32_t status = {P}_OK;",
         "    bool valid;",
-        _refuse(P, "(xhat == NULL) || (n_steps < 0) || ((signals == NULL) && (n_steps > 0))", "BAD_ARGUMENT",
-                hint=False),
+        _refuse(P, "(xhat == NULL) || (signals == NULL) || (n_steps < 0)", "BAD_ARGUMENT", hint=False),
+        "    /* no row: the state check of a step, which needs none (as the Python reference and CObserver) */",
+        "    if (n_steps == 0) {",
+        f"        for (int32_t i = 0; i < {nx}; ++i) {{",
+        _refuse(P, "!isfinite(xhat[i])", "NONFINITE_STATE", indent="            ", hint=False),
+        "        }",
+        "    }",
         "    if (dts != NULL) {",
         "        h = dts;",
         "        stride = 1u;",
@@ -1062,6 +1077,9 @@ def _source(*, tr: Translation, info: _Info, kind: str, real: str, method: str, 
         f"int32_t {prefix}_run({rt} *xhat, const {rt} *signals, int32_t n_steps, const {rt} *params,",
         f"    {rt} dt, {rt} *trajectory)",
         "{",
+        "    /* no row: dt is checked before the state, in _step's order */",
+        _refuse(P, f"(n_steps == 0) && (xhat != NULL) && (signals != NULL) && !((dt > {zero}) && isfinite(dt))",
+                "BAD_DT", hint=False),
         f"    return {prefix}_rows(xhat, signals, n_steps, params, dt, NULL, trajectory);",
         "}",
         "",

@@ -33,7 +33,7 @@ from ..exceptions import (CertificateError, DimensionError, ExpressionError, Mod
                           NotObservableError, SpectrumError)
 from ..model import Model, entries, free_names, make_symbol, numeric, parse_expression, rational_value
 from ._lyapunov import _generic_solution, observer_form_gramian
-from .._display import ROUNDED_NOTE, is_shortened, readable
+from .._display import ROUNDED_NOTE, is_shortened, readable, unicode_output
 from .._progress import progress
 from ._normal_form import ObserverNormalForm, is_rational, observer_normal_form, rational_matrix
 from ._recheck import lyapunov_by_substitution, lyapunov_residual_is_zero
@@ -423,7 +423,8 @@ class GainDesign:
 
     # ----------------------------------------------------------- output
     def to_json(self) -> dict[str, Any]:
-        """Plain-JSON view; every expression is a string ``sympy.sympify`` parses back."""
+        """Plain-JSON view; every expression is a string that :func:`switchobs.model.parse_expression` parses back
+        with its symbols (a bare ``sympy.sympify`` reads a symbol ``beta`` as sympy's beta function)."""
         return {
             "model": self.model.name,
             "n": self.n,
@@ -534,7 +535,7 @@ class GainDesign:
             return printer(readable(expr))
 
         def mat(M: sp.MatrixBase) -> str:
-            shown = sp.pretty(readable(M), use_unicode=True) if small else text(M.tolist())
+            shown = sp.pretty(readable(M), use_unicode=unicode_output()) if small else text(M.tolist())
             return "\n".join("    " + line for line in shown.splitlines())
 
         def conds(cs: Sequence[sp.Basic]) -> str:

@@ -11,6 +11,7 @@ Public API
 EstimatorSpec, xbs_estimator -- an observer kind (xbs3, xbs4, adaptive, none), gains and implementation
                                (python | c) -> an estimator for a vehicle (sign conventions, initial state)
 OBSERVER_KINDS, DEFAULT_BETA, DEFAULT_GAMMA, INITIAL_STATE -- the factory's choices and defaults
+default_method              -- the step method of a kind when none is chosen (radau3; rk4 for the adaptive one)
 ObserverXbsEstimator        -- any observer with step/readout as an estimator (mean-hold of the signals)
 LoadXbsEstimator            -- the same for an observer that reads the wheel load a = R^2 Fz / J as a signal
                                (seed 001 Sec. 3.6; the two-axle vehicle feeds it the load (3.36))
@@ -40,7 +41,7 @@ Example
 >>> sc = BrakingScenario("dry-asphalt", speed_m_s=20.0, duration_s=0.5)
 >>> res = simulate(sc, estimator=xbs_estimator("xbs4", sc.vehicle, sc.roads.initial))
 >>> res.observer
-"SwitchedObserver of model 'abs-xbs4' (rk4, ZOH signals y, vx, u)"
+"SwitchedObserver of model 'abs-xbs4' (radau3, ZOH signals y, vx, u)"
 """
 
 from ._adapter import LoadXbsEstimator, ObserverXbsEstimator, SteppingObserver
@@ -53,9 +54,10 @@ from ._pil import (PIL_SCENARIO, PIL_TOLERANCE, PilComparison, PilRecord, brakin
                    reference_observer, reference_run)
 from ._replay import (LogSignals, ReplayResult, ReplaySummary, edges_from_counts, edges_from_wheel_speed,
                       ideal_encoder, measurements_signals, pressure_from_rate, replay, speed_from_acceleration, zero_order_hold)
-from ._factory import DEFAULT_BETA, DEFAULT_GAMMA, INITIAL_STATE, OBSERVER_KINDS, EstimatorSpec, xbs_estimator
+from ._factory import (DEFAULT_BETA, DEFAULT_GAMMA, INITIAL_STATE, OBSERVER_KINDS, EstimatorSpec, default_method,
+                       xbs_estimator)
 
-__all__ = ["EstimatorSpec", "xbs_estimator", "OBSERVER_KINDS", "DEFAULT_BETA", "DEFAULT_GAMMA", "INITIAL_STATE",
+__all__ = ["EstimatorSpec", "xbs_estimator", "default_method", "OBSERVER_KINDS", "DEFAULT_BETA", "DEFAULT_GAMMA", "INITIAL_STATE",
            "ObserverXbsEstimator", "LoadXbsEstimator", "SteppingObserver", "run_braking", "BrakingRun", "CONTROLLER_NAMES", "EncoderLoopEstimator", "EncoderLoopRecord",
            "EncoderX2", "X2_MEASUREMENTS", "encoder_measurements", "EncoderMeasurements",
            "DemoSettings", "demo_scenario", "demo_braking", "road_segments", "segment_errors", "ErrorRow",

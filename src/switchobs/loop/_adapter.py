@@ -17,7 +17,18 @@ import numpy as np
 from ..exceptions import DimensionError, ModelError, ObserverInputError, SimulationError
 from ..plants import CompiledObserver
 
-__all__ = ["ObserverXbsEstimator", "LoadXbsEstimator", "SteppingObserver", "initial_xbs_state", "c_readout"]
+__all__ = ["ObserverXbsEstimator", "LoadXbsEstimator", "SteppingObserver", "initial_xbs_state", "c_readout",
+           "c_observer_type"]
+
+
+def c_observer_type() -> type | None:
+    """:class:`switchobs.codegen.CObserver`, or None where casadi is not installed (a base install): no
+    compiled observer can exist there, and the loops run the Python observers without the codegen package."""
+    try:
+        from ..codegen import CObserver
+    except ImportError:
+        return None
+    return CObserver
 
 #: Tokens of a readout that C evaluates as Python does: state names, number literals, + - * / and parentheses.
 _TOKEN = re.compile(r"\s*(?:(?P<state>x\d+)|(?P<number>\d+\.?\d*(?:[eE][+-]?\d+)?)|(?P<op>[-+*/()]))")
@@ -165,11 +176,9 @@ class ObserverXbsEstimator:
         The loop then does what :meth:`reset` and :meth:`update` do, with the generated
         ``<prefix>_step`` (:class:`switchobs.codegen.CObserver` calls the same function).
         """
-        from ..codegen import CObserver
-
         obs = self.observer
         # exact behaviour: a subclass of either class may step differently from the function the loop calls
-        if type(obs) is not CObserver or type(self) is not ObserverXbsEstimator:
+        if type(obs) is not c_observer_type() or type(self) is not ObserverXbsEstimator:
             return None
         generated = obs.generated
         code = obs.readout_code

@@ -21,7 +21,8 @@ import numpy.typing as npt
 
 from .._json import JsonRecord
 from ..exceptions import SimulationError
-from ..plants import BrakingResult, BrakingScenario, FivePhaseABS, QuarterCar, RoadChange, RoadSchedule, simulate
+from ..plants import (BrakingResult, BrakingScenario, FivePhaseABS, QuarterCar, RoadChange, RoadSchedule, distance_label,
+                      simulate)
 from ..sensors import Encoder
 from ._adapter import ObserverXbsEstimator, SteppingObserver
 from ._encoder_loop import EncoderLoopEstimator, EncoderLoopRecord
@@ -134,7 +135,8 @@ class BrakingSummary(JsonRecord, error=SimulationError):
 
     def __str__(self) -> str:
         dist = "n/a" if self.braking_distance_m is None else f"{self.braking_distance_m:.2f} m"
-        lines = [self.scenario, f"  {self.status}; stopping distance {self.stopping_distance_m:.2f} m, braking "
+        lines = [self.scenario, f"  {self.status}; {distance_label(self.stop_time_s is not None)} "
+                                f"{self.stopping_distance_m:.2f} m, braking "
                  f"distance v0²/(2gμ̄) {dist}; {self.abs_cycles} ABS cycles; {self.encoder_events} encoder edges, "
                  f"measurement lag {self.lag_mean_ms:.1f} ms"]
         lines += [f"  {e}" for e in self.errors]

@@ -18,9 +18,11 @@ from typing import Any
 from .._json import JsonRecord
 from ..exceptions import SimulationError
 from ..plants import Burckhardt, QuarterCar, XbsEstimator, road
+from ..spec import DEFAULT_METHOD
 from ._adapter import LoadXbsEstimator, ObserverXbsEstimator
 
-__all__ = ["EstimatorSpec", "xbs_estimator", "OBSERVER_KINDS", "DEFAULT_BETA", "DEFAULT_GAMMA", "INITIAL_STATE"]
+__all__ = ["EstimatorSpec", "xbs_estimator", "default_method", "OBSERVER_KINDS", "DEFAULT_BETA", "DEFAULT_GAMMA",
+           "INITIAL_STATE"]
 
 #: Observer kinds: the three reference XBS observers and ``none`` (no estimator).
 OBSERVER_KINDS = ("xbs3", "xbs4", "adaptive", "none")
@@ -32,6 +34,21 @@ DEFAULT_GAMMA = 1e4
 INITIAL_STATE: Mapping[str, Mapping[str, float]] = {"xbs3": {"z2": 0.5}, "xbs4": {"z2": 0.5},
                                                     "adaptive": {"c": 20.0, "d": 10.0}}
 IMPLEMENTATIONS = ("python", "c")
+
+
+def default_method(kind: str) -> str:
+    """The step method of an observer kind when none is chosen.
+
+    ``radau3`` (:data:`switchobs.spec.DEFAULT_METHOD`, certified for every step length) for the switched
+    observers; ``rk4`` for the adaptive one, whose right-hand side is not affine in its state, so that only
+    the explicit methods apply (:func:`switchobs.spec.require_explicit`).
+
+    Examples
+    --------
+    >>> default_method("xbs4"), default_method("adaptive")
+    ('radau3', 'rk4')
+    """
+    return "rk4" if kind == "adaptive" else DEFAULT_METHOD
 
 
 @dataclass(frozen=True)
@@ -53,10 +70,11 @@ class EstimatorSpec(JsonRecord, error=SimulationError):
         xbs3 and xbs4 only: the second rate (spectra ``{-beta1, -beta2, -beta2}`` and
         ``{-beta1, -beta1, -beta2, -beta2}``, seed 000 Secs. III-E, IV-D) with ``beta1 = beta``;
         default ``beta`` (the adaptive observer has one rate and refuses it).
-    method : str
-        Step method of the observer (``rk4``, ``euler``, ``midpoint``, ``radau3``; the adaptive observer
+    method : str, optional
+        Step method of the observer (``radau3``, ``midpoint``, ``rk4``, ``euler``; the adaptive observer
         takes the explicit ones): ``radau3`` and ``midpoint`` are certified for every step length
-        (``switchobs certify --discrete``), which one step per encoder measurement needs.
+        (``switchobs certify --discrete``), which one step per encoder measurement needs.  Default
+        :func:`default_method` of the kind (radau3; rk4 for the adaptive observer).
 
     Raises
     ------
@@ -67,7 +85,7 @@ class EstimatorSpec(JsonRecord, error=SimulationError):
     Examples
     --------
     >>> EstimatorSpec("xbs4")
-    EstimatorSpec(kind='xbs4', beta=None, gamma=None, impl='python', beta2=None, method='rk4')
+    EstimatorSpec(kind='xbs4', beta=None, gamma=None, impl='python', beta2=None, method='radau3')
     >>> str(EstimatorSpec("adaptive", beta=80))
     'adaptive observer, beta 80, gamma 10000 (python)'
     >>> str(EstimatorSpec("xbs4", beta=80, beta2=120))
@@ -79,11 +97,13 @@ class EstimatorSpec(JsonRecord, error=SimulationError):
     gamma: float | None = None
     impl: str = "python"
     beta2: float | None = None
-    method: str = "rk4"
+    method: str | None = None
 
     def __post_init__(self) -> None:
         if self.kind not in OBSERVER_KINDS:
             raise SimulationError(f"unknown observer {self.kind!r}; choose one of {', '.join(OBSERVER_KINDS)}")
+        if self.method is None:
+            object.__setattr__(self, "method", default_method(self.kind))
         if self.impl not in IMPLEMENTATIONS:
             raise SimulationError(f"unknown observer implementation {self.impl!r}; choose python or c")
         if self.beta2 is not None and self.kind == "adaptive":
@@ -101,7 +121,7 @@ class EstimatorSpec(JsonRecord, error=SimulationError):
         text = f"{self.kind} observer, beta {beta:g}" + ("" if self.beta2 is None else f"/{self.beta2:g}")
         if self.kind == "adaptive":
             text += f", gamma {DEFAULT_GAMMA if self.gamma is None else self.gamma:g}"
-        return f"{text} ({self.impl}{'' if self.method == 'rk4' else ', ' + self.method})"
+        return f"{text} ({self.impl}{'' if self.method == default_method(self.kind) else ', ' + self.method})"
 
 
 def xbs_estimator(spec: EstimatorSpec | str, vehicle: QuarterCar, initial_road: Burckhardt | str, *,
@@ -138,7 +158,7 @@ def xbs_estimator(spec: EstimatorSpec | str, vehicle: QuarterCar, initial_road: 
     >>> from switchobs.plants import QuarterCar
     >>> est = xbs_estimator("xbs4", QuarterCar(), "dry-asphalt")
     >>> est.describe()
-    "SwitchedObserver of model 'abs-xbs4' (rk4, ZOH signals y, vx, u)"
+    "SwitchedObserver of model 'abs-xbs4' (radau3, ZOH signals y, vx, u)"
     >>> xbs_estimator(EstimatorSpec("none"), QuarterCar(), "dry-asphalt") is None
     True
     """

@@ -12,7 +12,7 @@ from typing import Any
 import numpy as np
 import numpy.typing as npt
 
-from ._adapter import SteppingObserver
+from ._adapter import SteppingObserver, c_observer_type
 
 Array = npt.NDArray[np.float64]
 
@@ -25,9 +25,7 @@ def step_through(obs: SteppingObserver, x0: Array, rows: Array, dts: Array) -> A
     SimulationError
         A refusal of the observer at the first row it refuses (e.g. ``ObserverInputError``).
     """
-    from ..codegen import CObserver
-
-    if type(obs) is CObserver:  # exact behaviour: a subclass may step differently from the generated C
+    if type(obs) is c_observer_type():  # exact behaviour: a subclass may step differently from the generated C
         return obs.run_dt(x0, rows, dts)
     out = np.empty((len(dts), len(x0)))
     x: Any = x0

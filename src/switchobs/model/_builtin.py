@@ -7,6 +7,7 @@ import tomllib
 from importlib import resources
 from pathlib import Path
 
+from .._limits import MAX_DIMENSION
 from ..exceptions import ModelError
 from ._model import Model
 
@@ -55,8 +56,8 @@ def builtin_model(name: str) -> Model:
     match = _NORMAL_FORM.match(name)
     if match:
         n = int(match.group(1))
-        if not 1 <= n <= 64:
-            raise ModelError(f"normal-form-N needs 1 <= N <= 64, got N = {n}")
+        if not 1 <= n <= MAX_DIMENSION:
+            raise ModelError(f"normal-form-N needs 1 <= N <= {MAX_DIMENSION} (MAX_DIMENSION), got N = {n}")
         return _normal_form(n)
     if name in _FILES:
         text = resources.files("switchobs.model").joinpath("builtin", f"{name}.toml").read_text("utf-8")

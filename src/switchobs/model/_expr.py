@@ -28,7 +28,7 @@ from .._limits import (MAX_EXPONENT, MAX_EXPRESSION_DEPTH, MAX_EXPRESSION_LENGTH
                        MAX_NUMBER_DIGITS, check_double, digits, decimal_fraction)
 from ..exceptions import ExpressionError
 
-__all__ = ["parse_expression", "free_names", "exact_number", "FUNCTIONS"]
+__all__ = ["parse_expression", "free_names", "exact_number", "non_finite", "FUNCTIONS"]
 
 #: Functions an expression string may call, by name.
 FUNCTIONS: Mapping[str, sp.Basic] = {
@@ -45,6 +45,13 @@ FUNCTIONS: Mapping[str, sp.Basic] = {
     "sign": sp.sign,
 }
 _CONSTANTS = {"pi": sp.pi, "E": sp.E, "I": sp.I}
+#: What sympy makes of a division by zero, ``log(0)``, ``0**-1`` or ``0/0``: no value a model may hold.
+_NON_FINITE = (sp.zoo, sp.nan, sp.oo, -sp.oo)
+
+
+def non_finite(expr: sp.Basic) -> bool:
+    """Whether ``expr`` holds an infinity or NaN (``1/0`` is ``zoo``, ``0/0`` is ``nan`` to sympy)."""
+    return any(expr.has(x) for x in _NON_FINITE)
 
 _BINOPS = {
     ast.Add: lambda a, b: a + b,
@@ -250,7 +257,10 @@ class _Translator(ast.NodeVisitor):
                                  f"(limit {MAX_EXPONENT} on exact powers of names)")
 
     def _check_size(self, value: sp.Expr) -> sp.Expr:
-        """Exact numbers stay within MAX_NUMBER_DIGITS and powers within MAX_EXPONENT (sympy merges them)."""
+        """Exact numbers stay within MAX_NUMBER_DIGITS and powers within MAX_EXPONENT (sympy merges them); the
+        value is finite (a division by zero is refused where it is written, not found as ``zoo`` in a result)."""
+        if non_finite(value):
+            raise self._fail(f"the value is {value} (a division by zero, log(0) or 0**-1); an entry must be finite")
         for atom in value.atoms(sp.Rational) if not value.is_Rational else (value,):
             if max(digits(int(atom.p)), digits(int(atom.q))) > MAX_NUMBER_DIGITS:
                 raise self._fail(f"an exact number has more than {MAX_NUMBER_DIGITS} digits "
@@ -275,7 +285,10 @@ class _Translator(ast.NodeVisitor):
             raise self._fail(f"call of {name!r} is not allowed (allowed: {', '.join(sorted(FUNCTIONS))})")
         if node.keywords:
             raise self._fail("keyword arguments are not allowed")
-        return self._check_size(FUNCTIONS[node.func.id](*[self.visit(arg) for arg in node.args]))
+        args = [self.visit(arg) for arg in node.args]
+        if len(args) != 1:  # every function of FUNCTIONS takes one argument
+            raise self._fail(f"{node.func.id}() takes exactly one argument, got {len(args)}")
+        return self._check_size(FUNCTIONS[node.func.id](*args))
 
 
 def _short(value: sp.Basic) -> str:

@@ -16,10 +16,11 @@ from typing import Any
 import numpy as np
 import sympy as sp
 
+from ..exact import Matrix, fraction_matrix
 from ..exceptions import DimensionError, ModelError
 from ._expr import exact_number
 
-__all__ = ["is_statespace", "statespace_matrices", "matrix_rows", "entries"]
+__all__ = ["is_statespace", "statespace_matrices", "matrix_rows", "entries", "user_matrix"]
 
 
 def is_statespace(value: Any) -> bool:
@@ -123,3 +124,14 @@ def entries(value: Any, *, name: str) -> Any:
             raise DimensionError(f"{name} must be a vector, got a {len(rows)} x {len(rows[0])} matrix")
         return [e for r in rows for e in r]
     return rows
+
+
+def user_matrix(value: Any, *, what: str, part: str = "A", rows: int | None = None,
+                cols: int | None = None) -> Matrix:
+    """A user's matrix (list of rows, NumPy, sympy, ``control.StateSpace`` for ``part``) as exact rationals.
+
+    The boundary of exact matrix work: :func:`matrix_rows` reads the
+    container and the numbers (a float is its exact binary value), then the
+    exact layer checks the shape.  A flat sequence is one row.
+    """
+    return fraction_matrix(matrix_rows(value, name=what, part=part), what=what, rows=rows, cols=cols)

@@ -8,7 +8,9 @@
 from __future__ import annotations
 
 import dataclasses
+import functools
 import math
+import random
 import re
 import tomllib
 from collections.abc import Mapping, Sequence
@@ -20,15 +22,27 @@ from typing import Any
 import numpy as np
 import sympy as sp
 
-from .._limits import MAX_INPUT_FILE_BYTES, MAX_NUMBER_DIGITS, check_double, decimal_fraction, digits, read_text
+from .._limits import (MAX_INPUT_FILE_BYTES, MAX_NAME_LENGTH, MAX_NUMBER_DIGITS, check_dimension, check_double,
+                       decimal_fraction, digits, read_text)
 from ..exceptions import DimensionError, ExpressionError, FreeSymbolError, ModelError, NotRealError
-from ._expr import exact_number, parse_expression
+from ._expr import exact_number, non_finite, parse_expression
 from ._interop import matrix_rows, statespace_matrices
 
 __all__ = ["Model", "numeric", "make_symbol"]
 
 _IDENT = re.compile(r"[A-Za-z_][A-Za-z0-9_]*\Z")  # \Z: "$" would admit a trailing newline
 _RESERVED = {"t", "pi", "E", "I"}
+
+
+@functools.lru_cache(maxsize=4096)
+def _clashes_with_sympy(name: str) -> bool:
+    """Whether ``sympy.sympify(name)`` is anything but the symbol ``name`` (``exp``, ``oo``, ``beta``, ``S``,
+    ``lambda``): an expression written with it (``--json``, ``to_dict``) would not read back as the model's."""
+    try:
+        value = sp.sympify(name)  # name is an identifier (checked first): a look-up, nothing is run
+    except (sp.SympifyError, SyntaxError, TypeError, ValueError):
+        return True
+    return not (isinstance(value, sp.Symbol) and value.name == name)
 
 
 def make_symbol(name: str, *, positive: bool = False, negative: bool = False) -> sp.Symbol:
@@ -77,8 +91,9 @@ def _names(value: Any, key: str) -> tuple[str, ...]:
     for name in value:
         if not isinstance(name, str) or not _IDENT.match(name):
             raise ModelError(f"'{key}' holds {name!r}, which is not a valid name (letters, digits, '_')")
-        if name in _RESERVED:
-            raise ModelError(f"'{key}' holds the reserved name {name!r}; rename it")
+        if name in _RESERVED or _clashes_with_sympy(name):
+            raise ModelError(f"'{key}' holds the reserved name {name!r} (to sympy, which reads the JSON and "
+                             "theory outputs back, it is a function or a constant); rename it")
     if len(set(value)) != len(value):
         dup = sorted({n for n in value if list(value).count(n) > 1})
         raise ModelError(f"'{key}' repeats the name(s) {dup}")
@@ -162,6 +177,7 @@ class Model:
         states = _names(data["states"], "states")
         if not states:
             raise ModelError(f"{source}: 'states' is empty; a model needs at least one state")
+        check_dimension(len(states), what=f"{source}: the model", error=DimensionError)
         output = data.get("output", "y")
         _names([output], "output")
         parameters = _names(data.get("parameters"), "parameters")
@@ -207,9 +223,7 @@ class Model:
             b = _vector(b_raw, signal_par, n, "b")
         else:
             b = _matrix(b_raw, signal_par, rows=n, cols=m, name="b")
-        time_scale = parse_expression(data["time_scale"], s_names, what="time_scale")
-        if time_scale == 0:
-            raise ModelError(f"{source}: 'time_scale' is identically zero; the observer would never move")
+        time_scale = _check_time_scale(parse_expression(data["time_scale"], s_names, what="time_scale"), source)
 
         values = read_values(data.get("values"), parameters, symbols, source)
         refs = data.get("references", {}) or {}
@@ -262,7 +276,7 @@ class Model:
         [ 0,  1],
         [-2, -3]]), ('u1',))
         """
-        A, B, C, D = statespace_matrices(sys, what="the StateSpace")
+        A, B, C, D = statespace_matrices(sys, what="the system")
         if np.any(D != 0):
             raise ModelError(f"the StateSpace has D = {D.tolist()}, but a switchobs model measures y = C z; "
                              "give a system with D = 0 (the direct feedthrough is known and can be subtracted)")
@@ -329,6 +343,7 @@ class Model:
         remaining = tuple(p for p in self.parameters if p not in values)
         for name in ("A", "C", "d", "b", "time_scale"):
             _check_number_size(getattr(self, name).subs(subs), name)
+        _check_time_scale(self.time_scale.subs(subs), f"model {self.name!r} at these values")
         return Model(name=self.name, states=self.states, output=self.output,
                      A=self.A.subs(subs), C=self.C.subs(subs), d=self.d.subs(subs),
                      b=self.b.subs(subs), time_scale=self.time_scale.subs(subs),
@@ -544,12 +559,49 @@ def rational_value(value: Any, *, what: str) -> sp.Rational:
 
 
 def _check_number_size(expr: sp.Basic, name: str) -> None:
-    """Exact numbers stay printable and cheap once values are substituted (``a**64`` at ``a = 1e300``)."""
+    """Exact numbers stay printable and cheap once values are substituted (``a**64`` at ``a = 1e300``), and
+    finite (``1/a`` at ``a = 0``)."""
+    if non_finite(expr):
+        raise ModelError(f"'{name}' is not finite at these values ({_brief(expr)}: a division by zero?); "
+                         "give other values")
     for atom in expr.atoms(sp.Rational):
         if max(digits(int(atom.p)), digits(int(atom.q))) > MAX_NUMBER_DIGITS:
             raise ModelError(f"'{name}' holds an exact number of about {max(digits(int(atom.p)), digits(int(atom.q)))} "
                              f"digits at these values (limit {MAX_NUMBER_DIGITS}); give smaller values or "
                              "rescale the model")
+
+
+def _brief(expr: sp.Basic) -> str:
+    text = str(expr)
+    return text if len(text) <= 80 else text[:77] + "..."
+
+
+#: Sample points of the zero test of a time scale (a fixed seed: the same model gets the same answer).
+_ZERO_PROBES = 4
+
+
+def _check_time_scale(expr: sp.Expr, source: str) -> sp.Expr:
+    """``expr`` unless it is identically zero (``(a-2)*y`` at ``a = 2``, ``sin(y)**2 + cos(y)**2 - 1``): then the
+    rescaled time never advances and the observer never moves (seed 004 eq. (1) needs ``s`` zero only on a
+    thin set).
+
+    A value clearly away from zero at one of a few random points decides at once; only a time scale that
+    vanishes at all of them is simplified symbolically.
+    """
+    if expr == 0:
+        raise ModelError(f"{source}: 'time_scale' is identically zero; the observer would never move")
+    rng = random.Random(0)
+    names = sorted(expr.free_symbols, key=str)
+    for _ in range(_ZERO_PROBES):
+        point = {x: sp.Rational(rng.randint(1, 999), rng.randint(1, 99))
+                 * (1 if x.is_positive else -1 if x.is_negative else rng.choice((-1, 1))) for x in names}
+        value = expr.xreplace(point).evalf(30)
+        if value.is_number and value.is_finite and abs(value) > sp.Rational(1, 10**20):
+            return expr
+    if sp.simplify(expr) == 0:
+        raise ModelError(f"{source}: 'time_scale' = {_brief(expr)} is identically zero; the observer would "
+                         "never move")
+    return expr
 
 
 def check_keys(data: Any, known: set[str], required: Sequence[str], source: str) -> str:
@@ -566,6 +618,11 @@ def check_keys(data: Any, known: set[str], required: Sequence[str], source: str)
     name = data["name"]
     if not isinstance(name, str) or not name.strip():
         raise ModelError(f"{source}: 'name' must be a non-empty string, got {name!r}")
+    # The name is quoted in messages, reports and generated files (C comments, casadi function names): one
+    # line of printable text, of bounded length.
+    if not name.isprintable() or len(name) > MAX_NAME_LENGTH:
+        raise ModelError(f"{source}: 'name' must be one line of printable text of at most {MAX_NAME_LENGTH} "
+                         f"characters, got {name[:MAX_NAME_LENGTH]!r}{'...' if len(name) > MAX_NAME_LENGTH else ''}")
     return name
 
 

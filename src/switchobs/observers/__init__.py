@@ -10,7 +10,8 @@ adaptive_xbs_observer    -- switched adaptive XBS observer (abs-adaptive2, seed 
                             load_signal=True: a = R^2 Fz / J read each step (abs-adaptive2-load, Sec. 3.6)
 xbs_gains                -- the beta-parametrised gain pairs of the built-in XBS models
 ErrorCode                -- status codes of a refused step: switchobs.spec.StepStatus, shared with the generated C
-METHODS                  -- discretisations: "rk4" (default), "euler", "midpoint", "radau3" (switched only)
+METHODS                  -- discretisations: "radau3" (default of the switched observers), "midpoint" (certified,
+                            switched only), "rk4" (default of the adaptive one), "euler"
 
 Every observer has ``step(xhat, signals, dt)``, ``run(xhat0, signal_rows, dt)``,
 ``derivative(xhat, signals)`` and ``readout(xhat)``; signals are ordered as

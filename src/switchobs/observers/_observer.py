@@ -14,7 +14,7 @@ from .._validate import adaptation_gain, round_down, signal_matrix, substep_boun
 from ..design import GainDesign
 from ..exceptions import DimensionError, FreeSymbolError, ModelError, SimulationError
 from ..model import Model, numeric, parse_expression, rational_value
-from ..spec import REFERENCE_STATUSES, ObserverSpec
+from ..spec import REFERENCE_STATUSES, ObserverSpec, default_method
 from ._engine import Kernel, _ArrayPrinter, check_free
 
 __all__ = ["SwitchedObserver", "AdaptiveSwitchedObserver"]
@@ -378,11 +378,15 @@ class SwitchedObserver(_Observer):
         with :meth:`GainDesign.at`) with ``K_minus`` omitted, or two numeric gains.
     params : mapping, optional
         Parameter values overriding the model's (numbers or fraction strings).
-    method : {"rk4", "euler", "midpoint", "radau3"}
-        One classic RK4 step per ``dt`` with the signals held constant (the
-        default), forward Euler, the implicit midpoint rule or 2-stage Radau
-        IIA (``x + dt D(Z)^-1 F(Z) f(x)``, ``Z = dt (s A - g C)``; certified for
-        every step length by ``switchobs.certify.discrete_certificate``).
+    method : {"radau3", "midpoint", "rk4", "euler"}, optional
+        One step per ``dt`` with the signals held constant: 2-stage Radau IIA
+        (the default, :func:`switchobs.spec.default_method`) or the implicit
+        midpoint rule (``x + dt D(Z)^-1 F(Z) f(x)``, ``Z = dt (s A - g C)``;
+        both certified for every step length by
+        ``switchobs.certify.discrete_certificate``), classic RK4 or forward
+        Euler (no step bound is a certificate for them: n >= 3 for rk4,
+        n >= 2 for euler).  The implicit methods take n <= 12
+        (:data:`switchobs.spec.IMPLICIT_MAX_N`); above, the default is rk4 (bound it with ``h_max``).
     readout : str, optional
         An expression in the state names and parameters evaluated by
         :meth:`readout` (e.g. ``"z2"``, the XBS estimate of abs-xbs3).
@@ -426,8 +430,9 @@ class SwitchedObserver(_Observer):
     """
 
     def __init__(self, model: Model, K_plus: GainDesign | Any, K_minus: Any = None, *,
-                 params: Mapping[str, Any] | None = None, method: str = "rk4", readout: str | None = None,
+                 params: Mapping[str, Any] | None = None, method: str | None = None, readout: str | None = None,
                  h_max: Any = None, max_substeps: int | None = None):
+        method = default_method(model.n) if method is None else method
         super().__init__(model, K_plus, K_minus, params=params, method=method, readout=readout,
                          unknown=(), Gamma=None, h_max=h_max, max_substeps=max_substeps)
 
@@ -458,7 +463,12 @@ class AdaptiveSwitchedObserver(_Observer):
         Parameters to estimate (``("c", "d")`` for abs-adaptive2).
     Gamma : array_like, p x p (or its diagonal)
         Symmetric positive definite adaptation gain.
-    params, method, readout, h_max, max_substeps
+    method : {"rk4", "euler"}
+        The explicit step methods only: the right-hand side multiplies the
+        estimates (``Upsilon theta_hat``), it is not affine in the state, so the
+        certified implicit steps of :class:`SwitchedObserver` do not apply and
+        the default stays classic RK4 (bound the step with ``h_max``).
+    params, readout, h_max, max_substeps
         As for :class:`SwitchedObserver`; ``readout`` may use the estimated
         parameters by name (they denote the estimates).
 

@@ -12,6 +12,7 @@ import numpy as np
 from ..design import GainDesign, design_gains
 from ..exceptions import ModelError, SpectrumError
 from ..model import builtin_model
+from ..spec import DEFAULT_METHOD
 from ._observer import AdaptiveSwitchedObserver, SwitchedObserver
 
 __all__ = ["xbs3_observer", "xbs4_observer", "adaptive_xbs_observer", "xbs_gains"]
@@ -87,7 +88,7 @@ def _xbs_design(model_name: str, betas: Mapping[str, Any], params: Mapping[str, 
 
 
 def xbs3_observer(beta1: float, beta2: float, *, params: Mapping[str, Any] | None = None,
-                  method: str = "rk4") -> SwitchedObserver:
+                  method: str = DEFAULT_METHOD) -> SwitchedObserver:
     """The 3D known-road XBS observer of seed 000 eq. (8)-(9) on model abs-xbs3.
 
     State ``(z1, z2, z3)`` = (wheel-acceleration offset x2, XBS mu', -c2 c3);
@@ -102,7 +103,8 @@ def xbs3_observer(beta1: float, beta2: float, *, params: Mapping[str, Any] | Non
     params : mapping, optional
         Overrides of ``a = R^2 Fz / I``, ``b = -R gamma_b / I``, ``c = -c2`` (the
         built-in values are the TU Delft rig of seed 000 Fig. 2).
-    method : {"rk4", "euler", "midpoint", "radau3"}
+    method : {"radau3", "midpoint", "rk4", "euler"}
+        The step method (default radau3, certified for every step length; see :class:`SwitchedObserver`).
 
     Examples
     --------
@@ -115,7 +117,7 @@ def xbs3_observer(beta1: float, beta2: float, *, params: Mapping[str, Any] | Non
 
 
 def xbs4_observer(beta1: float, beta2: float, *, params: Mapping[str, Any] | None = None,
-                  method: str = "rk4") -> SwitchedObserver:
+                  method: str = DEFAULT_METHOD) -> SwitchedObserver:
     """The 4D unknown-road XBS observer of seed 000 Sec. IV on model abs-xbs4.
 
     State ``(z1, z2, z3, z4)`` = (x2, mu', mu'', alpha0); the error has two
@@ -151,7 +153,8 @@ def adaptive_xbs_observer(beta: float, Gamma: Any, *, params: Mapping[str, Any] 
     params : mapping, optional
         Overrides of ``a`` and ``b`` (``c`` and ``d`` are estimated).
     method : {"rk4", "euler"}
-        The adaptive observer is not affine in its state: the implicit methods are refused.
+        The adaptive observer is not affine in its state: the implicit (certified) methods are refused, so the
+        default stays rk4.
     h_max, max_substeps
         Bound on the step in rescaled time ``|s| dt`` and the sub-step limit, as for
         :class:`AdaptiveSwitchedObserver`: the explicit step of the adaptation is unstable when

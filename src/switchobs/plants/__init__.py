@@ -21,7 +21,8 @@ Hybrid integrator (every simulated plant: quarter car, two-axle vehicle, the whe
     :data:`MAX_CASCADE`
 Simulation
     :class:`BrakingScenario`, :func:`simulate`, :class:`BrakingResult`,
-    :class:`BrakingMetrics`, :class:`Assumption1Status`, :func:`assumption1`
+    :class:`BrakingMetrics`, :class:`Assumption1Status`, :func:`assumption1`, :func:`distance_label` (what the
+    travelled distance is called: stopping distance or distance travelled)
 Two-axle vehicle (seed 001 Sec. 3.6)
     :class:`TwoAxleVehicle`, :class:`Accelerometer`, :class:`TwoAxleScenario`,
     :func:`simulate_two_axle`, :class:`TwoAxleResult`
@@ -41,7 +42,7 @@ from ._poincare import PoincareFixedPoint, PoincareMap, simulate_return_map
 from ._two_axle import Accelerometer, TwoAxleResult, TwoAxleScenario, TwoAxleVehicle, simulate_two_axle
 from ._scenarios import (TABLE41_ROADS, aguado_sec36, TABLE41_SEED, TABLE41_SPEEDS_KMH, Table41Result, Table41Row, scenario,
                          scenario_description, scenario_names, scenario_observer, scenario_observer_gains, table41)
-from ._metrics import Assumption1Status, BrakingMetrics, Reconvergence, assumption1
+from ._metrics import Assumption1Status, BrakingMetrics, Reconvergence, assumption1, distance_label
 from ._road import RoadChange, RoadSchedule
 from ._simulate import SERIES, BrakingResult, BrakingScenario, simulate
 from ._tyre import (D1_HOANG, D2_HOANG, ROADS, Burckhardt, ExponentialTyre, fit_exponential, relation19_alphas,
@@ -51,7 +52,7 @@ from ._vehicle import GRAVITY, BrakeActuator, PrescribedSpeed, QuarterCar
 __all__ = [
     "Burckhardt", "ROADS", "road", "road_names", "ExponentialTyre", "fit_exponential", "relation19_alphas",
     "D1_HOANG", "D2_HOANG", "RoadChange", "RoadSchedule",
-    "QuarterCar", "BrakeActuator", "PrescribedSpeed", "GRAVITY",
+    "QuarterCar", "BrakeActuator", "PrescribedSpeed", "GRAVITY", "distance_label",
     "FivePhaseABS", "SixPhaseABS", "TwoPhaseABS", "ContinuousXbsControl",
     "XbsEstimator", "LoadInput", "TrueXbs", "X2Measurement", "CompiledEstimator", "CompiledObserver",
     "ReplayEstimator", "Replay", "replay_updates", "integrate", "HybridPlant", "HybridRun", "Crossing", "MAX_CASCADE",

@@ -282,8 +282,10 @@ def run_compiled(plant: _QuarterCar, obs: CompiledObserver | None, *, step_lengt
 
 def compiler_available() -> bool:
     """Whether a C compiler is installed (without one, the automatic choice runs the Python loop)."""
-    from ..codegen import find_compiler
-
+    try:
+        from ..codegen import find_compiler
+    except ImportError:    # without casadi (a base install) the codegen package is missing: the Python loop runs
+        return False
     try:
         find_compiler()
     except CodegenError:

@@ -38,7 +38,20 @@ from ._vehicle import GRAVITY
 if TYPE_CHECKING:
     from ._simulate import BrakingScenario
 
-__all__ = ["BrakingMetrics", "Assumption1Status", "Reconvergence", "braking_metrics", "assumption1", "diverged"]
+__all__ = ["BrakingMetrics", "Assumption1Status", "Reconvergence", "braking_metrics", "assumption1", "diverged",
+           "distance_label"]
+
+
+def distance_label(stopped: bool) -> str:
+    """What ``stopping_distance_m`` is called in text: the stopping distance of a run that stopped, the
+    distance travelled of one that ended first (time bound, failure).
+
+    Examples
+    --------
+    >>> distance_label(True), distance_label(False)
+    ('stopping distance', 'distance travelled')
+    """
+    return "stopping distance" if stopped else "distance travelled"
 
 #: Defaults of the Assumption 1 check.
 PE_WINDOW_S = 0.2
@@ -200,8 +213,8 @@ class BrakingMetrics:
                            assumption1=None if a1 is None else from_fields(Assumption1Status, a1, "Assumption 1"))
 
     def __str__(self) -> str:
-        distance = ("not reached, distance travelled" if self.stop_time_s is None else
-                    f"{self.stop_time_s:.3f} s, stopping distance")
+        distance = (f"not reached, {distance_label(False)}" if self.stop_time_s is None else
+                    f"{self.stop_time_s:.3f} s, {distance_label(True)}")
         lines = [f"stop: {distance} {self.stopping_distance_m:.2f} m, final speed {self.final_speed_m_s:.2f} m/s",
                  f"mean friction {self.mean_friction:.4f}" + (
                      "" if self.braking_distance_m is None else

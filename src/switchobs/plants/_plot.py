@@ -7,6 +7,7 @@ Each function returns the Figure and takes ``ax=``: the Axes to draw on, or
 
 from __future__ import annotations
 
+import re
 import textwrap
 from typing import Any
 
@@ -19,6 +20,42 @@ from ._two_axle import TwoAxleResult
 
 __all__ = ["plot_braking", "plot_table41", "plot_two_axle"]
 
+
+
+_PYTHON_OBSERVER = re.compile(r"^(\w*Observer) of model '([^']+)' \((\w+)")
+_C_OBSERVER = re.compile(r"generated C (\w+) observer \S+ for model '([^']+)' \((\w+), (\w+)")
+_KINDS = {"SwitchedObserver": "switched observer", "AdaptiveSwitchedObserver": "adaptive observer"}
+
+
+
+def _mark_road_changes(axes: Any, events: Any) -> None:
+    """A dotted line at every road change on every panel, labelled with the new road on the top one."""
+    for when, what in events:
+        if what.startswith("road"):
+            for a in axes:
+                a.axvline(when, color="tab:red", lw=0.6, ls=":")
+            road = what.split("-> ", 1)[-1].split(" (", 1)[0]
+            axes[0].annotate(f"→ {road}", (when, 1.0), xycoords=("data", "axes fraction"), xytext=(2, -9),
+                             textcoords="offset points", fontsize=7, color="tab:red")
+
+def observer_title(description: str) -> str:
+    """A run's observer as a figure title says it: ``switched observer of abs-xbs4 (radau3)`` for the line
+    ``SwitchedObserver of model 'abs-xbs4' (radau3, ZOH signals y, vx, u)``; other descriptions unchanged.
+
+    Examples
+    --------
+    >>> observer_title("SwitchedObserver of model 'abs-xbs4' (radau3, ZOH signals y, vx, u)")
+    'switched observer of abs-xbs4 (radau3)'
+    >>> observer_title("none")
+    'no observer'
+    """
+    if description == "none":
+        return "no observer"
+    if (m := _C_OBSERVER.search(description)) is not None:
+        return f"generated C {m.group(1)} observer of {m.group(2)} ({m.group(3)}, {m.group(4)})"
+    if (m := _PYTHON_OBSERVER.match(description)) is not None:
+        return f"{_KINDS.get(m.group(1), m.group(1))} of {m.group(2)} ({m.group(3)})"
+    return f"observer {description}"
 
 def plot_braking(result: BrakingResult, *, ax: Any = None) -> Any:
     """Time histories and phase planes of a run (seed 000 Figs. 3-4, seed 001 Figs. 3.4, 4.5-4.7).
@@ -80,10 +117,7 @@ def plot_braking(result: BrakingResult, *, ax: Any = None) -> Any:
     axes[4].set_ylabel("XBS")
     axes[4].set_xlabel("t [s]")
     axes[4].legend(loc="upper right", ncols=2, fontsize=8)
-    for when, what in result.events:
-        if what.startswith("road"):
-            for a in axes:
-                a.axvline(when, color="tab:red", lw=0.6, ls=":")
+    _mark_road_changes(axes, result.events)
     p1.plot(s["lambda"][active], s["x2"][active], lw=0.6)
     p1.set_xlabel("slip λ")
     p1.set_ylabel("x2 [m/s²]")
@@ -105,7 +139,7 @@ def plot_braking(result: BrakingResult, *, ax: Any = None) -> Any:
     p2.set_ylabel("z2 = μ'")
     p2.set_title("(z1, z2) plane")
     title = (f"{result.scenario.name}: {result.scenario.roads}, {result.scenario.speed_kmh:.0f} km/h, "
-             f"{result.scenario.controller.name}, observer {result.observer}")
+             f"{result.scenario.controller.name}, {observer_title(result.observer)}")
     fig.suptitle("\n".join(textwrap.wrap(title, 110)), fontsize=10)  # wrapped: never wider than the figure
     fig.set_layout_engine("constrained")
     return fig
@@ -131,7 +165,7 @@ def plot_table41(result: Table41Result, *, ax: Any = None) -> Any:
         ax.set_title(f"{v:.0f} km/h")
         ax.set_ylabel("braking distance [m]")
     axes[0].legend(fontsize=8)
-    fig.suptitle("seed 001 Table 4.1: braking distance vx(0)²/(2 g μ̄)")
+    fig.suptitle("Aguado-Rojas 2020 Table 4.1: braking distance vx(0)²/(2 g μ̄)")
     fig.tight_layout()
     return fig
 
@@ -169,9 +203,7 @@ def plot_two_axle(result: TwoAxleResult, *, ax: Any = None) -> Any:
     axes[4].set_xlabel("t [s]")
     for ax in axes:
         ax.legend(loc="upper right", fontsize=7)
-        for when, what in result.events:
-            if what.startswith("road"):
-                ax.axvline(when, color="tab:red", lw=0.6, ls=":")
+    _mark_road_changes(axes, result.events)
     fig.suptitle("\n".join(textwrap.wrap(str(result.scenario), 110)), fontsize=9)  # wrapped: never wider than the figure
     fig.tight_layout()
     return fig

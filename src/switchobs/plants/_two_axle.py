@@ -39,7 +39,7 @@ from ._controllers import FivePhaseABS, SixPhaseABS, TwoPhaseABS
 from ._estimator import LoadInput, XbsEstimator
 from ._hybrid import Crossing, HybridPlant, integrate
 from ._json import controller_from_json, from_fields, run_from_json
-from ._metrics import _cumtrapz, diverged
+from ._metrics import _cumtrapz, distance_label, diverged
 from ._road import RoadSchedule, _RoadState
 from ._vehicle import GRAVITY, BrakeActuator, QuarterCar, check_speed
 
@@ -332,7 +332,7 @@ class TwoAxleResult:
     @property
     def _distance_text(self) -> str:
         """The distance metric under the name it deserves: a run that did not stop only travelled it."""
-        what = "stopping distance" if self.status == "stopped" else "distance travelled"
+        what = distance_label(self.status == "stopped")
         return f"{what} {self.metrics['stopping_distance_m']:.2f} m"
 
     def _repr_markdown_(self) -> str:

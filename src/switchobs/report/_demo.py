@@ -163,7 +163,10 @@ class DemoReport(JsonRecord, error=SimulationError):
                          f"{m.c_run_ns:.0f} ns")
         b = self.braking
         dist = "n/a" if b.braking_distance_m is None else f"{b.braking_distance_m:.1f} m"
-        lines.append(f"  braking: {b.status}, stopping distance {b.stopping_distance_m:.1f} m, braking distance "
+        from ..plants import distance_label
+
+        lines.append(f"  braking: {b.status}, {distance_label(b.stop_time_s is not None)} "
+                     f"{b.stopping_distance_m:.1f} m, braking distance "
                      f"(Table 4.1 definition) {dist}")
         for e in b.errors:
             if e.segment == "whole run":

@@ -102,10 +102,10 @@ def encoder_comparison(*, fast: bool = True, noise_weight: float = 0.1) -> Encod
     """Run the demo braking with the ``beta = 100`` 4D observer in the loop and the synthesised pair beside it.
 
     Both are the Python reference observers with the Radau IIA step (one step per measurement
-    interval, certified for every step length); the pair is :func:`switchobs.certify.synthesize_box`
+    interval, certified for every step length); the pair is :func:`switchobs.synthesis.synthesize_box`
     over :data:`DEMO_BOX` at decay rate 100 in ``tau`` with ``noise_weight`` on the XBS error.
     """
-    from ..certify import synthesize_box
+    from ..synthesis import synthesize_box
     from ..loop import (DEFAULT_BETA, INITIAL_STATE, SETTLE_S, DemoSettings, EncoderLoopEstimator,
                         ObserverXbsEstimator, demo_scenario, road_segments, segment_errors)
     from ..model import builtin_model

@@ -36,7 +36,7 @@ def _num(v: float | None, fmt: str = ".3f") -> str:
 
 def demo_markdown(report: Any) -> str:
     """The readable report of a :class:`DemoReport`."""
-    from ..plants import QuarterCar
+    from ..plants import QuarterCar, distance_label
 
     st = report.settings
     b = report.braking
@@ -112,7 +112,7 @@ def demo_markdown(report: Any) -> str:
             "encoder reaches the brake through the observer's estimate in law (22), not through the "
             "thresholds. The 3D observer (road-specific c = 34, the rig value) and the 4D observer on the "
             "exact x2 run beside, for comparison.", "",
-            md_table(["status", "stop time [s]", "stopping distance [m]",
+            md_table(["status", "stop time [s]", f"{distance_label(b.stop_time_s is not None)} [m]",
                       "braking distance v0²/(2gμ̄) [m]", "mean friction μ̄", "ABS from [s]", "ABS cycles",
                       "mean slip"],
                      [[b.status, _num(b.stop_time_s), _num(b.stopping_distance_m, ".2f"),

@@ -11,18 +11,16 @@ from __future__ import annotations
 
 import math
 import re
-from typing import TYPE_CHECKING
 
 import numpy as np
 
-from ..loop import DEFAULT_BETA, DEFAULT_GAMMA, EstimatorSpec, xbs_estimator
+from ..loop import DEFAULT_BETA, DEFAULT_GAMMA, EstimatorSpec, default_method, xbs_estimator
 from ..plants import (D1_HOANG, D2_HOANG, BrakingScenario, ContinuousXbsControl, FivePhaseABS, PoincareMap,
                       SixPhaseABS, TwoPhaseABS, fit_exponential, road, road_names, scenario, simulate,
                       simulate_return_map)
+from ..experiments import Runs
 from ._markdown import md_table
 
-if TYPE_CHECKING:
-    from ._repro_runs import _Runs
 
 #: The observer rates and half-cycle lengths in tau of the decay-rate table of docs/observers.md.
 DECAY_BETAS = (5, 10, 20, 40, 60, 100, 150, 200, 300, 500)
@@ -51,7 +49,7 @@ def _error_matrices(obs) -> tuple[np.ndarray, np.ndarray]:
     return A - np.outer(obs.K_plus, C), -A + np.outer(obs.K_minus, C)
 
 
-def _decay_section(runs: _Runs) -> list[str]:
+def _decay_section(runs: Runs) -> list[str]:
     from ..observers import adaptive_xbs_observer, xbs3_observer, xbs4_observer
 
     build = {"abs-xbs3": lambda b: xbs3_observer(b, b), "abs-xbs4": lambda b: xbs4_observer(b, b),
@@ -80,12 +78,14 @@ def _quarter_car_rms(dt: float, kind: str, gamma: float | None, beta: float) -> 
     return f"{rms:#.3g}" if math.isfinite(rms) and rms < 1e3 else "diverges"
 
 
-def _quarter_car_section(runs: _Runs) -> list[str]:
+def _quarter_car_section(runs: Runs) -> list[str]:
     dry = road("dry-asphalt")
     truth = simulate(BrakingScenario("dry-asphalt", speed_m_s=25.0, dt_s=QUARTER_CAR_STEPS[0]))
     xbs = truth.series["xbs"][_scored(truth)]
     head = ("Measured with `switchobs.plants.simulate` (five-phase ABS, dry asphalt of seed 001 Table 2.1, "
-            "25 m/s, observer in parallel, adapter with mean hold): RMS of $\\hat\\mu' - \\mu'$ for "
+            f"25 m/s, observer in parallel, adapter with mean hold, each observer's default step: "
+            f"{default_method('xbs3')} for xbs3 and xbs4, {default_method('adaptive')} for the adaptive one, which "
+            "takes explicit steps only): RMS of $\\hat\\mu' - \\mu'$ for "
             f"$t > {_SCORED_AFTER_S:g}$ s and $v_x > {_SCORED_ABOVE_M_S:g}$ m/s (the true XBS ranges over "
             f"$[{xbs.min():.2f}, {xbs.max():.2f}]$, standard deviation {xbs.std():.2f}, there). The error is "
             "dominated by the simplification $(-a_x x_1 + x_2) \\simeq x_2$, $\\dot a_x \\simeq 0$ of the observer "
@@ -107,7 +107,7 @@ def _quarter_car_section(runs: _Runs) -> list[str]:
     return lines
 
 
-def _trajectory_section(runs: _Runs) -> list[str]:
+def _trajectory_section(runs: Runs) -> list[str]:
     from ..certify import trajectory_conditions
 
     name = "aguado-sec34"
@@ -150,7 +150,7 @@ def _short(x: float) -> str:
     return re.sub(r"e([+-])0*(\d)", r"e\1\2", text).replace("e+", "e")
 
 
-def _table1_section(runs: _Runs) -> list[str]:
+def _table1_section(runs: Runs) -> list[str]:
     lines = [f"Least squares on 101 equally spaced slips in $[-1,0]$, $d_1={D1_HOANG:g}$, $d_2={D2_HOANG:g}$ "
              "(`fit_exponential`):", ""]
     rows = []
@@ -163,7 +163,7 @@ def _table1_section(runs: _Runs) -> list[str]:
                              rows)]
 
 
-def _poincare_section(runs: _Runs) -> list[str]:
+def _poincare_section(runs: Runs) -> list[str]:
     dry = road("dry-asphalt")
     maps = {kp: PoincareMap.from_abs(kp=kp, c=dry.c, d=dry.d, **POINCARE_SETTING) for kp in POINCARE_KPS}
     z_ref = POINCARE_SETTING["z_ref"]
@@ -185,7 +185,7 @@ def _poincare_section(runs: _Runs) -> list[str]:
                               f"largest relative error, analytic vs simulated map ($\\zeta={zetas}$)"], rows)]
 
 
-def _continuous_section(runs: _Runs) -> list[str]:
+def _continuous_section(runs: Runs) -> list[str]:
     """Seed 001 Figs. 4.1-4.2: the continuous law (4.2)-(4.3) against the two-phase ABS, adaptive observer
     beside the loop (``switchobs simulate --controller continuous --observer adaptive --parallel``)."""
     law = ContinuousXbsControl()
@@ -214,7 +214,7 @@ def _continuous_section(runs: _Runs) -> list[str]:
             "that reaches $cz_2+d\\le0$ stops the run (`controller-singular`)."]
 
 
-def _five_phase_section(runs: _Runs) -> list[str]:
+def _five_phase_section(runs: Runs) -> list[str]:
     """The printed Fig. 6.6 thresholds on the Table 2.1 characteristics, and our defaults."""
     fig66, ours = FivePhaseABS.fig66(), FivePhaseABS()
     res = simulate(BrakingScenario("dry-asphalt", speed_m_s=120.0 / 3.6, controller=fig66))
@@ -232,7 +232,7 @@ def _five_phase_section(runs: _Runs) -> list[str]:
             f"$u=({ours.u1:g},{ours.u3:g},{ours.u4:g})$ bar·m/s²."]
 
 
-def _two_phase_start_section(runs: _Runs) -> list[str]:
+def _two_phase_start_section(runs: Runs) -> list[str]:
     """How the two-phase ABS of ``table41`` (no start-up safeguard) leaves its build-up on the flattest road."""
     name, speed = "dry-cobblestones", 180.0
     sc = BrakingScenario(name, speed_m_s=speed / 3.6, controller=TwoPhaseABS(start_decel_m_s2=None))
@@ -250,7 +250,7 @@ def _two_phase_start_section(runs: _Runs) -> list[str]:
     return [text]
 
 
-def _six_phase_section(runs: _Runs) -> list[str]:
+def _six_phase_section(runs: Runs) -> list[str]:
     """Our six-phase values and the friction utilisation they give on the roads of Table 2.1 at 120 km/h."""
     ours = SixPhaseABS()
     used = [simulate(BrakingScenario(name, speed_m_s=120.0 / 3.6, controller=ours)).metrics.efficiency

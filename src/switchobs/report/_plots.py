@@ -82,7 +82,7 @@ def plot_wheel_acceleration(scenario: Any, result: Any, record: Any, *, ax: Any 
     ph.step(s["t"], s["phase"], where="post", color="tab:gray", lw=0.6)
     ph.set_ylabel("ABS phase")
     axes[1].set_xlabel("t [s]")
-    axes[0].set_title("closed-loop wheel-acceleration control (seed 000 (21)-(22)) on the C observer's XBS")
+    axes[0].set_title("closed-loop wheel-acceleration control (Hoang et al. 2014 (21)-(22)) on the C observer's XBS")
     return _finish(fig, axes, scenario)
 
 
@@ -131,7 +131,7 @@ def plot_encoder(scenario: Any, result: Any, record: Any, *, ax: Any = None) -> 
         ax.legend(loc="upper right", fontsize=8)
         ax.grid(alpha=0.3)
     axes[0].set_title(f"{scenario.vehicle.radius_m:g} m wheel, 60-ppr encoder: harmonic compensation "
-                      "(seed 001 Ch. 6)")
+                      "(Aguado-Rojas 2020 Ch. 6)")
     return _finish(fig, axes, scenario)
 
 

@@ -10,7 +10,7 @@ from contextlib import contextmanager
 from dataclasses import dataclass, field
 from typing import TextIO
 
-from ..exceptions import CodegenError, PrerequisiteError
+from ..exceptions import CodegenError, PrerequisiteError, install_hint
 
 __all__ = ["Progress", "Stage", "check_prerequisites"]
 
@@ -47,7 +47,7 @@ def check_prerequisites(stages: Sequence[Stage]) -> None:
     >>> check_prerequisites([Stage("plot", ("no_such_module",))])
     Traceback (most recent call last):
     ...
-    switchobs.exceptions.PrerequisiteError: stage 'plot' cannot run: importing no_such_module failed (No module named 'no_such_module'); reinstall with `make install` (or pip install -e .)
+    switchobs.exceptions.PrerequisiteError: stage 'plot' cannot run: importing no_such_module failed (No module named 'no_such_module'); reinstall switchobs and its dependencies (pip install --force-reinstall "switchobs")
     """
     for stage in stages:
         for module in stage.modules:
@@ -56,9 +56,9 @@ def check_prerequisites(stages: Sequence[Stage]) -> None:
             except ImportError as exc:
                 raise PrerequisiteError(
                     f"stage {stage.name!r} cannot run: importing {module} failed ({exc}); "
-                    "reinstall with `make install` (or pip install -e .)") from None
+                    f"{install_hint(getattr(exc, 'name', None) or module)}") from None
         if stage.compiler:
-            from ..codegen import find_compiler  # importable: the stage's modules were checked above
+            from ..codegen import find_compiler  # importable without casadi: the generator alone needs it
 
             try:
                 find_compiler()

@@ -4,24 +4,21 @@
 
 from __future__ import annotations
 
-import bisect
 import math
 from collections.abc import Mapping, Sequence
 from dataclasses import replace
 from pathlib import Path
-from typing import TYPE_CHECKING
 
 import numpy as np
 
 from .._figures import panels, save_figure
-from ..loop import X2_MEASUREMENTS, encoder_measurements
+from ..loop import X2_MEASUREMENTS
 from ..plants import (GRAVITY, BrakingResult, BrakingScenario, FivePhaseABS, Table41Result, TwoPhaseABS, road,
                       scenario, scenario_description, scenario_observer, scenario_observer_gains, simulate)
-from ..sensors import TABLE61_ENCODER, Encoder
-from ._repro_cells import _fmt_s, _pct, _reconv, _row
-
-if TYPE_CHECKING:
-    from ._repro_runs import _Runs
+from ..experiments import (FIG67_BLOCKED_S, FIG67_ENCODER, FIG67_PHASES, FIG67_SMALL_ECCENTRICITY, FIG67_SPEEDS_KMH,
+                           FIG67_SPLIT_M_S, Runs, excursion, fast_cycles, fast_phase, fig67_open_loop, fig67_scenario,
+                           locks, longest_stay, reconverged)
+from ._repro_cells import _fmt_s, _pct, _row
 
 
 # ---------------------------------------------------------------- scenarios of docs/abs.md
@@ -39,7 +36,7 @@ def _gains_text(gains: Mapping[str, float]) -> str:
     return ", ".join(f"${names[k].format(v)}$" for k, v in gains.items())
 
 
-def _scenarios_section(runs: _Runs) -> list[str]:
+def _scenarios_section(runs: Runs) -> list[str]:
     """The built-in scenarios with their default observers: one CLI output and what each seed says vs ours."""
     fig3, fig4, sec34 = (runs.default_run(n) for n in ("hoang-fig3", "hoang-fig4", "aguado-sec34"))
     free = scenario("hoang-fig4")
@@ -56,20 +53,20 @@ def _scenarios_section(runs: _Runs) -> list[str]:
     lines += [
         _row(f"`hoang-fig3` dry → wet at 3 s, five-phase, `{scenario_observer('hoang-fig3')}`",
              "estimate \"highly perturbed by the swift road transition\", converges again \"in a fraction of a "
-             "second\"", f"re-converged within 10 % {_fmt_s(_reconv(fig3, '-> hoang-wet'))} after the transition; "
+             "second\"", f"re-converged within 10 % {_fmt_s(reconverged(fig3, '-> hoang-wet'))} after the transition; "
              f"RMS error {fig3.metrics.xbs_rms_error:.2f} (dominated by the transition spikes); Assumption 1 "
              f"{'holds' if a3.holds else 'fails'} ({a3.crossings} crossings, dwell {1e3 * a3.dwell_time_s:.0f} ms)"),
         _row(f"`hoang-fig4` dry 3 s, wet 1 s, snow; five-phase with tracking (21)–(22) on the "
              f"`{scenario_observer('hoang-fig4')}` estimate", "tracking achieved, pressure \"automatically increased "
              "or decreased to match road conditions\"",
              f"mean slip {a4.slip_mean:.3f} ± {a4.slip_std:.3f} over the three roads, re-convergence "
-             f"{_fmt_s(_reconv(fig4, '-> hoang-wet'))} (wet) and {_fmt_s(_reconv(fig4, '-> hoang-snow'))} (snow); "
+             f"{_fmt_s(reconverged(fig4, '-> hoang-wet'))} (wet) and {_fmt_s(reconverged(fig4, '-> hoang-snow'))} (snow); "
              f"without the stall exit the slip reaches {slip.min():.2f} on snow"),
         _row(f"`aguado-sec34` dry asphalt → wet asphalt → dry concrete, five-phase, `{scenario_observer('aguado-sec34')}` "
              f"({_gains_text(scenario_observer_gains('aguado-sec34'))}, chosen by us)",
              "errors converge quickly \"even after the abrupt transitions\"",
-             f"re-converged within 10 % {_fmt_s(_reconv(sec34, '-> wet-asphalt'))} after the change to wet asphalt "
-             f"and {_fmt_s(_reconv(sec34, '-> dry-concrete'))} after the change to dry concrete (band "
+             f"re-converged within 10 % {_fmt_s(reconverged(sec34, '-> wet-asphalt'))} after the change to wet asphalt "
+             f"and {_fmt_s(reconverged(sec34, '-> dry-concrete'))} after the change to dry concrete (band "
              f"{dry_to_wet.band:.2f}); see [Reproductions](reproductions.md) (Sec. 3.4)"),
         _row(f"`aguado-sec36` two-axle, 180 km/h, dry → snow (2.5 s) → wet (5 s), six-phase ABS, `{kind36}` per wheel "
              f"({_gains_text(scenario_observer_gains('aguado-sec36'))}, chosen by us; the load (3.36) read on line)",
@@ -87,7 +84,7 @@ def _scenarios_section(runs: _Runs) -> list[str]:
 # ---------------------------------------------------------------- Table 4.1
 
 
-def _table41_section(runs: _Runs) -> list[str]:
+def _table41_section(runs: Runs) -> list[str]:
     """Table 4.1 with the seed's cells, ours and the deviations (shared by reproductions.md and abs.md)."""
     res, adaptive = runs.table41, runs.table41_adaptive
     lines = ["Braking distance $v_x(0)^2/(2g\\bar\\mu)$ [m] of the free quarter car to 2.5 km/h (seed 001 "
@@ -173,7 +170,7 @@ def _utilisation_section(res: Table41Result) -> list[str]:
     return lines
 
 
-def _step_halving_section(runs: _Runs) -> list[str]:
+def _step_halving_section(runs: Runs) -> list[str]:
     """Braking on wet asphalt from 90 km/h at three step sizes (the integrator's convergence)."""
     lines = ["Halving the step (wet asphalt, 90 km/h, to standstill; "
              "`test_results_change_less_than_1_percent_when_the_step_is_halved`):", "",
@@ -192,20 +189,6 @@ def _step_halving_section(runs: _Runs) -> list[str]:
 
 # ---------------------------------------------------------------- Figs. 6.7-6.9
 
-#: Seed 001 Sec. 6.4's simulated encoder: N = 60 and a perturbation of one harmonic (M_r = 1), i.e. the
-#: eccentricity alone.  The seed does not give its size; e/r = 0.006 (e = 0.24 mm on a 40 mm code track, at the
-#: top of the seed's 0.05-0.25 mm, Sec. 6.1) is derived from its Fig. 6.7: the ripple must fire the hold 5 before
-#: the friction peak and stay above -eps5 afterwards (docs/reproductions.md).
-FIG67_ENCODER = Encoder(ppr=60, eccentricity=0.006)
-#: Our Table 6.1 encoder's eccentricity: with it the raw TSA of Fig. 6.7 cycles (the ripple is too small to trap).
-FIG67_SMALL_ECCENTRICITY = TABLE61_ENCODER.eccentricity
-#: The seed's statements are scored while the vehicle is faster than this (60 km/h, the lowest initial speed of
-#: the seed's ABS simulations, Table 4.1); below it every TSA-fed loop, a perfect encoder's included, loses the
-#: cycle (the TSA window's lag), which the seed does not discuss.
-FIG67_SPLIT_M_S = 60.0 / 3.6
-#: Robustness of Figs. 6.7-6.9: eccentricity phases (rad) at 130 km/h, then initial speeds (km/h) at phase 0.
-FIG67_PHASES = (0.0, 0.5 * math.pi, math.pi, 1.5 * math.pi)
-FIG67_SPEEDS_KMH = (125.0, 135.0)
 #: What each run of Figs. 6.7-6.9 stands for, and the seed's statement about it.
 _FIG67_SEED = {
     "exact": ("exact $x_2$ (the ideal cycle, green circles)", "cycles around the optimal point"),
@@ -221,145 +204,24 @@ _FIG67_SEED = {
 }
 
 
-class HalfWindowLate:
-    """The exact ``x2`` as the controller reads it half a TSA window late: the lag of the seed's TSA alone.
-
-    The acceleration of an order-2 TSA is constant over its window of ``n`` edges, so it describes the wheel
-    about ``n / 2`` edge pitches, ``pi n / (N omega)`` seconds, before the sample, however perfect the encoder;
-    this :class:`switchobs.plants.X2Measurement` has that lag and nothing else.  ``omega`` is rebuilt from the
-    plant's signals as :class:`switchobs.loop.EncoderLoopEstimator` rebuilds it.
-    """
-
-    def __init__(self, radius_m: float, *, window: int = 12, ppr: int = 60):
-        self._R = radius_m
-        self._angle = math.pi * window / ppr
-
-    def reset(self, t0: float, y0: float, vx0: float) -> None:
-        self._t, self._y = [t0], [y0]
-        self._omega, self._vx = vx0 / self._R, vx0
-
-    def update(self, t: float, y: float, vx: float, u: float, dt: float) -> float:
-        self._omega = max(self._omega + ((vx - self._vx) + 0.5 * (self._y[-1] + y) * dt) / self._R, 0.0)
-        self._vx = vx
-        self._t.append(t)
-        self._y.append(y)
-        # a wheel at rest gives no edge: the reading is the oldest one
-        tq = t - self._angle / self._omega if self._omega > 0.0 else -math.inf
-        i = bisect.bisect_right(self._t, tq)
-        if i == 0:
-            return self._y[0]
-        t0, t1 = self._t[i - 1], self._t[min(i, len(self._t) - 1)]
-        w = 0.0 if t1 <= t0 else (tq - t0) / (t1 - t0)
-        return self._y[i - 1] + w * (self._y[min(i, len(self._y) - 1)] - self._y[i - 1])
-
-
-def fig67_scenario() -> BrakingScenario:
-    """Seed 001 Sec. 6.4: free quarter car on dry concrete from 130 km/h, the Fig. 6.6 thresholds as printed."""
-    # the printed automaton has no stall exit; at the default 1000 bar/s build-up x2 passes -eps0 before the
-    # tyre saturates, the release then empties the brake and phase 1 never ends, so the build-up is slower
-    ctrl = replace(FivePhaseABS.fig66(), stall_timeout_s=None, initial_rate_bar_s=300.0)
-    return BrakingScenario("dry-concrete", speed_m_s=130.0 / 3.6, controller=ctrl, duration_s=8.0,
-                           name="aguado-fig67")
-
-
-def _fast(res: BrakingResult) -> np.ndarray:
-    """Samples at which the vehicle is faster than :data:`FIG67_SPLIT_M_S`."""
-    return np.asarray(res.series["vx"] >= FIG67_SPLIT_M_S)
-
-
-def _longest_stay(res: BrakingResult, where: np.ndarray | None = None) -> tuple[float, int, float, float]:
-    """The longest stay in one phase (within ``where``): (duration, phase, mean slip, mean true x2)."""
-    s = res.series
-    t, ph = s["t"], s["phase"]
-    keep = np.ones(t.size, dtype=bool) if where is None else where
-    # a stay ends where the phase changes or the selection does
-    starts = np.concatenate([np.flatnonzero((np.diff(ph) != 0) | (np.diff(keep.astype(int)) != 0)) + 1,
-                             [t.size - 1]])
-    starts = np.concatenate([[0], starts]) if starts[0] != 0 else starts
-    # the build-up (phase 0) is not a stay of the ABS
-    spans = np.where(keep[starts[:-1]] & (ph[starts[:-1]] > 0), np.diff(t[starts]), -1.0)
-    k = int(np.argmax(spans))
-    seg = slice(starts[k], starts[k + 1])
-    return (float(spans[k]), int(ph[starts[k]]), float(np.mean(s["lambda"][seg])), float(np.mean(s["x2"][seg])))
-
-
-#: A stay in one phase longer than this while the car is fast is the seed's "blocked" (the ideal cycle's
-#: longest stay is a quarter of it).
-FIG67_BLOCKED_S = 1.0
-
-
-def _excursion(res: BrakingResult, where: np.ndarray | None = None) -> float:
-    """How far the true x2 goes beyond the outermost thresholds ``[-eps0, eps2]`` once the ABS cycles (and within
-    ``where``) [m/s²]."""
-    s, eps = res.series, res.scenario.controller.eps
-    cycling = s["phase"] > 0
-    if where is not None:
-        cycling &= where
-    if not np.any(cycling):
-        return 0.0
-    x2 = s["x2"][cycling]
-    return float(max(np.max(x2) - eps[2], -eps[0] - np.min(x2), 0.0))
-
-
-def _fast_cycles(res: BrakingResult) -> int:
-    """Entries into the release phase 1 while the car is faster than the split speed."""
-    ph, fast = res.series["phase"], _fast(res)
-    return int(np.count_nonzero((ph[1:] == 1) & (ph[:-1] != 1) & fast[1:]))
-
-
 def _fig67_fast_text(res: BrakingResult) -> str:
-    dur, ph, lam, x2 = _longest_stay(res, _fast(res))
+    dur, ph, lam, x2 = longest_stay(res, fast_phase(res))
     if dur >= FIG67_BLOCKED_S:
         return f"blocked {dur:.1f} s in phase {ph} at $(x_1, x_2) = ({100 * lam:.1f}, {x2:.1f})$"
-    return f"cycles ({_fast_cycles(res)} cycles, longest stay {dur:.2f} s)"
+    return f"cycles ({fast_cycles(res)} cycles, longest stay {dur:.2f} s)"
 
 
 def _fig67_slow_text(res: BrakingResult) -> str:
-    slow = ~_fast(res)
+    slow = ~fast_phase(res)
     lowest = 100 * float(np.min(res.series["lambda"][slow])) if np.any(slow) else math.nan
-    return f"{_excursion(res, slow):.0f}, {lowest:.0f} %"
-
-
-def _locks(res: BrakingResult) -> bool:
-    """Whether the wheel locks (slip below -90 %) once the car is slower than the split speed."""
-    slow = ~_fast(res)
-    return bool(np.any(slow) and np.min(res.series["lambda"][slow]) < -0.9)
+    return f"{excursion(res, slow):.0f}, {lowest:.0f} %"
 
 
 def _median_range(values: Sequence[float]) -> str:
     return f"{np.median(values):.0f} ({min(values):.0f}–{max(values):.0f})"
 
 
-def fig67_open_loop(res: BrakingResult, cruise_s: float = 2.0) -> dict[str, tuple[float, float]]:
-    """The chain of Figs. 6.7-6.9 open loop on a recorded braking (after ``cruise_s`` at its initial speed).
-
-    Returns, for the raw TSA, the notch and the three-stage estimator on :data:`FIG67_ENCODER` and the TSA of a
-    perfect encoder, the RMS error of the measured ``x2`` while the car is faster than :data:`FIG67_SPLIT_M_S`
-    against the true ``x2`` at the centre of the TSA window and at the controller sample [m/s²].
-    """
-    s, sc = res.series, res.scenario
-    steps = round(cruise_s / sc.dt_s)
-    t = np.concatenate([s["t"][0] - sc.dt_s * np.arange(steps, 0, -1), s["t"]])
-    x2 = np.concatenate([np.zeros(steps), s["x2"]])
-    vx = np.concatenate([np.full(steps, s["vx"][0]), s["vx"]])
-    u = np.concatenate([np.zeros(steps), np.diff(s["P_b"]) / np.diff(s["t"])])
-    chain = {"encoder": encoder_measurements(t, x2, vx, u, encoder=FIG67_ENCODER, radius_m=sc.vehicle.radius_m,
-                                             window=12, harmonics=6),
-             "perfect": encoder_measurements(t, x2, vx, u, encoder=Encoder(ppr=60), radius_m=sc.vehicle.radius_m,
-                                             window=12, harmonics=6)}
-    out = {}
-    for name, (which, column) in {"tsa": ("encoder", "x2_tsa"), "notch": ("encoder", "x2_notch"),
-                                  "three-stage": ("encoder", "x2_measured"), "tsa-ideal": ("perfect", "x2_tsa")
-                                  }.items():
-        m = chain[which]
-        fast = np.isfinite(m.t_measured) & (m.t > s["t"][0]) & (m.vx >= FIG67_SPLIT_M_S)
-        got = getattr(m, column)[fast]
-        out[name] = tuple(float(np.sqrt(np.mean((got - np.interp(tq, t, x2)) ** 2)))
-                          for tq in (m.t_measured[fast], m.t[fast]))
-    return out
-
-
-def _fig67_section(runs: _Runs) -> list[str]:
+def _fig67_section(runs: Runs) -> list[str]:
     sc = fig67_scenario()
     split_kmh = 3.6 * FIG67_SPLIT_M_S
     fig = runs.fig67
@@ -376,7 +238,7 @@ def _fig67_section(runs: _Runs) -> list[str]:
                   "below: excursion [m/s²], lowest slip", "status, distance [m]"), _row(*["---"] * 6)]
     for kind, res in fig.items():
         label, seed = _FIG67_SEED[kind]
-        lines.append(_row(label, seed, _fig67_fast_text(res), f"{_excursion(res, _fast(res)):.0f}",
+        lines.append(_row(label, seed, _fig67_fast_text(res), f"{excursion(res, fast_phase(res)):.0f}",
                           _fig67_slow_text(res), f"{res.status}, {res.metrics.stopping_distance_m:.1f}"))
     robust = runs.fig67_robust
     count = len(robust["tsa"])
@@ -389,16 +251,16 @@ def _fig67_section(runs: _Runs) -> list[str]:
     blocked: dict[str, int] = {}
     excursions: dict[str, list[float]] = {}
     for kind, results in robust.items():
-        blocked[kind] = sum(_longest_stay(r, _fast(r))[0] >= FIG67_BLOCKED_S for r in results)
-        excursions[kind] = [_excursion(r, _fast(r)) for r in results]
-        locked = sum(_locks(r) for r in results)
+        blocked[kind] = sum(longest_stay(r, fast_phase(r))[0] >= FIG67_BLOCKED_S for r in results)
+        excursions[kind] = [excursion(r, fast_phase(r)) for r in results]
+        locked = sum(locks(r) for r in results)
         stuck = sum(r.status == "duration" for r in results)
         lines.append(_row(_FIG67_SEED[kind][0], f"{blocked[kind]} of {count}", _median_range(excursions[kind]),
                           f"{locked} of {count}", f"{stuck} of {count}"))
     smaller = sum(a < b for a, b in zip(excursions["three-stage"], excursions["notch"]))
-    ideal = _excursion(fig["tsa-ideal"], _fast(fig["tsa-ideal"]))
+    ideal = excursion(fig["tsa-ideal"], fast_phase(fig["tsa-ideal"]))
     ol = fig67_open_loop(fig["exact"])
-    stay = _longest_stay(fig["tsa"], _fast(fig["tsa"]))
+    stay = longest_stay(fig["tsa"], fast_phase(fig["tsa"]))
     lines += ["", f"Reproduced above {split_kmh:.0f} km/h: the raw TSA fails to cycle, blocked in the "
               f"hold phase {stay[1]} at $(x_1, x_2) = ({100 * stay[2]:.0f}, {stay[3]:.0f})$ against the seed's "
               f"$(-7, 0)$ ({blocked['tsa']} of {count} runs): the ripple fires the guard $x_2 \\le -\\varepsilon_4$ "
@@ -438,7 +300,7 @@ def _fig67_section(runs: _Runs) -> list[str]:
     return lines
 
 
-def plot_fig67(runs: _Runs, path: Path) -> None:
+def plot_fig67(runs: Runs, path: Path) -> None:
     """The phase plane (slip, true x2) of the three encoder-fed runs of Figs. 6.7-6.9, each beside the ideal
     cycle; the part below the scoring speed in grey."""
     eps = fig67_scenario().controller.eps
@@ -446,7 +308,7 @@ def plot_fig67(runs: _Runs, path: Path) -> None:
     fig, axes = panels(None, 3, figsize=(12, 3.8), owner="plot_fig67", nrows=1, ncols=3, sharey=True)
     for ax, kind in zip(axes, X2_MEASUREMENTS):
         res = runs.fig67[kind]
-        s, fast = res.series, _fast(res)
+        s, fast = res.series, fast_phase(res)
         lam, x2 = 100 * s["lambda"], s["x2"]
         ax.plot(np.where(fast, np.nan, lam), x2, lw=0.4, color="0.75",
                 label=f"below {3.6 * FIG67_SPLIT_M_S:.0f} km/h")

@@ -7,125 +7,31 @@ from __future__ import annotations
 
 import math
 from collections.abc import Callable
-from dataclasses import dataclass
-from typing import TYPE_CHECKING
 
 import numpy as np
 
-from ..loop import (DEFAULT_BETA, DEFAULT_GAMMA, INITIAL_STATE, EstimatorSpec, LoadXbsEstimator,
-                    ObserverXbsEstimator, xbs_estimator)
-from ..observers import adaptive_xbs_observer
-from ..plants import (BrakingResult, SixPhaseABS, TwoAxleResult, TwoAxleScenario, XbsEstimator, road,
-                      scenario_observer_gains)
-from ..plants._metrics import _reconvergence
-from ._repro_cells import _fmt_s, _reconv, _row
-
-if TYPE_CHECKING:
-    from ._repro_runs import _Runs
+from ..loop import DEFAULT_BETA, DEFAULT_GAMMA, EstimatorSpec
+from ..plants import BrakingResult, TwoAxleResult, road
+from ..experiments import (SEC34_AUGMENTED_BETAS, SEC34_BETAS, SEC34_CHANGES, SEC34_FINE_H_MAX, SEC34_GAINS,
+                           SEC34_GAMMAS, SEC34_H_MAX, SEC34_LARGE_GAMMA, SEC34_QUICK_S, SEC34_WINDOWS, SEC36_ACTIVATION,
+                           SEC36_CROSSING_TOL_S, SEC36_FINE_STEP_S, SEC36_H_MAX, SEC36_OBSERVER, SEC36_WINDOW_S, Runs,
+                           Traced, bosch_sequence, load_excursions, psi_excitation, quick_reapproach, reconverged,
+                           sec36_late_excursions, sec36_settled, sec36_stays, segment_rms, upsilon_excitation)
+from ._repro_cells import _fmt_s, _row
 
 
 # ---------------------------------------------------------------- Sec. 3.4
 
-#: The adaptive observer of the Sec. 3.4 page and of ``switchobs simulate aguado-sec34``: chosen by us on the grid
-#: of the page (the seed gives no gains).
-SEC34_GAINS = scenario_observer_gains("aguado-sec34")
-#: The (beta, gamma) grid of the page, sub-stepped to |s| dt <= SEC34_H_MAX (Gamma = 3e5 I needs the finer bound).
-_SEC34_BETAS = (100.0, 150.0, 200.0)
-_SEC34_GAMMAS = (3e3, 1e4, 3e4, 1e5)
-SEC34_H_MAX = 1e-4
-_SEC34_FINE_H_MAX = 3e-5
-_SEC34_LARGE_GAMMA = 3e5
-_SEC34_MAX_SUBSTEPS = 1000
-#: The augmented observers' rates compared with (the seed gives none for them either).
-_SEC34_AUGMENTED_BETAS = (70.0, 100.0, 150.0)
-#: "Converge quickly [...] even after the abrupt transitions": back in the 10 % band this soon after each change [s].
-_SEC34_QUICK_S = 0.1
-#: One-second windows of the ABS cycle on each road, away from the changes (seed 001 (3.7) with T1 = 1 s).
-_SEC34_WINDOWS = (("dry asphalt", 1.5, 2.5), ("wet asphalt", 4.0, 5.0), ("dry concrete", 8.0, 9.0))
-_SEC34_CHANGES = ("-> wet-asphalt", "-> dry-concrete")
 
-
-@dataclass(frozen=True)
-class _Traced:
-    """A Sec. 3.4 run and the adaptive observer's states at its samples (columns named by ``names``)."""
-
-    result: BrakingResult
-    names: tuple[str, ...]
-    states: np.ndarray
-
-    def column(self, name: str) -> np.ndarray:
-        return self.states[:, self.names.index(name)]
-
-    def at(self, name: str, t: float) -> float:
-        return float(self.column(name)[int(np.searchsorted(self.result.series["t"], t))])
-
-
-class _StateRecorder(ObserverXbsEstimator):
-    """The estimator of a braking run, keeping its state (``theta_hat``, ``Upsilon`` of (3.4)) after every sample."""
-
-    states: list[np.ndarray]
-
-    def reset(self, t0: float, y0: float, vx0: float) -> None:
-        super().reset(t0, y0, vx0)
-        self.states = [self.state]
-
-    def update(self, t: float, y: float, vx: float, u: float, dt: float) -> float:
-        out = super().update(t, y, vx, u, dt)
-        self.states.append(self.state)
-        return out
-
-
-def _gram_eigenvalues(t: np.ndarray, rows: np.ndarray, a: float, b: float) -> np.ndarray:
-    """Eigenvalues (ascending) of the integral over ``[a, b)`` of ``R' R``, ``rows`` holding ``R`` (k x m x 2)."""
-    keep = (t >= a) & (t < b)
-    r, dt = rows[keep], np.diff(t[keep], append=t[keep][-1])
-    return np.linalg.eigvalsh(np.einsum("kmi,kmj,k->ij", r, r, dt))
-
-
-def _upsilon_excitation(tr: _Traced, a: float, b: float) -> float:
-    """Smallest eigenvalue of the integral of ``Upsilon_1' Upsilon_1`` over ``[a, b)``: the first row of
-    ``Upsilon``, which alone drives (3.4b), so ``1 / (gamma * this)`` is the slowest parameter time constant."""
-    row = np.stack([tr.column("Upsilon_w1_c"), tr.column("Upsilon_w1_d")], axis=1)[:, None, :]
-    return float(_gram_eigenvalues(tr.result.series["t"], row, a, b)[0])
-
-
-def _psi_excitation(res: BrakingResult, a: float, b: float) -> np.ndarray:
-    """Eigenvalues of the integral of ``Psi' Psi`` over ``[a, b)``, seed 001 (3.7) with ``Psi`` of (3.3)."""
-    s, car = res.series, res.scenario.vehicle
-    y, vx = s["x2"], s["vx"]
-    psi = np.stack([np.stack([y * y / vx, np.zeros_like(y)], axis=1),
-                    np.stack([-car.b / car.a * s["u"], y / vx], axis=1)], axis=1)
-    return _gram_eigenvalues(s["t"], psi, a, b)
-
-
-def _excursions(res: BrakingResult, a: float, b: float, start: float) -> tuple[int, float, float, float]:
-    """The error's excursions out of the 10 % band of the segment ``[a, b]`` after ``start``: how many, the largest
-    error, the band, and when the last one ends."""
-    s = res.series
-    seg = (s["t"] >= a) & (s["t"] <= b)
-    band = 0.1 * float(np.ptp(s["xbs"][seg]))
-    out = seg & (s["t"] >= start) & (np.abs(s["xbs_hat"] - s["xbs"]) > band)
-    idx = np.flatnonzero(out)
-    if not len(idx):
-        return 0, 0.0, band, start
-    count = 1 + int(np.count_nonzero(np.diff(idx) > 1))
-    return count, float(np.max(np.abs(s["xbs_hat"] - s["xbs"])[idx])), band, float(s["t"][idx[-1] + 1])
-
-
-def _quick(res: BrakingResult) -> bool:
-    times = [_reconv(res, label) for label in _SEC34_CHANGES]
-    return all(v is not None and v <= _SEC34_QUICK_S for v in times)
-
-
-def _sec34_section(runs: _Runs) -> list[str]:
+def _sec34_section(runs: Runs) -> list[str]:
     """Seed 001 Sec. 3.4: the adaptive observer against the augmented ones, and what limits its re-convergence."""
     chosen = runs.braking("aguado-sec34", EstimatorSpec("adaptive", **SEC34_GAINS))
     library = runs.braking("aguado-sec34", "adaptive")
     augmented = {(kind, beta): runs.braking("aguado-sec34", EstimatorSpec(kind, beta=beta))
-                 for kind in ("xbs3", "xbs4") for beta in _SEC34_AUGMENTED_BETAS}
-    best = {kind: min(_SEC34_AUGMENTED_BETAS, key=lambda b: augmented[kind, b].metrics.xbs_rms_error)
+                 for kind in ("xbs3", "xbs4") for beta in SEC34_AUGMENTED_BETAS}
+    best = {kind: min(SEC34_AUGMENTED_BETAS, key=lambda b: augmented[kind, b].metrics.xbs_rms_error)
             for kind in ("xbs3", "xbs4")}
-    betas_text = "$\\beta \\in \\{" + ", ".join(f"{b:g}" for b in _SEC34_AUGMENTED_BETAS) + "\\}$"
+    betas_text = "$\\beta \\in \\{" + ", ".join(f"{b:g}" for b in SEC34_AUGMENTED_BETAS) + "\\}$"
     rows = [(f"adaptive (3.4), $\\beta = {SEC34_GAINS['beta']:g}$, $\\Gamma = {SEC34_GAINS['gamma']:g}\\,I$ "
              "(chosen by us, the scenario's)", chosen),
             (f"adaptive (3.4), $\\beta = {DEFAULT_BETA['adaptive']:g}$, $\\Gamma = {DEFAULT_GAMMA:g}\\,I$ "
@@ -135,7 +41,7 @@ def _sec34_section(runs: _Runs) -> list[str]:
             (f"augmented 3D (seed 000 Sec. III, knows the initial road's $c$), $\\beta_1 = \\beta_2 = "
              f"{best['xbs3']:g}$ (lowest RMS of {betas_text})", augmented["xbs3", best["xbs3"]])]
     aug_min = min(r.metrics.xbs_rms_error for r in augmented.values())
-    ordered = chosen.metrics.xbs_rms_error < aug_min and _quick(chosen)
+    ordered = chosen.metrics.xbs_rms_error < aug_min and quick_reapproach(chosen)
     lines = ["", "### Sec. 3.4: dry asphalt → wet asphalt → dry concrete", "",
              "*Seed:* with the switched adaptive observer (3.4) \"a quick convergence to zero of both the state and "
              "parameter estimation errors\" even after the abrupt transitions between the roads, and the adaptive "
@@ -144,11 +50,11 @@ def _sec34_section(runs: _Runs) -> list[str]:
              _row("observer (`switchobs simulate aguado-sec34 --observer ...`)", "RMS XBS error",
                   "re-converged after → wet asphalt", "after → dry concrete"), _row(*["---"] * 4)]
     for label, res in rows:
-        lines.append(_row(label, f"{res.metrics.xbs_rms_error:.3f}", *(_fmt_s(_reconv(res, c)) for c in _SEC34_CHANGES)))
+        lines.append(_row(label, f"{res.metrics.xbs_rms_error:.3f}", *(_fmt_s(reconverged(res, c)) for c in SEC34_CHANGES)))
     lines += ["", "Re-converged: the error stays within 10 % of the true XBS's peak-to-peak range on the segment. "
               f"{'**Reproduced**' if ordered else '**Not reproduced**'} for the XBS estimate at the chosen gains: the "
               "adaptive observer "
-              f"{'re-converges' if _quick(chosen) else 'does NOT re-converge'} within {_SEC34_QUICK_S:g} s after both "
+              f"{'re-converges' if quick_reapproach(chosen) else 'does NOT re-converge'} within {SEC34_QUICK_S:g} s after both "
               f"changes and its RMS error is {chosen.metrics.xbs_rms_error:.3f} against {aug_min:.3f}, the lowest of "
               f"the 3D and 4D observers at any of {betas_text}. Per segment (RMS XBS error):", "",
               _row("interval [s]", "adaptive, chosen", "adaptive, library defaults", "augmented 4D", "augmented 3D"),
@@ -157,10 +63,10 @@ def _sec34_section(runs: _Runs) -> list[str]:
                 (5.5, 6.0, "wet asphalt, 2.5 s after the change"), (6.0, 6.5, "first 0.5 s on dry concrete"),
                 (9.5, 10.0, "dry concrete, 3.5 s after the change"))
     for a, b, label in segments:
-        lines.append(_row(f"{a:g}–{b:g}, {label}", *(f"{_segment_rms(r, a, b):.3f}" for _, r in rows)))
+        lines.append(_row(f"{a:g}–{b:g}, {label}", *(f"{segment_rms(r, a, b):.3f}" for _, r in rows)))
     lost = []
     for a, b, label in segments[::2]:
-        ours, theirs = _segment_rms(chosen, a, b), {n: _segment_rms(r, a, b) for n, r in (("4D", rows[2][1]),
+        ours, theirs = segment_rms(chosen, a, b), {n: segment_rms(r, a, b) for n, r in (("4D", rows[2][1]),
                                                                                          ("3D", rows[3][1]))}
         better = min(theirs, key=lambda n: theirs[n])
         if not ours < theirs[better]:
@@ -170,20 +76,20 @@ def _sec34_section(runs: _Runs) -> list[str]:
                                              "the seed's \"better [...] at steady state\" holds only in part, because "
                                              "$\\hat c$ is not re-identified on wet asphalt (below).")]
     # the grid, sub-stepped so that no point is limited by the 1 kHz explicit step
-    grid = {(b, g): runs.sec34(b, g) for b in _SEC34_BETAS for g in _SEC34_GAMMAS}
+    grid = {(b, g): runs.sec34(b, g) for b in SEC34_BETAS for g in SEC34_GAMMAS}
     lines += ["", f"The adaptive observer over $(\\beta, \\Gamma = \\gamma I)$, sub-stepped "
               f"(`adaptive_xbs_observer(..., h_max={SEC34_H_MAX:g})`): RMS error; re-converged after → wet asphalt, "
               "after → dry concrete [s] (– never):", "",
-              _row("$\\beta$", *(f"$\\gamma = {g:g}$" for g in _SEC34_GAMMAS)), _row(*["---"] * (1 + len(_SEC34_GAMMAS)))]
+              _row("$\\beta$", *(f"$\\gamma = {g:g}$" for g in SEC34_GAMMAS)), _row(*["---"] * (1 + len(SEC34_GAMMAS)))]
 
     def cell(res: BrakingResult) -> str:
-        times = ", ".join("–" if v is None else f"{v:.3f}" for v in (_reconv(res, c) for c in _SEC34_CHANGES))
+        times = ", ".join("–" if v is None else f"{v:.3f}" for v in (reconverged(res, c) for c in SEC34_CHANGES))
         return f"{res.metrics.xbs_rms_error:.3f}; {times}"
-    for b in _SEC34_BETAS:
-        lines.append(_row(f"{b:g}", *(cell(grid[b, g].result) for g in _SEC34_GAMMAS)))
-    holds = [k for k, tr in grid.items() if _quick(tr.result) and tr.result.metrics.xbs_rms_error < aug_min]
+    for b in SEC34_BETAS:
+        lines.append(_row(f"{b:g}", *(cell(grid[b, g].result) for g in SEC34_GAMMAS)))
+    holds = [k for k, tr in grid.items() if quick_reapproach(tr.result) and tr.result.metrics.xbs_rms_error < aug_min]
     pick = min(holds, key=lambda k: grid[k].result.metrics.xbs_rms_error) if holds else None
-    lines += ["", f"The seed's ordering (back in the band within {_SEC34_QUICK_S:g} s after both changes, RMS below "
+    lines += ["", f"The seed's ordering (back in the band within {SEC34_QUICK_S:g} s after both changes, RMS below "
               f"{aug_min:.3f}) holds at {len(holds)} of {len(grid)} grid points"
               + (": " + ", ".join(f"$({b:g}, {g:g})$" for b, g in holds) if holds else "")
               + "; we chose " + ("the one with the lowest RMS error" if pick == (SEC34_GAINS["beta"], SEC34_GAINS["gamma"])
@@ -200,45 +106,45 @@ def _sec34_section(runs: _Runs) -> list[str]:
     return lines
 
 
-def _sec34_limits(runs: _Runs, grid: dict[tuple[float, float], _Traced], library: BrakingResult) -> list[str]:
+def _sec34_limits(runs: Runs, grid: dict[tuple[float, float], Traced], library: BrakingResult) -> list[str]:
     """What limits the adaptive observer's re-convergence after dry -> wet asphalt, measured."""
     wet, dry = road("wet-asphalt"), road("dry-asphalt")
-    base = min(_SEC34_BETAS)
+    base = min(SEC34_BETAS)
     with np.errstate(over="ignore", invalid="ignore"):     # the run without sub-steps overflows on purpose
         plain = runs.braking("aguado-sec34", EstimatorSpec("adaptive", beta=base, gamma=3e4)).metrics.xbs_rms_error
-    large = runs.sec34(base, _SEC34_LARGE_GAMMA, _SEC34_FINE_H_MAX).result
-    fine = runs.sec34(base, max(_SEC34_GAMMAS), _SEC34_FINE_H_MAX).result
-    coarse = grid[base, max(_SEC34_GAMMAS)].result
+    large = runs.sec34(base, SEC34_LARGE_GAMMA, SEC34_FINE_H_MAX).result
+    fine = runs.sec34(base, max(SEC34_GAMMAS), SEC34_FINE_H_MAX).result
+    coarse = grid[base, max(SEC34_GAMMAS)].result
     ref = grid[base, DEFAULT_GAMMA]
     s = ref.result.series
     spike = (s["t"] >= 3.0) & (s["t"] < 3.1)
     cycle = (s["t"] >= 4.0) & (s["t"] < 5.0)
     ratio = float(np.max(np.abs(ref.column("Upsilon_w1_c")[spike])) / np.mean(np.abs(ref.column("Upsilon_w1_c")[cycle])))
-    count, peak, band, last = _excursions(library, 3.025, 6.0, 3.5)
+    count, peak, band, last = load_excursions(library, 3.025, 6.0, 3.5)
     phase, late = library.series["phase"], (library.series["t"] >= 3.5) & (library.series["t"] <= 6.0)
     cycles = int(np.count_nonzero((phase[1:] == 1) & (phase[:-1] != 1) & late[1:]))
     reidentified = [k for k, tr in grid.items() if abs(tr.at("c", 5.99) - wet.c) <= 0.1 * wet.c]
     chosen = grid.get((SEC34_GAINS["beta"], SEC34_GAINS["gamma"]))
-    rising = all(np.all(np.diff([grid[b, g].result.metrics.xbs_rms_error for g in _SEC34_GAMMAS if g >= DEFAULT_GAMMA]) > 0)
-                 for b in _SEC34_BETAS)
-    kicks = [grid[base, g].at("c", 3.1) for g in _SEC34_GAMMAS]
-    wet_times = {k: _reconv(tr.result, _SEC34_CHANGES[0]) for k, tr in grid.items()}
-    fast = [k for k, v in wet_times.items() if v is not None and v <= _SEC34_QUICK_S]
-    slow = [v for v in wet_times.values() if v is None or v > _SEC34_QUICK_S]
+    rising = all(np.all(np.diff([grid[b, g].result.metrics.xbs_rms_error for g in SEC34_GAMMAS if g >= DEFAULT_GAMMA]) > 0)
+                 for b in SEC34_BETAS)
+    kicks = [grid[base, g].at("c", 3.1) for g in SEC34_GAMMAS]
+    wet_times = {k: reconverged(tr.result, SEC34_CHANGES[0]) for k, tr in grid.items()}
+    fast = [k for k, v in wet_times.items() if v is not None and v <= SEC34_QUICK_S]
+    slow = [v for v in wet_times.values() if v is None or v > SEC34_QUICK_S]
     lines = ["", "What limits the re-convergence after dry → wet asphalt, measured:", "",
              f"- **Not the step.** Without sub-steps $\\Gamma = 3\\cdot10^4 I$ still "
              f"{'blows up (RMS error above 1000)' if not plain < 1e3 else 'runs'} at $\\beta = {base:g}$; sub-stepped, "
-             f"every grid point runs, the $\\gamma = {max(_SEC34_GAMMAS):g}$ row gives the same RMS at $h_{{max}} = "
-             f"{_SEC34_FINE_H_MAX:g}$ ({fine.metrics.xbs_rms_error:.3f} against {coarse.metrics.xbs_rms_error:.3f}), "
-             f"and $\\gamma = {_SEC34_LARGE_GAMMA:g}$ ($h_{{max}} = {_SEC34_FINE_H_MAX:g}$) gives RMS "
+             f"every grid point runs, the $\\gamma = {max(SEC34_GAMMAS):g}$ row gives the same RMS at $h_{{max}} = "
+             f"{SEC34_FINE_H_MAX:g}$ ({fine.metrics.xbs_rms_error:.3f} against {coarse.metrics.xbs_rms_error:.3f}), "
+             f"and $\\gamma = {SEC34_LARGE_GAMMA:g}$ ($h_{{max}} = {SEC34_FINE_H_MAX:g}$) gives RMS "
              f"{large.metrics.xbs_rms_error:.3f}, re-converged after → wet asphalt "
-             f"{_fmt_s(_reconv(large, _SEC34_CHANGES[0]))}. From $\\gamma = {DEFAULT_GAMMA:g}$ on, the RMS error "
+             f"{_fmt_s(reconverged(large, SEC34_CHANGES[0]))}. From $\\gamma = {DEFAULT_GAMMA:g}$ on, the RMS error "
              + ("grows with $\\gamma$ at every $\\beta$" if rising else "does NOT grow with $\\gamma$ at every $\\beta$")
              + ": a larger $\\Gamma$ does not buy a better estimate.",
              f"- **The road change kicks $\\hat\\theta$.** At $\\beta = {base:g}$, $\\hat c$ just before the "
              f"change and 0.1 s after it (dry {dry.c:.2f}, wet {wet.c:.2f}): "
              + ", ".join(f"$\\gamma = {g:g}$: {grid[base, g].at('c', 3.0):.1f} → {grid[base, g].at('c', 3.1):.1f}"
-                         for g in _SEC34_GAMMAS)
+                         for g in SEC34_GAMMAS)
              + f" ({'growing' if kicks == sorted(kicks) else 'NOT growing'} with $\\gamma$). The XBS jumps at the "
              "change ($\\mu'$ of the new road at the same slip), which (3.2) with a "
              "constant $\\theta$ cannot represent, and the wheel acceleration swings to "
@@ -253,10 +159,10 @@ def _sec34_limits(runs: _Runs, grid: dict[tuple[float, float], _Traced], library
                   f"$1/(\\gamma\\lambda_{{min}})$ at $\\gamma = {DEFAULT_GAMMA:g}$, $\\beta = {base:g}$",
                   "(3.7): $\\lambda_{min}$, $\\lambda_{max}$"), _row(*["---"] * 5)]
     weakest, spread = ("", math.inf), {}
-    for label, a, b in _SEC34_WINDOWS:
-        ev = [_upsilon_excitation(grid[beta, DEFAULT_GAMMA], a, b) for beta in (base, SEC34_GAINS["beta"])]
+    for label, a, b in SEC34_WINDOWS:
+        ev = [upsilon_excitation(grid[beta, DEFAULT_GAMMA], a, b) for beta in (base, SEC34_GAINS["beta"])]
         weakest = min(weakest, (label, ev[0]), key=lambda p: p[1])
-        psi = _psi_excitation(ref.result, a, b)
+        psi = psi_excitation(ref.result, a, b)
         spread[label] = (psi[0] > 0.0, psi[1] / psi[0])
         lines.append(_row(f"{a:g}–{b:g} s, {label}", *(f"{v:.2g}" for v in ev), f"{1.0 / (DEFAULT_GAMMA * ev[0]):.1f} s",
                           f"{psi[0]:.2f}, {psi[1]:.0f}"))
@@ -275,8 +181,8 @@ def _sec34_limits(runs: _Runs, grid: dict[tuple[float, float], _Traced], library
               "- **The 10 % band turns small per-cycle excursions into seconds.** With the library defaults the error leaves the "
               f"10 % band ({band:.3f}) {count} times after 3.5 s, in {cycles} ABS cycles, by up to {peak:.3f}; "
               f"the last excursion ends at {last:.3f} s, hence the re-convergence "
-              f"of {_fmt_s(_reconv(library, _SEC34_CHANGES[0]))}. On the grid {len(fast)} points re-converge within "
-             f"{_SEC34_QUICK_S:g} s (" + ", ".join(f"$({b:g}, {g:g})$" for b, g in fast) + f"), the other {len(slow)} "
+              f"of {_fmt_s(reconverged(library, SEC34_CHANGES[0]))}. On the grid {len(fast)} points re-converge within "
+             f"{SEC34_QUICK_S:g} s (" + ", ".join(f"$({b:g}, {g:g})$" for b, g in fast) + f"), the other {len(slow)} "
              + (f"take {min(v for v in slow if v is not None):.2f} s or more" if any(v is not None for v in slow) else "")
              + (" or never" if None in slow else "") + ": whether the per-cycle excursions stay under the band "
              "decides, not the decay of the error.",
@@ -288,114 +194,8 @@ def _sec34_limits(runs: _Runs, grid: dict[tuple[float, float], _Traced], library
 
 # ---------------------------------------------------------------- Sec. 3.6
 
-#: The adaptive observer of the Sec. 3.6 runs: the default Gamma = 1e4 I diverges on the front wheel with the
-#: explicit RK4 step at 1 kHz (its a = R² Fz / J is the largest of all our runs); at 0.5 ms it does not, nor does
-#: half of it at 1 kHz.  The seed gives neither Gamma nor beta.
-SEC36_OBSERVER = EstimatorSpec("adaptive", **scenario_observer_gains("aguado-sec36"))
-#: The Sec. 3.6 step that keeps Gamma = 1e4 I stable [s].
-SEC36_FINE_STEP_S = 5e-4
-#: The bound on the observer's step in rescaled time |s| dt that keeps Gamma = 1e4 I stable at the 1 ms loop step
-#: (3e-4 does not, measured), and a sub-step limit this run never reaches.
-SEC36_H_MAX = 1e-4
-_SEC36_MAX_SUBSTEPS = 1000
-#: "Re-approach" as read from Fig. 3.19: the error averaged over this window [s] is back within the 10 % band.
-_SEC36_WINDOW_S = 0.1
-#: A true zero crossing of the XBS "coincides" with an estimated one this close [s].
-_SEC36_CROSSING_TOL_S = 0.02
-#: Seed 001 Sec. 3.6: when the ABS takes over on each axle [s].
-_SEC36_ACTIVATION = {"front": 0.75, "rear": 0.50}
 
-
-def sec36_estimators(sc: TwoAxleScenario, spec: EstimatorSpec, *, load_signal: bool = True,
-                     h_max: float | None = None) -> tuple[XbsEstimator, XbsEstimator]:
-    """The adaptive observers of the Sec. 3.6 runs, front and rear: ``spec``'s gains, ``a`` read on line from
-    the loads (3.36) the vehicle feeds (``load_signal``, the seed's) or the static one, optionally sub-stepped
-    to ``|s| dt <= h_max``."""
-    if h_max is None:
-        return tuple(xbs_estimator(spec, sc.vehicle.corner(axle), sc.roads.initial, load_signal=load_signal)
-                     for axle in ("front", "rear"))
-    gamma = DEFAULT_GAMMA if spec.gamma is None else spec.gamma
-    out = []
-    for axle in ("front", "rear"):
-        corner = sc.vehicle.corner(axle)
-        params = {"b": corner.b} if load_signal else {"a": corner.a, "b": corner.b}
-        obs = adaptive_xbs_observer(DEFAULT_BETA["adaptive"] if spec.beta is None else spec.beta, [gamma, gamma],
-                                    params=params, h_max=h_max, max_substeps=_SEC36_MAX_SUBSTEPS,
-                                    load_signal=load_signal)
-        out.append(LoadXbsEstimator(obs, load_n=corner.load_n, load_gain=corner.radius_m ** 2 / corner.inertia_kg_m2,
-                                    initial_state=INITIAL_STATE["adaptive"]) if load_signal else
-                   ObserverXbsEstimator(obs, initial_state=INITIAL_STATE["adaptive"]))
-    return out[0], out[1]
-
-
-class _ParameterRecorder:
-    """An estimator passed through (load included), recording one estimated parameter after every update."""
-
-    def __init__(self, estimator: LoadXbsEstimator, name: str):
-        self.estimator = estimator
-        self.index = estimator.observer.state_names.index(name)
-        self.rows: list[tuple[float, float]] = []
-
-    def set_load(self, fz_n: float) -> None:
-        self.estimator.set_load(fz_n)
-
-    def reset(self, t0: float, y0: float, vx0: float) -> None:
-        self.estimator.reset(t0, y0, vx0)
-
-    def update(self, t: float, y: float, vx: float, u: float, dt: float) -> float:
-        estimate = self.estimator.update(t, y, vx, u, dt)
-        self.rows.append((t, float(self.estimator.state[self.index])))
-        return estimate
-
-
-def sec36_settled(res: TwoAxleResult, k: str, a: float, b: float) -> float | None:
-    """Re-approach as Fig. 3.19 shows it: time after ``a`` when the RMS of the error of wheel ``k`` ("f"/"r")
-    over the trailing :data:`_SEC36_WINDOW_S` first lies within 10 % of the true XBS's range on ``[a, b]``."""
-    r = res.series
-    sel = (r["t"] >= a) & (r["t"] <= b)
-    ts, err = r["t"][sel], r[f"xbs_hat_{k}"][sel] - r[f"xbs_{k}"][sel]
-    band = 0.1 * float(np.ptp(r[f"xbs_{k}"][sel]))
-    # the loop's step shrinks only below the low-speed limit, long after these segments start
-    n = int(round(_SEC36_WINDOW_S / float(np.median(np.diff(ts)))))
-    energy = np.cumsum(np.r_[0.0, err ** 2])
-    rms = np.sqrt((energy[n:] - energy[:-n]) / n)
-    inside = np.flatnonzero(rms <= band)
-    return float(ts[n - 1 + inside[0]] - a) if len(inside) else None
-
-
-def sec36_stays(res: TwoAxleResult, k: str, a: float, b: float) -> float | None:
-    """The strict re-approach: time after ``a`` from which the error stays within that band until ``b``."""
-    r = res.series
-    return _reconvergence(r["t"], r[f"xbs_hat_{k}"] - r[f"xbs_{k}"], r[f"xbs_{k}"], a, b, "").time_s
-
-
-def sec36_late_excursions(res: TwoAxleResult, k: str, a: float, b: float) -> list[tuple[float, float]]:
-    """The stretches ``(start, end)`` [s] where the error of wheel ``k`` is outside the band more than 0.5 s
-    after ``a`` (samples less than 10 ms apart join one stretch)."""
-    r = res.series
-    t = r["t"]
-    sel = (t >= a) & (t <= b)
-    band = 0.1 * float(np.ptp(r[f"xbs_{k}"][sel]))
-    idx = np.flatnonzero(sel & (t > a + 0.5) & (np.abs(r[f"xbs_hat_{k}"] - r[f"xbs_{k}"]) > band))
-    if not len(idx):
-        return []
-    cuts = np.flatnonzero(np.diff(t[idx]) > 0.01) + 1
-    return [(float(t[c[0]]), float(t[c[-1]])) for c in np.split(idx, cuts)]
-
-
-def _bosch_sequence(res: TwoAxleResult, k: str) -> list[int]:
-    """The phases of wheel ``k`` ("f"/"r") in the order visited, as Bosch numbers (from the events: a phase
-    left at the instant it was entered has no sample)."""
-    label = "front" if k == "f" else "rear"
-    seq = [SixPhaseABS.BOSCH[0]]
-    for _, event in res.events:
-        words = event.split()
-        if words[0] == label and words[1] == "phase" and words[2] != words[4]:
-            seq.append(SixPhaseABS.BOSCH[int(words[4])])
-    return seq
-
-
-def _sec36_section(runs: _Runs) -> list[str]:
+def _sec36_section(runs: Runs) -> list[str]:
     est, true = runs.sec36["estimated"], runs.sec36["true"]
     sc = est.scenario
     m = est.metrics
@@ -427,7 +227,7 @@ def _sec36_section(runs: _Runs) -> list[str]:
             return t_on[1:][np.sign(x[1:]) != np.sign(x[:-1])]
         true_c, hat_c = crossings(r[f"xbs_{k}"][on]), crossings(r[f"xbs_hat_{k}"][on])
         dist = np.array([np.min(np.abs(hat_c - c)) for c in true_c])
-        return float(np.mean(dist <= _SEC36_CROSSING_TOL_S)), float(np.median(dist)), len(true_c), len(hat_c)
+        return float(np.mean(dist <= SEC36_CROSSING_TOL_S)), float(np.median(dist)), len(true_c), len(hat_c)
 
     def reapproach(res: TwoAxleResult, k: str, measure: Callable[..., float | None]) -> str:
         return ", ".join(f"{label}: {_fmt_s(measure(res, k, a, b))}" for a, b, label in changes)
@@ -488,7 +288,7 @@ def _sec36_section(runs: _Runs) -> list[str]:
     static = runs.sec36["static-load"]
     veh = sc.vehicle
     load_error = np.abs(veh.static_loads[0] - veh.load_transfer * s["ax_meas"] - s["Fz_f"])
-    seq = _bosch_sequence(est, "f")
+    seq = bosch_sequence(est, "f")
     text = "".join(map(str, seq))
     full = text.count("34567")
     cycles = text.count("3")
@@ -533,7 +333,7 @@ def _sec36_section(runs: _Runs) -> list[str]:
              f"stopping distance {m['stopping_distance_m']:.1f} m.", "",
              _row("item", "seed", "ours", "deviation"), _row(*["---"] * 4),
              _row("ABS takes over, front / rear", "0.75 / 0.50 s", " / ".join(f"{activation(est, k):.3f} s" for k in "fr"),
-                  " / ".join(f"{activation(est, k) - _SEC36_ACTIVATION[a]:+.3f} s"
+                  " / ".join(f"{activation(est, k) - SEC36_ACTIVATION[a]:+.3f} s"
                              for k, a in (("f", "front"), ("r", "rear")))),
              _row("six-phase cycle (front wheel, Bosch numbers)", "1 2 3 4 5 6 7, then 3 4 5 6 7 (Sec. 2.2.3)",
                   " ".join(map(str, seq[:12])) + f" …; {full} of {cycles} releases followed by the full 4 5 6 7",
@@ -551,7 +351,7 @@ def _sec36_section(runs: _Runs) -> list[str]:
                                                               f"$a$ {static.metrics[a]['xbs_rms_error']:.2f})"
                                                               for a in ("front", "rear")), "–"),
              _row("zero crossings of the true XBS met by one of the estimate within "
-                  f"{1e3 * _SEC36_CROSSING_TOL_S:.0f} ms, front / rear", "zero crossings coincide (Fig. 3.18)",
+                  f"{1e3 * SEC36_CROSSING_TOL_S:.0f} ms, front / rear", "zero crossings coincide (Fig. 3.18)",
                   " / ".join(f"{100 * met[k][0]:.0f} % of {met[k][2]} (median {1e3 * met[k][1]:.0f} ms; "
                              f"{met[k][3]} estimated crossings)" for k in "fr")
                   + "; true signals: " + " / ".join(f"{100 * met_true[k][0]:.0f} %" for k in "fr"), "–"),
@@ -561,7 +361,7 @@ def _sec36_section(runs: _Runs) -> list[str]:
                   + " / ".join(f"{100 * sign_agreement(est, k):.0f} %" for k in "fr") + " (true signals: "
                   + " / ".join(f"{100 * sign_agreement(true, k):.0f} %" for k in "fr") + ")", "–"),
              _row("re-approach after the road changes, front: error's "
-                  f"{1e3 * _SEC36_WINDOW_S:.0f} ms RMS back within the band; error stays within it",
+                  f"{1e3 * SEC36_WINDOW_S:.0f} ms RMS back within the band; error stays within it",
                   "within 0.5 s (Fig. 3.19)", f"{reapproach(est, 'f', sec36_settled)}; stays: "
                   f"{reapproach(est, 'f', sec36_stays)}", "–"),
              _row("re-approach after the road changes, rear (same two measures)", "within 0.5 s",
@@ -575,7 +375,7 @@ def _sec36_section(runs: _Runs) -> list[str]:
                   f"{initial_rms(est, 'f'):.2f} / {initial_rms(est, 'r'):.2f} (static-load $a$: "
                   f"{initial_rms(static, 'f'):.2f} / {initial_rms(static, 'r'):.2f})", "–"),
              "", "Re-approach, two readings of the seed's \"re-approach their true values within 0.5 s\": the "
-             f"RMS of the error over the trailing {1e3 * _SEC36_WINDOW_S:.0f} ms is back within 10 % of the true "
+             f"RMS of the error over the trailing {1e3 * SEC36_WINDOW_S:.0f} ms is back within 10 % of the true "
              "XBS's peak-to-peak range on the segment (what Fig. 3.19 shows: the perturbation has died out), and "
              "the stricter measure of Sec. 3.4, the error enters and stays within that band until the next change. "
              f"Reproduced: the six-phase cycle in the Bosch order, the speed underestimated on average "
@@ -661,7 +461,3 @@ def _rms_text(rms: float | None) -> str:
     return f"{rms:.2f}" if rms is not None and rms < 1e3 else "blows up"
 
 
-def _segment_rms(res: BrakingResult, a: float, b: float) -> float:
-    s = res.series
-    keep = (s["t"] >= a) & (s["t"] < b)
-    return float(np.sqrt(np.mean((s["xbs_hat"][keep] - s["xbs"][keep]) ** 2)))

@@ -1,10 +1,7 @@
 """Table cells and phrases shared by the generated reproduction sections: a Markdown table row, a deviation in
-percent, a re-convergence time read from a braking run's metrics."""
+percent, a time in seconds."""
 
 from __future__ import annotations
-
-from ..plants import BrakingResult
-
 
 def _pct(ours: float, seed: float) -> str:
     return f"{100.0 * (ours / seed - 1.0):+.1f} %"
@@ -12,10 +9,6 @@ def _pct(ours: float, seed: float) -> str:
 
 def _row(*cells: object) -> str:
     return "| " + " | ".join(str(c) for c in cells) + " |"
-
-
-def _reconv(res: BrakingResult, label: str) -> float | None:
-    return next(r.time_s for r in res.metrics.reconvergence if r.label == label)
 
 
 def _fmt_s(v: float | None) -> str:

@@ -17,7 +17,7 @@ from ..loop import braking_record, compare_with_reference
 from ._markdown import md_table
 
 if TYPE_CHECKING:
-    from ._repro_runs import _Runs
+    from ..experiments import Runs
 
 __all__ = ["TARGET_SECTIONS"]
 
@@ -28,7 +28,7 @@ ROWS = (("abs-xbs3", "radau3", 100.0, 100.0, "float", "cortex-m4f"),
         ("abs-xbs4", "radau3", 10.0, 20.0, "double", "cortex-m7"))
 
 
-def _on_the_target_section(runs: _Runs) -> list[str]:  # noqa: ARG001 - the runs of the other sections
+def _on_the_target_section(runs: Runs) -> list[str]:  # noqa: ARG001 - the runs of the other sections
     from ..codegen import TARGETS, CObserver, measure_footprint, run_pil   # casadi: not for `reproduce --help`
     from ..observers import xbs3_observer, xbs4_observer
 

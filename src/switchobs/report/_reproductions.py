@@ -11,7 +11,7 @@ This module assembles ``docs/reproductions.md``, splices the generated sections
 into the hand-written pages and writes or checks them; the sections come from
 ``_repro_adaptive`` (seed 001 Secs. 3.4, 3.6), ``_repro_abs`` (scenarios, step
 halving, Table 4.1, Figs. 6.7-6.9), ``_repro_encoders`` (Table 6.1, the
-wheel-encoder page) and ``_measured``, the runs they share from ``_repro_runs``.
+wheel-encoder page) and ``_measured``, the runs they share from :class:`switchobs.experiments.Runs`.
 """
 
 from __future__ import annotations
@@ -30,14 +30,14 @@ from ..exceptions import PrerequisiteError, SimulationError
 from ..loop import EstimatorSpec
 from ..plants import PoincareMap, fit_exponential, road
 from ..sensors import tsa_condition_number
+from ..experiments import Runs, reconverged
 from ._measured import MEASURED_SECTIONS
 from ._repro_abs import _fig67_section, _scenarios_section, _step_halving_section, _table41_section, plot_fig67
 from ._repro_adaptive import SEC34_GAINS, _sec34_section, _sec36_section
-from ._repro_cells import _fmt_s, _pct, _reconv, _row
+from ._repro_cells import _fmt_s, _pct, _row
 from ._repro_encoders import (_chain_abs_section, _chain_braking_section, _encoder_cli_section,
-                              _encoder_example_section, _orders, _super_twisting_section, _table61_section,
+                              _encoder_example_section, tsa_orders, _super_twisting_section, _table61_section,
                               _three_stage_section)
-from ._repro_runs import _Runs
 from ._repro_target import TARGET_SECTIONS
 
 __all__ = ["ReproductionPage", "GENERATED_SECTIONS", "reproduction_pages", "write_reproductions", "stale_pages"]
@@ -71,7 +71,7 @@ class ReproductionPage(JsonRecord, error=SimulationError):
 # ---------------------------------------------------------------- reproductions.md
 
 
-def _seed000(runs: _Runs) -> list[str]:
+def _seed000(runs: Runs) -> list[str]:
     fig3, fig4 = runs.braking("hoang-fig3", "xbs4"), runs.braking("hoang-fig4", "xbs4")
     a3 = fig3.metrics.assumption1
     m4 = fig4.metrics
@@ -105,7 +105,7 @@ def _seed000(runs: _Runs) -> list[str]:
              "*Seed caption:* \"the XBS observer is highly perturbed by the swift road transition but [...] once the "
              "transition is over, it converges again in a fraction of a second towards the appropriate state.\"", "",
              f"*Ours* (`switchobs simulate hoang-fig3`, 4D observer): re-converged within the 10 % band "
-             f"{_fmt_s(_reconv(fig3, '-> hoang-wet'))} after the transition; RMS error {fig3.metrics.xbs_rms_error:.2f} "
+             f"{_fmt_s(reconverged(fig3, '-> hoang-wet'))} after the transition; RMS error {fig3.metrics.xbs_rms_error:.2f} "
              f"over the run, dominated by the transition spikes; Assumption 1 "
              f"{'holds' if a3.holds else 'fails'} ({a3.crossings} zero crossings, dwell {1e3 * a3.dwell_time_s:.0f} ms).",
              "", "*Chosen by us:* the drum speed $25 - 1.96t$ m/s (seed 000 gives none; the deceleration is seed 001 "
@@ -115,8 +115,8 @@ def _seed000(runs: _Runs) -> list[str]:
              "*Seed caption:* \"Wheel acceleration tracking (during phases 1, 3, and 4) is achieved [...]. When the road "
              "conditions change, the brake pressure is reduced and follows the available tyre force potential.\"", "",
              f"*Ours* (`switchobs simulate hoang-fig4`): mean slip {m4.slip_mean:.3f} ± {m4.slip_std:.3f} over the "
-             f"three roads, re-convergence {_fmt_s(_reconv(fig4, '-> hoang-wet'))} (wet) and "
-             f"{_fmt_s(_reconv(fig4, '-> hoang-snow'))} (snow); travelled distance {m4.stopping_distance_m:.2f} m "
+             f"three roads, re-convergence {_fmt_s(reconverged(fig4, '-> hoang-wet'))} (wet) and "
+             f"{_fmt_s(reconverged(fig4, '-> hoang-snow'))} (snow); travelled distance {m4.stopping_distance_m:.2f} m "
              "(the generated C observer gives the same to 1e-12, `tests/test_codegen_simulation.py`).", "",
              "![seed 000 Fig. 4 scenario](abs_hoang_fig4.png)", "",
              "### Table I: exponential approximation (18)", "",
@@ -132,7 +132,7 @@ def _seed000(runs: _Runs) -> list[str]:
     return lines
 
 
-def _seed001(runs: _Runs) -> list[str]:
+def _seed001(runs: Runs) -> list[str]:
     sec34 = runs.braking("aguado-sec34", EstimatorSpec("adaptive", **SEC34_GAINS))
     a1 = sec34.metrics.assumption1
     dry = road("dry-asphalt")
@@ -174,9 +174,9 @@ def _seed001(runs: _Runs) -> list[str]:
     return lines
 
 
-def _seed003(runs: _Runs) -> list[str]:
+def _seed003(runs: Runs) -> list[str]:
     steps, arrivals, _, _ = runs.super_twisting
-    o1, o2 = _orders(runs)
+    o1, o2 = tsa_orders(runs)
     return ["## Seed 003 (M'Sirdi et al. 2008)", "",
             _row("item", "seed", "ours"), _row(*["---"] * 3),
             _row("Theorem 2: $\\lvert\\tilde x_1\\rvert = O(\\delta^2)$, $\\lvert\\tilde x_2\\rvert = O(\\delta)$",
@@ -207,7 +207,7 @@ _SEED004 = ["## Seed 004 (Pasillas-Lépine)", "",
             "Details: [Certification](certify.md), [Design](design.md).", ""]
 
 
-def _reproductions_md(runs: _Runs) -> str:
+def _reproductions_md(runs: Runs) -> str:
     head = ["# Reproduced seed results", "", _NOTE, "",
             "Every equation, figure and table of the seed papers that switchobs reproduces: the seed's statement "
             "or number, ours from a run, the deviation, and what we chose where the seed gives no value. The "
@@ -226,7 +226,7 @@ def _reproductions_md(runs: _Runs) -> str:
 
 
 #: Sections generated inside hand-written pages: name -> (page relative to the repository root, generator).
-_SECTIONS: dict[str, tuple[str, Callable[[_Runs], list[str]]]] = {
+_SECTIONS: dict[str, tuple[str, Callable[[Runs], list[str]]]] = {
     "step_halving": ("docs/abs.md", _step_halving_section), "scenarios": ("docs/abs.md", _scenarios_section),
     "table41": ("docs/abs.md", _table41_section),
     "encoder_example": ("docs/encoders.md", _encoder_example_section),
@@ -248,7 +248,8 @@ def _read_pages(root: Path) -> dict[str, str]:
     for path, name in GENERATED_SECTIONS:
         file = root / path
         if not file.is_file():
-            raise PrerequisiteError(f"{file} does not exist; give the repository root holding docs/ (--root)")
+            raise PrerequisiteError(f"{file} does not exist: reproduce rewrites the pages of a checkout of the "
+                                    "switchobs repository; run it in one, or give its root with --root")
         text = texts.setdefault(path, file.read_text("utf-8"))
         if not 0 <= text.find(_begin(name)) < text.find(_end(name)):
             raise PrerequisiteError(f"{file} has no generated section {name!r}: add the lines "
@@ -270,10 +271,10 @@ def reproduction_pages(root: str | Path = ".") -> tuple[ReproductionPage, ...]:
     PrerequisiteError
         If a page of :data:`GENERATED_SECTIONS` is missing under ``root`` or lacks its markers.
     """
-    return _pages(Path(root), _Runs())
+    return _pages(Path(root), Runs())
 
 
-def _pages(root: Path, runs: _Runs) -> tuple[ReproductionPage, ...]:
+def _pages(root: Path, runs: Runs) -> tuple[ReproductionPage, ...]:
     texts = _read_pages(root)
     for k, (name, (path, section)) in enumerate(_SECTIONS.items(), 1):
         progress(f"reproduce: [{k}/{len(_SECTIONS) + 1}] {name} section of {path}")
@@ -287,7 +288,7 @@ def write_reproductions(root: str | Path = ".") -> tuple[Path, ...]:
     """Write :func:`reproduction_pages` under ``root`` (all together or not at all) and the figure of
     Figs. 6.7-6.9 (``docs/figures/reproduction_fig67.png``, when matplotlib is installed); return the paths
     written."""
-    runs = _Runs()
+    runs = Runs()
     out = write_files(root, {page.path: page.text for page in _pages(Path(root), runs)},
                       what="the reproduction pages under")
     try:

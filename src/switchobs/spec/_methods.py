@@ -25,8 +25,8 @@ from typing import Any
 
 from ..exceptions import ModelError
 
-__all__ = ["StepMethod", "STEP_METHODS", "METHODS", "IMPLICIT_MAX_N", "implicit_increment", "affine_jacobian",
-           "require_explicit"]
+__all__ = ["StepMethod", "STEP_METHODS", "METHODS", "DEFAULT_METHOD", "CERTIFIED_METHODS", "IMPLICIT_MAX_N",
+           "implicit_increment", "affine_jacobian", "require_explicit", "uncertified_note", "default_method"]
 
 #: Largest state dimension of an implicit step: the cofactor solve shares minors over subsets of rows, so its
 #: size grows like 2^n (n = 12: 1.5 s to generate, 0.14 MB of C; n = 16: 21 s, 0.33 MB).
@@ -104,8 +104,54 @@ STEP_METHODS: dict[str, StepMethod] = {
                          "2-stage Radau IIA (L-stable, algebraically stable, order 3)"),
 }
 
-#: Discretisations of one step, the default first: "rk4", "euler" (explicit), "midpoint", "radau3" (implicit).
+#: Discretisations of one step: "rk4", "euler" (explicit), "midpoint", "radau3" (implicit).
 METHODS: tuple[str, ...] = tuple(STEP_METHODS)
+
+#: The methods whose sampled switched observer keeps the design's Lyapunov function non-increasing for every step
+#: length (algebraically stable, ``switchobs certify --discrete``); for rk4 (n >= 3) and euler (n >= 2) no step
+#: bound is a certificate (docs/certify.md, "The sampled observer").
+CERTIFIED_METHODS: tuple[str, ...] = ("midpoint", "radau3")
+
+#: The step method chosen when none is given, wherever the right-hand side is affine in the state (the switched
+#: observer): certified at every step length and of higher order than midpoint.  The adaptive observer, whose
+#: right-hand side is not affine in its state, takes an explicit method (:func:`require_explicit`).
+DEFAULT_METHOD = "radau3"
+
+
+def default_method(n: int, *, affine: bool = True) -> str:
+    """The step method when none is chosen, for an observer of ``n`` states.
+
+    :data:`DEFAULT_METHOD` (radau3) wherever it applies: a right-hand side affine in the state (the switched
+    observer) and ``n <= IMPLICIT_MAX_N`` (the cofactor solve grows like 2^n).  Elsewhere rk4: the adaptive
+    observer (not affine: explicit steps only) and larger switched observers (uncertified: bound the step
+    with ``h_max``).
+
+    Examples
+    --------
+    >>> default_method(3), default_method(3, affine=False), default_method(IMPLICIT_MAX_N + 1)
+    ('radau3', 'rk4', 'rk4')
+    """
+    return DEFAULT_METHOD if affine and n <= IMPLICIT_MAX_N else "rk4"
+
+
+def uncertified_note(method: str) -> str | None:
+    """One line saying that ``method`` is not certified, or None for a certified one.
+
+    The command line prints it on stderr when an uncertified method is chosen (not an error).
+
+    Examples
+    --------
+    >>> uncertified_note("radau3") is None
+    True
+    >>> uncertified_note("rk4")
+    "method 'rk4' is not certified: for n >= 3 states no step bound keeps the sampled error decreasing; radau3 and midpoint are certified for every step"
+    """
+    if method in CERTIFIED_METHODS or method not in STEP_METHODS:
+        return None
+    n_min = 3 if method == "rk4" else 2
+    return (f"method {method!r} is not certified: for n >= {n_min} states no step bound keeps the sampled error "
+            f"decreasing; "
+            f"radau3 and midpoint are certified for every step")
 
 Entry = Any  # a scalar (float, casadi SX) or None for a structural zero
 

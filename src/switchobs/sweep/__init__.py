@@ -18,6 +18,7 @@ SweepSpec, load_sweep_spec                            -- sweep spec files (TOML)
 summary_table, pareto_front, tune_betas, TunedDesign, check_tunable
                                                       -- tables and gain tuning
 plot_heatmap, plot_pareto                             -- figures
+LABELS, label                                         -- human names with units of case fields and metrics
 
 Example::
 
@@ -32,7 +33,7 @@ from ._case import CONTROLLERS, BrakingCase, CertifyCase, case_from_json
 from ._engine import SweepResult, dask_client, read_results, run_sweep
 from ._grid import (Choice, Integers, RoadChanges, Uniform, a_of_load, arange, certify_grid, grid, linspace,
                     monte_carlo, monte_carlo_case)
-from ._plots import plot_heatmap, plot_pareto
+from ._plots import LABELS, label, plot_heatmap, plot_pareto
 from ._run import CaseResult, run_case
 from ._spec import SweepSpec, load_sweep_spec
 
@@ -40,4 +41,4 @@ __all__ = ["BrakingCase", "CertifyCase", "CONTROLLERS", "case_from_json", "run_c
            "grid", "linspace", "arange", "certify_grid", "a_of_load", "monte_carlo", "monte_carlo_case",
            "Uniform", "Choice", "Integers", "RoadChanges", "run_sweep", "SweepResult", "read_results",
            "dask_client", "SweepSpec", "load_sweep_spec", "summary_table", "pareto_front", "tune_betas",
-           "TunedDesign", "check_tunable", "plot_heatmap", "plot_pareto"]
+           "TunedDesign", "check_tunable", "plot_heatmap", "plot_pareto", "LABELS", "label"]

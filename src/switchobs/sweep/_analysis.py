@@ -15,16 +15,16 @@ from __future__ import annotations
 
 import math
 from collections.abc import Callable, Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, fields
 from typing import Any
 
 from .._json import JsonRecord, fields_from_json
 from ..exceptions import SimulationError
 from ._case import BrakingCase
-from ._run import CaseResult
+from ._run import NUMERIC_METRICS, CaseResult
 
 __all__ = ["SummaryTable", "summary_table", "pareto_front", "TunedDesign", "tune_betas", "check_tunable",
-           "design_command"]
+           "design_command", "check_summary"]
 
 
 def _field(result: CaseResult, name: str) -> Any:
@@ -37,6 +37,38 @@ def _field(result: CaseResult, name: str) -> Any:
     if name == "status":
         return result.status
     raise SimulationError(f"{result.case.kind} cases have no field {name!r}")
+
+
+def check_summary(cases: Sequence[Any], *, rows: Sequence[str], column: str, metric: str,
+                  where: str = "a table") -> None:
+    """Refuse, before any case runs, a table or heatmap of ``cases`` that could only print dashes.
+
+    ``rows`` and ``column`` must be case fields (a spectrum name of a certification case such as ``beta1``,
+    or ``status``), and ``metric`` a number of the cases' rows
+    (:data:`switchobs.sweep._run.NUMERIC_METRICS`) that exists for some case.
+
+    Raises
+    ------
+    SimulationError
+        Naming ``where``, the offending name and the names there are.
+    """
+    if not cases:
+        return
+    kinds = sorted({c.kind for c in cases})
+    names = {"status"} | {f.name for c in {type(c): c for c in cases}.values() for f in fields(c)}
+    names |= {k for c in cases for k, _ in getattr(c, "betas", ())}
+    for name in [*rows, column]:
+        if name not in names:
+            raise SimulationError(f"{where}: {'/'.join(kinds)} cases have no field {name!r}; fields: "
+                                  f"{', '.join(sorted(names))}")
+    numbers = {k: v for kind in kinds for k, v in NUMERIC_METRICS[kind].items()}
+    if metric not in numbers:
+        raise SimulationError(f"{where}: {metric!r} is not a number of {'/'.join(kinds)} rows, which a table "
+                              f"averages; choose one of {', '.join(numbers)}")
+    need = numbers[metric]
+    if need is not None and not any(getattr(c, need, None) not in (None, "none", ()) for c in cases):
+        raise SimulationError(f"{where}: metric {metric!r} exists only for cases that set {need}, and every case "
+                              f"has {need} = {getattr(cases[0], need, None)!r}")
 
 
 def _mean(values: Sequence[Any]) -> float | None:
@@ -79,7 +111,13 @@ def summary_table(results: Sequence[CaseResult], *, rows: Sequence[str], column:
     """Pivot ``metric`` by the case fields ``rows`` (one table row per combination) and ``column``.
 
     Cases that failed are left out; keys keep the order they first appear in.
+
+    Raises
+    ------
+    SimulationError
+        A field or metric the cases do not have (:func:`check_summary`).
     """
+    check_summary([r.case for r in results], rows=rows, column=column, metric=metric)
     cells: dict[tuple[Any, ...], dict[Any, list[Any]]] = {}
     columns: dict[Any, None] = {}
     for r in results:

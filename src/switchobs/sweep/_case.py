@@ -14,8 +14,9 @@ import math
 from dataclasses import dataclass, fields
 from typing import Any, ClassVar
 
+from .._limits import MAX_ROAD_CHANGES
 from ..exceptions import SimulationError
-from ..loop import OBSERVER_KINDS
+from ..loop import OBSERVER_KINDS, default_method
 from ..model import builtin_names
 from ..observers import METHODS
 from ..plants import road_names
@@ -44,6 +45,11 @@ def _integer(owner: str, key: str, value: Any, *, minimum: int = 0) -> int:
     if isinstance(value, bool) or not isinstance(value, int) or value < minimum:
         raise SimulationError(f"{owner}: {key} must be an integer >= {minimum}, got {value!r}")
     return value
+
+
+def _short(value: Any) -> str:
+    text = repr(value)
+    return text if len(text) <= 80 else f"{text[:60]}... ({len(value) if hasattr(value, '__len__') else '?'} items)"
 
 
 def _choice(owner: str, key: str, value: Any, choices: tuple[str, ...]) -> str:
@@ -108,9 +114,10 @@ class BrakingCase(_CaseBase):
         Observer rates (``beta2``: xbs3/xbs4 only) and adaptation gain; defaults those of the factory.
     impl : str
         ``python`` (reference observer) or ``c`` (the generated C, compiled once per process through the cache).
-    method : str
+    method : str, optional
         The observer's step method (:data:`switchobs.observers.METHODS`); an encoder feeds it one step per
         measurement, which ``radau3`` and ``midpoint`` take at any length (``switchobs certify --discrete``).
+        Default :func:`switchobs.loop.default_method` of the observer (radau3; rk4 for the adaptive one).
     in_loop : bool
         Controllers that need an XBS read the estimate (otherwise the true XBS; the observer runs beside).
     encoder_ppr : int
@@ -146,7 +153,7 @@ class BrakingCase(_CaseBase):
     beta2: float | None = None
     gamma: float | None = None
     impl: str = "python"
-    method: str = "rk4"
+    method: str | None = None
     in_loop: bool = True
     encoder_ppr: int = 0
     encoder_dnl: float = 0.01
@@ -164,6 +171,9 @@ class BrakingCase(_CaseBase):
         roads = road_names()
         _choice(owner, "road", self.road, roads)
         set_ = object.__setattr__
+        if not isinstance(self.changes, (tuple, list)) or len(self.changes) > MAX_ROAD_CHANGES:
+            raise SimulationError(f"{owner}: changes is a list of at most {MAX_ROAD_CHANGES} (road, time_s) "
+                                  f"pairs (MAX_ROAD_CHANGES), got {_short(self.changes)}")
         changes = []
         for item in self.changes:
             if not (isinstance(item, (tuple, list)) and len(item) == 2):
@@ -177,6 +187,8 @@ class BrakingCase(_CaseBase):
         _choice(owner, "controller", self.controller, CONTROLLERS)
         _choice(owner, "observer", self.observer, OBSERVER_KINDS)
         _choice(owner, "impl", self.impl, _IMPLS)
+        if self.method is None:
+            set_(self, "method", default_method(self.observer))
         _choice(owner, "step method", self.method, tuple(METHODS))
         if not isinstance(self.in_loop, bool):
             raise SimulationError(f"{owner}: in_loop must be true or false, got {self.in_loop!r}")
@@ -200,7 +212,7 @@ class BrakingCase(_CaseBase):
         if self.beta1 is not None:
             obs += f", beta {self.beta1:g}" + ("" if self.beta2 is None else f"/{self.beta2:g}")
         if self.observer != "none":
-            obs += f" ({self.impl}{'' if self.method == 'rk4' else ', ' + self.method})"
+            obs += f" ({self.impl}{'' if self.method == default_method(self.observer) else ', ' + self.method})"
         if self.encoder_ppr:
             obs += f", {self.encoder_ppr}-ppr encoder (seed {self.encoder_seed})"
         return f"braking {roads}, {self.speed_kmh:g} km/h, {self.controller}, {obs}"
@@ -254,6 +266,9 @@ class CertifyCase(_CaseBase):
             raise SimulationError(f"{owner}: spectrum must be a text of comma-separated poles, got "
                                   f"{self.spectrum!r}")
         set_ = object.__setattr__
+        for key in ("betas", "values", "box"):
+            if not isinstance(getattr(self, key), (tuple, list)):
+                raise SimulationError(f"{owner}: {key} must be a list, got {_short(getattr(self, key))}")
         for key in ("betas", "values"):
             pairs = []
             for item in getattr(self, key):

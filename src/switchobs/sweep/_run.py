@@ -18,7 +18,7 @@ from typing import Any
 from ..exceptions import SwitchobsError
 from ._case import BrakingCase, Case, CertifyCase, case_from_json
 
-__all__ = ["CaseResult", "run_case", "STATUS_ERROR", "STATUS_LOST", "SERIES_COLUMNS"]
+__all__ = ["CaseResult", "run_case", "STATUS_ERROR", "STATUS_LOST", "SERIES_COLUMNS", "NUMERIC_METRICS"]
 
 #: Status of a case that raised (its message is in :attr:`CaseResult.error`).
 STATUS_ERROR = "error"
@@ -26,6 +26,18 @@ STATUS_ERROR = "error"
 STATUS_LOST = "lost"
 #: Columns kept by ``run_case(case, series=True)``.
 SERIES_COLUMNS = ("t", "vx", "lambda", "P_b", "xbs", "xbs_hat", "phase")
+#: The metrics of a row that a table or heatmap averages (numbers or true/false; None where a run has none),
+#: by kind of case, each with the case field that must be set for the metric to exist (``observer``: an XBS
+#: observer runs; ``discrete``: a sampled observer is certified; ``box``: a parameter box).  The other metrics
+#: are texts or lists (``verdict``, ``segments``, ``h_max``...): rows hold them, tables cannot average them.
+NUMERIC_METRICS: dict[str, dict[str, str | None]] = {
+    "braking": {"braking_distance_m": None, "stopping_distance_m": None, "stop_time_s": None,
+                "mean_friction": None, "abs_activation_s": None, "abs_cycles": None, "slip_mean": None,
+                "efficiency": None, "steps": None, "simulated_s": None, "xbs_rms": "observer",
+                "xbs_rms_settled": "observer", "reconvergence_max_s": "observer", "recovery_max_s": "observer"},
+    "certify": {"certified": None, "dwell_time_value": None, "discrete_certified": "discrete",
+                "box_certified": "box"},
+}
 
 
 def _clean(value: Any) -> Any:

@@ -6,7 +6,6 @@ names rules, the same safe expression parser and the same exact numbers.
 
 from __future__ import annotations
 
-import tomllib
 from collections.abc import Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -14,9 +13,10 @@ from typing import Any
 
 import sympy as sp
 
+from .._limits import check_dimension
 from ..exceptions import DimensionError, ModelError
 from ..model import make_symbol, parse_expression
-from ..model._model import _names, check_keys, read_values
+from ..model._model import _names, check_keys, read_toml, read_values
 
 __all__ = ["System"]
 
@@ -82,6 +82,7 @@ class System:
         states = _names(data["states"], "states")
         if len(states) < 2:
             raise ModelError(f"{source}: 'states' has {len(states)} name(s); the normal form needs at least 2 states")
+        check_dimension(len(states), what=f"{source}: the system", error=DimensionError)
         output = data.get("output", "y")
         _names([output], "output")
         inputs = _names(data.get("inputs"), "inputs")
@@ -143,15 +144,8 @@ class System:
     @classmethod
     def from_toml(cls, path: str | Path) -> "System":
         """Read a system from a TOML file (keys as in :meth:`from_dict`)."""
-        path = Path(path)
-        try:
-            text = path.read_text(encoding="utf-8")
-        except OSError as exc:
-            raise ModelError(f"cannot read system file {str(path)!r}: {exc.strerror}") from None
-        try:
-            data = tomllib.loads(text, parse_float=str)  # a number written in a file is its decimal value
-        except tomllib.TOMLDecodeError as exc:
-            raise ModelError(f"system file {str(path)!r} is not valid TOML: {exc}") from None
+        # the one bounded reader of model files: size, FIFOs, UTF-8; a number written in a file is its decimal value
+        data = read_toml(path, what="system file", parse_float=str)
         return cls.from_dict(data, source=str(path))
 
     @property

@@ -1,4 +1,4 @@
-"""Exact rational linear algebra for certificates (standard library only).
+"""Exact rational linear algebra (standard library rationals, python-flint integers and balls).
 
 Everything here works on matrices stored as lists of rows of
 :class:`fractions.Fraction` (or of Python ``int`` for the integer kernels).
@@ -35,7 +35,7 @@ __all__ = [
     "Matrix", "to_fraction", "fraction_matrix", "matrix_strings", "identity", "zeros", "transpose",
     "matmul", "add", "sub", "scale", "lyapunov_form", "integer_form", "Definiteness", "definiteness",
     "rank", "nullspace", "solve", "observable", "expm_enclosure", "inf_norm", "sqrt_lower", "sqrt_upper",
-    "is_zero", "ARITHMETICS", "arithmetic",
+    "is_zero", "ARITHMETICS", "arithmetic", "float_matrix",
 ]
 
 Matrix = list[list[Fraction]]
@@ -183,6 +183,13 @@ def integer_form(M: Sequence[Sequence[Fraction]]) -> tuple[list[list[int]], int]
         for x in row:
             d = d * x.denominator // math.gcd(d, x.denominator)
     return [[int(x * d) for x in row] for row in M], d
+
+
+def float_matrix(M: Sequence[Sequence[Any]]) -> Any:
+    """The exact matrix ``M`` as a NumPy float array (each entry rounded to nearest)."""
+    import numpy as np
+
+    return np.array([[float(x) for x in row] for row in M])
 
 
 def inf_norm(M: Sequence[Sequence[Any]]) -> Any:

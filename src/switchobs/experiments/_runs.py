@@ -1,6 +1,6 @@
 """The runs behind the reproduction pages (``switchobs reproduce``), each made once, on first use, and shared by
 the sections that quote them (``_repro_adaptive``, ``_repro_abs``, ``_repro_encoders``, ``_measured``,
-``_reproductions``)."""
+``_reproductions`` of :mod:`switchobs.report`)."""
 
 from __future__ import annotations
 
@@ -15,13 +15,15 @@ from ..plants import (Accelerometer, BrakingResult, Table41Result, TwoAxleResult
                       scenario, scenario_observer, scenario_observer_gains, simulate, simulate_two_axle, table41)
 from ..sensors import (TABLE61_ENCODER, TABLE61_PROFILES, ChainSettings, Encoder, EstimatorComparison,
                        compare_estimators, super_twisting, super_twisting_gains, varying_speed)
-from ._repro_abs import (FIG67_ENCODER, FIG67_PHASES, FIG67_SMALL_ECCENTRICITY, FIG67_SPEEDS_KMH, HalfWindowLate,
+from ._fig67 import (FIG67_ENCODER, FIG67_PHASES, FIG67_SMALL_ECCENTRICITY, FIG67_SPEEDS_KMH, HalfWindowLate,
                          fig67_scenario)
-from ._repro_adaptive import (_SEC34_MAX_SUBSTEPS, SEC34_H_MAX, SEC36_FINE_STEP_S, SEC36_H_MAX, SEC36_OBSERVER,
-                              _ParameterRecorder, _StateRecorder, _Traced, sec36_estimators)
+from ._adaptive import (SEC34_MAX_SUBSTEPS, SEC34_H_MAX, SEC36_FINE_STEP_S, SEC36_H_MAX, SEC36_OBSERVER,
+                              ParameterRecorder, StateRecorder, Traced, sec36_estimators)
+
+__all__ = ["Runs"]
 
 
-class _Runs:
+class Runs:
     """The runs behind the pages, each made once on first use."""
 
     @cached_property
@@ -35,7 +37,7 @@ class _Runs:
 
     def __init__(self) -> None:
         self._brakings: dict[tuple[str, EstimatorSpec], BrakingResult] = {}
-        self._sec34: dict[tuple[float, float, float], _Traced] = {}
+        self._sec34: dict[tuple[float, float, float], Traced] = {}
 
     def braking(self, name: str, kind: str | EstimatorSpec) -> BrakingResult:
         """The built-in scenario ``name`` with the observer ``kind`` in the loop."""
@@ -50,7 +52,7 @@ class _Runs:
         scenario chose for it."""
         return self.braking(name, EstimatorSpec(scenario_observer(name), **scenario_observer_gains(name)))
 
-    def sec34(self, beta: float, gamma: float, h_max: float | None = None) -> _Traced:
+    def sec34(self, beta: float, gamma: float, h_max: float | None = None) -> Traced:
         """Seed 001 Sec. 3.4 with the adaptive observer ``(beta, Gamma = gamma I)`` sub-stepped to ``|s| dt <=
         h_max`` (default :data:`SEC34_H_MAX`), and its states after every sample."""
         h_max = SEC34_H_MAX if h_max is None else h_max
@@ -58,11 +60,11 @@ class _Runs:
         if key not in self._sec34:
             sc = scenario("aguado-sec34")
             obs = adaptive_xbs_observer(beta, [gamma, gamma], params={"a": sc.vehicle.a, "b": sc.vehicle.b},
-                                        h_max=h_max, max_substeps=_SEC34_MAX_SUBSTEPS)
-            est = _StateRecorder(obs, initial_state=INITIAL_STATE["adaptive"])
+                                        h_max=h_max, max_substeps=SEC34_MAX_SUBSTEPS)
+            est = StateRecorder(obs, initial_state=INITIAL_STATE["adaptive"])
             with np.errstate(over="ignore", invalid="ignore"):
                 res = simulate(sc, estimator=est)
-            self._sec34[key] = _Traced(res, tuple(obs.state_names), np.array(est.states))
+            self._sec34[key] = Traced(res, tuple(obs.state_names), np.array(est.states))
         return self._sec34[key]
 
     @cached_property
@@ -80,7 +82,7 @@ class _Runs:
         """The ``estimated`` run of :attr:`sec36`, and each wheel's estimate ``c_hat`` after every update (rows
         ``t``, ``c_hat``) recorded along it."""
         sc = aguado_sec36()
-        recorders = tuple(_ParameterRecorder(e, "c") for e in sec36_estimators(sc, SEC36_OBSERVER))
+        recorders = tuple(ParameterRecorder(e, "c") for e in sec36_estimators(sc, SEC36_OBSERVER))
         result = simulate_two_axle(sc, estimators=recorders)
         return result, {k: np.array(r.rows) for k, r in zip("fr", recorders)}
 

@@ -4,7 +4,7 @@ The uncertain parameters ``theta`` enter ``A`` polynomially (:func:`model_terms`
 ``{A(theta)}`` lies in the convex hull of the vertex matrices ``A_v`` (the box's
 vertices when ``A`` is affine, monomial lifting otherwise,
 :mod:`switchobs.certify._box_check`).  With ``Y_p = X_p K_p`` the conditions
-(in the rescaled time, see :mod:`switchobs.certify._synthesis`)
+(in the rescaled time, see :mod:`switchobs.synthesis._synthesis`)
 
     He(X_p A_p(v)) + 2 rate X_p <= 0,     He(X_p A_p(v)) + E'E <= 0,
     [[Z_p, Y_p'], [Y_p, X_p]] >= 0,       A_plus(v) = A_v - K_plus C,  A_minus(v) = -A_v + K_minus C,
@@ -33,12 +33,10 @@ from typing import Any
 import numpy as np
 
 from ..exceptions import ModelError
-from ..model import Model
-from ._box import ParameterBox, model_terms, parse_box
-from ._box_check import evaluate_terms, vertex_matrices, vertex_values
-from ._exact import fraction_matrix, rank
-from ._lmi import DEFAULT_SOLVERS
-from ._synthesis import (STRICT_IMPOSSIBLE, GainSynthesis, _floats, _lmi, check_synthesis_inputs, decay_certificate,
+from ..model import Model, ParameterBox, model_terms, parse_box
+from ..exact import evaluate_terms, float_matrix, fraction_matrix, rank, vertex_matrices, vertex_values
+from ..lmi import DEFAULT_SOLVERS
+from ._synthesis import (STRICT_IMPOSSIBLE, GainSynthesis, _lmi, check_synthesis_inputs, decay_certificate,
                          noise_gain, state_rows)
 
 __all__ = ["synthesize_box"]
@@ -58,7 +56,7 @@ def synthesize_box(model: Model, box: ParameterBox | Sequence[str] | Mapping[str
     decay_rate : number
         Decay rate in the rescaled time, imposed on each mode at every parameter value of the box.
     noise_weight, estimate
-        As in :func:`switchobs.certify.synthesize`; the H2 bound holds at every vertex, the reported
+        As in :func:`switchobs.synthesis.synthesize`; the H2 bound holds at every vertex, the reported
         ``noise_gain`` is the nominal point's.
     values : mapping, optional
         Nominal values overriding the model's.
@@ -108,8 +106,9 @@ def synthesize_box(model: Model, box: ParameterBox | Sequence[str] | Mapping[str
     t0 = time.perf_counter()
     # solved in the coordinates of the modes' Kalman filters at the nominal point (riccati_scaling): the
     # states' scales differ by orders of magnitude (abs-xbs3: X spans 1e-4..1e2)
-    point, info = _lmi([_floats(A) / sigma for A in vertex_A], _floats(C), E, float(noise_weight) * sigma, (1, -1),
-                       use_strict, solvers, nominal=_floats(nominal_A) / sigma)
+    point, info = _lmi([float_matrix(A) / sigma for A in vertex_A], float_matrix(C), E, float(noise_weight) * sigma,
+                       (1, -1),
+                       use_strict, solvers, nominal=float_matrix(nominal_A) / sigma)
     solve_s = time.perf_counter() - t0
     if point is None:
         return fail(f"the polytopic LMIs are infeasible ({'; '.join(info.attempts)})", info, solve_s)
@@ -126,8 +125,8 @@ def synthesize_box(model: Model, box: ParameterBox | Sequence[str] | Mapping[str
     exact_s = time.perf_counter() - t0
     if reason:
         return fail(f"the rounded gains fail the exact vertex check: {reason}", info, solve_s)
-    Af, Cf = _floats(nominal_A), _floats(C)
-    Kp, Km = _floats(K_plus), _floats(K_minus)
+    Af, Cf = float_matrix(nominal_A), float_matrix(C)
+    Kp, Km = float_matrix(K_plus), float_matrix(K_minus)
     gains = {"A_plus": noise_gain(Af - Kp @ Cf, Kp, E), "A_minus": noise_gain(-Af + Km @ Cf, Km, E)}
     scaled = max(tr_X + (noise_weight * sigma) ** 2 * tr_Z for tr_X, tr_Z in zip(point.trace_X, point.trace_Z))
     return GainSynthesis(formulation, rate, noise_weight, rows, True, K_plus, K_minus,

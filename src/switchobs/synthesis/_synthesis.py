@@ -64,16 +64,12 @@ if TYPE_CHECKING:  # imported where an LMI is built (see _lmi)
 
 from .._json import JsonRecord, fields_from_json
 from .._limits import check_double
-from ..exceptions import CertificateError, DimensionError, ModelError, SolverFailure
-from ..model import Model
-from ._family import user_matrix
-from ._exact import (Matrix, add, definiteness, fraction_matrix, identity, lyapunov_form, matmul, matrix_strings,
-                     rank, scale, sub, to_fraction, transpose)
-from ._lmi import DEFAULT_SOLVERS, SolveInfo, primal_margin, solve
-from ._rounding import dyadic
+from ..exact import (Matrix, add, definiteness, dyadic, float_matrix, fraction_matrix, identity, lyapunov_form, matmul,
+                     matrix_strings, observable, rank, scale, sub, to_fraction, transpose)
+from ..exceptions import CertificateError, DimensionError, ModelError, NotObservableError, SolverFailure
+from ..lmi import DEFAULT_SOLVERS, SolveInfo, primal_margin, solve
+from ..model import Model, ParameterBox, user_matrix
 
-if TYPE_CHECKING:   # _box imports this module
-    from ._box import ParameterBox
 
 __all__ = ["GainSynthesis", "synthesize_gains", "synthesize", "noise_gain", "decay_holds", "decay_certificate",
            "riccati_scaling", "STRICT_IMPOSSIBLE", "RATE_MARGIN", "GAIN_BITS", "FrontPoint", "noise_decay_front"]
@@ -96,7 +92,7 @@ class GainSynthesis:
     formulation : str
         ``"strict"`` (common P with decay; needs ``C`` of rank n), ``"hespanha"``
         (non-strict common P and per-mode decay certificates), or over a parameter box
-        (:func:`switchobs.certify.synthesize_box`) ``"polytopic-strict"`` (one P for both modes and every
+        (:func:`switchobs.synthesis.synthesize_box`) ``"polytopic-strict"`` (one P for both modes and every
         vertex) and ``"polytopic"`` (one decay certificate per mode, common to every vertex).
     decay_rate : Fraction
         Requested decay rate in the rescaled time (``He(X A_p) + 2 rate X < 0`` exactly).
@@ -318,7 +314,7 @@ def decay_certificate(mats: Sequence[Matrix], rate: Fraction, S: np.ndarray, sta
 
     1. ``start``, the LMI's point ``X~``;
     2. re-solved for the rounded gains: the Lyapunov equation ``He(X~ (A~ + rate I)) = -I`` (one matrix),
-       else the margin LMI of :func:`switchobs.certify._lmi.primal_margin` on the shifted matrices;
+       else the margin LMI of :func:`switchobs.lmi.primal_margin` on the shifted matrices;
     3. one matrix: the exact solution of ``He(X (A + rate I)) = -S' S``, which holds whenever
        ``A + rate I`` is Hurwitz.
 
@@ -331,7 +327,7 @@ def decay_certificate(mats: Sequence[Matrix], rate: Fraction, S: np.ndarray, sta
     import scipy.linalg
 
     n = len(mats[0])
-    scaled = [S @ np.linalg.solve(S.T, (_floats(A) + float(rate) * np.eye(n)).T).T for A in mats]
+    scaled = [S @ np.linalg.solve(S.T, (float_matrix(A) + float(rate) * np.eye(n)).T).T for A in mats]
     reason = "no candidate"
 
     def check(X: Matrix) -> bool:
@@ -556,6 +552,11 @@ def synthesize_gains(A: Any, C: Any, *, decay_rate: Any, noise_weight: float = 0
         raise DimensionError(f"A must be square, got {n}x{len(A_ex[0])}")
     C_ex = user_matrix(C, what="C", part="C", cols=n)
     rate, rows = check_synthesis_inputs(decay_rate, noise_weight, estimate, n)
+    # no gain makes an unobservable mode decay: bad input, as design and certify say, not an infeasible LMI
+    obs, dim = observable(A_ex, C_ex)
+    if not obs:
+        raise NotObservableError(f"the pair (A, C) is not observable: the observable subspace has dimension {dim} "
+                                 f"< {n}; change C or A so that every state shows up in the output")
     full_rank = rank(C_ex) == n
     use_strict = full_rank if strict is None else strict
     formulation = "strict" if use_strict else "hespanha"
@@ -566,7 +567,7 @@ def synthesize_gains(A: Any, C: Any, *, decay_rate: Any, noise_weight: float = 0
 
     if use_strict and not full_rank:
         return fail(STRICT_IMPOSSIBLE)
-    Af, Cf = _floats(A_ex), _floats(C_ex)
+    Af, Cf = float_matrix(A_ex), float_matrix(C_ex)
     E = np.eye(n)[list(rows)]
     sigma = float(rate)
     t0 = time.perf_counter()
@@ -599,7 +600,7 @@ def synthesize_gains(A: Any, C: Any, *, decay_rate: Any, noise_weight: float = 0
     exact_s = time.perf_counter() - t0
     if reason:
         return fail(f"the rounded gains fail the exact check: {reason}", info, solve_s)
-    fl = [_floats(M) for M in (A_plus, A_minus, K_plus, K_minus)]
+    fl = [float_matrix(M) for M in (A_plus, A_minus, K_plus, K_minus)]
     gains = {"A_plus": noise_gain(fl[0], fl[2], E), "A_minus": noise_gain(fl[1], fl[3], E)}
     # H2^2 in the scaled time is sigma times H2^2 in tau
     scaled = point.trace_X[0] + (noise_weight * sigma) ** 2 * max(point.trace_Z)
@@ -706,10 +707,6 @@ def noise_decay_front(model: Model, rates: Sequence[Any], *, noise_weights: Sequ
         for W in noise_weights:
             res = synthesize(model, decay_rate=r, noise_weight=W, estimate=estimate, values=values, solvers=solvers)
             if res.feasible:
-                point(f"lmi W={W:g}", _floats(res.K_plus), _floats(res.K_minus),
+                point(f"lmi W={W:g}", float_matrix(res.K_plus), float_matrix(res.K_minus),
                       tuple(tuple(",".join(str(x) for x in row) for row in M) for M in (res.K_plus, res.K_minus)))
     return tuple(points)
-
-
-def _floats(M: Matrix) -> np.ndarray:
-    return np.array([[float(x) for x in row] for row in M])
