@@ -14,7 +14,8 @@ paths.  After every call the harness checks, and aborts on a violation:
 * status OK means a finite state (and one within its declared ranges);
 * ``_run`` and ``_run_dt`` equal a loop of ``_step`` on the same rows: the same status, the same first
   failing row, the same state bit for bit, the trajectory rows of the successful steps and no other row
-  written;
+  written; with no row the zero-step contract (``_run``: ``BAD_DT`` for a bad ``dt``, then both
+  ``NONFINITE_STATE`` for a non-finite ``xhat``, else OK), ``xhat`` unchanged;
 * ``_status_message`` returns a non-NULL text for every code, the documented one for each status.
 
 Compiled with ``clang -fsanitize=fuzzer,address,undefined`` every memory error
@@ -185,6 +186,14 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
             if (n < 0) {{
                 if (st != {int(StepStatus.BAD_ARGUMENT)}) fail("run with n_steps < 0 is not BAD_ARGUMENT");
                 if (memcmp(x, y, sizeof x) != 0) fail("run with n_steps < 0 changed xhat");
+                break;
+            }}
+            if (n == 0) {{ /* no row: _run checks dt (BAD_DT), then both check xhat (NONFINITE_STATE) */
+                int32_t want = 0;
+                if (!per_row && !(dt > ({real})0 && isfinite(dt))) want = {int(StepStatus.BAD_DT)};
+                else for (i = 0; i < {P}_NX; ++i) if (!isfinite(y[i])) want = {int(StepStatus.NONFINITE_STATE)};
+                if (st != want) fail("run with n_steps = 0 does not keep the zero-step contract");
+                if (memcmp(x, y, sizeof x) != 0) fail("run with n_steps = 0 changed xhat");
                 break;
             }}
             for (k = 0; k < n; ++k) {{
