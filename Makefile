@@ -45,11 +45,13 @@ test: $(STAMP) cc-tools
 	$(PY) -m pytest -n 2 -q
 
 # The fuzzing suites with many more examples than `make test` runs (random, not derandomised): model files,
-# certificates and sweep spec files (tests/test_fuzz_inputs.py, test_errors.py) and CLI option values of encoder,
-# simulate and sweep (tests/test_fuzz_options.py).
+# certificates and sweep spec files (tests/test_fuzz_inputs.py, test_errors.py), CLI option values of encoder,
+# simulate and sweep (tests/test_fuzz_options.py), and libFuzzer on the generated C API for FUZZ_C_SECONDS per
+# observer (tests/test_codegen_fuzz.py; 10 s in make test).
 FUZZ_EXAMPLES ?= 300
-fuzz: $(STAMP)
-	SWITCHOBS_FUZZ_EXAMPLES=$(FUZZ_EXAMPLES) $(PY) -m pytest -q -p no:cacheprovider tests/test_fuzz_inputs.py tests/test_errors.py tests/test_fuzz_options.py
+FUZZ_C_SECONDS ?= 300
+fuzz: $(STAMP) cc-tools
+	SWITCHOBS_FUZZ_EXAMPLES=$(FUZZ_EXAMPLES) SWITCHOBS_FUZZ_C_SECONDS=$(FUZZ_C_SECONDS) $(PY) -m pytest -q -p no:cacheprovider tests/test_fuzz_inputs.py tests/test_errors.py tests/test_fuzz_options.py tests/test_codegen_fuzz.py
 
 # Every benchmark script (benchmarks/_*.py are helpers), then their result tables into the docs pages.
 # BENCH_QUICK=1: every script with --quick (smaller sizes, fewer runs), printed only: nothing is published.

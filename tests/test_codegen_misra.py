@@ -194,6 +194,20 @@ def test_record_and_readme_name_the_deviations_and_a_long_prefix_breaks_rule_5_1
     assert not identifier_clashes(ok.prefix, ok.header, ok.source)
 
 
+@pytest.mark.parametrize("real, method, h_max", [("double", "radau3", None), ("float", "radau3", None),
+                                                ("double", "rk4", "1/100")])
+def test_ranged_build_has_no_required_finding_and_its_advisory_ones_are_recorded(tmp_path, real, method, h_max):
+    """The proved build (declared ranges of every input: range checks, the det floor before the one division,
+    the sub-step's state checks, next initialised) is MISRA-checked like the unranged one."""
+    from test_codegen_proof import xbs3
+
+    gen = xbs3(method, real, **({} if h_max is None else {"h_max": h_max}))
+    assert f"{gen.prefix}_proof.c" in gen.files
+    assert (f"{gen.prefix.upper()}_DET_FLOOR" in gen.header) == (method == "radau3")
+    rules = check(gen, findings(cppcheck(tmp_path), gen, tmp_path))
+    assert set(rules) <= {"2.5", "8.7", "15.5"}
+
+
 # ----------------------------------------------------------------------------- the rest of the matrix
 def _matrix() -> list[tuple[str, str, str, str | None]]:
     cases = [(name, real, method, h_max) for name in ("abs-xbs4", "abs-adaptive2", "user")

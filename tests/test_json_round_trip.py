@@ -305,6 +305,9 @@ def _samples() -> dict[str, Callable[[], tuple[Any, dict[str, Any]]]]:
         "AdaptiveSwitchedObserver": lambda: plain(adaptive()),
         "GeneratedObserver": lambda: (_c_observer().generated, {"sources": True}),
         "CObserver": lambda: (_c_observer(), {"sources": True}),
+        "ProofResult": lambda: plain(__import__("switchobs.codegen", fromlist=["ProofResult"]).ProofResult(
+            "switchobs_abs_xbs3", "frama-c -eva a.c a_proof.c", "25.0 (Manganese)", 1, 5, 9.7,
+            ("a.c:12: non-finite double value. assert \\is_finite(x);",))),
         "Transformation": lambda: plain(_transformations()[0]),
         # the target runs need the cross compiler and qemu (tests/test_codegen_target.py): their shapes
         "FunctionStack": lambda: plain(_footprint().stack[0]),

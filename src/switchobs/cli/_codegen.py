@@ -77,6 +77,15 @@ def register(sub: argparse._SubParsersAction) -> None:
                         "(default: no sub-stepping)")
     p.add_argument("--max-substeps", type=int, metavar="N",
                    help="most sub-steps per step with --h-max, 1..16777216 (default 64); beyond: status SUBSTEP_LIMIT")
+    p.add_argument("--range", action="append", default=[], metavar="NAME=LO:HI", dest="ranges",
+                   help="declared range of a state, signal, parameter or dt (repeatable, or comma-separated; on "
+                        "top of the model file's [ranges]), e.g. --range vx=1:70,dt=1e-4:1e-2: the step refuses a "
+                        "value outside (STATE_RANGE, also for a new state, SIGNAL_RANGE, BAD_PARAM, BAD_DT); with a "
+                        "range for every one of them the files "
+                        "include the Frama-C EVA proof driver <prefix>_proof.c")
+    p.add_argument("--prove", action="store_true",
+                   help="run the proof of no run-time errors (frama-c -eva, needs --range for every input) and "
+                        "write its command and result to <prefix>_proof.md; exit 1 if EVA reports an alarm")
     p.add_argument("--prefix", help="C prefix (default switchobs_<model>, non-identifier characters as _)")
     p.add_argument("--out", required=True, metavar="DIR", type=output_directory,
                    help="directory for <prefix>.c, <prefix>.h, README.md and <prefix>_misra.md (the MISRA C:2012 "
@@ -103,10 +112,26 @@ def _command(args: argparse.Namespace) -> str:
         words.append(f"--h-max={args.h_max}")
     if args.max_substeps is not None:
         words.append(f"--max-substeps={args.max_substeps}")
+    words += [f"--range={item}" for item in args.ranges]
     if args.prefix is not None:
         words.append(f"--prefix={args.prefix}")
     words.append("--out=DIR")
     return shlex.join(words)
+
+
+def _ranges(items: list[str]) -> dict[str, tuple[float, float]]:
+    """``--range NAME=LO:HI`` options as a mapping (the generator checks the names and the bounds)."""
+    out: dict[str, tuple[float, float]] = {}
+    for item in (part for text in items for part in text.split(",") if part.strip()):
+        name, eq, span = item.partition("=")
+        lo, colon, hi = span.partition(":")
+        try:
+            if not (eq and colon and name.strip()):
+                raise ValueError
+            out[name.strip()] = (float(lo), float(hi))
+        except ValueError:
+            raise CodegenError(f"--range expects NAME=LO:HI with two numbers, e.g. vx=1:70, got {item!r}") from None
+    return out
 
 
 def _gamma(text: str) -> list[list[float]] | list[float]:
@@ -201,20 +226,27 @@ def run(args: argparse.Namespace) -> int:
         gen = generate_observer(model, gains, values=values, real=args.real, method=method,
                                 prefix=args.prefix, unknown=unknown,
                                 Gamma=_gamma(args.gamma) if args.gamma else None, h_max=h_max,
-                                max_substeps=args.max_substeps, certificate=certificate, command=command)
+                                max_substeps=args.max_substeps, certificate=certificate, command=command,
+                                ranges=_ranges(args.ranges))
     from ..codegen import target_build
 
     record = _record(args, gen, model, tuple(unknown)) if args.pil else None
     build = None if not args.target else target_build(
         gen, args.target, record=None if record is None else (record.rows, record.dt, record.x0),
         record_description=None if record is None else record.description)
+    proof = None
+    if args.prove:
+        from ..codegen import proof_record, prove
+
+        proof = prove(gen)
     comparison = None
     if record is not None and build is not None and build.pil is not None and model is not None:
         from ..loop import compare_with_reference, reference_observer
 
         comparison = compare_with_reference(build.pil, reference_observer(model, gen, unknown=tuple(unknown)),
                                             record.rows, record.dt, record.x0)
-    files = {**(build or gen).files, **integration_files(gen, args)}
+    files = {**(build or gen).files, **integration_files(gen, args),
+             **({} if proof is None else {f"{gen.prefix}_proof.md": proof_record(gen, proof)})}
     # The files and the report on standard output succeed together: a report that cannot be written (a full
     # disk, /dev/full) removes the files and any directory made for them (the one cleanup of staged_directory).
     with staged_directory(args.out, what="the generated C into") as work:
@@ -237,11 +269,15 @@ def run(args: argparse.Namespace) -> int:
                 print(f"  {build.pil}")
                 print(f"  record: {record}")
                 print(f"  {comparison}" if comparison is not None else "  (no Python reference for this observer)")
+        if proof is not None:
+            print(proof, file=sys.stderr if args.json else sys.stdout)
         flush_stdout()
+    passed = True
     if build is not None and build.pil is not None and record is not None:
         passed = comparison.passed if comparison is not None else build.pil.bit_identical
-        return 0 if passed else 1
-    return 0
+    if proof is not None:
+        passed = passed and proof.ok
+    return 0 if passed else 1
 
 
 def _record(args: argparse.Namespace, gen: Any, model: Model | None, unknown: tuple[str, ...]) -> Any:

@@ -23,6 +23,9 @@ generate_fmu        -- the observer as an FMI 3.0 / 2.0 co-simulation FMU (Gener
 generate_a2l        -- ASAP2 1.71 description of the calibration object of ``calibration_files``
 calibration_files   -- ``<prefix>_calibration.c/.h``: the named parameter array a calibration tool writes
 elf_symbols         -- symbol addresses of a linked program (``nm``), for ``generate_a2l(addresses=...)``
+prove, ProofResult  -- Frama-C EVA proof that the step has no run-time errors over its declared ranges
+proof_driver, proof_record -- the EVA driver ``<prefix>_proof.c`` and the record ``<prefix>_proof.md``
+fuzz_harness        -- a libFuzzer harness of the C API with the API contract as its oracle
 """
 
 from ..spec import METHODS, STATUS_TEXT, Guard, StepStatus, domain_guards
@@ -30,6 +33,8 @@ from ._a2l import a2l_symbols, calibration_files, elf_symbols, generate_a2l
 from ._build import CObserver, cache_directory, compile_observer, compile_sources, find_compiler, load_library
 from ._fmu import FMI_VERSIONS, GeneratedFMU, generate_fmu
 from ._generate import REALS, GeneratedObserver, default_prefix, generate_observer, generate_super_twisting
+from ._fuzz import fuzz_harness
+from ._proof import ProofResult, proof_driver, proof_record, prove
 from ._target import (TARGETS, FunctionStack, PilResult, Target, TargetBuild, TargetFootprint, measure_footprint,
                       run_pil, target_build, target_real)
 
@@ -37,4 +42,5 @@ __all__ = ["CObserver", "FMI_VERSIONS", "GeneratedFMU", "GeneratedObserver", "a2
            "elf_symbols", "generate_a2l", "generate_fmu", "Guard", "METHODS", "REALS", "STATUS_TEXT", "StepStatus",
            "cache_directory", "compile_observer", "compile_sources", "find_compiler", "default_prefix", "domain_guards",
            "generate_observer", "generate_super_twisting", "load_library", "TARGETS", "Target", "target_real",
-           "target_build", "TargetBuild", "measure_footprint", "TargetFootprint", "FunctionStack", "run_pil", "PilResult"]
+           "target_build", "TargetBuild", "measure_footprint", "TargetFootprint", "FunctionStack", "run_pil",
+           "PilResult", "ProofResult", "fuzz_harness", "proof_driver", "proof_record", "prove"]

@@ -447,6 +447,8 @@ class CObserver:
         status = StepStatus(code)
         where = f"row {row}: " if row is not None else ""
         named = lambda names, vals: ", ".join(f"{n} = {v!r}" for n, v in zip(names, vals.tolist()))  # noqa: E731
+        ranged = lambda names: ", ".join(f"{n} in [{self.generated.ranges[n][0]!r}, "  # noqa: E731
+                                         f"{self.generated.ranges[n][1]!r}]" for n in names if n in self.generated.ranges)
         detail = {
             StepStatus.BAD_DT: f"dt = {dt!r} must be finite and > 0 (seconds)",
             StepStatus.NONFINITE_STATE: f"state {named(self.state_names, x)}; reset the observer",
@@ -455,6 +457,8 @@ class CObserver:
             StepStatus.NONFINITE_RESULT: f"signals {named(self.signal_names, sig)}; reduce dt or check the signals",
             StepStatus.BAD_PARAM: f"params {named(self.generated.param_names, self.params)}",
             StepStatus.BAD_ARGUMENT: "a NULL pointer or negative count reached the C code",
+            StepStatus.STATE_RANGE: f"state {named(self.state_names, x)}; ranges {ranged(self.state_names)}",
+            StepStatus.SIGNAL_RANGE: f"signals {named(self.signal_names, sig)}; ranges {ranged(self.signal_names)}",
             StepStatus.SUBSTEP_LIMIT: f"signals {named(self.signal_names, sig)}, dt = {dt!r}: |s|*dt needs more "
                                       f"than MAX_SUBSTEPS = {self.generated.max_substeps} sub-steps of H_MAX = "
                                       f"{self.generated.h_max_c!r}; reduce dt or regenerate with a larger "

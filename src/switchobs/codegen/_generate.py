@@ -18,8 +18,10 @@ The implicit midpoint rule and 2-stage Radau IIA (switched observer only, whose
 held-signal right-hand side ``f = J x + c``, ``J = s A - g C``, is affine) step
 ``x+ = x + dt D(Z)^-1 F(Z) f(x)``, ``Z = dt J`` (``switchobs.spec.implicit_increment``
 on casadi SX: cofactors, one division by ``det D(Z)`` made safe); the kernel
-returns ``det D(Z)`` after the new state and a zero or non-finite determinant is
-``NONFINITE_RESULT``.  They keep the design's Lyapunov function decreasing at
+returns ``det D(Z)`` after the new state and the step refuses ``|det D(Z)| <
+DET_FLOOR`` or a non-finite one (``NONFINITE_RESULT``).  With declared ranges the
+kernel returns ``det D(Z)`` and the undivided solve, and the step divides after
+that check (the proved build, :mod:`switchobs.codegen._proof`).  They keep the design's Lyapunov function decreasing at
 every step length, so they need no step bound.
 
 With a certified step bound ``h_max`` (in the rescaled time ``tau = ∫|s| dt``,
@@ -160,6 +162,14 @@ class GeneratedObserver:
     original_names : tuple of str
         The original coordinates ``x = phi^{-1}(xhat)`` that ``<prefix>_original`` returns (the model's
         ``[original]`` table, written by ``switchobs transform``); empty: no such function.
+    ranges : mapping str -> (float, float)
+        Declared ranges ``[lo, hi]`` of states, signals, parameters and ``dt`` (the name ``dt``), as the C
+        literals round them; the step refuses a value outside (``STATE_RANGE``, ``SIGNAL_RANGE``,
+        ``BAD_PARAM``, ``BAD_DT``).  With a range for every input the files include the proof driver
+        ``<prefix>_proof.c`` (:mod:`switchobs.codegen._proof`).
+    det_floor : float or None
+        ``<PREFIX>_DET_FLOOR`` of an implicit method (:meth:`switchobs.spec.StepMethod.det_floor`): the step
+        refuses ``|det D(Z)|`` below it (``NONFINITE_RESULT``); None for an explicit method.
     step_function : casadi.Function
         One step *without* sub-stepping as a casadi Function ``(x, signals, params, dt) -> x_next``
         (not compared, not in JSON).
@@ -190,6 +200,8 @@ class GeneratedObserver:
     max_substeps: int | None = None
     certificate: str | None = None
     original_names: tuple[str, ...] = ()
+    ranges: Mapping[str, tuple[float, float]] = field(default_factory=dict)
+    det_floor: float | None = None
     step_function: ca.Function | None = field(default=None, repr=False, compare=False)
 
     @property
@@ -210,10 +222,21 @@ class GeneratedObserver:
         return misra_record(self.prefix, self.header, self.source)
 
     @property
+    def unranged(self) -> tuple[str, ...]:
+        """The inputs without a declared range (states, signals, parameters, ``dt``): the proof needs none."""
+        names = (*self.state_names, *self.signal_names, *self.param_names, "dt")
+        return tuple(n for n in names if n not in self.ranges)
+
+    @property
     def files(self) -> dict[str, str]:
-        """File name -> text."""
-        return {f"{self.prefix}.h": self.header, f"{self.prefix}.c": self.source, "README.md": self.readme,
-                f"{self.prefix}_misra.md": self.misra}
+        """File name -> text (with the EVA proof driver ``<prefix>_proof.c`` when every input has a range)."""
+        out = {f"{self.prefix}.h": self.header, f"{self.prefix}.c": self.source, "README.md": self.readme,
+               f"{self.prefix}_misra.md": self.misra}
+        if not self.unranged:
+            from ._proof import proof_driver
+
+            out[f"{self.prefix}_proof.c"] = proof_driver(self)
+        return out
 
     def param_index(self, name: str) -> int:
         """Index of a parameter in ``params`` (the value of ``<PREFIX>_P_<NAME>``)."""
@@ -230,8 +253,9 @@ class GeneratedObserver:
             out[self.param_index(name)] = float(value)
         return out
 
-    def write(self, directory: str | Path) -> tuple[Path, ...]:
-        """Write ``<prefix>.h``, ``<prefix>.c``, ``README.md`` and ``<prefix>_misra.md`` into ``directory``
+    def write(self, directory: str | Path, *, extra: Mapping[str, str] | None = None) -> tuple[Path, ...]:
+        """Write :attr:`files` (``<prefix>.h``, ``<prefix>.c``, ``README.md``, ``<prefix>_misra.md``, with
+        ranges for every input ``<prefix>_proof.c``) and ``extra`` (name -> text) into ``directory``
         (created if needed).
 
         All files appear together or none does (:func:`switchobs._atomic.write_files`).
@@ -241,7 +265,7 @@ class GeneratedObserver:
         OutputError
             If a file cannot be written (the message names it); nothing is left behind.
         """
-        return write_files(directory, self.files, what="the generated C into")
+        return write_files(directory, {**self.files, **(extra or {})}, what="the generated C into")
 
     def to_json(self, *, sources: bool = False) -> dict[str, Any]:
         """What the files hold and mean (and the files' text if ``sources``: what :meth:`from_json` reads)."""
@@ -259,6 +283,7 @@ class GeneratedObserver:
             "references": dict(self.references), "original": list(self.original_names),
             "description": self.description, "equations": list(self.equations),
             "signal_roles": list(self.signal_roles),
+            "ranges": {n: list(r) for n, r in self.ranges.items()}, "det_floor": self.det_floor,
         }
         if sources:
             out.update(header=self.header, source=self.source, readme=self.readme)
@@ -280,7 +305,8 @@ class GeneratedObserver:
             flat = {**data, "model_name": data["model"], "state_names": data["states"],
                     "signal_names": data["signals"], "param_names": list(data["parameters"]),
                     "default_params": list(data["parameters"].values()), "original_names": data["original"],
-                    "guards": [Guard.from_json(g) for g in data["guards"]]}
+                    "guards": [Guard.from_json(g) for g in data["guards"]],
+                    "ranges": {n: (float(r[0]), float(r[1])) for n, r in data.get("ranges", {}).items()}}
         except (KeyError, TypeError, AttributeError) as exc:
             raise ModelError(f"not a generated observer JSON ({type(exc).__name__}: {exc})") from None
         return fields_from_json(cls, flat, error=ModelError, what="generated observer")
@@ -301,6 +327,9 @@ class GeneratedObserver:
             lines.append(f"  sub-steps: |s|*dt <= H_MAX = {self.h_max_c!r} (certified h_max = {self.h_max}) per step, "
                          f"at most MAX_SUBSTEPS = {self.max_substeps}, else SUBSTEP_LIMIT = "
                          f"{int(StepStatus.SUBSTEP_LIMIT)}")
+        if self.ranges:
+            lines.append("  ranges: " + ", ".join(f"{n} in [{lo:.6g}, {hi:.6g}]" for n, (lo, hi) in self.ranges.items())
+                         + ("" if not self.unranged else f"; none for {', '.join(self.unranged)} (no proof driver)"))
         if self.original_names:
             lines.append(f"  original coordinates: {', '.join(self.original_names)} = phi^-1(xhat) "
                          f"({self.prefix}_original)")
@@ -350,13 +379,22 @@ def _defaults(model: Model, values: Mapping[str, Any], extra_names: Sequence[str
 
 
 # ----------------------------------------------------------------------------- assembly
-def _step_expression(tr: Translation, method: str) -> ca.SX:
-    """The step ``x_next``; for an implicit method ``(x_next, det D(Z))``, the determinant last."""
+def _step_expression(tr: Translation, method: str, *, split: bool = False) -> ca.SX:
+    """The step ``x_next``; for an implicit method ``(x_next, det D(Z))``, or with ``split`` (the proved
+    build) ``(det D(Z), numerators)``: the undivided solve, which the step divides after its check of ``det``.
+
+    Without ranges the division stays in the kernel, by ``det`` where it is nonzero (else by 1), and the
+    step refuses ``|det| < DET_FLOOR``: divided outside, abs-xbs4's radau3 step was 1.1-1.15x slower with
+    gcc 12 -O2, and the floor tested in the kernel too (``if_else(|det| >= DET_FLOOR, det, 1)``) 1.08x
+    slower on abs-xbs3 float (``benchmarks/_codegen_against.py``); the step refuses those steps anyway.
+    """
     if tr.advance is not None:
         return tr.advance(method)
     if not STEP_METHODS[method].explicit:
-        x_next, det = tr.implicit(method)
-        return ca.vertcat(x_next, det)
+        num, det = tr.implicit(method)
+        if split:
+            return ca.vertcat(det, num)
+        return ca.vertcat(tr.x + tr.dt * (num * (1.0 / ca.if_else(det != 0, det, 1))), det)
     x, dt = tr.x, tr.dt
     k1 = tr.rhs(x)
     if method == "euler":
@@ -439,10 +477,36 @@ def _refuse(P: str, test: str, status: str, comment: str | None = None, indent: 
     return f"{indent}if ({cond}) {{\n{indent}    return {P}_ERR_{status};{note}\n{indent}}}"
 
 
+def _check_ranges(ranges: Mapping[str, Any] | None, tr: Translation, real: str) -> dict[str, tuple[float, float]]:
+    """The declared ranges by name (states, signals, parameters, ``dt``), each ``[lo, hi]`` as ``real`` rounds it.
+
+    A range is a pair of finite numbers ``lo < hi`` (``dt``: ``lo > 0``) of a name of the observer.
+    """
+    out: dict[str, tuple[float, float]] = {}
+    known = (*tr.state_names, *tr.signal_names, *tr.param_names, "dt")
+    dtype = np.float32 if real == "float" else np.float64
+    for name, value in (ranges or {}).items():
+        if name not in known:
+            raise CodegenError(f"range of {name!r}: not a state, signal or parameter of the observer, nor dt "
+                               f"(names: {', '.join(known)})")
+        try:
+            lo, hi = (float(v) for v in value)
+        except (TypeError, ValueError):
+            raise CodegenError(f"range of {name!r} must be two numbers lo, hi, got {value!r}") from None
+        lo_c, hi_c = float(dtype(lo)), float(dtype(hi))
+        if not (np.isfinite(lo_c) and np.isfinite(hi_c) and lo_c < hi_c):
+            raise CodegenError(f"range of {name!r} = [{lo!r}, {hi!r}] must be finite numbers lo < hi in {real}")
+        if name == "dt" and not lo_c > 0.0:
+            raise CodegenError(f"range of dt = [{lo!r}, {hi!r}] must have lo > 0 (seconds)")
+        out[name] = (lo_c, hi_c)
+    return out
+
+
 def _assemble(tr: Translation, *, info: _Info, kind: str, real: str, method: str, prefix: str,
               command: str | None, bound: tuple[Fraction, int] | None = None,
               certificate: str | None = None,
-              original: tuple[tuple[str, ...], ca.SX] | None = None) -> GeneratedObserver:
+              original: tuple[tuple[str, ...], ca.SX] | None = None,
+              ranges: Mapping[str, Any] | None = None) -> GeneratedObserver:
     if kind == "adaptive":
         require_explicit(method, "the adaptive observer's right-hand side", CodegenError)
     if method not in tr.methods:
@@ -457,7 +521,9 @@ def _assemble(tr: Translation, *, info: _Info, kind: str, real: str, method: str
     x_macros = _macro_names("state", tr.state_names)
     s_macros = _macro_names("signal", tr.signal_names)
     p_macros = _macro_names("parameter", tr.param_names)
-    step_expr = _step_expression(tr, method)
+    rng = _check_ranges(ranges, tr, real)
+    det_floor = None if STEP_METHODS[method].explicit else STEP_METHODS[method].det_floor(len(tr.state_names))
+    step_expr = _step_expression(tr, method, split=bool(rng))
     inputs = [("x", tr.x), ("sig", tr.signals), ("par", tr.params), ("dt", tr.dt)]
     if tr.s is not None and tr.scale.is_constant():  # a constant time scaling needs no check: fold it in
         step_expr = ca.substitute(step_expr, tr.s, tr.scale)
@@ -498,11 +564,14 @@ def _assemble(tr: Translation, *, info: _Info, kind: str, real: str, method: str
         checks += scale_check
 
     full = step_expr if tr.s is None else ca.substitute(step_expr, tr.s, tr.scale)
-    step_fn = ca.Function(f"{prefix}_step", [tr.x, tr.signals, tr.params, tr.dt], [full[:len(tr.state_names)]],
+    x_next = full[:len(tr.state_names)]
+    if not STEP_METHODS[method].explicit and rng:  # the step's division, after its check of det
+        x_next = tr.x + tr.dt * (full[1:] * (1.0 / full[0]))
+    step_fn = ca.Function(f"{prefix}_step", [tr.x, tr.signals, tr.params, tr.dt], [x_next],
                           ["x", "signals", "params", "dt"], ["x_next"])
     # kernel temporaries, the state _run holds and the new state, s, one guard value
     stack_reals = max(k.temporaries for k in kernels) + 2 * len(tr.state_names) + 2
-    if not STEP_METHODS[method].explicit:  # det D(Z) after the new state
+    if not STEP_METHODS[method].explicit:  # det D(Z) after the solve
         stack_reals += 1
     if bound is not None:  # the sub-step's input state, a, q, h
         stack_reals += len(tr.state_names) + 3
@@ -514,7 +583,7 @@ def _assemble(tr: Translation, *, info: _Info, kind: str, real: str, method: str
                      original_names=original_names, o_macros=_macro_names("original state", original_names),
                      x_macros=x_macros, s_macros=s_macros, p_macros=p_macros, command=command,
                      temporaries=step_k.temporaries, stack_reals=stack_reals, bound=bound, h_max_c=h_max_c,
-                     certificate=certificate)
+                     certificate=certificate, ranges=rng, det_floor=det_floor)
     header = _header(**text_args)
     source = _source(kernels=kernels, checks=checks, original_k=original_k, param_checks=param_checks, **text_args)
     gen = GeneratedObserver(
@@ -524,7 +593,8 @@ def _assemble(tr: Translation, *, info: _Info, kind: str, real: str, method: str
         header=header, source=source, readme="", casadi_version=ca.__version__, description=info.description,
         equations=info.equations, signal_roles=info.signal_roles, references=dict(info.references),
         h_max=None if bound is None else bound[0], h_max_c=h_max_c, max_substeps=None if bound is None else bound[1],
-        certificate=certificate, original_names=tuple(original_names), step_function=step_fn)
+        certificate=certificate, original_names=tuple(original_names), ranges=rng, det_floor=det_floor,
+        step_function=step_fn)
     return dataclasses.replace(gen, readme=readme(gen, command=command))
 
 
@@ -533,7 +603,8 @@ def generate_observer(model: Model, gains: GainDesign | tuple[Sequence[float], S
                       prefix: str | None = None, unknown: Sequence[str] = (),
                       Gamma: Sequence[Sequence[float]] | np.ndarray | None = None,
                       h_max: float | Fraction | str | None = None, max_substeps: int | None = None,
-                      certificate: str | None = None, command: str | None = None) -> GeneratedObserver:
+                      certificate: str | None = None, command: str | None = None,
+                      ranges: Mapping[str, tuple[float, float]] | None = None) -> GeneratedObserver:
     """Generate the C observer of a model and its gain pair.
 
     Parameters
@@ -577,6 +648,12 @@ def generate_observer(model: Model, gains: GainDesign | tuple[Sequence[float], S
         Statement of a discrete certificate proved for this design and method, recorded in the files.
     command : str, optional
         Command line recorded in the files' comments.
+    ranges : mapping name -> (lo, hi), optional
+        Declared ranges of states, signals, parameters and ``dt`` (name ``dt``, seconds), on top of the
+        model's ``[ranges]`` (:attr:`switchobs.model.Model.ranges`): the step refuses a
+        value outside its range (``STATE_RANGE``, also for a new state outside it, ``SIGNAL_RANGE``,
+        ``BAD_PARAM``, ``BAD_DT``).  With a range for every one of them the step is proved free of run-time
+        errors by Frama-C EVA (:func:`switchobs.codegen.prove`, driver ``<prefix>_proof.c``).
 
     Returns
     -------
@@ -585,7 +662,7 @@ def generate_observer(model: Model, gains: GainDesign | tuple[Sequence[float], S
     Raises
     ------
     CodegenError
-        Unsupported expression, bad prefix, clashing C names, explicit time dependence.
+        Unsupported expression, bad prefix, clashing C names, explicit time dependence, a malformed range.
     ModelError, FreeSymbolError, DimensionError
         Missing parameter values or design symbols, wrong gain sizes.
 
@@ -633,7 +710,8 @@ def generate_observer(model: Model, gains: GainDesign | tuple[Sequence[float], S
         if model.original:
             original = (tuple(name for name, _ in model.original), translate_original(model, tr))
     return _assemble(tr, info=_model_info(model, kind), kind=kind, real=real, method=method, prefix=prefix,
-                     command=command, bound=bound, certificate=certificate, original=original)
+                     command=command, bound=bound, certificate=certificate, original=original,
+                     ranges={**model.ranges, **(ranges or {})})
 
 
 def generate_super_twisting(lam: float, alpha: float, *, real: str = "double",
@@ -678,7 +756,8 @@ def generate_super_twisting(lam: float, alpha: float, *, real: str = "double",
 def _header(*, tr: Translation, info: _Info, kind: str, real: str, method: str, prefix: str, P: str,
             x_macros: Sequence[str], s_macros: Sequence[str], p_macros: Sequence[str], command: str | None,
             temporaries: int, stack_reals: int, bound: tuple[Fraction, int] | None, h_max_c: float | None,
-            certificate: str | None, original_names: Sequence[str], o_macros: Sequence[str]) -> str:
+            certificate: str | None, original_names: Sequence[str], o_macros: Sequence[str],
+            ranges: Mapping[str, tuple[float, float]], det_floor: float | None) -> str:
     guard = f"{P}_H"
     rt = f"{prefix}_real"
     scheme = _SCHEMES[method][0] + ", signals held over the step (zero-order hold)"
@@ -708,6 +787,20 @@ def _header(*, tr: Translation, info: _Info, kind: str, real: str, method: str, 
                   " * sub-steps of dt / n with the signals held; more than MAX_SUBSTEPS: ERR_SUBSTEP_LIMIT. */",
                   f"#define {P}_H_MAX {float_literal(h_max_c, real)}",
                   f"#define {P}_MAX_SUBSTEPS {bound[1]}  /* worst case: this many kernel evaluations per step */"]
+    if det_floor is not None:
+        lines += ["", "/* The step refuses |det D(Z)| below this (ERR_NONFINITE_RESULT), before its one division:",
+                  " * half the least |det D(Z)| of a Z = dt J with J Hurwitz (switchobs.spec.StepMethod.det_floor). */",
+                  f"#define {P}_DET_FLOOR {float_literal(det_floor, real)}"]
+    if ranges:
+        lines += ["", "/* Declared ranges [MIN, MAX]: the step refuses a value outside (state, also the new state:",
+                  " * ERR_STATE_RANGE; signal: ERR_SIGNAL_RANGE; parameter: ERR_BAD_PARAM; dt: ERR_BAD_DT). */"]
+        for key, names, macros in (("X", tr.state_names, x_macros), ("S", tr.signal_names, s_macros),
+                                   ("P", tr.param_names, p_macros), (None, ("dt",), ("DT",))):
+            for name, m in zip(names, macros):
+                if name in ranges:
+                    macro = f"{P}_{key}_{m}" if key else f"{P}_{m}"
+                    lines += [f"#define {macro}_MIN {float_literal(ranges[name][0], real)}",
+                              f"#define {macro}_MAX {float_literal(ranges[name][1], real)}"]
     lines += ["", "/* Observer state (xhat), in the model's coordinates. */"]
     lines += [f"#define {P}_X_{m} {i}" for i, m in enumerate(x_macros)]
     lines += ["", "/* Signals, one row per step. */"]
@@ -768,14 +861,27 @@ def _unrolled(template: str, count: int, indent: str, sep: str) -> str:
     The checks and copies of one row are written out, not looped: a loop over the state in the body of
     ``_run`` made abs-xbs4's ``_run`` 1.2x slower with gcc 12 -O2 (``benchmarks/codegen_step.py``).
     """
-    items = [template.format(i=i) for i in range(count)]
-    return f"{sep.rstrip()}\n{indent}".join(sep.join(items[j:j + 4]) for j in range(0, count, 4))
+    return _joined([template.format(i=i) for i in range(count)], indent, sep)
+
+
+def _joined(items: Sequence[str], indent: str, sep: str) -> str:
+    """``items`` joined by ``sep``, four to a line."""
+    return f"{sep.rstrip()}\n{indent}".join(sep.join(items[j:j + 4]) for j in range(0, len(items), 4))
+
+
+def _range_test(var: str, names: Sequence[str], macros: Sequence[str], key: str, ranges: Mapping[str, Any],
+                P: str, indent: str) -> str | None:
+    """C condition true when an entry ``var[i]`` with a declared range is outside it (or NaN); None: no range."""
+    items = [f"(!(({var}[{i}] >= {P}_{key}_{m}_MIN) && ({var}[{i}] <= {P}_{key}_{m}_MAX)))"
+             for i, (n, m) in enumerate(zip(names, macros)) if n in ranges]
+    return _joined(items, indent, " || ") if items else None
 
 
 def _source(*, tr: Translation, info: _Info, kind: str, real: str, method: str, prefix: str, P: str,
             kernels: Sequence[CFunction], checks: Sequence[str], command: str | None,
             bound: tuple[Fraction, int] | None, original_k: CFunction | None, param_checks: Sequence[str],
-            **_: Any) -> str:
+            ranges: Mapping[str, tuple[float, float]], x_macros: Sequence[str], s_macros: Sequence[str],
+            p_macros: Sequence[str], **_: Any) -> str:
     nx = f"{P}_NX"
     rt = f"{prefix}_real"
     n_x, n_s = len(tr.state_names), len(tr.signal_names)
@@ -792,14 +898,38 @@ def _source(*, tr: Translation, info: _Info, kind: str, real: str, method: str, 
     status_cases = "\n".join(f"    case {int(s)}:\n        message = \"{STATUS_TEXT[s]}\";\n        break;"
                              for s in StepStatus)
     call = kernels[0].call
+    state_in = _range_test("x", tr.state_names, x_macros, "X", ranges, P, "        ")
+    signal_in = _range_test("sig", tr.signal_names, s_macros, "S", ranges, P, "        ")
+    param_in = _range_test("par", tr.param_names, p_macros, "P", ranges, P, "        ")
+
+    # a declared dt range (DT_MIN > 0) is checked in every step, not skipped with valid: the proof then sees
+    # the bound of dt where it is used, without the relation between valid and dt
+    dt_check = (f"!((dt >= {P}_DT_MIN) && (dt <= {P}_DT_MAX))" if "dt" in ranges
+                else f"(!valid) && ((!(dt > {zero})) || (!isfinite(dt)))")
     implicit = not STEP_METHODS[method].explicit
-    # an implicit kernel writes det D(Z) after the new state; the solve divided by it only where it is nonzero
-    singular = [_refuse(P, f"(!((next[{nx}] < {zero}) || (next[{nx}] > {zero}))) || (!isfinite(next[{nx}]))",
-                        "NONFINITE_RESULT", "D(Z) singular", indent)
-                for indent in ("    ", "        ")] if implicit else [None, None]
+    f = "f" if real == "float" else ""
+    state_out = _range_test("next", tr.state_names, x_macros, "X", ranges, P, "        ")
+
+    def singular(x: str, dt: str, indent: str) -> list[str]:
+        """The implicit kernel's det D(Z) checked against DET_FLOOR.  In the ranged build the kernel wrote det
+        D(Z) and the undivided solve after it: the one division, 1 / det, is then taken as 1 / |det| with det's
+        sign (the same bits), its divisor visibly at least DET_FLOOR, and the step is x + dt (solve * (1 / det)),
+        the operations of the Python reference (switchobs.spec.implicit_increment)."""
+        if not implicit:
+            return []
+        if not ranges:  # the kernel divided by det where it is nonzero (else by 1): refuse |det| < DET_FLOOR
+            return [_refuse(P, f"(!(fabs{f}(next[{nx}]) >= {P}_DET_FLOOR)) || (!isfinite(next[{nx}]))",
+                            "NONFINITE_RESULT", "D(Z) singular, or J not Hurwitz", indent)]
+        return [f"{indent}det = next[0];  /* det D(Z), then the undivided solve */",
+                f"{indent}inv = fabs{f}(det);",
+                _refuse(P, f"(!(inv >= {P}_DET_FLOOR)) || (!isfinite(inv))", "NONFINITE_RESULT",
+                        "D(Z) singular, or J not Hurwitz", indent),
+                f"{indent}inv = (det < {zero}) ? ((-{one}) / inv) : ({one} / inv);",
+                *(f"{indent}next[{i}] = {x}[{i}] + ({dt} * (next[{i + 1}] * inv));" for i in range(n_x))]
+
     size = f"{nx} + 1" if implicit else nx
     if bound is None:
-        stepping = ["    " + call("next", x="x", sig="sig", par="par", dt="dt", s="s"), singular[0]]
+        stepping = ["    " + call("next", x="x", sig="sig", par="par", dt="dt", s="s"), *singular("x", "dt", "    ")]
     else:
         # one call of the kernel, so that compilers inline it as in the step without sub-steps (two calls,
         # the first from x, kept it out of line with gcc 12 -O2: 1.2x slower non-stiff steps of abs-xbs3).
@@ -811,10 +941,16 @@ def _source(*, tr: Translation, info: _Info, kind: str, real: str, method: str, 
                     f"    for (int32_t j = 1; j <= {P}_MAX_SUBSTEPS; ++j) {{  /* sub-step j of n <= MAX_SUBSTEPS, "
                     "signals held */",
                     "        " + call("next", x="cur", sig="sig", par="par", dt="h", s="s"),
-                    singular[1],
+                    *singular("cur", "h", "        "),
                     "        if (j >= n) {",
                     "            break;",
                     "        }",
+                    # ranged (proved) build: a sub-step's state stays in the declared box, so that the next
+                    # sub-step starts from a state the proof covers (the loop needs no global argument)
+                    *([] if state_out is None else [
+                        _refuse(P, _unrolled('(!isfinite(next[{i}]))', n_x, '            ', ' || '),
+                                "NONFINITE_RESULT", indent="        "),
+                        _refuse(P, state_out, "STATE_RANGE", indent="        ")]),
                     f"        for (int32_t i = 0; i < {nx}; ++i) {{",
                     "            cur[i] = next[i];",
                     "        }",
@@ -852,17 +988,22 @@ def _source(*, tr: Translation, info: _Info, kind: str, real: str, method: str, 
         f"    {rt} s;" if any("&s" in c for c in checks) else None,
         *([] if bound is None else [f"    {rt} cur[{nx}];", f"    {rt} a;", f"    {rt} h = dt;",
                                     "    int32_t n = 1;"]),
-        _refuse(P, f"(!valid) && ((!(dt > {zero})) || (!isfinite(dt)))", "BAD_DT"),
+        *([f"    {rt} det;", f"    {rt} inv;"] if implicit and ranges else []),
+        _refuse(P, dt_check, "BAD_DT"),
         _refuse(P, _unrolled('(!isfinite(x[{i}]))', n_x, '        ', ' || '), "NONFINITE_STATE"),
+        None if state_in is None else _refuse(P, state_in, "STATE_RANGE"),
         _refuse(P, _unrolled('(!isfinite(sig[{i}]))', n_s, '        ', ' || '), "NONFINITE_SIGNAL"),
+        None if signal_in is None else _refuse(P, signal_in, "SIGNAL_RANGE"),
         "    if (!valid) {",
         f"        for (int32_t i = 0; i < {P}_NP; ++i) {{",
         _refuse(P, "!isfinite(par[i])", "BAD_PARAM", indent="            "),
         "        }",
         "    }",
+        None if param_in is None else _refuse(P, param_in, "BAD_PARAM", "a declared parameter range"),
         *checks,
         *stepping,
         _refuse(P, _unrolled('(!isfinite(next[{i}]))', n_x, '        ', ' || '), "NONFINITE_RESULT"),
+        None if state_out is None else _refuse(P, state_out, "STATE_RANGE", "the new state leaves its range"),
         f"    return {P}_OK;",
         "}",
         "",
@@ -875,7 +1016,10 @@ def _source(*, tr: Translation, info: _Info, kind: str, real: str, method: str, 
         f"    {rt} dt, const {rt} *dts, {rt} *trajectory)",
         "{",
         f"    {rt} cur[{nx}];",
-        f"    {rt} next[{size}];",
+        # with ranges (the proved build) next starts initialised: that a row's state is written exactly when
+        # _advance returns 0 is a relation between paths the proof would otherwise have to keep apart
+        # (every element written out: a partial initialiser breaks MISRA C:2012 rule 9.3)
+        f"    {rt} next[{size}]{' = {' + ', '.join([zero] * (n_x + implicit)) + '}' if ranges else ''};",
         "    /* one loop for both: row k reads h[hk], hk stepped by stride, 0 for a fixed dt (stepped:",
         "     * faster than indexing h with k * stride with gcc 12 -O2) */",
         f"    const {rt} *h = &dt;",
@@ -902,7 +1046,8 @@ def _source(*, tr: Translation, info: _Info, kind: str, real: str, method: str, 
         "     * in _step's order, so a failing row reports exactly the status that _step reports. */",
         f"    valid = {_unrolled('isfinite(par[{i}])', len(tr.param_names), '        ', ' && ')};",
         "    for (int32_t k = 0; valid && (k < ((stride > 0u) ? n_steps : 1)); ++k) {",
-        f"        valid = (h[k] > {zero}) && isfinite(h[k]);",
+        f"        valid = (h[k] > {zero}) && isfinite(h[k])"
+        + (f" && (h[k] >= {P}_DT_MIN) && (h[k] <= {P}_DT_MAX);" if "dt" in ranges else ";"),
         "    }",
         "    /* the state is carried in a local array, which no store to trajectory can alias, and written to xhat",
         "     * once at the end; the copies in the loop are written out (measured fastest with gcc 12 -O2) */",

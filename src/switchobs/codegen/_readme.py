@@ -92,6 +92,28 @@ def _bound_section(gen: "GeneratedObserver") -> list[str]:
         "The bound is for the default gains and parameters: other `params` need their own bound.", ""]
 
 
+def _ranges_section(gen: "GeneratedObserver") -> list[str]:
+    """The declared ranges the step checks and, when every input has one, the proof that relies on them."""
+    if not gen.ranges:
+        return []
+    from ._proof import proof_command
+
+    out = ["## Declared ranges and the proof of no run-time errors", "",
+           "The step refuses a value outside its declared range before computing anything: a state (also the "
+           f"new state) with `STATE_RANGE` = {int(StepStatus.STATE_RANGE)}, a signal with `SIGNAL_RANGE` = "
+           f"{int(StepStatus.SIGNAL_RANGE)}, a parameter with `BAD_PARAM`, `dt` with `BAD_DT`.", "",
+           "| name | min | max |", "| --- | ---: | ---: |",
+           *[f"| `{n}` | {lo!r} | {hi!r} |" for n, (lo, hi) in gen.ranges.items()], ""]
+    if gen.unranged:
+        out += [f"No proof driver: {', '.join(f'`{n}`' for n in gen.unranged)} have no declared range.", ""]
+    else:
+        out += [f"`{gen.prefix}_proof.c` is the Frama-C EVA driver of the proof that no call of the API has a "
+                "run-time error for any finite input (`switchobs codegen --prove` runs it and writes "
+                f"`{gen.prefix}_proof.md`); in this directory:", "",
+                "    " + " ".join(proof_command(gen.prefix)), ""]
+    return out
+
+
 def _certificate_section(gen: "GeneratedObserver") -> list[str]:
     """Which step methods keep the design's Lyapunov function decreasing for every dt (docs/codegen.md)."""
     every = [m for m in METHODS if not STEP_METHODS[m].explicit]
@@ -183,6 +205,7 @@ def readme(gen: "GeneratedObserver", *, command: str | None) -> str:
         "",
         *_original_section(gen),
         *_bound_section(gen),
+        *_ranges_section(gen),
         *([] if gen.kind == "super-twisting" else _certificate_section(gen)),
         f"## State (`{P}_NX` = {gen.nx})",
         "",

@@ -178,8 +178,10 @@ class Translation:
     methods : tuple of str
         The discretisations this observer admits.
     implicit : callable, optional
-        ``implicit(method) -> (x_next, det)`` for an implicit method: ``x + dt D(Z)^-1 F(Z) f(x)``
-        and ``det D(Z)``, which the step checks (zero or not finite: ``NONFINITE_RESULT``).
+        ``implicit(method) -> (numerators, det)`` for an implicit method: ``det D(Z) D(Z)^-1 F(Z) f(x)``
+        (the cofactor solve before its one division) and ``det D(Z)``; the step checks ``|det|`` against
+        ``StepMethod.det_floor`` (below it or not finite: ``NONFINITE_RESULT``) and then steps
+        ``x + dt (numerators / det)``, so that the division is visibly by a number away from zero.
     """
 
     x: ca.SX
@@ -312,11 +314,12 @@ def translate_switched(spec: ObserverSpec) -> Translation:
         return ca.vertcat(*rows)
 
     def implicit(method: str) -> tuple[ca.SX, ca.SX]:
-        """One implicit step of the affine ``f(w) = J w + c``, ``J = s A - g C`` (switchobs.spec)."""
+        """The undivided solve of one implicit step of the affine ``f(w) = J w + c``, ``J = s A - g C``."""
         f = rhs(x)
-        inc, det = implicit_increment(STEP_METHODS[method], affine_jacobian(A, C, s, g), [f[i] for i in range(n)],
-                                      dt, lambda d: ca.if_else(d != 0, d, 1))
-        return x + dt * ca.vertcat(*inc), det
+        # safe = 1: the solve's one division is left to the step, after its check of det (see _generate)
+        num, det = implicit_increment(STEP_METHODS[method], affine_jacobian(A, C, s, g), [f[i] for i in range(n)],
+                                      dt, lambda d: ca.SX(1))
+        return ca.vertcat(*num), det
 
     values = [float(spec.values[name]) for name in model.parameters] + list(spec.K_plus) + list(spec.K_minus)
     return Translation(x=x, signals=sig, params=par, dt=dt, rhs=rhs, scale=s_expr, s=s, guards=_guards(spec, env),

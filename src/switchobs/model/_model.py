@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import dataclasses
 import functools
+import math
 import random
 import re
 import tomllib
@@ -136,6 +137,10 @@ class Model:
         The original coordinates ``x = phi^{-1}(z)`` of a model written by ``switchobs transform``
         (key ``[original]``): each name with its expression in the states, ``y``, the parameters and
         the external signals; empty when unknown.  The generated C evaluates it on the estimate.
+    ranges : mapping str -> (float, float)
+        Declared ranges ``[lo, hi]`` of states, the output, external signals, inputs, parameters and the
+        step length ``dt`` (key ``[ranges]``): the generated C step refuses values outside them, and with
+        a range for every one of them it is proved free of run-time errors (``switchobs codegen --prove``).
     """
 
     name: str
@@ -154,6 +159,7 @@ class Model:
     description: str = ""
     references: Mapping[str, str] = field(default_factory=dict)
     original: tuple[tuple[str, sp.Expr], ...] = ()
+    ranges: Mapping[str, tuple[float, float]] = field(default_factory=dict)
 
     # ------------------------------------------------------------------ build
     @classmethod
@@ -166,7 +172,7 @@ class Model:
             Naming the key and the offending value.
         """
         known = {"name", "description", "states", "output", "A", "C", "d", "b", "time_scale",
-                 "parameters", "external", "inputs", "values", "positive", "negative", "references", "original"}
+                 "parameters", "external", "inputs", "values", "positive", "negative", "references", "original", "ranges"}
         name = check_keys(data, known, ("name", "states", "A", "C", "time_scale"), source)
         states = _names(data["states"], "states")
         if not states:
@@ -226,7 +232,8 @@ class Model:
         return cls(name=name, states=states, output=output, A=A, C=C, d=d, b=b,
                    time_scale=time_scale, parameters=parameters, external=external, inputs=inputs,
                    values=values, symbols=symbols, description=str(data.get("description", "")),
-                   references=dict(refs), original=original)
+                   references=dict(refs), original=original,
+                   ranges=_ranges(data.get("ranges"), [*states, output, *external, *inputs, *parameters, "dt"], source))
 
     @classmethod
     def from_statespace(cls, sys: Any, *, time_scale: str | Any, name: str = "statespace",
@@ -343,7 +350,8 @@ class Model:
                      parameters=remaining, external=self.external, inputs=self.inputs,
                      values={k: v for k, v in self.values.items() if k in remaining},
                      symbols=self.symbols, description=self.description, references=self.references,
-                     original=tuple((k, e.subs(subs)) for k, e in self.original))
+                     original=tuple((k, e.subs(subs)) for k, e in self.original),
+                     ranges={k: r for k, r in self.ranges.items() if k not in values})
 
     def numeric(self) -> "Model":
         """The model with all its stored :attr:`values` substituted."""
@@ -405,6 +413,7 @@ class Model:
             "values": {k: str(v) for k, v in self.values.items()},
             **({"original": {"states": [k for k, _ in self.original], "inverse": [str(e) for _, e in self.original]}}
                if self.original else {}),
+            **({"ranges": {k: list(r) for k, r in self.ranges.items()}} if self.ranges else {}),
         }
 
     def to_json(self) -> dict[str, Any]:
@@ -458,6 +467,26 @@ class Model:
                              else f"${_latex(self.symbols[k])}$" for k in self.parameters)
             rows[-1] += f"; parameters: {vals}"
         return "\n".join(rows)
+
+
+def _ranges(data: Any, names: list[str], source: str) -> dict[str, tuple[float, float]]:
+    """The ``[ranges]`` table: name = [lo, hi] (numbers, or strings such as "375/2"), lo < hi, finite."""
+    if data is None:
+        return {}
+    if not isinstance(data, Mapping):
+        raise ModelError(f"{source}: 'ranges' must be a table name = [lo, hi], got {data!r:.80}")
+    out = {}
+    for key, value in data.items():
+        if key not in names:
+            raise ModelError(f"{source}: 'ranges' names {key!r}, which is not a state, signal, input, parameter "
+                             f"or dt (names: {', '.join(names)})")
+        if not isinstance(value, (list, tuple)) or len(value) != 2:
+            raise ModelError(f"{source}: 'ranges' {key} must be [lo, hi], got {value!r:.80}")
+        lo, hi = (float(rational_value(v, what=f"'ranges' {key}")) for v in value)
+        if not (math.isfinite(lo) and math.isfinite(hi) and lo < hi):
+            raise ModelError(f"{source}: 'ranges' {key} = {list(value)} must be finite with lo < hi")
+        out[str(key)] = (lo, hi)
+    return out
 
 
 def _original(data: Any, declared: list[str], names: Mapping[str, sp.Symbol], n: int,

@@ -319,7 +319,8 @@ class _Source:
         J = affine_jacobian(A, C, leaf("s"), [leaf(g) for g in self.g])
         inc, det = implicit_increment(STEP_METHODS[method], J, [leaf(k) for k in f], leaf("dt"), _Recorder.safe)
         out = [f"{indent}{line}" for line in lines]
-        out.append(f"{indent}ok = {_operand(det)} != 0.0 and math.isfinite({_operand(det)})")
+        floor = STEP_METHODS[method].det_floor(spec.size)  # the C step's DET_MIN: the same refusal
+        out.append(f"{indent}ok = abs({_operand(det)}) >= {floor!r} and math.isfinite({_operand(det)})")
         out += [f"{indent}{new[k]} = {self.x[k]} + dt*{_operand(inc[k])} if ok else math.nan"
                 for k in range(spec.size)]
         return out

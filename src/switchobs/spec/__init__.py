@@ -4,7 +4,7 @@ Public API
 ----------
 ObserverSpec        -- model, gains, estimated parameters and the affine split c = s d + b u (+ Psi theta),
                        checked once (linear in the unknowns, seed 001 eq. (3.2))
-StepStatus          -- status codes 0-7 of one step (Python raises 1-5, C returns all)
+StepStatus          -- status codes 0-10 of one step (Python raises 1-5 and 8, C returns all)
 STATUS_TEXT         -- one line per status code
 REFERENCE_STATUSES  -- the codes a Python reference step can end with (0-5)
 METHODS             -- discretisations: "rk4", "euler" (explicit), "midpoint", "radau3" (implicit)

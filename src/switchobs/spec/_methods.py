@@ -68,6 +68,27 @@ class StepMethod:
             diff.pop()
         return tuple(diff[1:])
 
+    def det_floor(self, n: int) -> float:
+        """Half the least ``|det D(Z)|`` of an ``n x n`` ``Z`` whose eigenvalues have real part ``<= 0``.
+
+        ``det D(Z)`` is the product of ``D(lambda_i)`` over the eigenvalues of ``Z``, and for ``Re z <= 0``
+        ``|D(z)| = |d_m| prod_k |z - r_k| >= |d_m| prod_k Re r_k`` (the roots ``r_k`` of ``D`` have positive
+        real part): 1 for the midpoint rule, 2/3 for 2-stage Radau IIA, so ``(2/3)^n`` there.  A step whose
+        ``|det D(Z)|`` is below half that bound (``Z = dt J`` with ``J`` not Hurwitz: runtime gains of
+        another design) is refused, so the one division of the solve is by a number bounded away from
+        zero, which any analyser sees locally.  1 for an explicit method (``D = 1``).
+        """
+        if self.explicit:
+            return 1.0
+        import numpy as np
+
+        roots = np.roots([float(c) for c in reversed(self.denominator)])
+        if not np.all(roots.real > 0):
+            raise ModelError(f"step method {self.name}: D(z) has a root {roots[roots.real <= 0][0]} with "
+                             "non-positive real part")
+        bound = abs(float(self.denominator[-1])) * float(np.prod(roots.real))
+        return 0.5 * bound ** n
+
 
 def _fr(*values: int | str) -> tuple[Fraction, ...]:
     return tuple(Fraction(v) for v in values)
@@ -224,8 +245,8 @@ def implicit_increment(method: StepMethod, J: Sequence[Sequence[Entry]], f: Sequ
     Returns
     -------
     increment, det
-        The caller must refuse the step unless ``det`` is finite and nonzero (``D(Z)`` singular: the
-        increment is then meaningless).  By Cramer's rule with the cofactors of ``D(Z)``; ``D(Z)`` is
+        The caller must refuse the step unless ``det`` is finite and ``|det| >= method.det_floor(n)``
+        (:meth:`StepMethod.det_floor`; below it the increment is meaningless or ill-conditioned).  By Cramer's rule with the cofactors of ``D(Z)``; ``D(Z)`` is
         nonsingular whenever ``J`` is Hurwitz (the roots of ``D`` have positive real part).
     """
     if method.explicit:

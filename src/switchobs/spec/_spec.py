@@ -44,11 +44,16 @@ class StepStatus(IntEnum):
     with ``code`` 1-5; the generated ``<prefix>_step`` returns the same codes for
     the same cases, and 6 and 7, which exist only in C, where parameters are
     runtime inputs and pointers may be NULL.  Code 8 (``SUBSTEP_LIMIT``) exists
-    only with a step bound ``H_MAX`` (C) or ``h_max`` (Python), in both.  The
-    checks run in the order ``BAD_ARGUMENT``, ``BAD_DT``, ``NONFINITE_STATE``,
-    ``NONFINITE_SIGNAL``, ``BAD_PARAM``, ``UNDEFINED_TIME_SCALE``,
+    only with a step bound ``H_MAX`` (C) or ``h_max`` (Python), in both.  Codes 9
+    (``STATE_RANGE``) and 10 (``SIGNAL_RANGE``) exist only in C generated with
+    declared ranges (``generate_observer(ranges=...)``, the domain over which
+    the step is proved free of run-time errors); a declared range of ``dt`` or
+    of a parameter extends ``BAD_DT`` and ``BAD_PARAM``.  The checks run in the
+    order ``BAD_ARGUMENT``, ``BAD_DT``, ``NONFINITE_STATE``, ``STATE_RANGE``,
+    ``NONFINITE_SIGNAL``, ``SIGNAL_RANGE``, ``BAD_PARAM``, ``UNDEFINED_TIME_SCALE``,
     ``SUBSTEP_LIMIT``, then the domain of ``d`` and ``b`` and the result
-    (``NONFINITE_RESULT``); the first failing check is reported.
+    (``NONFINITE_RESULT``, and ``STATE_RANGE`` for a new state outside its
+    range); the first failing check is reported.
     """
 
     OK = 0
@@ -64,6 +69,8 @@ class StepStatus(IntEnum):
     BAD_ARGUMENT = 7          # xhat or signals is NULL, or n_steps < 0 (C only)
     SUBSTEP_LIMIT = 8         # |s|*dt exceeds MAX_SUBSTEPS*H_MAX (or is not finite): the step would need more
                               # sub-steps than allowed
+    STATE_RANGE = 9           # an entry of xhat, or of the new state, lies outside its declared range (C only)
+    SIGNAL_RANGE = 10         # a signal lies outside its declared range (C only)
 
 
 #: One-line description of each status (also returned by ``<prefix>_status_message``).
@@ -77,6 +84,8 @@ STATUS_TEXT: dict[StepStatus, str] = {
     StepStatus.BAD_PARAM: "a parameter is not finite or violates its declared sign",
     StepStatus.BAD_ARGUMENT: "a required pointer is NULL or n_steps < 0",
     StepStatus.SUBSTEP_LIMIT: "|s|*dt exceeds MAX_SUBSTEPS*H_MAX (more sub-steps than allowed)",
+    StepStatus.STATE_RANGE: "an entry of xhat or of the new state is outside its declared range",
+    StepStatus.SIGNAL_RANGE: "a signal is outside its declared range",
 }
 
 #: The statuses a Python reference step can end with (its parameters are fixed numbers, its inputs arrays).
