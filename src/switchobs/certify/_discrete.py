@@ -46,7 +46,7 @@ from typing import Any
 
 from ..exceptions import CertificateError, DimensionError
 from ..spec import STEP_METHODS, StepMethod
-from ..exact import (Matrix, add, definiteness, fraction_matrix, identity, is_zero, lyapunov_form, matmul,
+from ..exact import (Matrix, add, definiteness, float_matrix, fraction_matrix, identity, is_zero, lyapunov_form, matmul,
                      matrix_strings, nullspace, observable, scale, solve, sub, to_fraction, transpose, zeros)
 
 __all__ = ["StepMethod", "STEP_METHODS", "DiscreteVerdict", "DiscreteCertificate", "discrete_certificate",
@@ -220,7 +220,7 @@ def _witness(Mw: list[Matrix], n: int) -> list[Fraction] | None:
         return None
     import numpy as np  # the search only; the claim is checked exactly by the caller
 
-    _, V = np.linalg.eigh(np.array([[float(x) for x in row] for row in G0]))
+    _, V = np.linalg.eigh(float_matrix(G0))
     for den in (10**3, 10**6, 10**9, 10**12):
         u = [Fraction(float(x)).limit_denominator(den) for x in V[:, 0]] + [Fraction(0)] * (n - r)
         lead = _leading_term(Mw, u)
@@ -238,7 +238,7 @@ def spectral_bound(A: Matrix, method: StepMethod) -> float | None:
     """
     import numpy as np
 
-    lams = np.linalg.eigvals(np.array([[float(x) for x in row] for row in A]))
+    lams = np.linalg.eigvals(float_matrix(A))
     best: float | None = None
     for lam in lams:
         num = np.polynomial.Polynomial([float(c) * lam**k for k, c in enumerate(method.numerator)])

@@ -13,7 +13,7 @@ from sympy.polys.matrices import DomainMatrix
 from ..design import routh_first_column
 from ..exceptions import CertificateError, DimensionError, ModelError, NotHurwitzError
 from ..model import matrix_rows
-from ..exact import Matrix, fraction_matrix, matrix_strings
+from ..exact import Matrix, float_matrix, fraction_matrix, matrix_strings
 
 __all__ = ["Family", "as_family", "format_spectrum", "FamilyLike"]
 
@@ -64,7 +64,7 @@ class Family:
         if len(exact) != len(names) or not exact:
             raise CertificateError(f"a family JSON needs one matrix per name, got {len(names)} names and "
                                    f"{len(data['matrices'])} matrices")
-        return cls(names, exact, tuple(np.array([[float(x) for x in row] for row in M]) for M in exact))
+        return cls(names, exact, tuple(float_matrix(M) for M in exact))
 
     def spectra(self) -> dict[str, str]:
         """Each matrix's name and its spectrum as :func:`format_spectrum` prints it."""
@@ -166,7 +166,7 @@ def as_family(matrices: FamilyLike, names: Sequence[str] | None = None, *, hurwi
                 raise DimensionError(f"{nm} is {len(M)}x{len(M)} but {names[0]} is {n}x{n}; "
                                      "all matrices of a family must have the same size")
         fam = Family(tuple(str(x) for x in names), tuple(exact),
-                     tuple(np.array([[float(x) for x in row] for row in M]) for M in exact))
+                     tuple(float_matrix(M) for M in exact))
     if hurwitz:
         for nm, M, E in zip(fam.names, fam.numeric, fam.exact):
             if not np.all(np.isfinite(M)):

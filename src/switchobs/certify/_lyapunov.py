@@ -20,8 +20,9 @@ import numpy as np
 from .._progress import progress
 from ..exceptions import CertificateError
 from ..model import user_matrix
-from ..exact import (FACE_TOLERANCES, Matrix, dyadic, factor_rows, fraction_matrix, kernel_vector, lyapunov_form,
-                    matrix_strings, normalise, project_dual, project_primal, psd_dyadic, short_sqrt_lower)
+from ..exact import (FACE_TOLERANCES, Matrix, dyadic, factor_rows, float_matrix, fraction_matrix, kernel_vector,
+                     lyapunov_form, matrix_strings, normalise, project_dual, project_primal, psd_dyadic,
+                     short_sqrt_lower)
 from ._family import Family, FamilyLike, as_family
 from ..lmi import DEFAULT_SOLVERS, SolveInfo, balance, dual_margin, primal_margin
 from ._schema import CertificateKind, DualEntry, LyapunovEntry, SingularSumEntry
@@ -314,7 +315,7 @@ def _output_weights(bal_d: np.ndarray, output: Any, n: int, count: int) -> list[
     """``H = C' C`` in balanced coordinates (identity without an output), normalised to unit norm."""
     if output is None:
         return [np.eye(n)] * count
-    Cf = np.array([[float(x) for x in row] for row in user_matrix(output, what="output C", part="C", cols=n)])
+    Cf = float_matrix(user_matrix(output, what="output C", part="C", cols=n))
     Cb = Cf * bal_d[None, :]
     H = Cb.T @ Cb
     return [H / (np.linalg.norm(H, 2) or 1.0)] * count

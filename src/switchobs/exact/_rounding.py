@@ -31,7 +31,7 @@ import numpy as np
 from sympy import QQ
 from sympy.polys.matrices import DomainMatrix
 
-from ._exact import Matrix, definiteness, matmul, sqrt_lower, transpose
+from ._exact import Matrix, definiteness, float_matrix, matmul, sqrt_lower, transpose
 
 __all__ = ["dyadic", "psd_dyadic", "factor_rows", "ldl_psd", "range_basis", "project_primal", "project_dual",
            "kernel_vector", "MAX_PROJECTION_UNKNOWNS", "FACE_TOLERANCES", "short_sqrt_lower", "normalise"]
@@ -254,7 +254,7 @@ def project_primal(As: Sequence[Matrix], P_num: np.ndarray, rel_tol: float
     the certificate built from them.
     """
     n = len(As[0])
-    Af = [np.array([[float(x) for x in row] for row in A]) for A in As]
+    Af = [float_matrix(A) for A in As]
     W_nums = [-(A.T @ P_num + P_num @ A) for A in Af]
     faces = [range_basis(W, rel_tol) for W in W_nums]
     ranks = [len(U[0]) if U and U[0] else 0 for U in faces]
@@ -296,7 +296,7 @@ def project_dual(As: Sequence[Matrix], R_nums: Sequence[np.ndarray], rel_tol: fl
     Returns ``None`` if the projected blocks are not semidefinite or all ``R_p`` vanish.
     """
     n = len(As[0])
-    Af = [np.array([[float(x) for x in row] for row in A]) for A in As]
+    Af = [float_matrix(A) for A in As]
     S_num = sum(A @ R + R @ A.T for A, R in zip(Af, R_nums))
     if not all(np.all(np.isfinite(M)) for M in (*R_nums, S_num)):  # a solver answer beyond double range
         return None
@@ -344,7 +344,7 @@ def project_dual(As: Sequence[Matrix], R_nums: Sequence[np.ndarray], rel_tol: fl
 
 def _face_start(U: Matrix, W: np.ndarray, r: int) -> list[Fraction]:
     """Coordinates of the numeric matrix ``W`` on the face spanned by ``U`` (the projection's start point)."""
-    pinv = np.linalg.pinv(np.array([[float(x) for x in row] for row in U]))
+    pinv = np.linalg.pinv(float_matrix(U))
     return [Fraction(x) for x in _vech_coords(pinv @ W @ pinv.T, r)]
 
 
