@@ -96,12 +96,12 @@ def run(args: argparse.Namespace) -> int:
         obs = report.document.get("observer", {})
         values = ", ".join(f"{k} = {v}" for k, v in prov.get("parameters", {}).items())
         print(f"switchobs certify: model {prov.get('model')}{' (' + values + ')' if values else ''}", file=stream)
-        gains = [*obs.get("K_plus", []), *obs.get("K_minus", [])]
         with exact_display(args.exact):
-            print(f"  K_plus  = [{', '.join(map(readable_number, obs.get('K_plus', [])))}]", file=stream)
-            print(f"  K_minus = [{', '.join(map(readable_number, obs.get('K_minus', [])))}]", file=stream)
-            if any(readable_number(k) != k for k in gains):
-                print(f"  {ROUNDED_NOTE}", file=stream)
+            shown = {k: [readable_number(v) for v in obs.get(k, [])] for k in ("K_plus", "K_minus")}
+        print(f"  K_plus  = [{', '.join(shown['K_plus'])}]", file=stream)
+        print(f"  K_minus = [{', '.join(shown['K_minus'])}]", file=stream)
+        if any(shown[k] != obs.get(k, []) for k in shown):
+            print(f"  {ROUNDED_NOTE}", file=stream)
         print(report, file=stream)
         if report.discrete is not None:
             from ..report import sampled_lines
