@@ -1,6 +1,6 @@
 """Cost of one FMU communication step against the bare C step it wraps.
 
-For abs-xbs3 and abs-xbs4 (seed 000, RK4, 1 ms steps), double and float: a C driver (``gcc -O2``, the FMU's
+For abs-xbs3 and abs-xbs4 (seed 000, the default method radau3, 1 ms steps), double and float: a C driver (``gcc -O2``, the FMU's
 flags) linking the generated ``<prefix>.c`` and the FMI 3.0 and FMI 2.0 wrappers of ``switchobs.codegen.
 generate_fmu`` steps a record of signals (a 40 rad/s sine in y, a falling vx) three ways, interleaved:
 
@@ -141,7 +141,7 @@ def main() -> None:
             bare, f3, f2 = measure(model, spectrum, real, rows, runs)
             table.append(f"| {model} | {real} | {bare.show(1e9)} | {f3.show(1e9)} | "
                          f"{f3.median / bare.median:.2f}× | {f2.show(1e9)} | {f2.median / bare.median:.2f}× |")
-    publish("fmu_step", f"C: ns per 1 ms RK4 step, `gcc {' '.join(CFLAGS)}`, CPU time of {rows} rows, median "
+    publish("fmu_step", f"C: ns per 1 ms radau3 step (the default method), `gcc {' '.join(CFLAGS)}`, CPU time of {rows} rows, median "
             f"[min–max] of {runs} interleaved runs; *bare* is `<prefix>_step` per row, *FMI* a master's "
             "communication step: set the three inputs, `doStep`, get the state outputs.  The goal is at most "
             "1.5× the bare step.", [table], write=not args.quick)

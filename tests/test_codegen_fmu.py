@@ -2,8 +2,10 @@
 
 Every FMU passes ``fmpy.validation.validate_fmu``; FMPy's slave classes step it over a record of the signals a
 braking simulation (scenario hoang-fig3) fed its observer and get the C ``_run`` / ``_run_dt`` trajectory bit for
-bit; ``fmpy.simulate_fmu`` runs it with the record as its input.  Both FMI versions, each method, both real types,
-a user model with d(y) and b(y) and the adaptive observer.  One FMU per case and version per module.
+bit; ``fmpy.simulate_fmu`` runs it with the record as its input.  The matrix of every model (abs-xbs3, abs-xbs4,
+a user model with d(y) and b(y)), method and real type in both FMI versions, sub-stepping and the adaptive
+observer; four cases in the default run, the rest of the matrix marked slow.  One FMU per case and version per
+module.
 """
 
 from __future__ import annotations
@@ -26,7 +28,7 @@ from fmpy.fmi3 import FMU3Slave  # noqa: E402
 from fmpy.validation import validate_fmu  # noqa: E402
 
 from switchobs.cli.main import main  # noqa: E402
-from switchobs.codegen import STATUS_TEXT, CObserver, StepStatus, generate_observer  # noqa: E402
+from switchobs.codegen import METHODS, REALS, STATUS_TEXT, CObserver, StepStatus, generate_observer  # noqa: E402
 from switchobs.codegen._fmu import fmi_headers, generate_fmu  # noqa: E402
 from switchobs.design import design  # noqa: E402
 from switchobs.exceptions import CodegenError  # noqa: E402
@@ -80,22 +82,44 @@ def _generated(case: str):
     return generate_observer(m, design(m, spectrum), real=real, method=method, h_max=h_max, unknown=unknown)
 
 
+#: The full matrix of the issue: every model, method and real type (no sub-stepping), each in both FMI versions.
+MODELS = {"xbs3": ("abs-xbs3", "-40,-60,-60"), "xbs4": ("abs-xbs4", "-40,-60,-60,-60"),
+          "user": (str(ROOT / "examples" / "my_model.toml"), "-40,-60,-60")}
+MATRIX = {f"{short}-{method}-{real}": (model, spectrum, real, method, None, ())
+          for short, (model, spectrum) in MODELS.items() for real in REALS for method in METHODS}
+CASES.update({name: case for name, case in MATRIX.items() if case not in CASES.values()})
+#: The cases of the default run (the rest of the matrix is marked slow).
+DEFAULT = ("xbs3-rk4-substeps", "xbs4-euler-float", "user-radau3", "user-midpoint-float")
+
+
+class _FMUs(dict):
+    """Case and FMI version -> (generated, FMU, path, unzipped directory, initial state), built on first use
+    (the generated observer once per case) and kept for the module."""
+
+    def __init__(self, root):
+        super().__init__()
+        self.root, self.generated = root, {}
+
+    def __missing__(self, key):
+        case, version = key
+        if case not in self.generated:
+            self.generated[case] = _generated(case)
+        gen = self.generated[case]
+        x0 = {name: 0.1 * (i + 1) for i, name in enumerate(gen.state_names)}
+        fmu = generate_fmu(gen, fmi_version=version, initial_state=x0)
+        path = fmu.write(self.root / f"{case}-{version}.fmu")
+        self[key] = (gen, fmu, path, extract(str(path), unzipdir=str(self.root / f"{case}-{version}")), x0)
+        return self[key]
+
+
 @pytest.fixture(scope="module")
 def fmus(tmp_path_factory):
-    """Every case and FMI version, generated, written and extracted once."""
-    root = tmp_path_factory.mktemp("fmus")
-    out = {}
-    for case in CASES:
-        gen = _generated(case)
-        x0 = {name: 0.1 * (i + 1) for i, name in enumerate(gen.state_names)}
-        for version in (3, 2):
-            fmu = generate_fmu(gen, fmi_version=version, initial_state=x0)
-            path = fmu.write(root / f"{case}-{version}.fmu")
-            out[case, version] = (gen, fmu, path, extract(str(path), unzipdir=str(root / f"{case}-{version}")), x0)
-    return out
+    """Every case and FMI version, generated, written and extracted once (on first use)."""
+    return _FMUs(tmp_path_factory.mktemp("fmus"))
 
 
-PARAMS = [(case, version) for case in CASES for version in (3, 2)]
+PARAMS = [pytest.param(case, version, marks=() if case in DEFAULT else pytest.mark.slow)
+          for case in CASES for version in (3, 2)]
 
 
 def _slave(fmu, path, unzipped, name="instance", **instantiate):

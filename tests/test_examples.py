@@ -23,6 +23,7 @@ EXPECTED = {
     "noise_decay_front.py": ["noise_decay_front.png"],
     "python_control_notebook.py": ["python_control_notebook.png"],
     "c_observer.py": ["c_observer.png", "c_observer/observer_demo", "c_observer/switchobs_abs_xbs4.h"],
+    "fmu_closed_loop.py": ["switchobs_quarter_car.fmu", "switchobs_abs_xbs4.fmu"],
 }
 
 

@@ -5,7 +5,7 @@ import importlib
 
 import pytest
 
-MODULES = ["_tyre", "_road", "_estimator", "_poincare", "_simulate", "_scenarios", "_plot", "_metrics"]
+MODULES = ["_tyre", "_road", "_estimator", "_poincare", "_simulate", "_scenarios", "_plot", "_metrics", "_fmu"]
 
 
 @pytest.mark.parametrize("module", MODULES)

@@ -20,6 +20,7 @@ target_build, TargetBuild -- the files for a target: Makefile, CMakeLists.txt, R
 measure_footprint, TargetFootprint, FunctionStack -- text/data/bss and worst-case stack, measured by building
 run_pil, PilResult  -- processor in the loop: the step over a record on qemu-system-arm and on the host
 generate_fmu        -- the observer as an FMI 3.0 / 2.0 co-simulation FMU (GeneratedFMU), binary for this platform
+build_fmu, FMUVariable -- the archive of any rendered FMI wrapper (the quarter car's plant FMU uses it)
 generate_a2l        -- ASAP2 1.71 description of the calibration object of ``calibration_files``
 calibration_files   -- ``<prefix>_calibration.c/.h``: the named parameter array a calibration tool writes
 elf_symbols         -- symbol addresses of a linked program (``nm``), for ``generate_a2l(addresses=...)``
@@ -31,14 +32,16 @@ fuzz_harness        -- a libFuzzer harness of the C API with the API contract as
 from ..spec import METHODS, STATUS_TEXT, Guard, StepStatus, domain_guards
 from ._a2l import a2l_symbols, calibration_files, elf_symbols, generate_a2l
 from ._build import CObserver, cache_directory, compile_observer, compile_sources, find_compiler, load_library
-from ._fmu import FMI_VERSIONS, GeneratedFMU, generate_fmu
+from ._fmu import (FMI_VERSIONS, FMUVariable, GeneratedFMU, build_fmu, fmi3_stubs, fmi_headers, fmu_token,
+                   generate_fmu)
 from ._generate import REALS, GeneratedObserver, default_prefix, generate_observer, generate_super_twisting
 from ._fuzz import fuzz_harness
 from ._proof import ProofResult, proof_driver, proof_record, prove
 from ._target import (TARGETS, FunctionStack, PilResult, Target, TargetBuild, TargetFootprint, measure_footprint,
                       run_pil, target_build, target_real)
 
-__all__ = ["CObserver", "FMI_VERSIONS", "GeneratedFMU", "GeneratedObserver", "a2l_symbols", "calibration_files",
+__all__ = ["CObserver", "FMI_VERSIONS", "FMUVariable", "GeneratedFMU", "build_fmu", "fmi3_stubs", "fmi_headers",
+           "fmu_token", "GeneratedObserver", "a2l_symbols", "calibration_files",
            "elf_symbols", "generate_a2l", "generate_fmu", "Guard", "METHODS", "REALS", "STATUS_TEXT", "StepStatus",
            "cache_directory", "compile_observer", "compile_sources", "find_compiler", "default_prefix", "domain_guards",
            "generate_observer", "generate_super_twisting", "load_library", "TARGETS", "Target", "target_real",

@@ -42,7 +42,8 @@ from ._build import BUILD_FLAGS, compile_sources
 from ._emit import float_literal
 from ._generate import GeneratedObserver
 
-__all__ = ["FMI_VERSIONS", "GeneratedFMU", "generate_fmu", "fmi_headers"]
+__all__ = ["FMI_VERSIONS", "FMUVariable", "GeneratedFMU", "build_fmu", "fmi3_stubs", "fmi_headers", "fmu_token",
+           "generate_fmu"]
 
 #: The FMI versions of :func:`generate_fmu`.
 FMI_VERSIONS = (2, 3)
@@ -78,10 +79,12 @@ def fmi_headers(version: int) -> dict[str, str]:
 _TYPEDEF = re.compile(r"typedef\s+fmi3Status\s+(fmi3\w+)TYPE\s*\((.*?)\);", re.S)
 
 
-def _fmi3_stubs(types_header: str, template: str) -> str:
-    """Definitions of the FMI 3.0 functions the wrapper does not implement (model exchange, scheduled execution,
-    clocks, FMU state...): each returns ``fmi3Error`` with a log message.  FMI 3.0 importers (FMPy) load every
-    function of ``fmi3Functions.h``, so all are defined; the signatures come from the standard's own header."""
+def fmi3_stubs(template: str) -> str:
+    """Definitions of the FMI 3.0 functions a wrapper ``template`` does not implement (model exchange, scheduled
+    execution, clocks, FMU state...): each returns ``fmi3Error`` with a log message through the wrapper's
+    ``swobs_fail(SWOBS_INST, function, why)``.  FMI 3.0 importers (FMPy) load every function of
+    ``fmi3Functions.h``, so all are defined; the signatures come from the standard's own header."""
+    types_header = fmi_headers(3)["fmi3FunctionTypes.h"]
     defined = set(re.findall(r"\b(fmi3\w+)\s*\(fmi3Instance instance", template)) | \
         set(re.findall(r"SWOBS_NONE\((fmi3\w+),", template))
     out = []
@@ -120,7 +123,9 @@ def _shared_suffix() -> str:
 
 
 @dataclass(frozen=True)
-class _Variable:
+class FMUVariable:
+    """One variable of an FMU's model description (``kind`` "real": Float64 / Real, "int": Int32 / Integer)."""
+
     name: str
     vr: int
     kind: str          # "real" or "int"
@@ -140,29 +145,29 @@ def _signal_start(gen: GeneratedObserver) -> list[float]:
     return out
 
 
-def _variables(gen: GeneratedObserver, version: int, initial_state: tuple[float, ...]) -> list[_Variable]:
-    out = [_Variable("time", 0, "real", "independent", "continuous", description="simulation time")] \
+def _variables(gen: GeneratedObserver, version: int, initial_state: tuple[float, ...]) -> list[FMUVariable]:
+    out = [FMUVariable("time", 0, "real", "independent", "continuous", description="simulation time")] \
         if version == 3 else []
     vr = 1
     for name, role, start in zip(gen.signal_names, gen.signal_roles or ("",) * gen.ns, _signal_start(gen)):
-        out.append(_Variable(name, vr, "real", "input", "continuous", start, description=role))
+        out.append(FMUVariable(name, vr, "real", "input", "continuous", start, description=role))
         vr += 1
     for name, value in zip(gen.param_names, gen.default_params):
-        out.append(_Variable(name, vr, "real", "parameter", "tunable", value, "exact", "runtime parameter"))
+        out.append(FMUVariable(name, vr, "real", "parameter", "tunable", value, "exact", "runtime parameter"))
         vr += 1
     for name, value in zip(gen.state_names, initial_state):
-        out.append(_Variable(f"xhat0_{name}", vr, "real", "parameter", "fixed", value, "exact",
+        out.append(FMUVariable(f"xhat0_{name}", vr, "real", "parameter", "fixed", value, "exact",
                              f"initial estimate of {name}"))
         vr += 1
     for name in gen.state_names:
-        out.append(_Variable(f"xhat_{name}", vr, "real", "output", "discrete", initial="calculated",
+        out.append(FMUVariable(f"xhat_{name}", vr, "real", "output", "discrete", initial="calculated",
                              description=f"estimate of {name} after the last step"))
         vr += 1
     for name in gen.original_names:
-        out.append(_Variable(f"x_{name}", vr, "real", "output", "discrete", initial="calculated",
+        out.append(FMUVariable(f"x_{name}", vr, "real", "output", "discrete", initial="calculated",
                              description=f"estimate of {name} in the original coordinates (phi^-1(xhat))"))
         vr += 1
-    out.append(_Variable("status", vr, "int", "output", "discrete", initial="calculated",
+    out.append(FMUVariable("status", vr, "int", "output", "discrete", initial="calculated",
                          description=f"status code of the last step ({gen.prefix}_status_message)"))
     names = [v.name for v in out]
     clash = sorted({n for n in names if names.count(n) > 1})
@@ -176,30 +181,34 @@ def _number(value: float | int) -> str:
     return repr(int(value)) if isinstance(value, int) else repr(float(value))
 
 
-def _model_description(gen: GeneratedObserver, version: int, token: str, variables: list[_Variable],
-                       sources: tuple[str, ...], dt: float) -> str:
-    description = quoteattr(f"{gen.kind} observer of model {gen.model_name!r}: {gen.description}")
+#: The log categories of the observer FMUs (name, description).
+_OBSERVER_LOG = (("logStatusWarning", "the original coordinates were refused"),
+                 ("logStatusDiscard", "a step refused: its status"),
+                 ("logStatusError", "a call the FMU cannot serve"))
+
+
+def _model_description(identifier: str, text: str, version: int, token: str, variables: list[FMUVariable],
+                       sources: tuple[str, ...], dt: float, log: tuple[tuple[str, str], ...]) -> str:
+    description = quoteattr(text)
     head = [
         '<?xml version="1.0" encoding="UTF-8"?>',
-        f'<fmiModelDescription fmiVersion="{version}.0" modelName={quoteattr(gen.prefix)} '
+        f'<fmiModelDescription fmiVersion="{version}.0" modelName={quoteattr(identifier)} '
         f'{"instantiationToken" if version == 3 else "guid"}="{token}" description={description} '
         f'generationTool="switchobs {__version__}" variableNamingConvention="flat"'
         + (' numberOfEventIndicators="0"' if version == 2 else '') + '>',
     ]
     if version == 3:
-        head.append(f'  <CoSimulation modelIdentifier={quoteattr(gen.prefix)} '
+        head.append(f'  <CoSimulation modelIdentifier={quoteattr(identifier)} '
                     'canHandleVariableCommunicationStepSize="true" canGetAndSetFMUState="false" '
                     'canSerializeFMUState="false" hasEventMode="false"/>')
     else:
-        head += [f'  <CoSimulation modelIdentifier={quoteattr(gen.prefix)} '
+        head += [f'  <CoSimulation modelIdentifier={quoteattr(identifier)} '
                  'canHandleVariableCommunicationStepSize="true" canGetAndSetFMUstate="false" '
                  'canSerializeFMUstate="false">',
                  '    <SourceFiles>', *[f'      <File name="{s}"/>' for s in sources], '    </SourceFiles>',
                  '  </CoSimulation>']
     head += ['  <LogCategories>',
-             '    <Category name="logStatusWarning" description="the original coordinates were refused"/>',
-             '    <Category name="logStatusDiscard" description="a step refused: its status"/>',
-             '    <Category name="logStatusError" description="a call the FMU cannot serve"/>',
+             *[f'    <Category name="{name}" description={quoteattr(what)}/>' for name, what in log],
              '  </LogCategories>',
              f'  <DefaultExperiment startTime="0" stopTime="1" stepSize="{dt!r}"/>',
              '  <ModelVariables>']
@@ -227,11 +236,11 @@ def _model_description(gen: GeneratedObserver, version: int, token: str, variabl
                       '  </ModelStructure>', '</fmiModelDescription>', ''])
 
 
-def _build_description(gen: GeneratedObserver, sources: tuple[str, ...]) -> str:
+def _build_description(identifier: str, sources: tuple[str, ...]) -> str:
     return "\n".join([
         '<?xml version="1.0" encoding="UTF-8"?>',
         '<fmiBuildDescription fmiVersion="3.0">',
-        f'  <BuildConfiguration modelIdentifier={quoteattr(gen.prefix)} '
+        f'  <BuildConfiguration modelIdentifier={quoteattr(identifier)} '
         f'description={quoteattr("C99; link with the C math library (-lm)")}>',
         '    <SourceFileSet language="C99">',
         *[f'      <SourceFile name="{escape(s)}"/>' for s in sources],
@@ -340,32 +349,60 @@ def generate_fmu(gen: GeneratedObserver, *, fmi_version: int = 3, initial_state:
     headers = fmi_headers(fmi_version)
     variables = _variables(gen, fmi_version, x0)
     P = gen.prefix.upper()
-    wrapper_name = f"{gen.prefix}_fmi{fmi_version}.c"
-    sources = (f"{gen.prefix}.c", wrapper_name)
-    # the token names this exact observer and interface: any change of the sources changes it
-    digest = hashlib.sha256("\0".join([gen.header, gen.source, str(fmi_version), repr(x0)]).encode()).hexdigest()
-    token = "{" + "-".join([digest[:8], digest[8:12], digest[12:16], digest[16:20], digest[20:32]]) + "}"
     template = _TEMPLATE.read_text(encoding="utf-8")
-    stubs = _fmi3_stubs(headers["fmi3FunctionTypes.h"], template) if fmi_version == 3 else ""
-    wrapper = Template(template).substitute(stubs=stubs,
+    # the token names this exact observer and interface: any change of the sources changes it
+    token = fmu_token(gen.header, gen.source, str(fmi_version), repr(x0))
+    wrapper = Template(template).substitute(stubs=fmi3_stubs(template) if fmi_version == 3 else "",
         prefix=gen.prefix, P=P, version=fmi_version, no=len(gen.original_names), token=token,
         discard=f"fmi{fmi_version}Discard",
         allocation="fmi2CallbackFunctions.allocateMemory" if fmi_version == 2 else "calloc (FMI 3.0 passes no "
                                                                                   "allocator)",
         signal_start=", ".join(float_literal(v, "double") for v in _signal_start(gen)),
         x0_start=", ".join(float_literal(v, "double") for v in x0))
-    files = {**gen.files, wrapper_name: wrapper, **headers}
-    library = compile_sources(files, sources, f"{gen.prefix}_fmi{fmi_version}", compiler=compiler, flags=_FLAGS,
-                              cache_dir=cache_dir, host=False)
+    return build_fmu(gen.prefix, f"{gen.kind} observer of model {gen.model_name!r}: {gen.description}",
+                     variables, {**gen.files, **headers}, wrapper, fmi_version=fmi_version, token=token,
+                     step_size=step_size, log=_OBSERVER_LOG, readme=gen.readme, compiler=compiler,
+                     cache_dir=cache_dir)
+
+
+def fmu_token(*texts: str) -> str:
+    """The instantiation token (FMI 2.0 GUID) of an FMU made of ``texts``: any change of them changes it."""
+    digest = hashlib.sha256("\0".join(texts).encode()).hexdigest()
+    return "{" + "-".join([digest[:8], digest[8:12], digest[12:16], digest[16:20], digest[20:32]]) + "}"
+
+
+def build_fmu(identifier: str, description: str, variables: list[FMUVariable], files: dict[str, str], wrapper: str,
+              *, fmi_version: int, token: str, step_size: float, log: tuple[tuple[str, str], ...], readme: str,
+              compiled: tuple[str, ...] | None = None, compiler: str | None = None,
+              cache_dir: str | os.PathLike | None = None) -> GeneratedFMU:
+    """The co-simulation FMU ``identifier`` of a rendered ``wrapper`` (``sources/<identifier>_fmi<v>.c``) over the
+    C ``files`` (``<identifier>.c`` the model's source, the headers it includes), compiled for this platform.
+
+    ``variables`` are the model description's, ``log`` its log categories (name, description), ``readme`` the
+    archive's ``documentation/README.md``; ``compiled`` the translation units (default: ``<identifier>.c`` and the
+    wrapper; a wrapper that includes the model's source compiles alone).  Shared by :func:`generate_fmu` and the quarter car's plant FMU
+    (:func:`switchobs.plants.generate_plant_fmu`).
+
+    Raises
+    ------
+    CodegenError
+        A failed compilation, or no FMI platform name for this system.
+    """
+    wrapper_name = f"{identifier}_fmi{fmi_version}.c"
+    sources = (f"{identifier}.c", wrapper_name) if compiled is None else (*compiled, wrapper_name)
+    library = compile_sources({**files, wrapper_name: wrapper}, sources, f"{identifier}_fmi{fmi_version}",
+                              compiler=compiler, flags=_FLAGS, cache_dir=cache_dir, host=False)
     plat = _platform(fmi_version)
-    description = _model_description(gen, fmi_version, token, variables, sources, step_size)
-    archive = {"modelDescription.xml": description.encode(),
-               f"sources/{gen.prefix}.c": gen.source.encode(), f"sources/{gen.prefix}.h": gen.header.encode(),
+    model_description = _model_description(identifier, description, fmi_version, token, variables, sources,
+                                           step_size, log)
+    archive = {"modelDescription.xml": model_description.encode(),
+               **{f"sources/{name}": text.encode() for name, text in files.items()
+                  if name.startswith(identifier) and name.endswith((".c", ".h"))},
                f"sources/{wrapper_name}": wrapper.encode(),
-               f"documentation/README.md": gen.readme.encode(),
-               f"binaries/{plat}/{gen.prefix}{_shared_suffix()}": library.read_bytes()}
+               "documentation/README.md": readme.encode(),
+               f"binaries/{plat}/{identifier}{_shared_suffix()}": library.read_bytes()}
     if fmi_version == 3:
-        archive["sources/buildDescription.xml"] = _build_description(gen, sources).encode()
+        archive["sources/buildDescription.xml"] = _build_description(identifier, sources).encode()
     buffer = io.BytesIO()
     with zipfile.ZipFile(buffer, "w", compression=zipfile.ZIP_DEFLATED) as zf:
         for name in sorted(archive):
@@ -373,5 +410,6 @@ def generate_fmu(gen: GeneratedObserver, *, fmi_version: int = 3, initial_state:
             info.compress_type = zipfile.ZIP_DEFLATED
             info.external_attr = (0o755 if name.startswith("binaries/") else 0o644) << 16
             zf.writestr(info, archive[name])
-    return GeneratedFMU(prefix=gen.prefix, fmi_version=fmi_version, platform=plat, model_description=description,
-                        wrapper=wrapper, data=buffer.getvalue(), value_references={v.name: v.vr for v in variables})
+    return GeneratedFMU(prefix=identifier, fmi_version=fmi_version, platform=plat,
+                        model_description=model_description, wrapper=wrapper, data=buffer.getvalue(),
+                        value_references={v.name: v.vr for v in variables})

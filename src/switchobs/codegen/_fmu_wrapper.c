@@ -32,12 +32,17 @@ static const double swobs_x0_start[${P}_NX] = { ${x0_start} };
 
 enum swobs_mode { SWOBS_INSTANTIATED, SWOBS_INITIALIZATION, SWOBS_STEP, SWOBS_TERMINATED };
 
+/* The real variables after time, in value-reference order, are one array (v[r - SWOBS_VR_SIG]): a get or set
+ * of a value reference is one bound check and one copy, not a search over the variable kinds. */
+#define SWOBS_NREAL (SWOBS_VR_STATUS - SWOBS_VR_SIG)
+#define SWOBS_SIG(inst) ((inst)->v)
+#define SWOBS_PAR(inst) ((inst)->v + (SWOBS_VR_PAR - SWOBS_VR_SIG))
+#define SWOBS_X0(inst) ((inst)->v + (SWOBS_VR_X0 - SWOBS_VR_SIG))
+#define SWOBS_X(inst) ((inst)->v + (SWOBS_VR_X - SWOBS_VR_SIG))
+#define SWOBS_XO(inst) ((inst)->v + (SWOBS_VR_O - SWOBS_VR_SIG))
+
 typedef struct {
-    swobs_real sig[${P}_NS];
-    swobs_real par[${P}_NP];
-    swobs_real x0[${P}_NX];
-    swobs_real x[${P}_NX];
-    swobs_real xo[SWOBS_NO > 0 ? SWOBS_NO : 1];
+    swobs_real v[SWOBS_NREAL];   /* the signals, the parameters, the initial state, the state, the original ones */
     int32_t status;
     double time;
     enum swobs_mode mode;
@@ -95,7 +100,7 @@ static swobs_status swobs_fail(const swobs_instance *inst, const char *function,
 static swobs_status swobs_update_original(swobs_instance *inst)
 {
 #if SWOBS_NO > 0
-    int32_t code = ${prefix}_original(inst->x, inst->sig, inst->par, inst->xo);
+    int32_t code = ${prefix}_original(SWOBS_X(inst), SWOBS_SIG(inst), SWOBS_PAR(inst), SWOBS_XO(inst));
     if (code != 0) {
         char text[200];
         (void)snprintf(text, sizeof text, "${prefix}_original refused (status %d, %s); the original-coordinate "
@@ -112,11 +117,11 @@ static swobs_status swobs_update_original(swobs_instance *inst)
 static void swobs_reset(swobs_instance *inst)
 {
     size_t i;
-    for (i = 0; i < ${P}_NS; ++i) inst->sig[i] = (swobs_real)swobs_signal_start[i];
-    for (i = 0; i < ${P}_NP; ++i) inst->par[i] = ${prefix}_default_params[i];
-    for (i = 0; i < ${P}_NX; ++i) inst->x0[i] = (swobs_real)swobs_x0_start[i];
-    for (i = 0; i < ${P}_NX; ++i) inst->x[i] = inst->x0[i];
-    for (i = 0; i < (SWOBS_NO > 0 ? SWOBS_NO : 1); ++i) inst->xo[i] = (swobs_real)0;
+    memset(inst->v, 0, sizeof inst->v);      /* the original coordinates start at 0 */
+    for (i = 0; i < ${P}_NS; ++i) SWOBS_SIG(inst)[i] = (swobs_real)swobs_signal_start[i];
+    for (i = 0; i < ${P}_NP; ++i) SWOBS_PAR(inst)[i] = ${prefix}_default_params[i];
+    for (i = 0; i < ${P}_NX; ++i) SWOBS_X0(inst)[i] = (swobs_real)swobs_x0_start[i];
+    for (i = 0; i < ${P}_NX; ++i) SWOBS_X(inst)[i] = SWOBS_X0(inst)[i];
     inst->status = 0;
     inst->time = 0.0;
     inst->mode = SWOBS_INSTANTIATED;
@@ -137,13 +142,9 @@ static swobs_status swobs_get_real(const swobs_instance *inst, const unsigned in
     size_t k;
     if (nvr > 0u && (vr == NULL || value == NULL)) return swobs_fail(inst, "get", "NULL value reference or value array");
     for (k = 0; k < nvr; ++k) {
-        unsigned int r = vr[k];
-        if (r == 0u && SWOBS_FMI == 3) value[k] = inst->time;
-        else if (r >= SWOBS_VR_SIG && r < SWOBS_VR_PAR) value[k] = (double)inst->sig[r - SWOBS_VR_SIG];
-        else if (r >= SWOBS_VR_PAR && r < SWOBS_VR_X0) value[k] = (double)inst->par[r - SWOBS_VR_PAR];
-        else if (r >= SWOBS_VR_X0 && r < SWOBS_VR_X) value[k] = (double)inst->x0[r - SWOBS_VR_X0];
-        else if (r >= SWOBS_VR_X && r < SWOBS_VR_O) value[k] = (double)inst->x[r - SWOBS_VR_X];
-        else if (r >= SWOBS_VR_O && r < SWOBS_VR_STATUS) value[k] = (double)inst->xo[r - SWOBS_VR_O];
+        unsigned int i = vr[k] - SWOBS_VR_SIG;   /* unsigned: time (0) wraps past the end */
+        if (i < SWOBS_NREAL) value[k] = (double)inst->v[i];
+        else if (vr[k] == 0u && SWOBS_FMI == 3) value[k] = inst->time;
         else return swobs_fail(inst, "get", "no real variable has this value reference");
     }
     return SWOBS_OK;
@@ -154,15 +155,14 @@ static swobs_status swobs_set_real(swobs_instance *inst, const unsigned int vr[]
     size_t k;
     if (nvr > 0u && (vr == NULL || value == NULL)) return swobs_fail(inst, "set", "NULL value reference or value array");
     for (k = 0; k < nvr; ++k) {
-        unsigned int r = vr[k];
-        if (r >= SWOBS_VR_SIG && r < SWOBS_VR_PAR) inst->sig[r - SWOBS_VR_SIG] = (swobs_real)value[k];
-        else if (r >= SWOBS_VR_PAR && r < SWOBS_VR_X0) inst->par[r - SWOBS_VR_PAR] = (swobs_real)value[k];
-        else if (r >= SWOBS_VR_X0 && r < SWOBS_VR_X) {
+        unsigned int i = vr[k] - SWOBS_VR_SIG;   /* unsigned: time (0) wraps past the end */
+        if (i < SWOBS_VR_X0 - SWOBS_VR_SIG) inst->v[i] = (swobs_real)value[k];   /* a signal or a tunable parameter */
+        else if (i < SWOBS_VR_X - SWOBS_VR_SIG) {
             /* the initial state is a fixed parameter: set before the initialization ends */
             if (inst->mode != SWOBS_INSTANTIATED && inst->mode != SWOBS_INITIALIZATION) {
                 return swobs_fail(inst, "set", "the initial state can only be set before initialization ends");
             }
-            inst->x0[r - SWOBS_VR_X0] = (swobs_real)value[k];
+            inst->v[i] = (swobs_real)value[k];
         }
         else return swobs_fail(inst, "set", "no settable real variable has this value reference");
     }
@@ -184,7 +184,7 @@ static swobs_status swobs_check_status_refs(const swobs_instance *inst, const un
 static swobs_status swobs_exit_initialization(swobs_instance *inst)
 {
     size_t i;
-    for (i = 0; i < ${P}_NX; ++i) inst->x[i] = inst->x0[i];
+    for (i = 0; i < ${P}_NX; ++i) SWOBS_X(inst)[i] = SWOBS_X0(inst)[i];
     inst->status = 0;
     inst->mode = SWOBS_STEP;
     return swobs_update_original(inst);
@@ -194,7 +194,7 @@ static swobs_status swobs_do_step(swobs_instance *inst, double t, double h)
 {
     int32_t code;
     if (inst->mode != SWOBS_STEP) return swobs_fail(inst, "doStep", "called outside step mode");
-    code = ${prefix}_step(inst->x, inst->sig, inst->par, (swobs_real)h);
+    code = ${prefix}_step(SWOBS_X(inst), SWOBS_SIG(inst), SWOBS_PAR(inst), (swobs_real)h);
     inst->status = code;
     if (code != 0) {
         char text[200];

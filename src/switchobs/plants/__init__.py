@@ -21,6 +21,7 @@ Hybrid integrator (every simulated plant: quarter car, two-axle vehicle, the whe
     :data:`MAX_CASCADE`
 Simulation
     :class:`BrakingScenario`, :func:`simulate`, :class:`BrakingResult`,
+    :func:`generate_plant_fmu` (the quarter car with its ABS as an FMI 3.0 co-simulation FMU),
     :class:`BrakingMetrics`, :class:`Assumption1Status`, :func:`assumption1`, :func:`distance_label` (what the
     travelled distance is called: stopping distance or distance travelled)
 Two-axle vehicle (seed 001 Sec. 3.6)
@@ -35,6 +36,7 @@ Limit cycle of the two-phase ABS
 
 from ._compiled import CompiledEstimator, CompiledObserver
 from ._controllers import ContinuousXbsControl, FivePhaseABS, SixPhaseABS, TwoPhaseABS
+from ._fmu import PLANT_OUTPUTS, generate_plant_fmu
 from ._estimator import LoadInput, Replay, ReplayEstimator, TrueXbs, X2Measurement, XbsEstimator, replay_updates
 from ._hybrid import MAX_CASCADE, Crossing, HybridPlant, HybridRun, integrate
 from ._plot import plot_braking, plot_table41, plot_two_axle
@@ -56,7 +58,7 @@ __all__ = [
     "FivePhaseABS", "SixPhaseABS", "TwoPhaseABS", "ContinuousXbsControl",
     "XbsEstimator", "LoadInput", "TrueXbs", "X2Measurement", "CompiledEstimator", "CompiledObserver",
     "ReplayEstimator", "Replay", "replay_updates", "integrate", "HybridPlant", "HybridRun", "Crossing", "MAX_CASCADE",
-    "BrakingScenario", "BrakingResult", "simulate", "SERIES",
+    "BrakingScenario", "BrakingResult", "simulate", "SERIES", "generate_plant_fmu", "PLANT_OUTPUTS",
     "BrakingMetrics", "Assumption1Status", "Reconvergence", "assumption1",
     "scenario", "scenario_names", "scenario_observer", "scenario_observer_gains", "scenario_description", "table41", "Table41Result",
     "Table41Row", "TABLE41_SEED", "TABLE41_ROADS", "TABLE41_SPEEDS_KMH", "plot_braking", "plot_table41",

@@ -252,6 +252,7 @@ typedef struct {
 
 static int record_row(Loop *L, Record *rec, double t, const double *y) {
     double *r, ref, dref;
+    if (rec == NULL) return 1;
     if (rec->n_rows >= rec->cap_rows) return 0;
     r = rec->rows + N_SERIES * rec->n_rows++;
     reference(L, t, &ref, &dref);
@@ -266,6 +267,7 @@ static int record_row(Loop *L, Record *rec, double t, const double *y) {
 
 static int record_event(Record *rec, double t, int kind, double a, double b) {
     double *e;
+    if (rec == NULL) return 1;
     if (rec->n_events >= rec->cap_events) return 0;
     e = rec->events + EV_COLS * rec->n_events++;
     e[0] = t; e[1] = (double)kind; e[2] = a; e[3] = b;
@@ -302,22 +304,22 @@ static int32_t observer_update(Loop *L, double *xo, const double *params, double
 }
 #endif
 
-#define ADD_EVENT(t, kind, a, b) do { if (!record_event(rec, t, kind, a, b)) { status = ST_EVENTS_FULL; goto done; } } while (0)
+#define ADD_EVENT(t, kind, a, b) do { if (!record_event(rec, t, kind, a, b)) return ST_EVENTS_FULL; } while (0)
 
-/* One braking run.  p: parameters (P_*); ch: road changes (CH_COLS per change); xo: observer state, x[0]
- * set here to the first measurement; op: observer parameters; rows, events: output buffers; out: OUT_*.
- * Returns the status ST_*. */
-int32_t switchobs_braking_run(const double *p, const double *ch, int32_t n_ch, double *xo, const double *op,
-                              double *rows, int64_t cap_rows, double *events, int64_t cap_events, double *out) {
-    Loop Lv, *L = &Lv;
-    Record recv, *rec = &recv;
-    double t = 0.0, y[NY], y1[NY], k1[NY], k_end[NY], g_old[2], g_new[2], h, tb, obs_time = 0.0, p_prev = 0.0;
-    int n_old, i, status = ST_DURATION, located = p[P_LOCATABLE] != 0.0;
-    int64_t steps = 0;
-    double t_end = p[P_T_END], v_stop = p[P_V_STOP];
-    (void)xo; (void)op;
+/* The run between two steps: what switchobs_braking_run and the plant FMU (switchobs.plants.generate_plant_fmu)
+ * advance.  A step is braking_advance (the integrator step with its event location and the clamp), then the
+ * estimator's update (the run's, or the co-simulation master's observer), then braking_settle (the sample,
+ * the road events and the controller's transitions, which read the new estimate). */
+typedef struct {
+    Loop L;
+    double t, y[NY], k1[NY], k_end[NY], g_old[2], h, p_prev, u_mean;
+    int n_old, at_break, found, found_what, found_index;
+    int64_t steps;
+} Braking;
 
-    memset(L, 0, sizeof *L);
+static void braking_start(Braking *B, const double *p, const double *ch, int32_t n_ch) {
+    Loop *L = &B->L;
+    memset(B, 0, sizeof *B);
     L->p = p; L->ch = ch; L->n_ch = n_ch;
     L->a1 = L->b1 = p[P_C1]; L->a2 = L->b2 = p[P_C2]; L->a3 = L->b3 = p[P_C3];
     L->kind = (int)p[P_KIND];
@@ -341,164 +343,204 @@ int32_t switchobs_braking_run(const double *p, const double *ch, int32_t n_ch, d
     } else {
         L->start = p[P_HAS_START] != 0.0 ? -p[P_START_DECEL] : -INFINITY;
     }
+    B->t = 0.0;
+    B->y[0] = p[P_V0] / p[P_R]; B->y[1] = p[P_V0]; B->y[2] = 0.0; B->y[3] = 0.0;
+    rhs(L, B->t, B->y, B->k1);
+    B->n_old = ctrl_guards(L, L->o_x2, L->use_hat ? L->xbs_hat : L->o_xbs, B->g_old);
+}
+
+/* One integrator step from B->t, ending at the first located event, at a breakpoint, or at t_limit (a
+ * communication point of the plant FMU; INFINITY in the run), whichever comes first; then the clamp and the
+ * step's mean pressure rate u_mean. */
+static void braking_advance(Braking *B, double t_limit) {
+    Loop *L = &B->L;
+    const double *p = L->p;
+    double y1[NY], g_new[2], h, tb, best = 2.0, t = B->t, *y = B->y;
+    int n_new, i, clamped, found = -1, n_c = 0;
+    /* candidates: (what, index, where, g0, g1) */
+    int c_what[4], c_index[4];
+    double c_where[4], c_g0[4], c_g1[4];
+    const double *pending;
+
+    h = y[1] >= p[P_V_LOW] ? p[P_DT] : p[P_DT] * y[1] / p[P_V_LOW];
+    {
+        double road_bp = road_breakpoint(L), kink = ctrl_breakpoint(L), bp;
+        kink = kink > t + 1e-12 ? kink : INFINITY;
+        bp = kink < road_bp ? kink : road_bp;
+        tb = bp < p[P_T_END] ? bp : p[P_T_END];
+    }
+    if (t + h > t_limit + 1e-12) h = t_limit - t;
+    B->at_break = t + h >= tb - 1e-12;
+    if (B->at_break) h = tb - t;
+    rk4_step(L, t, y, h, B->k1, y1);
+    rhs(L, t + h, y1, B->k_end);
+    if (p[P_LOCATABLE] != 0.0) {
+        n_new = ctrl_guards(L, L->o_x2, L->use_hat ? L->xbs_hat : L->o_xbs, g_new);
+        for (i = 0; i < n_new && i < B->n_old; ++i) {
+            if (g_new[i] > 0.0) {
+                c_what[n_c] = G_CONTROLLER; c_index[n_c] = i; c_where[n_c] = 0.0;
+                c_g0[n_c] = B->g_old[i]; c_g1[n_c] = g_new[i]; ++n_c;
+            }
+        }
+    }
+    if (y1[1] <= p[P_V_STOP]) {
+        c_what[n_c] = G_STOP; c_index[n_c] = 0; c_where[n_c] = p[P_V_STOP];
+        c_g0[n_c] = p[P_V_STOP] - y[1]; c_g1[n_c] = p[P_V_STOP] - y1[1]; ++n_c;
+    }
+    pending = road_pending(L);
+    if (!L->blending && pending != NULL && pending[CH_AT_TIME] == 0.0 && y1[2] >= pending[CH_WHERE]) {
+        double x_change = pending[CH_WHERE];
+        c_what[n_c] = G_ROAD; c_index[n_c] = 0; c_where[n_c] = x_change;
+        c_g0[n_c] = y[2] - x_change; c_g1[n_c] = y1[2] - x_change; ++n_c;
+    }
+    for (i = 0; i < n_c; ++i) {
+        double g_lo = c_g0[i] > 0.0 ? 0.0 : c_g0[i];
+        double theta = locate_event(L, t, y, h, B->k1, c_what[i], c_index[i], c_where[i], g_lo, c_g1[i]);
+        if (theta < best) { best = theta; found = i; }
+    }
+    B->found = found;
+    B->found_what = found >= 0 ? c_what[found] : 0;
+    B->found_index = found >= 0 ? c_index[found] : 0;
+    if (found >= 0 && best < 1.0) {
+        h *= best;
+        B->at_break = 0;
+        rk4_step(L, t, y, h, B->k1, y1);
+        rhs(L, t + h, y1, B->k_end);
+    }
+    t += h;
+    B->t = t;
+    B->h = h;
+    L->h_step = h;
+    /* clamp: the state projected on its admissible set */
+    clamped = y1[0] < 0.0 || y1[3] < 0.0 || y1[3] > p[P_P_MAX];
+    y[1] = y1[1]; y[2] = y1[2];
+    if (clamped) {
+        double P = y1[3] < 0.0 ? 0.0 : y1[3];
+        y[0] = y1[0] < 0.0 ? 0.0 : y1[0];
+        y[3] = p[P_P_MAX] < P ? p[P_P_MAX] : P;
+        rhs(L, t, y, B->k_end);
+    } else {
+        y[0] = y1[0]; y[3] = y1[3];
+    }
+    B->steps += 1;
+    /* the estimator advances over the step with the mean pressure rate */
+    B->u_mean = (y[3] - B->p_prev) / h;
+    B->p_prev = y[3];
+}
+
+/* After the estimator's update: the sample, the road events, the stall timeout and the controller's
+ * transitions.  Returns the run's status ST_* where it ends, else -1.  rec NULL: nothing recorded; out: where
+ * a cascade is reported (OUT_CASCADE_*). */
+static int braking_settle(Braking *B, Record *rec, double *out) {
+    Loop *L = &B->L;
+    const double *p = L->p;
+    double t = B->t, *y = B->y;
+    int i, changed, rounds, fired;
+    const double *pending;
+
+    if (!record_row(L, rec, t, y)) return ST_ROWS_FULL;
+    changed = L->use_hat;
+    if (B->found >= 0 && B->found_what == G_STOP) return ST_STOPPED;
+    if (B->found >= 0 && B->found_what == G_ROAD) {
+        ADD_EVENT(t, EV_ROAD_POSITION, (double)L->next, y[2]);
+        road_start_change(L, t);
+        changed = 1;
+    }
+    if (B->at_break) {
+        /* _RoadState.at_breakpoint */
+        pending = road_pending(L);
+        if (L->blending && t >= L->t0 + L->dur - 1e-12) {
+            L->a1 = L->b1; L->a2 = L->b2; L->a3 = L->b3;
+            L->blending = 0;
+            changed = 1;
+        } else if (!L->blending && pending != NULL && pending[CH_AT_TIME] != 0.0
+                   && t >= pending[CH_WHERE] - 1e-12) {
+            ADD_EVENT(t, EV_ROAD_TIME, (double)L->next, 0.0);
+            road_start_change(L, t);
+            changed = 1;
+        }
+    }
+    if (changed) rhs(L, t, y, B->k_end);
+    /* _transitions: the stall timeout, then the located guard and the cascade */
+    fired = (B->found >= 0 && B->found_what == G_CONTROLLER) ? B->found_index : -1;
+    if (fired < 0 && t >= L->deadline - 1e-12) {
+        int before = L->phase;
+        ctrl_expire(L, t, L->o_x2, p[P_R] * y[0]);
+        ADD_EVENT(t, EV_TIMEOUT, (double)before, (double)L->phase);
+        rhs(L, t, y, B->k_end);
+    }
+    rounds = 0;
+    for (;;) {
+        if (fired < 0) {
+            B->n_old = ctrl_guards(L, L->o_x2, L->use_hat ? L->xbs_hat : L->o_xbs, B->g_old);
+            for (i = 0; i < B->n_old; ++i) {
+                if (B->g_old[i] > 0.0) { fired = i; break; }
+            }
+            if (fired < 0) break;
+        }
+        rounds += 1;
+        if (rounds > MAX_CASCADE) {
+            out[OUT_CASCADE_INDEX] = (double)fired;
+            out[OUT_CASCADE_PHASE] = (double)L->phase;
+            return ST_CASCADE;
+        }
+        {
+            int before = L->phase;
+            ctrl_fire(L, fired, t, L->o_x2, p[P_R] * y[0]);
+            ADD_EVENT(t, EV_PHASE, (double)before, (double)L->phase);
+        }
+        fired = -1;
+        rhs(L, t, y, B->k_end);
+    }
+    memcpy(B->k1, B->k_end, sizeof B->k1);
+    return t >= p[P_T_END] - 1e-12 ? ST_DURATION : -1;
+}
+
+/* One braking run.  p: parameters (P_*); ch: road changes (CH_COLS per change); xo: observer state, x[0]
+ * set here to the first measurement; op: observer parameters; rows, events: output buffers; out: OUT_*.
+ * Returns the status ST_*. */
+int32_t switchobs_braking_run(const double *p, const double *ch, int32_t n_ch, double *xo, const double *op,
+                              double *rows, int64_t cap_rows, double *events, int64_t cap_events, double *out) {
+    Braking Bv, *B = &Bv;
+    Loop *L = &B->L;
+    Record recv, *rec = &recv;
+    double obs_time = 0.0;
+    int status;
+    (void)xo; (void)op;
+
+    braking_start(B, p, ch, n_ch);
     rec->rows = rows; rec->cap_rows = cap_rows; rec->n_rows = 0;
     rec->events = events; rec->cap_events = cap_events; rec->n_events = 0;
-
-    y[0] = p[P_V0] / p[P_R]; y[1] = p[P_V0]; y[2] = 0.0; y[3] = 0.0;
-    rhs(L, t, y, k1);
     if (L->est == 2) {
 #if OBS_NX > 0
         if (p[P_OBS_MEASURED_FIRST] != 0.0) xo[0] = L->o_x2;
-        L->est_y = L->o_x2; L->est_vx = y[1];
+        L->est_y = L->o_x2; L->est_vx = B->y[1];
         L->estimate = OBS_READOUT(xo);
 #endif
     }
-    if (!record_row(L, rec, t, y)) { status = ST_ROWS_FULL; goto done; }
-    n_old = ctrl_guards(L, L->o_x2, L->use_hat ? L->xbs_hat : L->o_xbs, g_old);
+    if (!record_row(L, rec, B->t, B->y)) { status = ST_ROWS_FULL; goto done; }
     for (;;) {
-        int at_break, found = -1, found_what = 0, n_new, clamped, changed, rounds, fired;
-        double best = 2.0, u_mean;
-        /* candidates: (what, index, where, g0, g1) */
-        int c_what[4], c_index[4], n_c = 0;
-        double c_where[4], c_g0[4], c_g1[4];
-        const double *pending;
-
-        h = y[1] >= p[P_V_LOW] ? p[P_DT] : p[P_DT] * y[1] / p[P_V_LOW];
-        {
-            double road_bp = road_breakpoint(L), kink = ctrl_breakpoint(L), bp;
-            kink = kink > t + 1e-12 ? kink : INFINITY;
-            bp = kink < road_bp ? kink : road_bp;
-            tb = bp < t_end ? bp : t_end;
-        }
-        at_break = t + h >= tb - 1e-12;
-        if (at_break) h = tb - t;
-        rk4_step(L, t, y, h, k1, y1);
-        rhs(L, t + h, y1, k_end);
-        if (located) {
-            n_new = ctrl_guards(L, L->o_x2, L->use_hat ? L->xbs_hat : L->o_xbs, g_new);
-            for (i = 0; i < n_new && i < n_old; ++i) {
-                if (g_new[i] > 0.0) {
-                    c_what[n_c] = G_CONTROLLER; c_index[n_c] = i; c_where[n_c] = 0.0;
-                    c_g0[n_c] = g_old[i]; c_g1[n_c] = g_new[i]; ++n_c;
-                }
-            }
-        }
-        if (y1[1] <= v_stop) {
-            c_what[n_c] = G_STOP; c_index[n_c] = 0; c_where[n_c] = v_stop;
-            c_g0[n_c] = v_stop - y[1]; c_g1[n_c] = v_stop - y1[1]; ++n_c;
-        }
-        pending = road_pending(L);
-        if (!L->blending && pending != NULL && pending[CH_AT_TIME] == 0.0 && y1[2] >= pending[CH_WHERE]) {
-            double x_change = pending[CH_WHERE];
-            c_what[n_c] = G_ROAD; c_index[n_c] = 0; c_where[n_c] = x_change;
-            c_g0[n_c] = y[2] - x_change; c_g1[n_c] = y1[2] - x_change; ++n_c;
-        }
-        for (i = 0; i < n_c; ++i) {
-            double g_lo = c_g0[i] > 0.0 ? 0.0 : c_g0[i];
-            double theta = locate_event(L, t, y, h, k1, c_what[i], c_index[i], c_where[i], g_lo, c_g1[i]);
-            if (theta < best) { best = theta; found = i; }
-        }
-        if (found >= 0) found_what = c_what[found];
-        if (found >= 0 && best < 1.0) {
-            h *= best;
-            at_break = 0;
-            rk4_step(L, t, y, h, k1, y1);
-            rhs(L, t + h, y1, k_end);
-        }
-        t += h;
-        L->h_step = h;
-        /* clamp: the state projected on its admissible set */
-        clamped = y1[0] < 0.0 || y1[3] < 0.0 || y1[3] > p[P_P_MAX];
-        y[1] = y1[1]; y[2] = y1[2];
-        if (clamped) {
-            double P = y1[3] < 0.0 ? 0.0 : y1[3];
-            y[0] = y1[0] < 0.0 ? 0.0 : y1[0];
-            y[3] = p[P_P_MAX] < P ? p[P_P_MAX] : P;
-            rhs(L, t, y, k_end);
-        } else {
-            y[0] = y1[0]; y[3] = y1[3];
-        }
-        steps += 1;
-        /* after_step: the estimator advances over the step */
-        u_mean = (y[3] - p_prev) / h;
-        p_prev = y[3];
-        (void)u_mean;                      /* read by the observer only */
+        braking_advance(B, INFINITY);
         if (L->est == 1) {
             L->xbs_hat = L->o_xbs;
         } else if (L->est == 2) {
 #if OBS_NX > 0
             double t_obs = seconds();
-            int32_t code = observer_update(L, xo, op, L->o_x2, y[1], u_mean, h, out);
+            int32_t code = observer_update(L, xo, op, L->o_x2, B->y[1], B->u_mean, B->h, out);
             obs_time += seconds() - t_obs;
             if (code != 0) {
-                if (!record_row(L, rec, t, y)) { status = ST_ROWS_FULL; goto done; }
-                status = ST_OBSERVER_FAILED;
+                status = record_row(L, rec, B->t, B->y) ? ST_OBSERVER_FAILED : ST_ROWS_FULL;
                 goto done;
             }
             L->xbs_hat = L->estimate;
 #endif
         }
-        if (!record_row(L, rec, t, y)) { status = ST_ROWS_FULL; goto done; }
-        changed = L->use_hat;
-        if (found >= 0 && found_what == G_STOP) { status = ST_STOPPED; goto done; }
-        if (found >= 0 && found_what == G_ROAD) {
-            ADD_EVENT(t, EV_ROAD_POSITION, (double)L->next, y[2]);
-            road_start_change(L, t);
-            changed = 1;
-        }
-        if (at_break) {
-            /* _RoadState.at_breakpoint */
-            pending = road_pending(L);
-            if (L->blending && t >= L->t0 + L->dur - 1e-12) {
-                L->a1 = L->b1; L->a2 = L->b2; L->a3 = L->b3;
-                L->blending = 0;
-                changed = 1;
-            } else if (!L->blending && pending != NULL && pending[CH_AT_TIME] != 0.0
-                       && t >= pending[CH_WHERE] - 1e-12) {
-                ADD_EVENT(t, EV_ROAD_TIME, (double)L->next, 0.0);
-                road_start_change(L, t);
-                changed = 1;
-            }
-        }
-        if (changed) rhs(L, t, y, k_end);
-        /* _transitions: the stall timeout, then the located guard and the cascade */
-        fired = (found >= 0 && found_what == G_CONTROLLER) ? c_index[found] : -1;
-        if (fired < 0 && t >= L->deadline - 1e-12) {
-            int before = L->phase;
-            ctrl_expire(L, t, L->o_x2, p[P_R] * y[0]);
-            ADD_EVENT(t, EV_TIMEOUT, (double)before, (double)L->phase);
-            rhs(L, t, y, k_end);
-        }
-        rounds = 0;
-        for (;;) {
-            if (fired < 0) {
-                n_old = ctrl_guards(L, L->o_x2, L->use_hat ? L->xbs_hat : L->o_xbs, g_old);
-                for (i = 0; i < n_old; ++i) {
-                    if (g_old[i] > 0.0) { fired = i; break; }
-                }
-                if (fired < 0) break;
-            }
-            rounds += 1;
-            if (rounds > MAX_CASCADE) {
-                out[OUT_CASCADE_INDEX] = (double)fired;
-                out[OUT_CASCADE_PHASE] = (double)L->phase;
-                status = ST_CASCADE;
-                goto done;
-            }
-            {
-                int before = L->phase;
-                ctrl_fire(L, fired, t, L->o_x2, p[P_R] * y[0]);
-                ADD_EVENT(t, EV_PHASE, (double)before, (double)L->phase);
-            }
-            fired = -1;
-            rhs(L, t, y, k_end);
-        }
-        memcpy(k1, k_end, sizeof k1);
-        if (t >= t_end - 1e-12) break;
+        status = braking_settle(B, rec, out);
+        if (status >= 0) break;
     }
 done:
-    out[OUT_T] = t;
-    out[OUT_STEPS] = (double)steps;
+    out[OUT_T] = B->t;
+    out[OUT_STEPS] = (double)B->steps;
     out[OUT_ROWS] = (double)rec->n_rows;
     out[OUT_EVENTS] = (double)rec->n_events;
     out[OUT_OBSERVER_TIME] = obs_time;
