@@ -6,15 +6,14 @@ from __future__ import annotations
 
 import math
 from collections.abc import Mapping, Sequence
-from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
 
 from .._figures import panels, save_figure
 from ..loop import X2_MEASUREMENTS
-from ..plants import (GRAVITY, BrakingResult, BrakingScenario, FivePhaseABS, Table41Result, TwoPhaseABS, road,
-                      scenario, scenario_description, scenario_observer, scenario_observer_gains, simulate)
+from ..plants import (GRAVITY, BrakingResult, Table41Result, road, scenario_description, scenario_observer,
+                      scenario_observer_gains)
 from ..experiments import (FIG67_BLOCKED_S, FIG67_ENCODER, FIG67_PHASES, FIG67_SMALL_ECCENTRICITY, FIG67_SPEEDS_KMH,
                            FIG67_SPLIT_M_S, Runs, excursion, fast_cycles, fast_phase, fig67_open_loop, fig67_scenario,
                            locks, longest_stay, reconverged)
@@ -39,10 +38,8 @@ def _gains_text(gains: Mapping[str, float]) -> str:
 def _scenarios_section(runs: Runs) -> list[str]:
     """The built-in scenarios with their default observers: one CLI output and what each seed says vs ours."""
     fig3, fig4, sec34 = (runs.default_run(n) for n in ("hoang-fig3", "hoang-fig4", "aguado-sec34"))
-    free = scenario("hoang-fig4")
-    free = replace(free, controller=replace(free.controller, stall_timeout_s=None))
-    on_snow = free.roads.changes[-1].at_time_s
-    no_exit = simulate(free)
+    no_exit = runs.no_stall_exit
+    on_snow = no_exit.scenario.roads.changes[-1].at_time_s
     slip = no_exit.series["lambda"][no_exit.series["t"] >= on_snow]
     kind36 = scenario_observer("aguado-sec36")
     sec36 = runs.two_axle_default
@@ -176,11 +173,7 @@ def _step_halving_section(runs: Runs) -> list[str]:
              "`test_results_change_less_than_1_percent_when_the_step_is_halved`):", "",
              _row("controller", "braking distance, dt = 1 / 0.5 / 0.25 ms [m]", "relative change 1 → 0.5 ms",
                   "ABS cycles 1 / 0.5 ms"), _row(*["---"] * 4)]
-    for label, ctrl in (("five-phase", FivePhaseABS()), ("two-phase (true XBS)", TwoPhaseABS()),
-                        ("five-phase + tracking (true XBS)", FivePhaseABS(tracking=True))):
-        sc = BrakingScenario("wet-asphalt", speed_m_s=90.0 / 3.6, controller=ctrl)
-        m = [simulate(sc.with_step(dt), estimator="true" if ctrl.uses_xbs else None).metrics
-             for dt in (1e-3, 5e-4, 2.5e-4)]
+    for label, m in runs.step_halving.items():
         d = [x.braking_distance_m for x in m]
         lines.append(_row(label, " / ".join(f"{x:.6f}" for x in d), f"{abs(d[1] / d[0] - 1):.1e}",
                           f"{m[0].abs_cycles} / {m[1].abs_cycles}"))
