@@ -19,6 +19,7 @@ from ..plants import D1_HOANG, D2_HOANG, FivePhaseABS, PoincareMap, SixPhaseABS,
 from ..experiments import (POINCARE_KPS, POINCARE_SETTING, POINCARE_ZETAS, QUARTER_CAR_BETAS, QUARTER_CAR_OBSERVERS,
                            QUARTER_CAR_STEPS, TWO_PHASE_START, Runs)
 from ._markdown import md_table
+from ._repro_cells import ROLE, _fitted
 
 
 #: The observer rates and half-cycle lengths in tau of the decay-rate table of docs/observers.md.
@@ -126,6 +127,8 @@ def _trajectory_section(runs: Runs) -> list[str]:
 
 #: Seed 000 Table I: theta per road, as printed.
 TABLE1_SEED = {"hoang-dry": (-0.53, 25.22, 7.2), "hoang-wet": (-0.36, 8.86, 24.0), "hoang-snow": (-0.05, 0.24, 14.0)}
+#: What was chosen to match Table I: the fit's range and spacing (``fit_exponential``'s defaults).
+TABLE1_FIT = "the range $[-1, 0]$ and its 101 slips were chosen to give these digits"
 
 
 def _minus(text: str) -> str:
@@ -147,9 +150,9 @@ def _table1_section(runs: Runs) -> list[str]:
         fit = fit_exponential(name)
         rows.append([name.removeprefix("hoang-"), _minus("(" + ", ".join(f"{x:.3f}" for x in fit.theta) + ")"),
                      _minus("(" + ", ".join(f"{x:g}" for x in seed) + ")"), f"{fit.residual_rms:.4f}",
-                     _minus(f"{D1_HOANG * D2_HOANG * fit.theta[0]:.1f}")])
-    return lines + [md_table(["road", "$\\theta$ ours", "$\\theta$ seed", "fit RMS", "$\\alpha_0=d_1d_2\\theta_0$"],
-                             rows)]
+                     _minus(f"{D1_HOANG * D2_HOANG * fit.theta[0]:.1f}"), _fitted(TABLE1_FIT)])
+    return lines + [md_table(["road", "$\\theta$ ours", "$\\theta$ seed", "fit RMS", "$\\alpha_0=d_1d_2\\theta_0$",
+                              ROLE], rows)]
 
 
 def _poincare_section(runs: Runs) -> list[str]:
