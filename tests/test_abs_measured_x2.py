@@ -127,7 +127,12 @@ def test_fig67_the_raw_tsa_is_blocked_in_the_hold_before_the_peak_as_the_seed_s_
     res = _fig67_runs("tsa")["tsa"]
     dur, phase, slip, x2 = longest_stay(res)
     assert dur >= FIG67_BLOCKED_S and phase == 5
-    assert -0.12 < slip < -0.03 and abs(x2) < 5.0          # before the friction peak (-16 %), at rest in x2
+    # before the friction peak (-16 %), at rest in x2: ours (-7.8 %, 0.6 m/s²), the seed's (-7 %, 0). The point is
+    # fitted (FIG67_ENCODER's e/r was derived from it); the run is deterministic, and 1 point of slip, 1 m/s² of x2
+    # cover floating-point differences between machines (the six runs over eccentricity phase and initial speed of
+    # docs/reproductions.md all block at (-8, 1)) while staying within 1.5 points of the seed's slip
+    assert slip == pytest.approx(-0.078, abs=0.01) and abs(slip - (-0.07)) < 0.015
+    assert x2 == pytest.approx(0.6, abs=1.0)
     assert res.series["phase"][-1] == 5.0 and excursion(res) < 10.0
     # with our Table 6.1 eccentricity the ripple is too small to fire the hold before the peak: it cycles
     small = _fig67_runs("tsa", encoder=replace(FIG67_ENCODER, eccentricity=FIG67_SMALL_ECCENTRICITY))["tsa"]
@@ -141,8 +146,12 @@ def test_fig67_the_three_stage_loop_cycles_closer_than_the_notch_and_as_a_perfec
     exc = {kind: excursion(res) for kind, res in runs.items()}
     for res in runs.values():
         assert res.status == "stopped" and longest_stay(res)[0] < FIG67_BLOCKED_S and res.metrics.abs_cycles >= 4
-    # Fig. 6.9: about 35 m/s^2 beyond the thresholds, less than the notch's (its delay)
-    assert 20.0 < exc["three-stage"] < 45.0 < exc["notch"]
+    # Fig. 6.9: "about 35 m/s^2" beyond the thresholds (seed), ours 37.1, and less than the notch's (ours 57.5:
+    # its delay). The run is deterministic; an excursion is the largest x2 past a threshold, which a switch
+    # moved by one 1 ms step shifts by up to 2.8 m/s^2 (x2 changes by up to 2800 m/s^3 in this run), so 3 m/s^2 covers
+    # floating-point differences between machines; the seed's 35 stays within 5
+    assert exc["three-stage"] == pytest.approx(37.1, abs=3.0) and abs(exc["three-stage"] - 35.0) < 5.0
+    assert exc["notch"] == pytest.approx(57.5, abs=5.0) and exc["three-stage"] < exc["notch"] - 10.0
     # the compensation removes the whole ripple: what is left is the TSA window's lag
     assert abs(exc["three-stage"] - exc["tsa-ideal"]) < 8.0
 

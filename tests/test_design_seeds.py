@@ -190,8 +190,12 @@ def test_aguado2020_prop1_eq320_gains_and_conditions():
     assert all(d.verify().values())
     # P+ = P-: one P solves both equations with C_plus = C_minus = C
     assert list(d.C_plus) == list(d.C_minus) == [1, 0]
-    assert zero(a - a)  # a is positive by declaration (a = R^2 Fz / J)
+    # the proof's characteristic polynomials, l^2 + k1+ l - a k2+ and l^2 - k1- l - a k2-: with a > 0 (declared,
+    # a = R^2 Fz / J) their coefficients are positive exactly under (3.20)
+    lam = sp.Symbol("lambda")
     assert a.is_positive
+    assert zero(d.A_plus.charpoly(lam).as_expr() - (lam ** 2 + k1 * lam - a * k2))
+    assert zero(d.A_minus.charpoly(lam).as_expr() - (lam ** 2 - d.K_minus[0] * lam - a * d.K_minus[1]))
 
 
 @pytest.mark.parametrize("n", [2, 3, 4, 5])

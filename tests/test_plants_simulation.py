@@ -322,6 +322,31 @@ def test_aguado2020_sec34_the_road_change_not_the_step_limits_the_adaptive_obser
         assert rec.theta[-1][:2] == pytest.approx([dry.c, dry.d], rel=0.05)
 
 
+def test_hoang2014_fig3_perturbed_by_the_25ms_transition_then_reconverged_in_a_fraction_of_a_second():
+    """Seed 000 Fig. 3 (dry -> wet, transitions "which last 25 ms", Sec. IV-D): "highly perturbed by the swift road
+    transition but [...] once the transition is over, it converges again in a fraction of a second"."""
+    from switchobs.experiments import Runs, reconverged
+    from switchobs.plants import scenario_observer
+
+    sc = scenario("hoang-fig3")
+    (change,) = sc.roads.changes
+    assert change.duration_s == pytest.approx(0.025) and change.road.name == "hoang-wet"
+    assert scenario_observer("hoang-fig3") == "xbs4"      # the unknown-road observer of Sec. IV, as the figure's
+    res = Runs().default_run("hoang-fig3")
+    s, t0 = res.series, change.at_time_s
+    err = np.abs(s["xbs_hat"] - s["xbs"])
+    back = next(r for r in res.metrics.reconvergence if r.label == "-> hoang-wet")
+    # perturbed: the error during the transition and just after it is many times the 10 % band it re-enters, while
+    # before the change it stays well inside it
+    assert back.settle_start_s == pytest.approx(t0 + change.duration_s)
+    assert err[(s["t"] >= t0) & (s["t"] < t0 + 0.2)].max() > 20 * back.band
+    assert err[(s["t"] > t0 - 0.5) & (s["t"] < t0)].max() < 0.5 * back.band
+    # re-converged "in a fraction of a second": ours 0.141 s after the end of the transition (docs/reproductions.md);
+    # the run is deterministic, and 20 ms (20 samples of the 1 kHz loop) covers floating-point differences
+    # between machines while staying far below the seed's second
+    assert reconverged(res, "-> hoang-wet") == pytest.approx(0.141, abs=0.02) and back.time_s < 1.0
+
+
 def test_hoang2014_sec5_five_phase_stalls_after_a_road_change_without_timeout():
     sc = scenario("aguado-sec34")
     stuck = simulate(replace(sc, controller=replace(sc.controller, stall_timeout_s=None)))

@@ -157,8 +157,12 @@ def test_aguado2020_sec36_six_phase_with_the_adaptive_observer(sec36):
     for k, axle in (("f", "front"), ("r", "rear")):
         seq = "".join(map(str, bosch_sequence(sec36, k)))
         assert seq.count("34567") >= 5 and m[axle]["abs_cycles"] >= 10
-    # speed underestimated on average (seed: 18 %)
-    assert -25.0 < m["speed_error_mean_pct"] < -5.0
+    # speed underestimated on average: ours -14.9 % (docs/reproductions.md, Sec. 3.6), the seed's -18 %. The run
+    # is deterministic (fixed seeds, fixed steps); one point covers floating-point differences between machines and
+    # still leaves the seed's value out: the filter is ours (the seed's [19] is not described), so the page gives
+    # the 3.1 points of deviation rather than claim the seed's number
+    assert m["speed_error_mean_pct"] == pytest.approx(-14.9, abs=1.0)
+    assert abs(m["speed_error_mean_pct"] - (-18.0)) > 2.0
     # the pressure is drastically reduced on snow (Fig. 3.16)
     dry, snow = (t > 0.75) & (t < 2.5), (t > 3.0) & (t < 5.0)
     assert s["P_f"][snow].mean() < 0.3 * s["P_f"][dry].mean()

@@ -42,9 +42,13 @@ def test_aguado2020_sec36_speed_from_biased_accelerometer(sec36):
     braking = s["t"] > 0.25
     bias = s["ax_meas"] - s["ax"]
     assert bias[0] == pytest.approx(0.5, abs=1e-12) and np.all(np.abs(bias - 0.5) < 0.1)
-    # the filter follows the slipping wheels, so it underestimates the speed (the seed reports 18 % on average)
+    # the filter follows the slipping wheels, so it underestimates the speed: ours -16.4 % on average over these
+    # 4 s of the five-phase run (-14.9 % over the six-phase run of the page), the seed's -18 % on its own run. The
+    # run is deterministic; one point covers floating-point differences between machines. The metric is the mean
+    # of the series' relative error over the braking, which the two must agree on to rounding
     rel = (s["vx_hat"] - s["vx"]) / s["vx"]
-    assert rel[braking].mean() < -0.03 and sec36.metrics["speed_error_mean_pct"] < -3.0
+    assert 100.0 * rel[braking].mean() == pytest.approx(-16.4, abs=1.0)
+    assert sec36.metrics["speed_error_mean_pct"] == pytest.approx(100.0 * rel[braking].mean(), abs=0.05)
     assert s["vx_hat"][0] == s["vx"][0]
 
 

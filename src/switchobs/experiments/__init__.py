@@ -11,6 +11,8 @@ SEC34_*, SEC36_*, sec36_estimators, StateRecorder, ParameterRecorder, Traced
                   -- seed 001 Secs. 3.4 and 3.6: the adaptive observer after road changes, on the two-axle car
 fit_table61_encoder, EncoderFit, notch_from_zero, speed_spread, ...
                   -- seed 001 Table 6.1: the fitted encoder and the bounds behind its cells
+quarter_car, step_halving, continuous_law, six_phase_roads, simulated_return, chain_braking, ChainBraking, ...
+                  -- the set-ups and runs behind the measured numbers of the observer, ABS and encoder pages
 """
 from ._adaptive import (ParameterRecorder, SEC34_AUGMENTED_BETAS, SEC34_BETAS, SEC34_CHANGES, SEC34_FINE_H_MAX,
                         SEC34_GAINS, SEC34_GAMMAS, SEC34_H_MAX, SEC34_LARGE_GAMMA, SEC34_MAX_SUBSTEPS, SEC34_QUICK_S,
@@ -21,21 +23,34 @@ from ._adaptive import (ParameterRecorder, SEC34_AUGMENTED_BETAS, SEC34_BETAS, S
 from ._fig67 import (FIG67_BLOCKED_S, FIG67_ENCODER, FIG67_PHASES, FIG67_SMALL_ECCENTRICITY, FIG67_SPEEDS_KMH,
                      FIG67_SPLIT_M_S, HalfWindowLate, excursion, fast_cycles, fast_phase, fig67_open_loop,
                      fig67_scenario, locks, longest_stay)
+from ._layer_pages import (CHAIN_ABS_SCENARIOS, CHAIN_TSA_WINDOWS, ENCODER_COMMANDS, POINCARE_KPS, POINCARE_SETTING,
+                           POINCARE_ZETAS, QUARTER_CAR_BETAS, QUARTER_CAR_OBSERVERS, QUARTER_CAR_STEPS,
+                           STEP_HALVING_STEPS_S, TWO_PHASE_START, ChainBraking, chain_abs, chain_braking,
+                           chain_tsa_windows, continuous_law, encoder_example, fig66_thresholds_run,
+                           imperfection_encoders, imperfection_runs, no_stall_exit, plant_trajectory, quarter_car,
+                           quarter_car_scenario, robustness_runs, simulated_return, six_phase_roads, step_halving,
+                           step_halving_controllers, two_phase_start)
 from ._runs import (Runs)
-from ._table61 import (ENCODER_COMMANDS, EncoderFit, NOTCH_RAMPS_S, TABLE61_FIT_UNITS, constant_cells,
-                       fit_table61_encoder, notch_from_zero, notch_to_tsa_ratios, plant_trajectory, reference_1024,
+from ._table61 import (EncoderFit, NOTCH_RAMPS_S, TABLE61_FIT_UNITS, constant_cells,
+                       fit_table61_encoder, notch_from_zero, notch_to_tsa_ratios, reference_1024,
                        seed_speed_spread, speed_exponents, speed_spread, tooth_error_bound, trapezoid_spread_bound,
                        tsa_orders)
 
-__all__ = ["ENCODER_COMMANDS", "EncoderFit", "FIG67_BLOCKED_S", "FIG67_ENCODER", "FIG67_PHASES",
-           "FIG67_SMALL_ECCENTRICITY", "FIG67_SPEEDS_KMH", "FIG67_SPLIT_M_S", "HalfWindowLate", "NOTCH_RAMPS_S",
-           "ParameterRecorder", "Runs", "SEC34_AUGMENTED_BETAS", "SEC34_BETAS", "SEC34_CHANGES", "SEC34_FINE_H_MAX",
-           "SEC34_GAINS", "SEC34_GAMMAS", "SEC34_H_MAX", "SEC34_LARGE_GAMMA", "SEC34_MAX_SUBSTEPS", "SEC34_QUICK_S",
+__all__ = ["CHAIN_ABS_SCENARIOS", "CHAIN_TSA_WINDOWS", "ChainBraking", "ENCODER_COMMANDS", "EncoderFit",
+           "FIG67_BLOCKED_S", "FIG67_ENCODER", "FIG67_PHASES", "FIG67_SMALL_ECCENTRICITY", "FIG67_SPEEDS_KMH",
+           "FIG67_SPLIT_M_S", "HalfWindowLate", "NOTCH_RAMPS_S", "POINCARE_KPS", "POINCARE_SETTING",
+           "POINCARE_ZETAS", "ParameterRecorder", "QUARTER_CAR_BETAS", "QUARTER_CAR_OBSERVERS", "QUARTER_CAR_STEPS",
+           "Runs", "SEC34_AUGMENTED_BETAS", "SEC34_BETAS", "SEC34_CHANGES", "SEC34_FINE_H_MAX", "SEC34_GAINS",
+           "SEC34_GAMMAS", "SEC34_H_MAX", "SEC34_LARGE_GAMMA", "SEC34_MAX_SUBSTEPS", "SEC34_QUICK_S",
            "SEC34_WINDOWS", "SEC36_ACTIVATION", "SEC36_CROSSING_TOL_S", "SEC36_FINE_STEP_S", "SEC36_H_MAX",
-           "SEC36_MAX_SUBSTEPS", "SEC36_OBSERVER", "SEC36_WINDOW_S", "StateRecorder", "TABLE61_FIT_UNITS", "Traced",
-           "bosch_sequence", "constant_cells", "excursion", "fast_cycles", "fast_phase", "fig67_open_loop",
-           "fig67_scenario", "fit_table61_encoder", "gram_eigenvalues", "load_excursions", "reconverged", "locks", "longest_stay",
-           "notch_from_zero", "notch_to_tsa_ratios", "plant_trajectory", "psi_excitation", "quick_reapproach",
-           "reference_1024", "sec36_estimators", "sec36_late_excursions", "sec36_settled", "sec36_stays",
-           "seed_speed_spread", "segment_rms", "speed_exponents", "speed_spread", "tooth_error_bound",
-           "trapezoid_spread_bound", "tsa_orders", "upsilon_excitation"]
+           "SEC36_MAX_SUBSTEPS", "SEC36_OBSERVER", "SEC36_WINDOW_S", "STEP_HALVING_STEPS_S", "StateRecorder",
+           "TABLE61_FIT_UNITS", "TWO_PHASE_START", "Traced", "bosch_sequence", "chain_abs", "chain_braking",
+           "chain_tsa_windows", "constant_cells", "continuous_law", "encoder_example", "excursion", "fast_cycles",
+           "fast_phase", "fig66_thresholds_run", "fig67_open_loop", "fig67_scenario", "fit_table61_encoder",
+           "gram_eigenvalues", "imperfection_encoders", "imperfection_runs", "load_excursions", "locks",
+           "longest_stay", "no_stall_exit", "notch_from_zero", "notch_to_tsa_ratios", "plant_trajectory",
+           "psi_excitation", "quarter_car", "quarter_car_scenario", "quick_reapproach", "reconverged",
+           "reference_1024", "robustness_runs", "sec36_estimators", "sec36_late_excursions", "sec36_settled",
+           "sec36_stays", "seed_speed_spread", "segment_rms", "simulated_return", "six_phase_roads",
+           "speed_exponents", "speed_spread", "step_halving", "step_halving_controllers", "tooth_error_bound",
+           "trapezoid_spread_bound", "tsa_orders", "two_phase_start", "upsilon_excitation"]

@@ -1,6 +1,6 @@
 """The runs behind the reproduction pages (``switchobs reproduce``), each made once, on first use, and shared by
 the sections that quote them (``_repro_adaptive``, ``_repro_abs``, ``_repro_encoders``, ``_measured``,
-``_reproductions`` of :mod:`switchobs.report`)."""
+``_reproductions`` of :mod:`switchobs.report`), the runs of the layer pages (:mod:`._layer_pages`) included."""
 
 from __future__ import annotations
 
@@ -13,8 +13,10 @@ from ..loop import INITIAL_STATE, X2_MEASUREMENTS, EncoderX2, EstimatorSpec, xbs
 from ..observers import adaptive_xbs_observer
 from ..plants import (Accelerometer, BrakingResult, Table41Result, TwoAxleResult, TwoAxleScenario, aguado_sec36,
                       scenario, scenario_observer, scenario_observer_gains, simulate, simulate_two_axle, table41)
-from ..sensors import (TABLE61_ENCODER, TABLE61_PROFILES, ChainSettings, Encoder, EstimatorComparison,
-                       compare_estimators, super_twisting, super_twisting_gains, varying_speed)
+from ..plants import BrakingMetrics
+from ..sensors import (TABLE61_ENCODER, TABLE61_PROFILES, ChainResult, ChainSettings, Encoder, EncoderEvents,
+                       EstimatorComparison, compare_estimators, super_twisting, super_twisting_gains, varying_speed)
+from . import _layer_pages as _pages
 from ._fig67 import (FIG67_ENCODER, FIG67_PHASES, FIG67_SMALL_ECCENTRICITY, FIG67_SPEEDS_KMH, HalfWindowLate,
                          fig67_scenario)
 from ._adaptive import (SEC34_MAX_SUBSTEPS, SEC34_H_MAX, SEC36_FINE_STEP_S, SEC36_H_MAX, SEC36_OBSERVER,
@@ -38,6 +40,7 @@ class Runs:
     def __init__(self) -> None:
         self._brakings: dict[tuple[str, EstimatorSpec], BrakingResult] = {}
         self._sec34: dict[tuple[float, float, float], Traced] = {}
+        self._quarter_car: dict[tuple[float, str | None, float | None, float | None], BrakingResult] = {}
 
     def braking(self, name: str, kind: str | EstimatorSpec) -> BrakingResult:
         """The built-in scenario ``name`` with the observer ``kind`` in the loop."""
@@ -170,3 +173,77 @@ class Runs:
             arrivals.append(float(t[np.flatnonzero(err2 > band)[-1] + 1]))
             bands.append(band)
         return steps, arrivals, e1, e2
+
+    # ---------------------------------------------------------------- the layer pages (._layer_pages)
+
+    def quarter_car(self, dt_s: float, kind: str | None = None, gamma: float | None = None,
+                    beta: float | None = None) -> BrakingResult:
+        """:func:`~switchobs.experiments.quarter_car`, made once per argument set."""
+        key = (dt_s, kind, gamma, beta)
+        if key not in self._quarter_car:
+            self._quarter_car[key] = _pages.quarter_car(dt_s, kind, gamma, beta)
+        return self._quarter_car[key]
+
+    @cached_property
+    def step_halving(self) -> dict[str, tuple[BrakingMetrics, ...]]:
+        return _pages.step_halving()
+
+    @cached_property
+    def no_stall_exit(self) -> BrakingResult:
+        """``hoang-fig4`` without the stall exit."""
+        return _pages.no_stall_exit("hoang-fig4")
+
+    @cached_property
+    def continuous_law(self) -> dict[str, BrakingResult]:
+        return _pages.continuous_law()
+
+    @cached_property
+    def fig66_thresholds(self) -> BrakingResult:
+        return _pages.fig66_thresholds_run()
+
+    @cached_property
+    def two_phase_start(self) -> BrakingResult:
+        return _pages.two_phase_start()
+
+    @cached_property
+    def six_phase_roads(self) -> dict[str, BrakingResult]:
+        return _pages.six_phase_roads()
+
+    @cached_property
+    def return_maps(self) -> dict[tuple[float, float], float]:
+        """:func:`~switchobs.experiments.simulated_return` at every gain and start of the Poincare table."""
+        return {(kp, zeta): _pages.simulated_return(kp, zeta) for kp in _pages.POINCARE_KPS
+                for zeta in _pages.POINCARE_ZETAS}
+
+    @cached_property
+    def encoder_cli(self) -> list[tuple[str, EstimatorComparison]]:
+        """What each command of :data:`~switchobs.experiments.ENCODER_COMMANDS` compares."""
+        return [(command, compare_estimators(build(), TABLE61_ENCODER)) for command, build in _pages.ENCODER_COMMANDS]
+
+    @cached_property
+    def encoder_example(self) -> tuple[EncoderEvents, ChainResult]:
+        return _pages.encoder_example()
+
+    @cached_property
+    def imperfections(self) -> list[tuple[str, EstimatorComparison]]:
+        return _pages.imperfection_runs()
+
+    @cached_property
+    def robustness(self) -> list[tuple[str, EstimatorComparison, EstimatorComparison]]:
+        return _pages.robustness_runs()
+
+    @cached_property
+    def chain_braking(self) -> _pages.ChainBraking:
+        return _pages.chain_braking()
+
+    @cached_property
+    def chain_abs(self) -> dict[str, EstimatorComparison]:
+        """The open-loop chain on the closed-loop brakings of :data:`~switchobs.experiments.CHAIN_ABS_SCENARIOS`
+        (their plant trajectories, no observer)."""
+        return _pages.chain_abs({name: _pages.plant_trajectory(self.braking(name, "none"))
+                                 for name in _pages.CHAIN_ABS_SCENARIOS})
+
+    @cached_property
+    def chain_tsa_windows(self) -> dict[str, tuple[float, ...]]:
+        """The TSA window on ``hoang-fig3``'s plant trajectory."""
+        return _pages.chain_tsa_windows(_pages.plant_trajectory(self.braking("hoang-fig3", "none")))

@@ -4,22 +4,19 @@ bounds that explain the cells outside 15 %, and the encoder runs quoted by the p
 from __future__ import annotations
 
 import math
-from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
 
-from ..plants import BrakingResult
-from ..sensors import (TABLE61_ENCODER, TABLE61_PROFILES, TABLE61_SEED, AngleTrajectory, ChainSettings, Encoder,
-                       NotchFilter, braking_trajectory, compare_estimators, constant_speed, controller_times,
-                       time_stamping, trapezoid_speed, varying_speed)
+from ..sensors import (TABLE61_ENCODER, TABLE61_PROFILES, TABLE61_SEED, ChainSettings, Encoder,
+                       NotchFilter, compare_estimators, constant_speed, controller_times,
+                       time_stamping, trapezoid_speed)
 from ..sensors._series import rms_error
 from ._runs import Runs
 
 __all__ = ["notch_from_zero", "TABLE61_FIT_UNITS", "EncoderFit", "constant_cells", "fit_table61_encoder",
            "tooth_error_bound", "speed_spread", "seed_speed_spread", "trapezoid_spread_bound", "NOTCH_RAMPS_S",
-           "notch_to_tsa_ratios", "speed_exponents", "reference_1024", "ENCODER_COMMANDS", "tsa_orders",
-           "plant_trajectory"]
+           "notch_to_tsa_ratios", "speed_exponents", "reference_1024", "tsa_orders"]
 
 
 def notch_from_zero(profile: str, duration_s: float = 10.0) -> tuple[float, float]:
@@ -158,20 +155,6 @@ def reference_1024(profile: str, window: int, duration_s: float = 10.0) -> tuple
     return (rms_error(ref.omega, traj.omega(tsa.t), scored), rms_error(ref.alpha, traj.alpha(tsa.t), scored),
             rms_error(tsa.alpha, ref.alpha, scored))
 
-#: The commands whose output docs/encoders.md shows, and the trajectories they run (as the CLI builds them).
-ENCODER_COMMANDS: tuple[tuple[str, Callable[[], AngleTrajectory]], ...] = (
-    ("switchobs encoder", lambda: constant_speed(1020.0, 10.0)),
-    ("switchobs encoder --profile varying", lambda: varying_speed(1020.0, 10.0)),
-    ("switchobs encoder --profile braking", lambda: braking_trajectory(10.0).trajectory("braking, dry asphalt, 130 km/h")),
-)
-
 def tsa_orders(runs: Runs) -> tuple[float, float]:
     steps, _, e1, e2 = runs.super_twisting
     return (float(np.polyfit(np.log(steps), np.log(e1), 1)[0]), float(np.polyfit(np.log(steps), np.log(e2), 1)[0]))
-
-def plant_trajectory(res: BrakingResult) -> AngleTrajectory:
-    s = res.series
-    keep = np.concatenate([[True], np.diff(s["t"]) > 0])      # event-located steps repeat times
-    return AngleTrajectory.from_samples(s["t"][keep], omega=s["omega"][keep], alpha=s["omega_dot"][keep],
-                                        accel_x=s["ax"][keep], radius_m=res.scenario.vehicle.radius_m,
-                                        name=res.scenario.name)

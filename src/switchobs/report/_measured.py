@@ -14,21 +14,17 @@ import re
 
 import numpy as np
 
-from ..loop import DEFAULT_BETA, DEFAULT_GAMMA, EstimatorSpec, default_method, xbs_estimator
-from ..plants import (D1_HOANG, D2_HOANG, BrakingScenario, ContinuousXbsControl, FivePhaseABS, PoincareMap,
-                      SixPhaseABS, TwoPhaseABS, fit_exponential, road, road_names, scenario, simulate,
-                      simulate_return_map)
-from ..experiments import Runs
+from ..loop import DEFAULT_BETA, DEFAULT_GAMMA, default_method
+from ..plants import D1_HOANG, D2_HOANG, FivePhaseABS, PoincareMap, SixPhaseABS, fit_exponential, road, scenario
+from ..experiments import (POINCARE_KPS, POINCARE_SETTING, POINCARE_ZETAS, QUARTER_CAR_BETAS, QUARTER_CAR_OBSERVERS,
+                           QUARTER_CAR_STEPS, TWO_PHASE_START, Runs)
 from ._markdown import md_table
+from ._repro_cells import ROLE, _fitted
 
 
 #: The observer rates and half-cycle lengths in tau of the decay-rate table of docs/observers.md.
 DECAY_BETAS = (5, 10, 20, 40, 60, 100, 150, 200, 300, 500)
 DECAY_DTAUS = (0.03, 0.1)
-#: The quarter-car comparison of docs/observers.md: plant steps [s], observers (kind, Gamma), rates.
-QUARTER_CAR_STEPS = (1e-3, 2.5e-4)
-QUARTER_CAR_OBSERVERS = (("xbs3", None), ("xbs4", None), ("adaptive", 1e4), ("adaptive", 1e3))
-QUARTER_CAR_BETAS = (60.0, 100.0, 150.0)
 #: Where the quarter-car error is scored: after the start-up transient and above the low-speed end [s], [m/s].
 _SCORED_AFTER_S, _SCORED_ABOVE_M_S = 0.5, 5.0
 #: Assumption 1 on aguado-sec34 (docs/certify.md): the PE window T0 and the regressor window T1 [s].
@@ -68,19 +64,17 @@ def _scored(res) -> np.ndarray:
     return (s["t"] > _SCORED_AFTER_S) & (s["vx"] > _SCORED_ABOVE_M_S)
 
 
-def _quarter_car_rms(dt: float, kind: str, gamma: float | None, beta: float) -> str:
-    sc = BrakingScenario("dry-asphalt", speed_m_s=25.0, dt_s=dt)
-    est = xbs_estimator(EstimatorSpec(kind, beta=beta, gamma=gamma), sc.vehicle, sc.roads.initial)
-    with np.errstate(over="ignore", invalid="ignore"):     # Gamma = 1e4 I at beta = 60 diverges at 1 ms
-        res = simulate(sc, estimator=est, observer_in_loop=False)
+def _quarter_car_rms(runs: Runs, dt: float, kind: str, gamma: float | None, beta: float) -> str:
+    res = runs.quarter_car(dt, kind, gamma, beta)
     m = _scored(res)
-    rms = float(np.sqrt(np.mean((res.series["xbs_hat"][m] - res.series["xbs"][m]) ** 2)))
+    with np.errstate(over="ignore", invalid="ignore"):     # Gamma = 1e4 I at beta = 60 diverges at 1 ms
+        rms = float(np.sqrt(np.mean((res.series["xbs_hat"][m] - res.series["xbs"][m]) ** 2)))
     return f"{rms:#.3g}" if math.isfinite(rms) and rms < 1e3 else "diverges"
 
 
 def _quarter_car_section(runs: Runs) -> list[str]:
     dry = road("dry-asphalt")
-    truth = simulate(BrakingScenario("dry-asphalt", speed_m_s=25.0, dt_s=QUARTER_CAR_STEPS[0]))
+    truth = runs.quarter_car(QUARTER_CAR_STEPS[0])
     xbs = truth.series["xbs"][_scored(truth)]
     head = ("Measured with `switchobs.plants.simulate` (five-phase ABS, dry asphalt of seed 001 Table 2.1, "
             f"25 m/s, observer in parallel, adapter with mean hold, each observer's default step: "
@@ -97,7 +91,7 @@ def _quarter_car_section(runs: Runs) -> list[str]:
         for kind, gamma in QUARTER_CAR_OBSERVERS:
             name = names[kind, gamma] if dt == QUARTER_CAR_STEPS[0] else names[kind, gamma].split(" (")[0]
             rows.append([f"{dt * 1e3:g}", name,
-                         *(_quarter_car_rms(dt, kind, gamma, beta) for beta in QUARTER_CAR_BETAS)])
+                         *(_quarter_car_rms(runs, dt, kind, gamma, beta) for beta in QUARTER_CAR_BETAS)])
     lines = [head, "", md_table(["plant step [ms]", "observer", *(f"$\\beta = {b:g}$" for b in QUARTER_CAR_BETAS)],
                                 rows)]
     lines += ["", "The scenarios' defaults (`switchobs.loop.DEFAULT_BETA`, `DEFAULT_GAMMA`): "
@@ -133,10 +127,8 @@ def _trajectory_section(runs: Runs) -> list[str]:
 
 #: Seed 000 Table I: theta per road, as printed.
 TABLE1_SEED = {"hoang-dry": (-0.53, 25.22, 7.2), "hoang-wet": (-0.36, 8.86, 24.0), "hoang-snow": (-0.05, 0.24, 14.0)}
-#: The two-phase ABS of the Poincare table (docs/abs.md): gains, and where the maps are compared.
-POINCARE_KPS = (10.0, 50.0, 100.0, 300.0, 3000.0)
-POINCARE_SETTING = {"z_ref": 8.0, "chi_a": -0.1, "chi_b": 0.1}
-POINCARE_ZETAS = (-0.9, -0.5, -0.1)
+#: What was chosen to match Table I: the fit's range and spacing (``fit_exponential``'s defaults).
+TABLE1_FIT = "the range $[-1, 0]$ and its 101 slips were chosen to give these digits"
 
 
 def _minus(text: str) -> str:
@@ -158,15 +150,14 @@ def _table1_section(runs: Runs) -> list[str]:
         fit = fit_exponential(name)
         rows.append([name.removeprefix("hoang-"), _minus("(" + ", ".join(f"{x:.3f}" for x in fit.theta) + ")"),
                      _minus("(" + ", ".join(f"{x:g}" for x in seed) + ")"), f"{fit.residual_rms:.4f}",
-                     _minus(f"{D1_HOANG * D2_HOANG * fit.theta[0]:.1f}")])
-    return lines + [md_table(["road", "$\\theta$ ours", "$\\theta$ seed", "fit RMS", "$\\alpha_0=d_1d_2\\theta_0$"],
-                             rows)]
+                     _minus(f"{D1_HOANG * D2_HOANG * fit.theta[0]:.1f}"), _fitted(TABLE1_FIT)])
+    return lines + [md_table(["road", "$\\theta$ ours", "$\\theta$ seed", "fit RMS", "$\\alpha_0=d_1d_2\\theta_0$",
+                              ROLE], rows)]
 
 
 def _poincare_section(runs: Runs) -> list[str]:
     dry = road("dry-asphalt")
     maps = {kp: PoincareMap.from_abs(kp=kp, c=dry.c, d=dry.d, **POINCARE_SETTING) for kp in POINCARE_KPS}
-    z_ref = POINCARE_SETTING["z_ref"]
     zetas = ",".join(f"{z:g}" for z in POINCARE_ZETAS)
     symbols = {"z_ref": "z_{ref}", "chi_a": "\\chi_a", "chi_b": "\\chi_b"}
     lines = ["Dry asphalt, " + ", ".join(f"${symbols[k]}={v:g}$" for k, v in POINCARE_SETTING.items())
@@ -174,10 +165,8 @@ def _poincare_section(runs: Runs) -> list[str]:
     rows = []
     for kp, pm in maps.items():
         fp = pm.fixed_point()
-        errors = []
-        for zeta in POINCARE_ZETAS:
-            _, back = simulate_return_map(zeta * z_ref, kp=kp, c=dry.c, d=dry.d, **POINCARE_SETTING)
-            errors.append(abs(pm(zeta) - back / z_ref) / abs(back / z_ref))
+        errors = [abs(pm(zeta) - runs.return_maps[kp, zeta]) / abs(runs.return_maps[kp, zeta])
+                  for zeta in POINCARE_ZETAS]
         condition = "yes" if fp.alpha > fp.alpha_bound else ("no (yet stable)" if fp.stable else "no (unstable)")
         rows.append([f"{kp:g}", _minus(f"{fp.zeta:.6f}"), _short(fp.derivative), f"{fp.alpha_bound:.2f}",
                      condition, f"{max(errors):.2g}"])
@@ -188,12 +177,8 @@ def _poincare_section(runs: Runs) -> list[str]:
 def _continuous_section(runs: Runs) -> list[str]:
     """Seed 001 Figs. 4.1-4.2: the continuous law (4.2)-(4.3) against the two-phase ABS, adaptive observer
     beside the loop (``switchobs simulate --controller continuous --observer adaptive --parallel``)."""
-    law = ContinuousXbsControl()
-    res = {}
-    for name, controller in (("continuous", law), ("two-phase", TwoPhaseABS())):
-        sc = BrakingScenario("dry-asphalt", speed_m_s=90.0 / 3.6, controller=controller)
-        est = xbs_estimator(EstimatorSpec("adaptive"), sc.vehicle, sc.roads.initial)
-        res[name] = simulate(sc, estimator=est, observer_in_loop=False)
+    res = runs.continuous_law
+    law = res["continuous"].scenario.controller
     cont, two = res["continuous"], res["two-phase"]
     m, a1 = cont.metrics, cont.metrics.assumption1
     s = cont.series
@@ -217,7 +202,7 @@ def _continuous_section(runs: Runs) -> list[str]:
 def _five_phase_section(runs: Runs) -> list[str]:
     """The printed Fig. 6.6 thresholds on the Table 2.1 characteristics, and our defaults."""
     fig66, ours = FivePhaseABS.fig66(), FivePhaseABS()
-    res = simulate(BrakingScenario("dry-asphalt", speed_m_s=120.0 / 3.6, controller=fig66))
+    res = runs.fig66_thresholds
     s = res.series
     k = int(np.argmin(s["lambda"]))
     mu_ratio = float(road("dry-asphalt").mu(s["lambda"][k])) / road("dry-asphalt").peak_friction
@@ -234,9 +219,8 @@ def _five_phase_section(runs: Runs) -> list[str]:
 
 def _two_phase_start_section(runs: Runs) -> list[str]:
     """How the two-phase ABS of ``table41`` (no start-up safeguard) leaves its build-up on the flattest road."""
-    name, speed = "dry-cobblestones", 180.0
-    sc = BrakingScenario(name, speed_m_s=speed / 3.6, controller=TwoPhaseABS(start_decel_m_s2=None))
-    s = simulate(sc).series
+    name, speed = TWO_PHASE_START
+    s = runs.two_phase_start.series
     k = int(np.flatnonzero(s["phase"] != 0)[0])
     slip, optimum = abs(float(s["lambda"][k])), abs(road(name).optimal_slip)
     text = (f"`table41` on the true XBS runs without the safeguard, as printed: at {speed:g} km/h on "
@@ -253,8 +237,7 @@ def _two_phase_start_section(runs: Runs) -> list[str]:
 def _six_phase_section(runs: Runs) -> list[str]:
     """Our six-phase values and the friction utilisation they give on the roads of Table 2.1 at 120 km/h."""
     ours = SixPhaseABS()
-    used = [simulate(BrakingScenario(name, speed_m_s=120.0 / 3.6, controller=ours)).metrics.efficiency
-            for name in road_names()[:7] if road(name).d > 0]   # ice has no friction peak (c3 = 0)
+    used = [res.metrics.efficiency for res in runs.six_phase_roads.values()]   # ice has no friction peak (c3 = 0)
     return [f"Ours: $-a={-ours.a_minus:g}$, $+a={ours.a_plus:g}$, $+A={ours.a_big:g}$ m/s², "
             f"$\\lambda_1={ours.slip_threshold:g}$, $u=({ours.u_release:g}, {ours.u_apply:g}, {ours.u_step:g})$ bar·m/s² "
             "(a grid search for the worst friction utilisation over the roads of Table 2.1 with a friction peak, all "
