@@ -11,6 +11,8 @@ SEC34_*, SEC36_*, sec36_estimators, StateRecorder, ParameterRecorder, Traced
                   -- seed 001 Secs. 3.4 and 3.6: the adaptive observer after road changes, on the two-axle car
 fit_table61_encoder, EncoderFit, notch_from_zero, speed_spread, ...
                   -- seed 001 Table 6.1: the fitted encoder and the bounds behind its cells
+msirdi_wheel, theorem3_reaching, equivalent_injection, identify_theta, MSIRDI_*
+                  -- seed 003 Secs. III-B, IV, V: the vehicle-speed observer, the injections, theta_1 and theta_2
 """
 from ._adaptive import (ParameterRecorder, SEC34_AUGMENTED_BETAS, SEC34_BETAS, SEC34_CHANGES, SEC34_FINE_H_MAX,
                         SEC34_GAINS, SEC34_GAMMAS, SEC34_H_MAX, SEC34_LARGE_GAMMA, SEC34_MAX_SUBSTEPS, SEC34_QUICK_S,
@@ -21,6 +23,10 @@ from ._adaptive import (ParameterRecorder, SEC34_AUGMENTED_BETAS, SEC34_BETAS, S
 from ._fig67 import (FIG67_BLOCKED_S, FIG67_ENCODER, FIG67_PHASES, FIG67_SMALL_ECCENTRICITY, FIG67_SPEEDS_KMH,
                      FIG67_SPLIT_M_S, HalfWindowLate, excursion, fast_cycles, fast_phase, fig67_open_loop,
                      fig67_scenario, locks, longest_stay)
+from ._msirdi import (MSIRDI_DURATION_S, MSIRDI_F_PLUS, MSIRDI_ID_STEP_S, MSIRDI_ID_TAU_S, MSIRDI_INITIAL_ERROR_M_S,
+                      MSIRDI_INJECTION_STEPS, MSIRDI_MARGINS, MSIRDI_SPEED0_M_S, MSIRDI_START_S, MSIRDI_STIFFNESS_N,
+                      Identification, InjectionRow, ReachingRow, equivalent_injection, identify_theta, msirdi_torque,
+                      msirdi_wheel, theorem3_reaching)
 from ._runs import (Runs)
 from ._table61 import (ENCODER_COMMANDS, EncoderFit, NOTCH_RAMPS_S, TABLE61_FIT_UNITS, constant_cells,
                        fit_table61_encoder, notch_from_zero, notch_to_tsa_ratios, plant_trajectory, reference_1024,
@@ -34,7 +40,11 @@ __all__ = ["ENCODER_COMMANDS", "EncoderFit", "FIG67_BLOCKED_S", "FIG67_ENCODER",
            "SEC34_WINDOWS", "SEC36_ACTIVATION", "SEC36_CROSSING_TOL_S", "SEC36_FINE_STEP_S", "SEC36_H_MAX",
            "SEC36_MAX_SUBSTEPS", "SEC36_OBSERVER", "SEC36_WINDOW_S", "StateRecorder", "TABLE61_FIT_UNITS", "Traced",
            "bosch_sequence", "constant_cells", "excursion", "fast_cycles", "fast_phase", "fig67_open_loop",
-           "fig67_scenario", "fit_table61_encoder", "gram_eigenvalues", "load_excursions", "reconverged", "locks", "longest_stay",
+           "fig67_scenario", "fit_table61_encoder", "MSIRDI_DURATION_S", "MSIRDI_F_PLUS", "MSIRDI_ID_STEP_S",
+           "MSIRDI_ID_TAU_S", "MSIRDI_INITIAL_ERROR_M_S", "MSIRDI_INJECTION_STEPS", "MSIRDI_MARGINS",
+           "MSIRDI_SPEED0_M_S", "MSIRDI_START_S", "MSIRDI_STIFFNESS_N", "Identification", "InjectionRow",
+           "ReachingRow", "equivalent_injection", "identify_theta", "msirdi_torque", "msirdi_wheel",
+           "theorem3_reaching", "gram_eigenvalues", "load_excursions", "reconverged", "locks", "longest_stay",
            "notch_from_zero", "notch_to_tsa_ratios", "plant_trajectory", "psi_excitation", "quick_reapproach",
            "reference_1024", "sec36_estimators", "sec36_late_excursions", "sec36_settled", "sec36_stays",
            "seed_speed_spread", "segment_rms", "speed_exponents", "speed_spread", "tooth_error_bound",
