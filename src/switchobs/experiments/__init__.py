@@ -11,7 +11,7 @@ SEC34_*, SEC36_*, sec36_estimators, StateRecorder, ParameterRecorder, Traced
                   -- seed 001 Secs. 3.4 and 3.6: the adaptive observer after road changes, on the two-axle car
 fit_table61_encoder, EncoderFit, notch_from_zero, speed_spread, ...
                   -- seed 001 Table 6.1: the fitted encoder and the bounds behind its cells
-msirdi_wheel, theorem3_reaching, equivalent_injection, identify_theta, MSIRDI_*
+msirdi_runs, msirdi_wheel, theorem3_reaching, equivalent_injection, identify_theta, MSIRDI_*
                   -- seed 003 Secs. III-B, IV, V: the vehicle-speed observer, the injections, theta_1 and theta_2
 """
 from ._adaptive import (ParameterRecorder, SEC34_AUGMENTED_BETAS, SEC34_BETAS, SEC34_CHANGES, SEC34_FINE_H_MAX,
@@ -23,10 +23,10 @@ from ._adaptive import (ParameterRecorder, SEC34_AUGMENTED_BETAS, SEC34_BETAS, S
 from ._fig67 import (FIG67_BLOCKED_S, FIG67_ENCODER, FIG67_PHASES, FIG67_SMALL_ECCENTRICITY, FIG67_SPEEDS_KMH,
                      FIG67_SPLIT_M_S, HalfWindowLate, excursion, fast_cycles, fast_phase, fig67_open_loop,
                      fig67_scenario, locks, longest_stay)
-from ._msirdi import (MSIRDI_DURATION_S, MSIRDI_F_PLUS, MSIRDI_ID_STEP_S, MSIRDI_ID_TAU_S, MSIRDI_INITIAL_ERROR_M_S,
+from ._msirdi import (MSIRDI_COARSE_STEP_S, MSIRDI_DURATION_S, MSIRDI_REACHING_STEP_S, MSIRDI_F_PLUS, MSIRDI_ID_STEP_S, MSIRDI_ID_TAU_S, MSIRDI_INITIAL_ERROR_M_S,
                       MSIRDI_INJECTION_STEPS, MSIRDI_MARGINS, MSIRDI_SPEED0_M_S, MSIRDI_START_S, MSIRDI_STIFFNESS_N,
                       Identification, InjectionRow, ReachingRow, equivalent_injection, identify_theta, msirdi_torque,
-                      msirdi_wheel, theorem3_reaching)
+                      msirdi_wheel, theorem3_reaching, MsirdiRuns, msirdi_runs)
 from ._runs import (Runs)
 from ._table61 import (ENCODER_COMMANDS, EncoderFit, NOTCH_RAMPS_S, TABLE61_FIT_UNITS, constant_cells,
                        fit_table61_encoder, notch_from_zero, notch_to_tsa_ratios, plant_trajectory, reference_1024,
@@ -44,7 +44,7 @@ __all__ = ["ENCODER_COMMANDS", "EncoderFit", "FIG67_BLOCKED_S", "FIG67_ENCODER",
            "MSIRDI_ID_TAU_S", "MSIRDI_INITIAL_ERROR_M_S", "MSIRDI_INJECTION_STEPS", "MSIRDI_MARGINS",
            "MSIRDI_SPEED0_M_S", "MSIRDI_START_S", "MSIRDI_STIFFNESS_N", "Identification", "InjectionRow",
            "ReachingRow", "equivalent_injection", "identify_theta", "msirdi_torque", "msirdi_wheel",
-           "theorem3_reaching", "gram_eigenvalues", "load_excursions", "reconverged", "locks", "longest_stay",
+           "theorem3_reaching", "MSIRDI_COARSE_STEP_S", "MSIRDI_REACHING_STEP_S", "MsirdiRuns", "msirdi_runs", "gram_eigenvalues", "load_excursions", "reconverged", "locks", "longest_stay",
            "notch_from_zero", "notch_to_tsa_ratios", "plant_trajectory", "psi_excitation", "quick_reapproach",
            "reference_1024", "sec36_estimators", "sec36_late_excursions", "sec36_settled", "sec36_stays",
            "seed_speed_spread", "segment_rms", "speed_exponents", "speed_spread", "tooth_error_bound",

@@ -26,7 +26,8 @@ from ..sensors import (AngleTrajectory, SpeedParameterEstimate, StiffnessEstimat
 __all__ = ["MSIRDI_STIFFNESS_N", "MSIRDI_SPEED0_M_S", "MSIRDI_DURATION_S", "MSIRDI_F_PLUS", "MSIRDI_START_S",
            "MSIRDI_INITIAL_ERROR_M_S", "MSIRDI_MARGINS", "MSIRDI_INJECTION_STEPS", "MSIRDI_ID_STEP_S",
            "MSIRDI_ID_TAU_S", "msirdi_torque", "msirdi_wheel", "ReachingRow", "theorem3_reaching", "InjectionRow",
-           "equivalent_injection", "Identification", "identify_theta"]
+           "equivalent_injection", "Identification", "identify_theta", "MSIRDI_COARSE_STEP_S", "MSIRDI_REACHING_STEP_S", "MsirdiRuns",
+           "msirdi_runs"]
 
 Array = npt.NDArray[np.float64]
 
@@ -41,6 +42,8 @@ MSIRDI_F_PLUS = 1500.0
 MSIRDI_START_S = 0.5
 #: Initial error x3_hat(0) - x3(0) (m/s) of the Theorem 3 runs: positive, so that the braking force opposes it.
 MSIRDI_INITIAL_ERROR_M_S = 2.0
+#: Sample step of the Theorem 3 runs (s).
+MSIRDI_REACHING_STEP_S = 1e-4
 #: Margins (beta - eta) / eta of the Theorem 3 runs; the last two violate it.
 MSIRDI_MARGINS: tuple[float, ...] = (2.0, 1.0, 0.5, 0.25, 0.1, -0.1, -0.5)
 #: (delta, tau) of the injection runs: tau halves and delta / tau halves with it, as Sec. IV asks.
@@ -49,6 +52,8 @@ MSIRDI_INJECTION_STEPS: tuple[tuple[float, float], ...] = ((4e-4, 0.02), (1e-4, 
 #: regressors see the slip through it, so the identification needs a fine step.
 MSIRDI_ID_STEP_S = 1e-5
 MSIRDI_ID_TAU_S = 0.01
+#: The step twice as coarse, to show the bias of the identification shrink with the step.
+MSIRDI_COARSE_STEP_S = 2e-5
 
 
 def msirdi_torque(t: float) -> float:
@@ -87,7 +92,7 @@ class ReachingRow:
     final_error_m_s: float   # x3_tilde at the end of the run
 
 
-def theorem3_reaching(run: WheelRun, margins: Sequence[float] = MSIRDI_MARGINS, *, delta_s: float = 1e-4,
+def theorem3_reaching(run: WheelRun, margins: Sequence[float] = MSIRDI_MARGINS, *, delta_s: float = MSIRDI_REACHING_STEP_S,
                       initial_error_m_s: float = MSIRDI_INITIAL_ERROR_M_S) -> tuple[ReachingRow, ...]:
     """The observer (15) with ``beta = (1 + margin) eta`` on the measured speed of ``run``, sampled at ``delta_s``."""
     t = np.arange(0.0, MSIRDI_DURATION_S, delta_s)
@@ -193,3 +198,23 @@ def identify_theta(run: WheelRun, *, delta_s: float = MSIRDI_ID_STEP_S, tau_s: f
                                    start_s=MSIRDI_START_S)
     return Identification(theta1=th1, theta2_remark4=r4, theta2_remark5=r5, stiffness_n=MSIRDI_STIFFNESS_N,
                           radius_m=veh.radius_m)
+
+
+@dataclass(frozen=True)
+class MsirdiRuns:
+    """Every run of this module on one braking (what ``switchobs reproduce`` quotes)."""
+
+    reaching: tuple[ReachingRow, ...]
+    injection: tuple[InjectionRow, ...]
+    identification: Identification           # delta = MSIRDI_ID_STEP_S
+    coarse: Identification                   # delta = MSIRDI_COARSE_STEP_S
+
+
+def msirdi_runs() -> MsirdiRuns:
+    """:func:`theorem3_reaching`, :func:`equivalent_injection` and :func:`identify_theta` (at two steps) on
+    :func:`msirdi_wheel`."""
+    run = msirdi_wheel()
+    traj = run.trajectory()
+    return MsirdiRuns(reaching=theorem3_reaching(run), injection=equivalent_injection(run, trajectory=traj),
+                      identification=identify_theta(run, trajectory=traj),
+                      coarse=identify_theta(run, delta_s=MSIRDI_COARSE_STEP_S, trajectory=traj))
