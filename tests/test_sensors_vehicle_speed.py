@@ -45,12 +45,14 @@ def test_msirdi2008_theorem3_reaching_time_within_its_bound_and_shorter_for_a_la
 
 def test_msirdi2008_theorem3_condition_beta_above_eta_matters(wheel):
     below = {r.margin: r for r in theorem3_reaching(wheel[0], (-0.1, -0.5))}
-    # beta = eta / 2 is below the least deceleration after the first 0.1 s: the error only grows
+    # beta = eta / 2 is below the mean deceleration: the error grows on average and x3 is never reached
     never = below[-0.5]
+    assert never.beta < never.mean_xi2
     assert math.isnan(never.reached_s) and abs(never.final_error_m_s) > 2.0 * MSIRDI_INITIAL_ERROR_M_S
     # beta = 0.9 eta reaches x3 (the mean deceleration is below beta) but loses the sliding motion whenever
     # |xi2| > beta: the error leaves the band (beta + eta) delta by more than ten times
     lost = below[-0.1]
+    assert lost.beta > lost.mean_xi2
     assert math.isfinite(lost.reached_s) and lost.after_max_m_s > 10.0 * lost.band_m_s
 
 

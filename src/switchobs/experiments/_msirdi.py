@@ -84,6 +84,7 @@ class ReachingRow:
     margin: float            # (beta - eta) / eta
     beta: float              # m/s^2
     eta: float               # m/s^2
+    mean_xi2: float          # mean |xi2| over the run (m/s^2): what beta must beat on average to reach x3
     reached_s: float         # first sign change of x3_tilde, nan if none
     bound_s: float           # |e0| / (beta - eta), inf if beta <= eta
     lower_s: float           # |e0| / (beta + eta): no observer reaches sooner
@@ -98,6 +99,7 @@ def theorem3_reaching(run: WheelRun, margins: Sequence[float] = MSIRDI_MARGINS, 
     t = np.arange(0.0, MSIRDI_DURATION_S, delta_s)
     v = np.interp(t, run.t, run.speed_m_s)
     eta = _eta(run)
+    mean = float(np.mean(np.abs(_xi2(run))))
     rows = []
     for m in margins:
         beta = (1.0 + m) * eta
@@ -106,7 +108,7 @@ def theorem3_reaching(run: WheelRun, margins: Sequence[float] = MSIRDI_MARGINS, 
                                      x3_0=float(v[0]) + initial_error_m_s)
         t1 = obs.reaching_time_s
         after = np.abs(obs.error[t >= t1]) if math.isfinite(t1) else np.array([math.nan])
-        rows.append(ReachingRow(margin=m, beta=beta, eta=eta, reached_s=t1,
+        rows.append(ReachingRow(margin=m, beta=beta, eta=eta, mean_xi2=mean, reached_s=t1,
                                 bound_s=obs.gain.reaching_time_bound(initial_error_m_s),
                                 lower_s=abs(initial_error_m_s) / (beta + eta), band_m_s=(beta + eta) * delta_s,
                                 after_max_m_s=float(after.max()), final_error_m_s=float(obs.error[-1])))
@@ -174,11 +176,11 @@ class Identification:
         return {"theta_11": r * c, "theta_12": r * r * c, "theta_21": c, "theta_22": r * c}
 
     @property
-    def identified(self) -> dict[str, tuple[float, float, float]]:
+    def identified(self) -> dict[str, tuple[float, ...]]:
         """``theta_11, theta_12`` (V-A), ``theta_21`` (Remark 4), ``theta_21, theta_22`` (Remark 5)."""
         t1, r4, r5 = self.theta1.history[-1], self.theta2_remark4.history[-1], self.theta2_remark5.history[-1]
         return {"theta_11": (float(t1[0]),), "theta_12": (float(t1[1]),), "theta_21": (float(r4[0]), float(r5[0])),
-                "theta_22": (float(r5[1]),)}  # type: ignore[dict-item]
+                "theta_22": (float(r5[1]),)}
 
 
 def identify_theta(run: WheelRun, *, delta_s: float = MSIRDI_ID_STEP_S, tau_s: float = MSIRDI_ID_TAU_S,

@@ -53,23 +53,24 @@ def _msirdi_speed_section(runs: Runs) -> list[str]:
              f"$\\delta = {_step(MSIRDI_REACHING_STEP_S)}$ s; $t_1$ is the first sign "
              "change of $\\tilde x_3$:", "",
              _row("$(\\beta-\\eta)/\\eta$", "$\\beta$ [m/s²]", "$t_1$ [s]", "bound $\\lvert e_0\\rvert/(\\beta-\\eta)$ [s]",
-                  "least $\\lvert e_0\\rvert/(\\beta+\\eta)$ [s]", "max $\\lvert\\tilde x_3\\rvert$ after $t_1$ [m/s]",
-                  "band $(\\beta+\\eta)\\delta$ [m/s]"), _row(*["---"] * 7)]
+                  "least $\\lvert e_0\\rvert/(\\beta+\\eta)$ [s]", "max $\\lvert\\tilde x_3\\rvert$ after $t_1$ [mm/s]",
+                  "band $(\\beta+\\eta)\\delta$ [mm/s]"), _row(*["---"] * 7)]
     for r in ms.reaching:
         reached = "never" if r.reached_s != r.reached_s else f"{r.reached_s:.4f}"
-        after = "–" if r.after_max_m_s != r.after_max_m_s else f"{r.after_max_m_s:.4f}"
+        after = "–" if r.after_max_m_s != r.after_max_m_s else f"{1e3 * r.after_max_m_s:.2f}"
         bound = "none ($\\beta \\le \\eta$)" if r.bound_s == float("inf") else f"{r.bound_s:.4f}"
-        lines.append(_row(_pc(r.margin), f"{r.beta:.2f}", reached, bound, f"{r.lower_s:.4f}",
-                          after, f"{r.band_m_s:.4f}"))
+        lines.append(_row(_pc(r.margin), f"{r.beta:.2f}", reached, bound, f"{r.lower_s:.4f}", after,
+                          f"{1e3 * r.band_m_s:.2f}"))
     lo, hi = min(ok, key=lambda r: r.margin), max(ok, key=lambda r: r.margin)
     near, far = bad[min(bad, key=lambda m: abs(m))], bad[min(bad)]
     lines += ["", f"Every $t_1$ lies between its two bounds and falls as the margin grows ({lo.reached_s:.3f} s at "
               f"{_pc(lo.margin)} to {hi.reached_s:.3f} s at {_pc(hi.margin)}); after $t_1$ the error stays in the "
               "discrete band. Below $\\eta$ the theorem promises nothing, and the runs show why: at "
               f"$\\beta = {1 + near.margin:.1f}\\eta$ the estimate reaches $x_3$ at {near.reached_s:.3f} s (the mean "
-              f"deceleration is below $\\beta$) but loses the sliding motion whenever $\\lvert\\xi_2\\rvert > \\beta$ "
+              f"$\\lvert\\xi_2\\rvert$, {near.mean_xi2:.2f} m/s², is below $\\beta$) but loses the sliding motion whenever $\\lvert\\xi_2\\rvert > \\beta$ "
               f"(error up to {near.after_max_m_s:.3f} m/s, {near.after_max_m_s / near.band_m_s:.0f} times the band); "
-              f"at $\\beta = {1 + far.margin:.1f}\\eta$ it never does (error {far.final_error_m_s:.2f} m/s at the end).",
+              f"at $\\beta = {1 + far.margin:.1f}\\eta$, below the mean, it never does (error {far.final_error_m_s:.2f} m/s "
+              "at the end).",
               "", "**(20)–(21), equivalent output injection.** *Seed:* $\\bar z_2 = \\xi_1$, $\\bar z_3 = \\xi_2$ when "
               "$\\tau \\to 0$ and $\\delta/\\tau \\to 0$, no number. *Ours:* the first-order low-pass of time constant "
               "$\\tau$ on $z_2$ (super-twisting, $f_1 = u/J$) and on $z_3$ ($\\beta = 2\\eta$), against the unfiltered "
