@@ -15,7 +15,8 @@ import casadi as ca
 import numpy as np
 import pytest
 
-from switchobs.codegen import GeneratedObserver, StepStatus, generate_observer, generate_super_twisting
+from switchobs.codegen import (GeneratedObserver, StepStatus, generate_observer, generate_super_twisting,
+                               generate_vehicle_speed)
 from switchobs.codegen._emit import kernel
 from switchobs.exceptions import CodegenError
 from switchobs.design import design
@@ -73,6 +74,7 @@ def generated_cases() -> list[tuple[str, GeneratedObserver]]:
                 cases.append((f"{name}-{real}-{method}", builtin(name, real, method)))
     cases += [(f"adaptive-{r}", adaptive(r)) for r in ("double", "float")]
     cases += [(f"super-twisting-{r}", generate_super_twisting(400.0, 2000.0, real=r)) for r in ("double", "float")]
+    cases += [(f"vehicle-speed-{r}", generate_vehicle_speed(24.0, real=r)) for r in ("double", "float")]
     rng = np.random.default_rng(11)
     for n in range(1, 7):
         text = random_model_toml(rng, n)
@@ -104,7 +106,7 @@ def test_generated_c_compiles_clean_with_strict_flags(tmp_path, cc):
     also with the branch hints on."""
     cc = compiler(cc)
     cases = generated_cases()
-    assert len(cases) == 3 * 2 * len(METHODS) + 2 + 2 + 12 + 6 + 2 + 2
+    assert len(cases) == 3 * 2 * len(METHODS) + 2 + 2 + 2 + 12 + 6 + 2 + 2
     for i, (label, gen) in enumerate(cases):
         src = written(gen, tmp_path / label)
         hints = ["-DSWITCHOBS_BRANCH_HINTS"] if i % 2 else []

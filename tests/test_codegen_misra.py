@@ -25,7 +25,8 @@ import casadi as ca
 import numpy as np
 import pytest
 
-from switchobs.codegen import GeneratedObserver, compile_sources, generate_observer, generate_super_twisting
+from switchobs.codegen import (GeneratedObserver, compile_sources, generate_observer, generate_super_twisting,
+                               generate_vehicle_speed)
 from switchobs.codegen._emit import kernel
 from switchobs.codegen._misra import CATEGORY, deviations, functions, identifier_clashes
 from switchobs.design import design
@@ -212,7 +213,7 @@ def test_ranged_build_has_no_required_finding_and_its_advisory_ones_are_recorded
 def _matrix() -> list[tuple[str, str, str, str | None]]:
     cases = [(name, real, method, h_max) for name in ("abs-xbs4", "abs-adaptive2", "user")
              for real in REALS for method, h_max in STEPS]
-    cases += [(kind, real, "rk4" if kind == "adaptive" else "euler", h_max) for kind in ("adaptive", "super-twisting")
+    cases += [(kind, real, "rk4" if kind == "adaptive" else "euler", h_max) for kind in ("adaptive", "super-twisting", "vehicle-speed")
               for real in REALS for h_max in ((None, "1/50") if kind == "adaptive" else (None,))]
     return cases
 
@@ -227,6 +228,8 @@ def test_matrix_has_no_required_finding_and_its_advisory_ones_are_recorded(tmp_p
         gen = adaptive(real, h_max)
     elif name == "super-twisting":
         gen = generate_super_twisting(400.0, 2000.0, real=real)
+    elif name == "vehicle-speed":
+        gen = generate_vehicle_speed(24.0, real=real)
     else:
         gen = builtin(name, real, method, h_max)
     rules = check(gen, findings(exe, gen, tmp_path))

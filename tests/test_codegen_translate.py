@@ -18,12 +18,13 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 from switchobs.codegen import (CObserver, StepStatus, compile_observer, default_prefix, generate_observer,
-                               generate_super_twisting)
+                               generate_super_twisting, generate_vehicle_speed)
 from switchobs.design import design
+from switchobs.exceptions import CodegenError
 from switchobs.model import Model, builtin_model
 from switchobs.observers import (AdaptiveSwitchedObserver, ErrorCode, SwitchedObserver, adaptive_xbs_observer,
                                  xbs3_observer, xbs4_observer)
-from switchobs.sensors import super_twisting, super_twisting_gains
+from switchobs.sensors import super_twisting, super_twisting_gains, vehicle_speed_gain, vehicle_speed_observer
 
 #: Agreement required of the double build (relative, norm-wise).
 RTOL_DOUBLE = 1e-12
@@ -320,6 +321,24 @@ def test_msirdi2008_super_twisting_float_tracks_double():
     late = slice(2000, None)
     assert np.sqrt(np.mean((flt[late, 1] - dbl[late, 1]) ** 2)) < 0.01 * 60
     assert abs(np.mean(flt[late, 1]) - 60.0) < 0.5 and abs(np.mean(dbl[late, 1]) - 60.0) < 0.5
+
+
+def test_msirdi2008_eq15_vehicle_speed_c_equals_sensors_reference():
+    g = vehicle_speed_gain(12.0)
+    t = np.cumsum(np.r_[0.0, np.random.default_rng(7).uniform(2e-4, 6e-4, size=3000)])  # irregular samples
+    x3 = 36.0 - 8.0 * t + 0.3 * np.sin(25 * t)
+    ref = vehicle_speed_observer(t, x3, gain=g, x3_0=38.0)
+    c = compile_observer(generate_vehicle_speed(g.beta))
+    assert c.state_names == ("x3_hat", "z3") and c.signal_names == ("x3",)
+    x = np.array([38.0, 0.0])
+    dts = np.diff(t)
+    for i in range(t.size - 1):
+        x = c.step(x, [x3[i]], dts[i])
+        assert rel_err(x, np.array([ref.x3_hat[i + 1], ref.z3[i]])) <= RTOL_DOUBLE
+    # Theorem 3: |dx3/dt| <= 8 + 7.5 < beta = 24, so the sliding motion is reached and kept
+    assert ref.reaching_time_s < 2.0 / (g.beta - 15.5) and abs(x[0] - x3[-1]) < (g.beta + 15.5) * 6e-4
+    with pytest.raises(CodegenError, match=r"beta = -1.0 must be a finite number > 0 \(seed 003 eq. \(15\)\)"):
+        generate_vehicle_speed(-1.0)
 
 
 def test_error_codes_shared_with_python_reference():

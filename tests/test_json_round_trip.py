@@ -247,6 +247,15 @@ def _samples() -> dict[str, Callable[[], tuple[Any, dict[str, Any]]]]:
         return sensors.identify_stiffness(st.t, st.z2 + 1.0, st.x2_hat + 60.0, speed, inertia_kg_m2=1.2,
                                           start_s=0.05)
 
+    def vehicle_speed():
+        t = np.arange(0.0, 0.5, 1e-3)
+        return sensors.vehicle_speed_observer(t, 30.0 - 5.0 * t, gain=sensors.vehicle_speed_gain(6.0), x3_0=31.0)
+
+    def speed_parameters():
+        run = vehicle_speed()
+        return sensors.identify_speed_parameters(run.t, run.z3 - 6.0, 100.0 + 0.0 * run.t, 30.0 - 5.0 * run.t,
+                                                 mass_kg=290.0, start_s=0.1)
+
     def summary():
         rows = _sweep().results
         return sweep.summary_table([r for r in rows if r.case.kind == "braking"], rows=("road",),
@@ -355,6 +364,9 @@ def _samples() -> dict[str, Callable[[], tuple[Any, dict[str, Any]]]]:
         "SuperTwistingGains": lambda: plain(_super_twisting().gains),
         "SuperTwistingRun": lambda: arrays(_super_twisting()),
         "StiffnessEstimate": lambda: arrays(stiffness()),
+        "VehicleSpeedGain": lambda: plain(vehicle_speed().gain),
+        "VehicleSpeedRun": lambda: arrays(vehicle_speed()),
+        "SpeedParameterEstimate": lambda: arrays(speed_parameters()),
         "EstimatorComparison": lambda: arrays(_comparison()),
         # sweep
         "BrakingCase": lambda: plain(_sweep().results[0].case),

@@ -7,7 +7,7 @@ import importlib
 
 import pytest
 
-MODULES = ["_chain", "_encoder", "_super_twisting", "_three_stage", "_tsa"]
+MODULES = ["_chain", "_encoder", "_super_twisting", "_three_stage", "_tsa", "_vehicle_speed"]
 
 
 @pytest.mark.parametrize("name", MODULES)

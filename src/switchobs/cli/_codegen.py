@@ -24,8 +24,12 @@ from ._integration import add_integration_arguments, integration_files
 
 __all__ = ["register"]
 
-#: Pseudo-model name of the super-twisting observer of seed 003 (not a switchobs model).
+#: Pseudo-model names of the sliding-mode observers of seed 003 (not switchobs models).
 SUPER_TWISTING = "super-twisting"
+VEHICLE_SPEED = "vehicle-speed"
+#: Their runtime gains, the rule those follow and the equation of their Euler scheme.
+SLIDING_MODE = {SUPER_TWISTING: (("lam", "alpha"), "seed 003 (9), rule (12)", "13"),
+                VEHICLE_SPEED: (("beta",), "seed 003 (15), Theorem 3: beta > eta", "15")}
 #: The names of ``switchobs.codegen.TARGETS`` (listed here so that ``--help`` imports no numpy).
 TARGET_NAMES = ("host", "cortex-m4f", "cortex-m7")
 
@@ -34,13 +38,14 @@ def register(sub: argparse._SubParsersAction) -> None:
     p = sub.add_parser("codegen",
                        description="Generate C for the switched observer of MODEL (built-in or TOML), the "
                                    "adaptive observer of Aguado-Rojas 2020 (3.4) with --unknown, or the super-twisting "
-                                   f"observer of M'Sirdi et al. 2008 with MODEL = {SUPER_TWISTING}.")
+                                   f"observer of M'Sirdi et al. 2008 with MODEL = {SUPER_TWISTING} (its vehicle-speed "
+                                   f"observer (15): MODEL = {VEHICLE_SPEED}).")
     p.add_argument("model", metavar="MODEL",
                    help=f"built-in model ({', '.join(builtin_names())}), a TOML file, "
-                        f"or {SUPER_TWISTING}")
+                        f"{SUPER_TWISTING} or {VEHICLE_SPEED}")
     p.add_argument("--param", action="append", default=[], metavar="NAME=VALUE",
                    help="default of a runtime parameter or value of a design symbol (repeatable), e.g. "
-                        "--param beta1=40 --param c=24; for super-twisting: lam and alpha")
+                        "--param beta1=40 --param c=24; for super-twisting: lam and alpha; for vehicle-speed: beta")
     target = p.add_mutually_exclusive_group()
     target.add_argument("--spectrum", help='poles of A_plus, e.g. "-40,-60,-60" or "-beta1,-beta2,-beta2" '
                         "(give the betas with --param)")
@@ -67,7 +72,7 @@ def register(sub: argparse._SubParsersAction) -> None:
                         "default 0.001); the state starts at 0")
     p.add_argument("--method", choices=METHODS, default=None,
                    help="discretisation, signals held over the step (default radau3; rk4 with --unknown, as the "
-                        "adaptive observer takes explicit steps only, and beyond 12 states; super-twisting: euler); midpoint and radau3 "
+                        "adaptive observer takes explicit steps only, and beyond 12 states; super-twisting and vehicle-speed: euler); midpoint and radau3 "
                         "are implicit and certified for every dt, rk4 and euler are not (a note says so)")
     p.add_argument("--h-max", metavar="auto|VALUE",
                    help="bound on the step |s|*dt in the rescaled time: a step beyond it is split into "
@@ -164,7 +169,7 @@ def _discrete_certificate(model: Model, gains: GainDesign, values: dict[str, str
 
 def run(args: argparse.Namespace) -> int:
     check_output_directory(args.out, what="the generated C into")
-    from ..codegen import generate_observer, generate_super_twisting
+    from ..codegen import generate_observer, generate_super_twisting, generate_vehicle_speed
 
     from ..codegen import target_real
 
@@ -176,27 +181,29 @@ def run(args: argparse.Namespace) -> int:
     values = parse_params(args.param)
     command = _command(args)
     model, unknown = None, []
-    if args.model == SUPER_TWISTING:
-        extra = sorted(set(values) - {"lam", "alpha"})
-        missing = [k for k in ("lam", "alpha") if k not in values]
+    if args.model in SLIDING_MODE:
+        names, rule, eq = SLIDING_MODE[args.model]
+        extra = sorted(set(values) - set(names))
+        missing = [k for k in names if k not in values]
         if extra or missing:
-            raise CodegenError(f"{SUPER_TWISTING} takes --param lam=... and --param alpha=... (seed 003 (9), rule "
-                               f"(12)); missing {missing}, unexpected {extra}")
+            raise CodegenError(f"{args.model} takes " + " and ".join(f"--param {k}=..." for k in names)
+                               + f" ({rule}); missing {missing}, unexpected {extra}")
         if args.spectrum or args.charpoly or args.gains_plus or args.gains_minus or args.unknown or args.gamma:
-            raise CodegenError(f"{SUPER_TWISTING} has no gain design or unknowns; give only lam and alpha")
+            raise CodegenError(f"{args.model} has no gain design or unknowns; give only {' and '.join(names)}")
         if args.method not in (None, "euler"):
-            raise CodegenError(f"{SUPER_TWISTING} is discretised by the Euler scheme of seed 003 (13); "
+            raise CodegenError(f"{args.model} is discretised by the Euler scheme of seed 003 ({eq}); "
                                f"--method {args.method} is not available")
         if args.h_max is not None or args.max_substeps is not None:
-            raise CodegenError(f"{SUPER_TWISTING} has no rescaled-time certificate; --h-max and --max-substeps "
+            raise CodegenError(f"{args.model} has no rescaled-time certificate; --h-max and --max-substeps "
                                "apply to the switched observers")
         try:
-            lam, alpha = float(values["lam"]), float(values["alpha"])
+            gains = [float(values[k]) for k in names]
         except ValueError:
-            raise CodegenError(f"lam and alpha must be numbers, got {values['lam']!r}, {values['alpha']!r}") from None
-        gen = generate_super_twisting(lam, alpha, real=args.real,
-                                      prefix="switchobs_super_twisting" if args.prefix is None else args.prefix,
-                                      command=command)
+            raise CodegenError(f"{' and '.join(names)} must be numbers, got "
+                               + ", ".join(repr(values[k]) for k in names)) from None
+        generate = generate_super_twisting if args.model == SUPER_TWISTING else generate_vehicle_speed
+        gen = generate(*gains, real=args.real, command=command,
+                       prefix=f"switchobs_{args.model.replace('-', '_')}" if args.prefix is None else args.prefix)
     else:
         if not (args.spectrum or args.charpoly or args.gains_plus):
             raise SpectrumError("give the gains with --spectrum, --charpoly or --gains-plus")

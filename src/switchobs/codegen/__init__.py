@@ -5,6 +5,7 @@ Public API
 generate_observer   -- model + gains -> GeneratedObserver (``<prefix>.h``, ``<prefix>.c``, README); switched
                        observer (seed 000 (8)-(9)) or, with ``unknown``, the adaptive observer (seed 001 (3.4))
 generate_super_twisting -- the super-twisting observer of seed 003 (8)-(9), Euler scheme (13)
+generate_vehicle_speed -- the sliding-mode observer of the vehicle speed of seed 003 (15), forward Euler
 GeneratedObserver   -- the generated files and what they mean (names, defaults, checks, stack)
 compile_observer    -- compile with the system C compiler (cached) and bind with ctypes
 CObserver           -- the compiled observer: ``step`` / ``run`` like the Python reference observers, ``run_dt``
@@ -34,7 +35,8 @@ from ._a2l import a2l_symbols, calibration_files, elf_symbols, generate_a2l
 from ._build import CObserver, cache_directory, compile_observer, compile_sources, find_compiler, load_library
 from ._fmu import (FMI_VERSIONS, FMUVariable, GeneratedFMU, build_fmu, fmi3_stubs, fmi_headers, fmu_token,
                    generate_fmu)
-from ._generate import REALS, GeneratedObserver, default_prefix, generate_observer, generate_super_twisting
+from ._generate import (REALS, GeneratedObserver, default_prefix, generate_observer, generate_super_twisting,
+                        generate_vehicle_speed)
 from ._fuzz import fuzz_harness
 from ._proof import ProofResult, proof_driver, proof_record, prove
 from ._target import (TARGETS, FunctionStack, PilResult, Target, TargetBuild, TargetFootprint, measure_footprint,
@@ -44,6 +46,6 @@ __all__ = ["CObserver", "FMI_VERSIONS", "FMUVariable", "GeneratedFMU", "build_fm
            "fmu_token", "GeneratedObserver", "a2l_symbols", "calibration_files",
            "elf_symbols", "generate_a2l", "generate_fmu", "Guard", "METHODS", "REALS", "STATUS_TEXT", "StepStatus",
            "cache_directory", "compile_observer", "compile_sources", "find_compiler", "default_prefix", "domain_guards",
-           "generate_observer", "generate_super_twisting", "load_library", "TARGETS", "Target", "target_real",
+           "generate_observer", "generate_super_twisting", "generate_vehicle_speed", "load_library", "TARGETS", "Target", "target_real",
            "target_build", "TargetBuild", "measure_footprint", "TargetFootprint", "FunctionStack", "run_pil",
            "PilResult", "ProofResult", "fuzz_harness", "proof_driver", "proof_record", "prove"]

@@ -59,9 +59,11 @@ from ._misra import misra_record
 from ._readme import readme
 from ._text import c_comment
 from ._translate import (GUARD_TESTS, Translation, translate_adaptive, translate_original, translate_super_twisting,
+                         translate_vehicle_speed,
                          translate_switched)
 
-__all__ = ["GeneratedObserver", "generate_observer", "generate_super_twisting", "default_prefix", "REALS", "METHODS"]
+__all__ = ["GeneratedObserver", "generate_observer", "generate_super_twisting", "generate_vehicle_speed",
+           "default_prefix", "REALS", "METHODS"]
 
 REALS = ("double", "float")
 #: The macro that switches on the branch hints of every generated file (clang only; MISRA C:2012 rule 1.2).
@@ -749,6 +751,41 @@ def generate_super_twisting(lam: float, alpha: float, *, real: str = "double",
                  references={"observer": "seed 003 eq. (8)-(9)", "discretisation": "seed 003 eq. (13)",
                              "gains": "seed 003 eq. (12)"})
     return _assemble(translate_super_twisting(lam, alpha), info=info, kind="super-twisting", real=real,
+                     method="euler", prefix=prefix, command=command)
+
+
+def generate_vehicle_speed(beta: float, *, real: str = "double", prefix: str = "switchobs_vehicle_speed",
+                           command: str | None = None) -> GeneratedObserver:
+    """Generate the C sliding-mode observer of the vehicle speed of seed 003 eq. (15), explicit Euler.
+
+    Parameters
+    ----------
+    beta : float
+        Gain of (15) (e.g. from ``switchobs.sensors.vehicle_speed_gain``, Theorem 3: ``beta > eta``); positive.
+        A runtime parameter ``beta``.
+    real : {"double", "float"}
+    prefix : str
+
+    Returns
+    -------
+    GeneratedObserver
+        Signal ``(x3,)`` (measured speed), state ``(x3_hat, z3)`` with ``z3`` the injection of the last step.
+
+    References
+    ----------
+    seed 003 eq. (14)-(17), (21), Theorem 3.
+    """
+    _check_options(real, "euler")
+    prefix = _check_prefix(prefix)
+    if not (isinstance(beta, (int, float)) and np.isfinite(beta) and beta > 0):
+        raise CodegenError(f"beta = {beta!r} must be a finite number > 0 (seed 003 eq. (15))")
+    info = _Info(name="vehicle-speed", description="vehicle speed and its injection from a speed sensor (seed 003)",
+                 equations=("sliding-mode observer of the vehicle speed (seed 003 eq. (15)), forward Euler:",
+                            "x3_hat' = z3 = beta sign(x3 - x3_hat);",
+                            "state entry z3 is the injection of the last step (seed 003 eq. (21))."),
+                 signal_roles=("measured vehicle speed x3 (m/s)",),
+                 references={"observer": "seed 003 eq. (15)", "gain": "seed 003 Theorem 3"})
+    return _assemble(translate_vehicle_speed(beta), info=info, kind="vehicle-speed", real=real,
                      method="euler", prefix=prefix, command=command)
 
 

@@ -173,7 +173,7 @@ def misra_record(prefix: str, header: str, source: str) -> str:
              CPPCHECK_COMMAND.format(source=f"{prefix}.c"), "```", "",
              "The emitter writes no violation of a mandatory or required guideline that this check finds "
              "(switchobs's tests run it on every method and both real types of abs-xbs3, abs-xbs4, abs-adaptive2 "
-             "and a user model, and on the adaptive and super-twisting observers); "
+             "and a user model, and on the adaptive, super-twisting and vehicle-speed observers); "
              "what it reports are the advisory rules below, kept on purpose.  Rules marked *not checked* are not "
              "checked by the addon and are listed from what the emitter writes.", ""]
     if clashes:

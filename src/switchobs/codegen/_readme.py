@@ -13,6 +13,10 @@ if TYPE_CHECKING:  # pragma: no cover
 
 __all__ = ["readme", "example_program"]
 
+#: The sliding-mode observers of seed 003 (no time scale, no certificate) and the sentence on their gains.
+SLIDING_MODE_GAINS = {"super-twisting": "The gains `lam` and `alpha` of seed 003 eq. (9).",
+                      "vehicle-speed": "The gain `beta` of seed 003 eq. (15) (Theorem 3: above the bound on |dx3/dt|)."}
+
 
 def example_program(gen: "GeneratedObserver") -> str:
     """A complete C program that runs the observer on constant signals and checks the status codes.
@@ -65,7 +69,7 @@ def _bound_section(gen: "GeneratedObserver") -> list[str]:
     """The step bound: what it guarantees (a certificate only where one exists), the worst case, the status beyond."""
     P = gen.prefix.upper()
     if gen.h_max is None:
-        if gen.kind == "super-twisting":
+        if gen.kind in SLIDING_MODE_GAINS:
             return []
         return ["## Step bound", "",
                 "None: every call takes one step of `dt`, whatever `|s|*dt` is; regenerate with `--h-max` to split",
@@ -148,7 +152,8 @@ def readme(gen: "GeneratedObserver", *, command: str | None) -> str:
     method = {"rk4": "classic fourth-order Runge-Kutta (RK4)", "euler": "forward Euler"}.get(
         gen.method, STEP_METHODS[gen.method].description)
     kind = {"adaptive": "switched adaptive observer of seed 001 eq. (3.4)",
-            "super-twisting": "super-twisting observer of seed 003 eq. (8)-(9)"}.get(
+            "super-twisting": "super-twisting observer of seed 003 eq. (8)-(9)",
+            "vehicle-speed": "sliding-mode observer of the vehicle speed of seed 003 eq. (15)"}.get(
         gen.kind, "switched observer (seed 000 eq. (8)-(9), seed 004)")
     out = [
         f"# `{p}`: generated C {gen.kind} observer for model `{gen.model_name}`",
@@ -206,7 +211,7 @@ def readme(gen: "GeneratedObserver", *, command: str | None) -> str:
         *_original_section(gen),
         *_bound_section(gen),
         *_ranges_section(gen),
-        *([] if gen.kind == "super-twisting" else _certificate_section(gen)),
+        *([] if gen.kind in SLIDING_MODE_GAINS else _certificate_section(gen)),
         f"## State (`{P}_NX` = {gen.nx})",
         "",
         "| index macro | state |",
@@ -222,7 +227,7 @@ def readme(gen: "GeneratedObserver", *, command: str | None) -> str:
         "",
         f"## Parameters (`{P}_NP` = {gen.np})",
         "",
-        ("The gains `lam` and `alpha` of seed 003 eq. (9)." if gen.kind == "super-twisting" else
+        (SLIDING_MODE_GAINS[gen.kind] if gen.kind in SLIDING_MODE_GAINS else
          "Model parameters, then the gains `K_plus_<state>` (used where s > 0) and `K_minus_<state>`"
          + (", then the adaptation gain `Gamma` (row-major)" if gen.kind == "adaptive" else "")
          + ".  The gains do not follow a change of a model parameter: set them too, or regenerate."),
@@ -244,7 +249,7 @@ def readme(gen: "GeneratedObserver", *, command: str | None) -> str:
         "Model-specific checks, in order:",
         "",
         *([f"- `{g}`" for g in gen.guards] or ["- none beyond finiteness"]),
-        *([] if gen.kind == "super-twisting" else ["- `s` finite, else `UNDEFINED_TIME_SCALE`."]),
+        *([] if gen.kind in SLIDING_MODE_GAINS else ["- `s` finite, else `UNDEFINED_TIME_SCALE`."]),
         *([] if gen.h_max is None else ["- at most `MAX_SUBSTEPS` sub-steps of `H_MAX` (then the domain of d, b), "
                                         "else `SUBSTEP_LIMIT`."]),
         "",

@@ -38,7 +38,7 @@ from ..spec import (METHODS, SCALE, STEP_METHODS, Guard, ObserverSpec, StepStatu
                     implicit_increment)
 
 __all__ = ["Translation", "to_casadi", "translate_original", "translate_switched", "translate_adaptive",
-           "translate_super_twisting"]
+           "translate_super_twisting", "translate_vehicle_speed"]
 
 #: Guard kinds and the C comparison that holds when the guard is satisfied (NaN fails every one); ``{zero}`` is
 #: the literal 0 of the C real type (MISRA C:2012 rule 10.4: no int operand beside a real one).
@@ -417,3 +417,30 @@ def translate_super_twisting(lam: float, alpha: float) -> Translation:
                        state_names=("x1_hat", "x2_hat", "z2"), signal_names=("x1", "f1"),
                        param_names=("lam", "alpha"), default_params=(float(lam), float(alpha)),
                        advance=advance, methods=("euler",))
+
+
+def translate_vehicle_speed(beta: float) -> Translation:
+    """The sliding-mode observer of the vehicle speed of seed 003 eq. (15), explicit Euler, as casadi SX.
+
+    Signal ``x3``: the measured speed; parameter ``beta``; state ``(x3_hat, z3)`` where ``z3 = beta sign(x3 -
+    x3_hat)`` is the injection used over the last step (an output, as ``z2`` of
+    :func:`translate_super_twisting`), whose low-pass filtered value is ``xi2`` (seed 003 eq. (21))::
+
+        z3 = beta sign(x3 - x3_hat),   x3_hat+ = x3_hat + dt z3
+
+    Only forward Euler is admitted, for the reason given in :func:`translate_super_twisting`.
+    """
+    sig = ca.SX.sym("signals", 1)
+    par = ca.SX.sym("params", 1)
+    dt = ca.SX.sym("dt")
+    x = ca.SX.sym("x", 2)
+    z3 = par[0] * ca.sign(sig[0] - x[0])
+
+    def advance(method: str) -> ca.SX:  # noqa: ARG001 - only "euler" is admitted
+        return ca.vertcat(x[0] + dt * z3, z3)
+
+    guards = ((Guard(sp.Symbol("beta", positive=True), "positive", StepStatus.BAD_PARAM,
+                     "gain beta of seed 003 (15) must be > 0"), par[0]),)
+    return Translation(x=x, signals=sig, params=par, dt=dt, rhs=None, scale=ca.SX(1.0), guards=guards,
+                       state_names=("x3_hat", "z3"), signal_names=("x3",), param_names=("beta",),
+                       default_params=(float(beta),), advance=advance, methods=("euler",))

@@ -13,6 +13,8 @@ fit_table61_encoder, EncoderFit, notch_from_zero, speed_spread, ...
                   -- seed 001 Table 6.1: the fitted encoder and the bounds behind its cells
 quarter_car, step_halving, continuous_law, six_phase_roads, simulated_return, chain_braking, ChainBraking, ...
                   -- the set-ups and runs behind the measured numbers of the observer, ABS and encoder pages
+msirdi_runs, msirdi_wheel, theorem3_reaching, equivalent_injection, identify_theta, MSIRDI_*
+                  -- seed 003 Secs. III-B, IV, V: the vehicle-speed observer, the injections, theta_1 and theta_2
 """
 from ._adaptive import (ParameterRecorder, SEC34_AUGMENTED_BETAS, SEC34_BETAS, SEC34_CHANGES, SEC34_FINE_H_MAX,
                         SEC34_GAINS, SEC34_GAMMAS, SEC34_H_MAX, SEC34_LARGE_GAMMA, SEC34_MAX_SUBSTEPS, SEC34_QUICK_S,
@@ -30,6 +32,10 @@ from ._layer_pages import (CHAIN_ABS_SCENARIOS, CHAIN_TSA_WINDOWS, ENCODER_COMMA
                            imperfection_encoders, imperfection_runs, no_stall_exit, plant_trajectory, quarter_car,
                            quarter_car_scenario, robustness_runs, simulated_return, six_phase_roads, step_halving,
                            step_halving_controllers, two_phase_start)
+from ._msirdi import (MSIRDI_COARSE_STEP_S, MSIRDI_DURATION_S, MSIRDI_REACHING_STEP_S, MSIRDI_F_PLUS, MSIRDI_ID_STEP_S, MSIRDI_ID_TAU_S, MSIRDI_INITIAL_ERROR_M_S,
+                      MSIRDI_INJECTION_STEPS, MSIRDI_MARGINS, MSIRDI_SPEED0_M_S, MSIRDI_START_S, MSIRDI_STIFFNESS_N,
+                      Identification, InjectionRow, ReachingRow, equivalent_injection, identify_theta, msirdi_torque,
+                      msirdi_wheel, theorem3_reaching, MsirdiRuns, msirdi_runs)
 from ._runs import (Runs)
 from ._table61 import (EncoderFit, NOTCH_RAMPS_S, TABLE61_FIT_UNITS, constant_cells,
                        fit_table61_encoder, notch_from_zero, notch_to_tsa_ratios, reference_1024,
@@ -43,14 +49,18 @@ __all__ = ["CHAIN_ABS_SCENARIOS", "CHAIN_TSA_WINDOWS", "ChainBraking", "ENCODER_
            "Runs", "SEC34_AUGMENTED_BETAS", "SEC34_BETAS", "SEC34_CHANGES", "SEC34_FINE_H_MAX", "SEC34_GAINS",
            "SEC34_GAMMAS", "SEC34_H_MAX", "SEC34_LARGE_GAMMA", "SEC34_MAX_SUBSTEPS", "SEC34_QUICK_S",
            "SEC34_WINDOWS", "SEC36_ACTIVATION", "SEC36_CROSSING_TOL_S", "SEC36_FINE_STEP_S", "SEC36_H_MAX",
-           "SEC36_MAX_SUBSTEPS", "SEC36_OBSERVER", "SEC36_WINDOW_S", "STEP_HALVING_STEPS_S", "StateRecorder",
-           "TABLE61_FIT_UNITS", "TWO_PHASE_START", "Traced", "bosch_sequence", "chain_abs", "chain_braking",
-           "chain_tsa_windows", "constant_cells", "continuous_law", "encoder_example", "excursion", "fast_cycles",
-           "fast_phase", "fig66_thresholds_run", "fig67_open_loop", "fig67_scenario", "fit_table61_encoder",
-           "gram_eigenvalues", "imperfection_encoders", "imperfection_runs", "load_excursions", "locks",
-           "longest_stay", "no_stall_exit", "notch_from_zero", "notch_to_tsa_ratios", "plant_trajectory",
+           "Identification", "InjectionRow", "MSIRDI_COARSE_STEP_S", "MSIRDI_DURATION_S", "MSIRDI_F_PLUS",
+           "MSIRDI_ID_STEP_S", "MSIRDI_ID_TAU_S", "MSIRDI_INITIAL_ERROR_M_S", "MSIRDI_INJECTION_STEPS",
+           "MSIRDI_MARGINS", "MSIRDI_REACHING_STEP_S", "MSIRDI_SPEED0_M_S", "MSIRDI_START_S", "MSIRDI_STIFFNESS_N",
+           "MsirdiRuns", "ReachingRow", "SEC36_MAX_SUBSTEPS", "SEC36_OBSERVER", "SEC36_WINDOW_S",
+           "STEP_HALVING_STEPS_S", "StateRecorder", "TABLE61_FIT_UNITS", "TWO_PHASE_START", "Traced", "bosch_sequence",
+           "chain_abs", "chain_braking", "chain_tsa_windows", "constant_cells", "continuous_law", "encoder_example",
+           "equivalent_injection", "excursion", "fast_cycles", "fast_phase", "fig66_thresholds_run", "fig67_open_loop",
+           "fig67_scenario", "fit_table61_encoder", "gram_eigenvalues", "identify_theta", "imperfection_encoders",
+           "imperfection_runs", "load_excursions", "locks", "longest_stay", "msirdi_runs", "msirdi_torque",
+           "msirdi_wheel", "no_stall_exit", "notch_from_zero", "notch_to_tsa_ratios", "plant_trajectory",
            "psi_excitation", "quarter_car", "quarter_car_scenario", "quick_reapproach", "reconverged",
            "reference_1024", "robustness_runs", "sec36_estimators", "sec36_late_excursions", "sec36_settled",
-           "sec36_stays", "seed_speed_spread", "segment_rms", "simulated_return", "six_phase_roads",
-           "speed_exponents", "speed_spread", "step_halving", "step_halving_controllers", "tooth_error_bound",
+           "sec36_stays", "seed_speed_spread", "segment_rms", "simulated_return", "six_phase_roads", "speed_exponents",
+           "speed_spread", "step_halving", "step_halving_controllers", "theorem3_reaching", "tooth_error_bound",
            "trapezoid_spread_bound", "tsa_orders", "two_phase_start", "upsilon_excitation"]

@@ -19,6 +19,7 @@ from ..sensors import (TABLE61_ENCODER, TABLE61_PROFILES, ChainResult, ChainSett
 from . import _layer_pages as _pages
 from ._fig67 import (FIG67_ENCODER, FIG67_PHASES, FIG67_SMALL_ECCENTRICITY, FIG67_SPEEDS_KMH, HalfWindowLate,
                          fig67_scenario)
+from ._msirdi import MsirdiRuns, msirdi_runs
 from ._adaptive import (SEC34_MAX_SUBSTEPS, SEC34_H_MAX, SEC36_FINE_STEP_S, SEC36_H_MAX, SEC36_OBSERVER,
                               ParameterRecorder, StateRecorder, Traced, sec36_estimators)
 
@@ -156,6 +157,11 @@ class Runs:
         return {name: compare_estimators(build(10.0), TABLE61_ENCODER, estimators=("three-stage",),
                                          settings=ChainSettings(highpass_hz=1.0))
                 for name, (_, build) in TABLE61_PROFILES.items()}
+
+    @cached_property
+    def msirdi(self) -> MsirdiRuns:
+        """Seed 003 Secs. III-B, IV, V on the quarter car: Theorem 3, the injections (20)-(21), theta_1, theta_2."""
+        return msirdi_runs()
 
     @cached_property
     def super_twisting(self) -> tuple[list[float], list[float], list[float], list[float]]:

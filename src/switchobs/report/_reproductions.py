@@ -39,6 +39,7 @@ from ._repro_cells import PREDICTED, ROLE, _fitted, _fmt_s, _pct, _row
 from ._repro_encoders import (_all_cases_claim, _chain_abs_section, _chain_braking_section, _encoder_cli_section,
                               _encoder_example_section, tsa_orders, _super_twisting_section, _table61_section,
                               _three_stage_section)
+from ._repro_msirdi import _msirdi_rows, _msirdi_speed_section
 from ._repro_target import TARGET_SECTIONS
 
 __all__ = ["ReproductionPage", "GENERATED_SECTIONS", "reproduction_pages", "write_reproductions", "stale_pages"]
@@ -189,7 +190,8 @@ def _seed003(runs: Runs) -> list[str]:
                  f"the speed error enters its $O(\\delta)$ band at {min(arrivals):.3f}–{max(arrivals):.3f} s whatever "
                  "the step", PREDICTED),
             _row("(27)–(30) identification, $R C_x = 18000$, $R = 0.3$", "converges",
-                 "within 5 % at $\\delta = 10^{-5}$ (tested)", PREDICTED), "",
+                 "within 5 % at $\\delta = 10^{-5}$ (tested)", PREDICTED),
+            *_msirdi_rows(runs), "",
             "*Chosen by us:* $f^+ = 400$ in the gain rule (12) (re-derived: the printed exponent has no consistent "
             "units), the exact angle of the 1020 rpm ± 40 rad/s profile, $\\hat x_2(0) = 0$, the band = twice the "
             "largest error after 0.5 s. Details, and the re-derived equations (5), (12), (13), (23): "
@@ -258,6 +260,7 @@ _SECTIONS: dict[str, tuple[str, Callable[[Runs], list[str]]]] = {
     "chain_braking": ("docs/encoders.md", _chain_braking_section),
     "chain_abs": ("docs/encoders.md", _chain_abs_section),
     "super_twisting": ("docs/encoders.md", _super_twisting_section),
+    "msirdi_speed": ("docs/encoders.md", _msirdi_speed_section),
 }
 _SECTIONS.update({name: (path, section) for name, path, section in MEASURED_SECTIONS})
 _SECTIONS.update({name: (path, section) for name, path, section in TARGET_SECTIONS})

@@ -16,6 +16,9 @@ Harmonic compensation
 Super-twisting observer and identification
     SuperTwistingGains, super_twisting_gains, SuperTwistingObserver, super_twisting,
     SuperTwistingRun, low_pass, StiffnessEstimate, identify_stiffness
+Sliding-mode observer of the vehicle speed and identification of theta_2 (seed 003 Secs. III-B, V-B)
+    VehicleSpeedGain, vehicle_speed_gain, VehicleSpeedObserver, vehicle_speed_observer, VehicleSpeedRun,
+    SpeedParameterEstimate, identify_speed_parameters
 Torque-driven quarter car (vehicle and roads of switchobs.plants)
     WheelRun, simulate_wheel, braking_trajectory, linear_tyre, burckhardt_tyre
 Chain
@@ -28,7 +31,7 @@ Seed 001 Table 6.1
 from ._chain import (ESTIMATORS, ROBUSTNESS_PROFILES, TABLE61_ENCODER, TABLE61_PROFILES, TABLE61_SEED, ChainResult, ChainSettings,
                      EstimatorComparison, compare_estimators, encoder_chain)
 from ._encoder import Encoder, EncoderEvents
-from ._identify import StiffnessEstimate, identify_stiffness
+from ._identify import SpeedParameterEstimate, StiffnessEstimate, identify_speed_parameters, identify_stiffness
 from ._plot import plot_comparison
 from ._quarter_car import WheelRun, braking_trajectory, burckhardt_tyre, linear_tyre, simulate_wheel
 from ._series import SpeedEstimate, estimate_lag, rms_error
@@ -36,6 +39,8 @@ from ._super_twisting import (SuperTwistingGains, SuperTwistingObserver, SuperTw
                               super_twisting, super_twisting_gains)
 from ._three_stage import NotchFilter, ThreeStageEstimator, notch, notch_series, three_stage
 from ._trajectory import AngleTrajectory, constant_speed, rpm_to_rad_s, trapezoid_speed, varying_speed
+from ._vehicle_speed import (VehicleSpeedGain, VehicleSpeedObserver, VehicleSpeedRun, vehicle_speed_gain,
+                             vehicle_speed_observer)
 from ._tsa import TimeStamper, TsaEstimate, controller_times, time_stamping, tsa_condition_number
 
 __all__ = [
@@ -45,6 +50,8 @@ __all__ = [
     "ThreeStageEstimator", "three_stage", "NotchFilter", "notch", "notch_series", "SpeedEstimate",
     "SuperTwistingGains", "super_twisting_gains", "SuperTwistingObserver", "super_twisting",
     "SuperTwistingRun", "low_pass", "StiffnessEstimate", "identify_stiffness",
+    "VehicleSpeedGain", "vehicle_speed_gain", "VehicleSpeedObserver", "vehicle_speed_observer", "VehicleSpeedRun",
+    "SpeedParameterEstimate", "identify_speed_parameters",
     "WheelRun", "simulate_wheel", "braking_trajectory", "linear_tyre", "burckhardt_tyre",
     "encoder_chain", "compare_estimators", "ChainSettings", "ChainResult", "EstimatorComparison",
     "ESTIMATORS", "TABLE61_SEED", "TABLE61_ENCODER", "TABLE61_PROFILES", "ROBUSTNESS_PROFILES",
