@@ -14,6 +14,7 @@ from pathlib import Path
 import pytest
 import yaml
 
+from switchobs._layers import FLOORS
 from switchobs.cli.main import main
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -42,8 +43,10 @@ socket.socket.connect = socket.socket.connect_ex = _offline
 socket.create_connection = socket.getaddrinfo = _offline
 """
 REMOTE = re.compile(r"<(?:script|link)\b[^>]*\b(?:src|href)=\"((?:https?:)?//[^\"]+)\"")
-LAYERS = ("model", "design", "certify", "codegen", "spec", "observers", "plants", "sensors", "loop", "report",
-          "exceptions")
+#: The packages the API pages render, one page each (docs/api/<name>.md): every layer but the CLI, and the exceptions.
+LAYERS = tuple(name for floor in FLOORS for name in floor if name != "cli") + ("exceptions",)
+#: A Sphinx role as the docstrings write it; the API pages show cross-references instead (docs/_hooks/roles.py).
+ROLE = re.compile(r":(?:func|meth|class|data|attr|mod|exc|obj|const):`")
 
 
 @pytest.fixture(scope="module")
@@ -72,7 +75,7 @@ def test_the_docs_build_cannot_reach_the_network(tmp_path):
 def test_mkdocs_builds_in_strict_mode(site):
     for page in ("index.html", "guide/index.html", "model-format/index.html", "reproductions/index.html",
                  "benchmarks/index.html", "theory/abs-xbs3/index.html", "theory/normal-form-3/index.html",
-                 "api/index.html"):
+                 "api/index.html", "api/codegen/index.html"):
         assert (site / page).is_file(), page
     # the generated theory reaches the site with its math for MathJax
     assert "arithmatex" in (site / "theory" / "abs-xbs4" / "index.html").read_text("utf-8")
@@ -94,23 +97,40 @@ def test_the_site_loads_no_script_or_style_from_outside_and_serves_mathjax_itsel
 
 @pytest.mark.slow
 def test_the_api_reference_documents_every_public_name_from_its_docstring(site):
-    html = (site / "api" / "index.html").read_text("utf-8")
-    ids = set(re.findall(r'id="(switchobs\.[\w.]+)"', html))
     for layer in LAYERS:
+        html = (site / "api" / layer / "index.html").read_text("utf-8")
+        ids = set(re.findall(r'id="(switchobs\.[\w.]+)"', html))
         names = importlib.import_module(f"switchobs.{layer}").__all__
         missing = [name for name in names if f"switchobs.{layer}.{name}" not in ids]
-        assert not missing, f"the API reference lacks switchobs.{layer}: {missing}"
+        assert not missing, f"the API page of switchobs.{layer} lacks {missing}"
     # rendered from the numpydoc sections, not pasted as text
     from switchobs.design import design_gains
 
+    html = (site / "api" / "design" / "index.html").read_text("utf-8")
     assert design_gains.__doc__.split("\n")[0].strip() in html
     assert "Parameters:" in html and "Raises:" in html
+
+
+def test_the_api_pages_are_one_per_layer_and_show_cross_references_not_roles(site):
+    assert sorted(p.stem for p in (DOCS / "api").glob("*.md")) == sorted([*LAYERS, "index"])
+    links = 0
+    for layer in LAYERS:
+        html = (site / "api" / layer / "index.html").read_text("utf-8")
+        roles = ROLE.findall(html)
+        assert not roles, f"the API page of switchobs.{layer} shows {len(roles)} raw Sphinx roles"
+        links += html.count('class="autorefs autorefs-internal"')
+    assert links > 500
+    # prove's docstring says :func:`proof_record`: a link to where the codegen page renders it
+    codegen = (site / "api" / "codegen" / "index.html").read_text("utf-8")
+    assert 'href="#switchobs.codegen.proof_record"' in codegen
+    # a role naming another layer's object links across pages (ParameterBox lives in model, certify re-exports it)
+    assert 'href="../model/#switchobs.model.ParameterBox' in (site / "api" / "certify" / "index.html").read_text("utf-8")
 
 
 def test_every_page_is_in_the_navigation_and_every_nav_entry_exists():
     config = yaml.safe_load((ROOT / "mkdocs.yml").read_text("utf-8"))
     nav = _nav_pages(config["nav"])
-    pages = sorted(str(p.relative_to(DOCS)) for p in DOCS.glob("*.md"))
+    pages = sorted(str(p.relative_to(DOCS)) for p in [*DOCS.glob("*.md"), *DOCS.glob("api/*.md")])
     theory = sorted(f"theory/{p.name}" for p in (ROOT / "theory").glob("*.md"))
     assert sorted(nav) == sorted(pages + theory)
 
