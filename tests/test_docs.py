@@ -135,6 +135,9 @@ def test_the_api_pages_are_one_per_layer_and_show_cross_references_not_roles(sit
         html = (site / "api" / f"{layer}.html").read_text("utf-8")
         roles = ROLE.findall(html)
         assert not roles, f"the API page of switchobs.{layer} shows {len(roles)} raw Sphinx roles"
+        prose = re.sub(r"<(code|pre)\b[^>]*>.*?</\1>", "", html, flags=re.S)   # a constant's value is code
+        seeds = SEED_NUMBER.findall(prose)
+        assert not seeds, f"the API page of switchobs.{layer} cites {seeds[0]!r}, not the paper's author and year"
         links += html.count('class="autorefs autorefs-internal"')
     assert links > 500
     # prove's docstring says :func:`proof_record`: a link to where the codegen page renders it
@@ -142,6 +145,26 @@ def test_the_api_pages_are_one_per_layer_and_show_cross_references_not_roles(sit
     assert 'href="#switchobs.codegen.proof_record"' in codegen
     # a role naming another layer's object links across pages (ParameterBox lives in model, certify re-exports it)
     assert 'href="model.html#switchobs.model.ParameterBox' in (site / "api" / "certify.html").read_text("utf-8")
+
+
+#: An internal seed number; the pages cite the papers by author and year (Hoang et al. 2014, ...).
+SEED_NUMBER = re.compile(r"\b[Ss]eeds?[ -]00[0-9]")
+
+
+def test_the_hand_written_pages_cite_the_papers_by_author_and_year():
+    """Outside the generated sections, the benchmark blocks and the blocks of command output (what the code prints),
+    no page names a paper by its seed number."""
+    generated = r"<!-- begin generated: .*?<!-- end generated[^>]*-->|<!-- bench:([\w-]+) -->.*?<!-- /bench:\1 -->"
+    command_output = r"^```[^\n]*\n(?:(?!^```).)*?^\$ .*?^```"
+    protected = re.compile(f"{generated}|{command_output}", re.S | re.M)
+    for page in [ROOT / "README.md", *DOCS.glob("*.md"), *DOCS.glob("api/*.md")]:
+        if page.name == "reproductions.md":   # generated whole by switchobs reproduce
+            continue
+        text = protected.sub("", page.read_text("utf-8"))
+        if page.name == "model-format.md":    # the example file examples/my_model.toml, shown whole
+            text = text.replace((ROOT / "examples" / "my_model.toml").read_text("utf-8"), "")
+        found = SEED_NUMBER.findall(text)
+        assert not found, f"{page.relative_to(ROOT)} cites {found[0]!r}: cite the paper by author and year"
 
 
 def test_every_page_is_in_the_navigation_and_every_nav_entry_exists():

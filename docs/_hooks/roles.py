@@ -1,4 +1,5 @@
-"""Griffe extension for the API pages: the docstrings' Sphinx roles become cross-references.
+"""Griffe extension for the API pages: the docstrings' Sphinx roles become cross-references, their seed numbers
+the papers' authors and years.
 
 The docstrings write ``:func:`design_gains```, ``:class:`~switchobs.sensors.TimeStamper```,
 ``:meth:`GeneratedObserver.unranged``` and so on (numpydoc style, readable in ``help()``).  mkdocstrings
@@ -8,7 +9,9 @@ enclosing scopes) to the object it names, and rewritten as an autorefs link ``[`
 the place the API pages render that object: the public package that exports it (the lowest layer when
 several do, e.g. ``switchobs.model.ParameterBox`` rather than its re-export from ``switchobs.certify``), or
 a member of such an object.  A role naming something the pages do not render (a private module, a private
-member, a name outside switchobs) stays as code, without the role.  The source is not changed.
+member, a name outside switchobs) stays as code, without the role.  The docstrings cite the papers by their
+seed number (``seed 000 eq. (13)``, the files of the specification); the pages cite them by author and year
+(``Hoang et al. 2014 eq. (13)``, :data:`PAPERS`), equation numbers kept.  The source is not changed.
 
 Used by mkdocs.yml (``plugins: mkdocstrings: handlers: python: options: extensions``).
 """
@@ -20,6 +23,10 @@ from typing import Any
 
 from griffe import Alias, Extension, Module, Object
 
+#: The papers by their seed number, as the user-facing pages cite them.
+PAPERS = {"000": "Hoang et al. 2014", "001": "Aguado-Rojas 2020", "003": "M'Sirdi et al. 2008",
+          "004": "Pasillas-Lépine"}
+SEED = re.compile(r"\b[Ss]eed (00[0134])\b")
 #: A Sphinx role: ``:kind:`target``` or ``:kind:`text <target>```.
 ROLE = re.compile(r":(?:py:)?(?P<kind>func|meth|class|data|attr|mod|exc|obj|const):`(?P<body>[^`]+)`")
 
@@ -32,8 +39,9 @@ class SphinxRoles(Extension):
             return
         public = _public_paths(pkg)
         for obj in _objects(pkg):
-            if obj.docstring is not None and ":" in obj.docstring.value:
-                obj.docstring.value = ROLE.sub(lambda m, o=obj: _link(m, o, pkg, public), obj.docstring.value)
+            if obj.docstring is not None:
+                text = ROLE.sub(lambda m, o=obj: _link(m, o, pkg, public), obj.docstring.value)
+                obj.docstring.value = SEED.sub(lambda m: PAPERS[m.group(1)], text)
 
 
 def _objects(obj: Object):

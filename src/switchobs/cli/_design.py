@@ -83,6 +83,7 @@ def run(args: argparse.Namespace) -> int:
             print(f"  exact re-check ({', '.join(checks)}): {status}")
         if at_values:
             with exact_display(args.exact):
-                print(f"at the model's values: {failed}" if failed else result.describe_at_values(full=True if args.full else None))
+                print(f"at the model's values: {failed}" if failed else
+                      result.describe_at_values(full=True if args.full else None))
     ok = (checks is None or all(checks.values())) and failed is None
     return 0 if ok else 1
