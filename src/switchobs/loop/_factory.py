@@ -138,7 +138,7 @@ class EstimatorSpec(JsonRecord, error=SimulationError):
         if self.kind == "adaptive":
             text += f", gamma {DEFAULT_GAMMA if self.gamma is None else self.gamma:g}"
         bound = substep_bound(self.h_max, self.max_substeps, error=SimulationError)
-        substeps = "" if bound is None else f", |s| dt <= {self.h_max:g} in at most {bound[1]} sub-steps"
+        substeps = "" if bound is None else f", |s| dt <= {float(bound[0]):g} in at most {bound[1]} sub-steps"
         return f"{text} ({self.impl}{'' if self.method == default_method(self.kind) else ', ' + self.method}{substeps})"
 
 
