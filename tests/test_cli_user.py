@@ -140,3 +140,63 @@ def test_braking_figure_labels_its_road_changes_and_names_the_observer():
     assert [t.get_text() for t in fig.axes[0].texts] == ["→ hoang-wet"]
     title = fig._suptitle.get_text()
     assert "switched observer of abs-xbs4 (radau3)" in title and "SwitchedObserver" not in title
+
+
+_VALUED_MODEL = """
+name = "valued"
+states = ["z1", "z2"]
+output = "y"
+parameters = ["a", "c"]
+positive = ["a"]
+A = [[0, 1], ["c", 0]]
+C = [1, 0]
+time_scale = "y"
+
+[values]
+a = "2"
+c = "{c}"
+"""
+
+
+def _valued(tmp_path: Path, c: str) -> str:
+    path = tmp_path / f"valued{c.replace('/', '_')}.toml"
+    path.write_text(_VALUED_MODEL.format(c=c), encoding="utf-8")
+    return str(path)
+
+
+def test_design_shows_the_symbolic_result_then_the_same_at_the_model_values(tmp_path, capsys):
+    """One rule with certify: a model's [values] are used; the symbolic output stays as it was, first."""
+    import json
+
+    from switchobs.design import design
+    from switchobs.model import load_model
+
+    model = _valued(tmp_path, "3")
+    assert main(["design", model, "--gains-plus", "k1,k2", "--symbolic"]) == 0
+    symbolic = capsys.readouterr().out
+    assert "at the model's values" not in symbolic
+    assert main(["design", model, "--gains-plus", "k1,k2"]) == 0
+    both = capsys.readouterr().out
+    assert both.startswith(symbolic)
+    evaluated = both[len(symbolic):]
+    assert evaluated.startswith("at the model's values a = 2, c = 3 (switchobs design --symbolic leaves this out):")
+    at = design(load_model(model), K_plus="k1,k2").at()
+    for condition in at.hurwitz_plus:       # the conditions with c = 3 substituted, as GainDesign.at() gives them
+        assert f"    {condition}" in evaluated
+    assert main(["design", model, "--gains-plus", "k1,k2", "--json"]) == 0
+    data = json.loads(capsys.readouterr().out)
+    assert data["at_values"]["values"] == {"a": "2", "c": "3"}
+    assert data["at_values"]["K_minus"] == at.to_json()["K_minus"]
+    assert data["at_values"]["hurwitz_plus"] == at.to_json()["hurwitz_plus"]
+    assert main(["design", model, "--gains-plus", "k1,k2", "--json", "--symbolic"]) == 0
+    assert "at_values" not in json.loads(capsys.readouterr().out)
+
+
+def test_design_at_values_that_break_a_condition_says_so_and_exits_1(tmp_path, capsys):
+    """With K_plus = [1, 1] the Routh conditions need c < 1: the symbolic design holds, its value c = 5 does not."""
+    model = _valued(tmp_path, "5")
+    assert main(["design", model, "--gains-plus", "1,1", "--no-verify"]) == 1
+    out = capsys.readouterr().out
+    assert out.splitlines()[-1].startswith("at the model's values: at these values the A_plus Routh–Hurwitz "
+                                           "condition fails:"), out
+    assert main(["design", model, "--gains-plus", "1,1", "--no-verify", "--symbolic"]) == 0

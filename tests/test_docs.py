@@ -14,6 +14,7 @@ from pathlib import Path
 import pytest
 import yaml
 
+from switchobs._layers import FLOORS
 from switchobs.cli.main import main
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -42,8 +43,10 @@ socket.socket.connect = socket.socket.connect_ex = _offline
 socket.create_connection = socket.getaddrinfo = _offline
 """
 REMOTE = re.compile(r"<(?:script|link)\b[^>]*\b(?:src|href)=\"((?:https?:)?//[^\"]+)\"")
-LAYERS = ("model", "design", "certify", "codegen", "spec", "observers", "plants", "sensors", "loop", "report",
-          "exceptions")
+#: The packages the API pages render, one page each (docs/api/<name>.md): every layer but the CLI, and the exceptions.
+LAYERS = tuple(name for floor in FLOORS for name in floor if name != "cli") + ("exceptions",)
+#: A Sphinx role as the docstrings write it; the API pages show cross-references instead (docs/_hooks/roles.py).
+ROLE = re.compile(r":(?:func|meth|class|data|attr|mod|exc|obj|const):`")
 
 
 @pytest.fixture(scope="module")
@@ -70,12 +73,12 @@ def test_the_docs_build_cannot_reach_the_network(tmp_path):
 
 @pytest.mark.slow
 def test_mkdocs_builds_in_strict_mode(site):
-    for page in ("index.html", "guide/index.html", "model-format/index.html", "reproductions/index.html",
-                 "benchmarks/index.html", "theory/abs-xbs3/index.html", "theory/normal-form-3/index.html",
-                 "api/index.html"):
+    for page in ("index.html", "guide.html", "model-format.html", "reproductions.html",
+                 "benchmarks.html", "theory/abs-xbs3.html", "theory/normal-form-3.html",
+                 "api/index.html", "api/codegen.html"):
         assert (site / page).is_file(), page
     # the generated theory reaches the site with its math for MathJax
-    assert "arithmatex" in (site / "theory" / "abs-xbs4" / "index.html").read_text("utf-8")
+    assert "arithmatex" in (site / "theory" / "abs-xbs4.html").read_text("utf-8")
 
 
 @pytest.mark.slow
@@ -85,32 +88,89 @@ def test_the_site_loads_no_script_or_style_from_outside_and_serves_mathjax_itsel
     for page in pages:
         remote = REMOTE.findall(page.read_text("utf-8"))
         assert not remote, f"{page.relative_to(site)} loads {remote}"
-    theory = (site / "theory" / "abs-xbs4" / "index.html").read_text("utf-8")
-    assert '<script src="../../javascripts/mathjax/tex-svg.js"></script>' in theory
+    theory = (site / "theory" / "abs-xbs4.html").read_text("utf-8")
+    assert '<script src="../javascripts/mathjax/tex-svg.js"></script>' in theory
     mathjax = site / "javascripts" / "mathjax" / "tex-svg.js"
     assert mathjax.stat().st_size > 1_000_000 and b'VERSION="3.' in mathjax.read_bytes()  # MathJax 3
     assert "Apache License" in (site / "javascripts" / "mathjax" / "LICENSE").read_text("utf-8")
 
 
 @pytest.mark.slow
+def test_the_site_browses_from_the_file_system(site):
+    """use_directory_urls is off: every link, script, style and image of every page names a file of the site (what a
+    browser opens from file://, where a directory does not show its index.html)."""
+    reference = re.compile(r'\b(?:href|src)="([^"#?]+)[^"]*"')
+    checked = 0
+    for page in sorted(p for p in site.rglob("*.html") if p.name != "404.html"):  # 404: a server's page only
+        for target in reference.findall(page.read_text("utf-8")):
+            if re.match(r"(?:[a-z]+:|//)", target):   # mailto:, data:, an external address: not a file of the site
+                continue
+            path = (page.parent / target).resolve()
+            assert path.is_file(), f"{page.relative_to(site)} links to {target}, which is not a file of the site"
+            checked += 1
+    assert checked > 1000
+
+
+@pytest.mark.slow
 def test_the_api_reference_documents_every_public_name_from_its_docstring(site):
-    html = (site / "api" / "index.html").read_text("utf-8")
-    ids = set(re.findall(r'id="(switchobs\.[\w.]+)"', html))
     for layer in LAYERS:
+        html = (site / "api" / f"{layer}.html").read_text("utf-8")
+        ids = set(re.findall(r'id="(switchobs\.[\w.]+)"', html))
         names = importlib.import_module(f"switchobs.{layer}").__all__
         missing = [name for name in names if f"switchobs.{layer}.{name}" not in ids]
-        assert not missing, f"the API reference lacks switchobs.{layer}: {missing}"
+        assert not missing, f"the API page of switchobs.{layer} lacks {missing}"
     # rendered from the numpydoc sections, not pasted as text
     from switchobs.design import design_gains
 
+    html = (site / "api" / "design.html").read_text("utf-8")
     assert design_gains.__doc__.split("\n")[0].strip() in html
     assert "Parameters:" in html and "Raises:" in html
+
+
+@pytest.mark.slow
+def test_the_api_pages_are_one_per_layer_and_show_cross_references_not_roles(site):
+    assert sorted(p.stem for p in (DOCS / "api").glob("*.md")) == sorted([*LAYERS, "index"])
+    links = 0
+    for layer in LAYERS:
+        html = (site / "api" / f"{layer}.html").read_text("utf-8")
+        roles = ROLE.findall(html)
+        assert not roles, f"the API page of switchobs.{layer} shows {len(roles)} raw Sphinx roles"
+        prose = re.sub(r"<(code|pre)\b[^>]*>.*?</\1>", "", html, flags=re.S)   # a constant's value is code
+        seeds = SEED_NUMBER.findall(prose)
+        assert not seeds, f"the API page of switchobs.{layer} cites {seeds[0]!r}, not the paper's author and year"
+        links += html.count('class="autorefs autorefs-internal"')
+    assert links > 500
+    # prove's docstring says :func:`proof_record`: a link to where the codegen page renders it
+    codegen = (site / "api" / "codegen.html").read_text("utf-8")
+    assert 'href="#switchobs.codegen.proof_record"' in codegen
+    # a role naming another layer's object links across pages (ParameterBox lives in model, certify re-exports it)
+    assert 'href="model.html#switchobs.model.ParameterBox' in (site / "api" / "certify.html").read_text("utf-8")
+
+
+#: An internal seed number; the pages cite the papers by author and year (Hoang et al. 2014, ...).
+SEED_NUMBER = re.compile(r"\b[Ss]eeds?[ -]00[0-9]")
+
+
+def test_the_hand_written_pages_cite_the_papers_by_author_and_year():
+    """Outside the generated sections, the benchmark blocks and the blocks of command output (what the code prints),
+    no page names a paper by its seed number."""
+    generated = r"<!-- begin generated: .*?<!-- end generated[^>]*-->|<!-- bench:([\w-]+) -->.*?<!-- /bench:\1 -->"
+    command_output = r"^```[^\n]*\n(?:(?!^```).)*?^\$ .*?^```"
+    protected = re.compile(f"{generated}|{command_output}", re.S | re.M)
+    for page in [ROOT / "README.md", *DOCS.glob("*.md"), *DOCS.glob("api/*.md")]:
+        if page.name == "reproductions.md":   # generated whole by switchobs reproduce
+            continue
+        text = protected.sub("", page.read_text("utf-8"))
+        if page.name == "model-format.md":    # the example file examples/my_model.toml, shown whole
+            text = text.replace((ROOT / "examples" / "my_model.toml").read_text("utf-8"), "")
+        found = SEED_NUMBER.findall(text)
+        assert not found, f"{page.relative_to(ROOT)} cites {found[0]!r}: cite the paper by author and year"
 
 
 def test_every_page_is_in_the_navigation_and_every_nav_entry_exists():
     config = yaml.safe_load((ROOT / "mkdocs.yml").read_text("utf-8"))
     nav = _nav_pages(config["nav"])
-    pages = sorted(str(p.relative_to(DOCS)) for p in DOCS.glob("*.md"))
+    pages = sorted(str(p.relative_to(DOCS)) for p in [*DOCS.glob("*.md"), *DOCS.glob("api/*.md")])
     theory = sorted(f"theory/{p.name}" for p in (ROOT / "theory").glob("*.md"))
     assert sorted(nav) == sorted(pages + theory)
 

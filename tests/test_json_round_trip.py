@@ -351,6 +351,7 @@ def _samples() -> dict[str, Callable[[], tuple[Any, dict[str, Any]]]]:
         "BrakingRun": lambda: series(_braking_run()),
         "EncoderLoopRecord": lambda: plain(encoder_loop()),
         "EncoderMeasurements": lambda: plain(encoder_measurements()),
+        "EncoderSamples": lambda: plain(loop.EncoderSamples(**encoder_measurements().signals())),
         "ReplayResult": lambda: plain(replayed()),
         "ReplaySummary": lambda: plain(replayed().summary),
         "DemoSettings": lambda: plain(loop.DemoSettings(fast=True)),

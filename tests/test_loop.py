@@ -2,8 +2,11 @@
 
 from __future__ import annotations
 
+import json
 import pathlib
+import shutil
 from dataclasses import replace
+from fractions import Fraction
 
 import numpy as np
 import pytest
@@ -67,6 +70,32 @@ def test_factory_flips_the_sign_of_b_for_the_models_of_seed_000_and_starts_from_
     assert adaptive.values["b"] == pytest.approx(veh.b)          # seed 001's sign convention
     assert xbs_estimator("none", veh, "hoang-dry") is None
     assert str(EstimatorSpec("xbs4")) == f"xbs4 observer, beta {DEFAULT_BETA['xbs4']:g} (python)"
+
+
+def test_the_spec_sub_stepping_bound_reaches_the_observer_its_c_twin_and_the_json():
+    """EstimatorSpec.h_max / max_substeps: the observer splits a step with |s| dt above h_max, as its C build does."""
+    veh = QuarterCar()
+    spec = EstimatorSpec("xbs4", h_max=1e-3, max_substeps=50)
+    obs = xbs_estimator(spec, veh, "dry-asphalt").observer
+    assert (obs.h_max, obs.max_substeps) == (Fraction(1, 1000), 50)
+    assert xbs_estimator("xbs4", veh, "dry-asphalt").observer.h_max is None
+    # the reference observer sub-steps: a step of |s| dt = 0.05 differs from the unbounded one
+    plain = xbs_estimator("xbs4", veh, "dry-asphalt")
+    bounded = xbs_estimator(spec, veh, "dry-asphalt")
+    for est in (plain, bounded):
+        est.reset(0.0, -3.0, 20.0)
+    assert plain.update(0.1, -4.0, 20.0, 100.0, 0.1) != bounded.update(0.1, -4.0, 20.0, 100.0, 0.1)
+    assert "|s| dt <= 0.001 in at most 50 sub-steps" in str(spec)
+    assert EstimatorSpec.from_json(json.loads(json.dumps(spec.to_json()))) == spec
+    with pytest.raises(SimulationError, match="max_substeps = 5 has no effect without h_max"):
+        EstimatorSpec("xbs3", max_substeps=5)
+    with pytest.raises(SimulationError, match="h_max = -1.0 must be > 0"):
+        EstimatorSpec("adaptive", h_max=-1.0)
+    pytest.importorskip("casadi", reason="casadi is not installed: the C twin's H_MAX is NOT checked")
+    if shutil.which("gcc") is None and shutil.which("cc") is None:
+        pytest.skip("no C compiler is installed: the C twin's H_MAX is NOT checked")
+    twin = xbs_estimator(EstimatorSpec("xbs4", impl="c", h_max=1e-3, max_substeps=50), veh, "dry-asphalt").observer
+    assert (twin.generated.h_max, twin.generated.max_substeps) == (Fraction(1, 1000), 50)
 
 
 def test_factory_refusals():

@@ -208,3 +208,17 @@ def test_dt_defaults_to_the_differences_of_t_and_the_result_reads_and_serialises
     assert f"{meas.t.size} samples" in str(meas) and f"{meas.events} edges" in str(meas)
     first, at, span, signals = meas.observer_steps()
     assert first >= 0 and np.all(span > 0.0) and signals.shape == (at.size, 3)
+
+
+def test_the_three_measurement_records_are_one_record_with_additions():
+    """EncoderLoopRecord, EncoderMeasurements and ReplayResult are EncoderSamples: its fields first, in its order."""
+    import dataclasses
+
+    from switchobs.loop import EncoderLoopRecord, EncoderSamples, ReplayResult
+
+    base = [f.name for f in dataclasses.fields(EncoderSamples)]
+    assert tuple(base) == EncoderSamples.SIGNALS
+    for cls in (EncoderLoopRecord, EncoderMeasurements, ReplayResult):
+        assert issubclass(cls, EncoderSamples)
+        names = [f.name for f in dataclasses.fields(cls)]
+        assert names[:len(base)] == base and not set(names[len(base):]) & set(base), cls

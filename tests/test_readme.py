@@ -59,3 +59,15 @@ def test_the_layer_table_names_every_command_and_every_layer():
     assert [c for c in COMMANDS if f"`switchobs {c}`" not in cli_row and f"`{c}`" not in cli_row] == []
     layers = sorted(p.name for p in (ROOT / "src" / "switchobs").iterdir() if (p / "__init__.py").is_file())
     assert [name for name in layers if f"`switchobs.{name}`" not in readme] == []
+
+
+def test_the_missing_project_urls_are_answered_in_the_readme():
+    """pyproject.toml names no project URL; the README says why (issue: package metadata)."""
+    import tomllib
+
+    project = tomllib.loads((ROOT / "pyproject.toml").read_text("utf-8"))["project"]
+    readme = (ROOT / "README.md").read_text("utf-8")
+    if "urls" in project:
+        assert "no project URLs" not in readme, "the README says there are no project URLs, pyproject.toml has some"
+    else:
+        assert "The package metadata has no project URLs" in readme

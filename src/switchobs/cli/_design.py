@@ -7,12 +7,15 @@ import sys
 
 from .._display import exact_display
 from ..design import design_gains
-from ..exceptions import SpectrumError
+from ..exceptions import NotHurwitzError, NotObservableError, SpectrumError
 from ..report import Progress
 from ._common import add_model_arguments, emit_json, model_from_args
 from .main import QUIET
 
 __all__ = ["register"]
+
+#: What ``design --json`` gives of the design at the model's values (``at_values``), besides the values.
+AT_VALUES_KEYS = ("K_plus", "K_minus", "hurwitz_plus", "hurwitz_minus", "P")
 
 
 def register(sub: argparse._SubParsersAction) -> None:
@@ -33,6 +36,9 @@ def register(sub: argparse._SubParsersAction) -> None:
                    help="print every rational in full (default: those longer than 20 characters to 6 digits)")
     p.add_argument("--no-verify", action="store_true",
                    help="skip the exact re-check of the Lyapunov equations (for large symbolic models)")
+    p.add_argument("--symbolic", action="store_true",
+                   help="show the symbolic design only (default: when the model has [values], also the gains, "
+                        "Routh–Hurwitz conditions and P at those values, as certify uses them)")
     p.set_defaults(func=run)
 
 
@@ -51,9 +57,22 @@ def run(args: argparse.Namespace) -> int:
     if not args.no_verify:
         with progress.stage("re-check", "exact re-check of the certificate"):
             checks = result.verify()
+    # one rule with certify: a model's [values] are used; the symbolic result comes first, then the same design
+    # at those values (a substitution: the re-check above covers it)
+    at_values = not args.symbolic and bool(result.stored_values)
+    failed = None
+    if at_values:
+        try:
+            evaluated = result.at()
+        except (NotHurwitzError, NotObservableError) as exc:
+            failed = str(exc)
     if args.json:
         data = result.to_json()
         data["verified"] = checks
+        if at_values:
+            data["at_values"] = {"values": {k: str(v) for k, v in result.stored_values.items()},
+                                 **({"error": failed} if failed else
+                                    {k: evaluated.to_json()[k] for k in AT_VALUES_KEYS})}
         emit_json(data)
     else:
         with exact_display(args.exact):
@@ -62,4 +81,9 @@ def run(args: argparse.Namespace) -> int:
             status = "all hold exactly" if all(checks.values()) else "FAILED: " + ", ".join(
                 k for k, v in checks.items() if not v)
             print(f"  exact re-check ({', '.join(checks)}): {status}")
-    return 0 if checks is None or all(checks.values()) else 1
+        if at_values:
+            with exact_display(args.exact):
+                print(f"at the model's values: {failed}" if failed else
+                      result.describe_at_values(full=True if args.full else None))
+    ok = (checks is None or all(checks.values())) and failed is None
+    return 0 if ok else 1

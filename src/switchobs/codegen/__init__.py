@@ -35,10 +35,11 @@ from ._a2l import a2l_symbols, calibration_files, elf_symbols, generate_a2l
 from ._build import CObserver, cache_directory, compile_observer, compile_sources, find_compiler, load_library
 from ._fmu import (FMI_VERSIONS, FMUVariable, GeneratedFMU, build_fmu, fmi3_stubs, fmi_headers, fmu_token,
                    generate_fmu)
-from ._generate import (REALS, GeneratedObserver, default_prefix, generate_observer, generate_super_twisting,
+from ._generate import (REALS, default_prefix, generate_observer, generate_super_twisting,
                         generate_vehicle_speed)
+from ._observer import GeneratedObserver, proof_driver
 from ._fuzz import fuzz_harness
-from ._proof import ProofResult, proof_driver, proof_record, prove
+from ._proof import ProofResult, proof_record, prove
 from ._target import (TARGETS, FunctionStack, PilResult, Target, TargetBuild, TargetFootprint, measure_footprint,
                       run_pil, target_build, target_real)
 

@@ -27,7 +27,7 @@ from .. import __version__
 from ..exceptions import CodegenError, PrerequisiteError
 from ..spec import StepStatus
 from ._emit import float_literal
-from ._generate import GeneratedObserver
+from ._observer import GeneratedObserver
 
 __all__ = ["calibration_files", "generate_a2l", "elf_symbols", "a2l_symbols"]
 

@@ -41,7 +41,8 @@ import numpy.typing as npt
 
 from .._validate import named_vector, signal_matrix
 from ..exceptions import CodegenError, DimensionError, ModelError, ObserverInputError
-from ._generate import BRANCH_HINTS, GeneratedObserver, generate_observer
+from ._generate import BRANCH_HINTS, generate_observer
+from ._observer import GeneratedObserver
 from ..spec import STATUS_TEXT, StepStatus
 
 __all__ = ["CObserver", "compile_observer", "compile_shared", "compile_sources", "cache_directory", "find_compiler",

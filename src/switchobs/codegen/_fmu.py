@@ -40,7 +40,7 @@ from .. import __version__
 from ..exceptions import CodegenError, PrerequisiteError
 from ._build import BUILD_FLAGS, compile_sources
 from ._emit import float_literal
-from ._generate import GeneratedObserver
+from ._observer import GeneratedObserver
 
 __all__ = ["FMI_VERSIONS", "FMUVariable", "GeneratedFMU", "build_fmu", "fmi3_stubs", "fmi_headers", "fmu_token",
            "generate_fmu"]

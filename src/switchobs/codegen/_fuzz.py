@@ -30,7 +30,7 @@ from ..spec import STATUS_TEXT, StepStatus
 from ._emit import float_literal
 
 if TYPE_CHECKING:
-    from ._generate import GeneratedObserver
+    from ._observer import GeneratedObserver
 
 __all__ = ["fuzz_harness", "FUZZ_ROWS"]
 

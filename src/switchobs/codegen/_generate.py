@@ -37,9 +37,8 @@ from __future__ import annotations
 import dataclasses
 import re
 from collections.abc import Mapping, Sequence
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from fractions import Fraction
-from pathlib import Path
 from typing import Any
 
 import casadi as ca
@@ -48,14 +47,12 @@ import sympy as sp
 
 from ..design import GainDesign
 from .._validate import adaptation_gain, round_down, substep_bound
-from .._atomic import write_files
-from .._json import fields_from_json
 from ..exceptions import CodegenError, DimensionError, ModelError
 from ..model import Model, numeric, rational_value
 from ..spec import (METHODS, STATUS_TEXT, STEP_METHODS, Guard, ObserverSpec, StepStatus,
                     default_method, require_explicit)
 from ._emit import CFunction, float_literal, kernel
-from ._misra import misra_record
+from ._observer import GeneratedObserver
 from ._readme import readme
 from ._text import c_comment
 from ._translate import (GUARD_TESTS, Translation, translate_adaptive, translate_original, translate_super_twisting,
@@ -115,227 +112,6 @@ def _macro_names(kind: str, names: Sequence[str]) -> list[str]:
         dup = [n for n in names if n.upper() in clash]
         raise CodegenError(f"the {kind} names {dup} give the same C macro name(s) {clash}; rename them in the model")
     return upper
-
-
-@dataclass(frozen=True)
-class GeneratedObserver:
-    """The generated C observer: the two C files, the README, and what they mean.
-
-    Attributes
-    ----------
-    prefix : str
-        C prefix of every public name (``switchobs_abs_xbs3``).
-    real : {"double", "float"}
-    method : {"rk4", "euler", "midpoint", "radau3"}
-    kind : {"switched", "adaptive"}
-    model_name : str
-    state_names, signal_names, param_names : tuple of str
-        In C order; states are in the model's own coordinates (adaptive:
-        ``w``, then ``theta_hat``, then ``Upsilon`` row-major).
-    default_params : tuple of float
-        ``<prefix>_default_params``: the model values and designed gains used at generation.
-    guards : tuple of Guard
-        Conditions the step checks, in order, with their status codes.
-    temporaries : int
-        Scalar temporaries of the step kernel (casadi ``sz_w``).
-    stack_reals : int
-        Upper bound of the reals one ``_step`` call keeps on the stack
-        (temporaries + the new state + ``s`` + one guard value).
-    header, source, readme : str
-        Text of ``<prefix>.h``, ``<prefix>.c`` and ``README.md`` (the fourth file, ``<prefix>_misra.md``, is
-        :attr:`misra`, made from the two C files).
-    casadi_version : str
-    description : str
-        What is observed (the model's description).
-    equations : tuple of str
-        The observer equations, as written in the files' comments.
-    signal_roles : tuple of str
-        What each signal is (measured output, external signal, input).
-    references : mapping str -> str
-    h_max : Fraction or None
-        Certified bound on the step ``|s| dt`` in rescaled time (exact); None: no sub-stepping.
-    h_max_c : float or None
-        ``<PREFIX>_H_MAX``: ``h_max`` rounded down to ``real``.
-    max_substeps : int or None
-        ``<PREFIX>_MAX_SUBSTEPS``: most sub-steps of one step before ``SUBSTEP_LIMIT``.
-    certificate : str or None
-        The statement of the discrete certificate proved for this design and method (``--h-max auto``),
-        recorded in the header and README; None: none was checked.
-    original_names : tuple of str
-        The original coordinates ``x = phi^{-1}(xhat)`` that ``<prefix>_original`` returns (the model's
-        ``[original]`` table, written by ``switchobs transform``); empty: no such function.
-    ranges : mapping str -> (float, float)
-        Declared ranges ``[lo, hi]`` of states, signals, parameters and ``dt`` (the name ``dt``), as the C
-        literals round them; the step refuses a value outside (``STATE_RANGE``, ``SIGNAL_RANGE``,
-        ``BAD_PARAM``, ``BAD_DT``).  With a range for every input the files include the proof driver
-        ``<prefix>_proof.c`` (:mod:`switchobs.codegen._proof`).
-    det_floor : float or None
-        ``<PREFIX>_DET_FLOOR`` of an implicit method (:meth:`switchobs.spec.StepMethod.det_floor`): the step
-        refuses ``|det D(Z)|`` below it (``NONFINITE_RESULT``); None for an explicit method.
-    step_function : casadi.Function
-        One step *without* sub-stepping as a casadi Function ``(x, signals, params, dt) -> x_next``
-        (not compared, not in JSON).
-    """
-
-    prefix: str
-    real: str
-    method: str
-    kind: str
-    model_name: str
-    state_names: tuple[str, ...]
-    signal_names: tuple[str, ...]
-    param_names: tuple[str, ...]
-    default_params: tuple[float, ...]
-    guards: tuple[Guard, ...]
-    temporaries: int
-    stack_reals: int
-    header: str
-    source: str
-    readme: str
-    casadi_version: str
-    description: str = ""
-    equations: tuple[str, ...] = ()
-    signal_roles: tuple[str, ...] = ()
-    references: Mapping[str, str] = field(default_factory=dict)
-    h_max: Fraction | None = None
-    h_max_c: float | None = None
-    max_substeps: int | None = None
-    certificate: str | None = None
-    original_names: tuple[str, ...] = ()
-    ranges: Mapping[str, tuple[float, float]] = field(default_factory=dict)
-    det_floor: float | None = None
-    step_function: ca.Function | None = field(default=None, repr=False, compare=False)
-
-    @property
-    def nx(self) -> int:
-        return len(self.state_names)
-
-    @property
-    def ns(self) -> int:
-        return len(self.signal_names)
-
-    @property
-    def np(self) -> int:
-        return len(self.param_names)
-
-    @property
-    def misra(self) -> str:
-        """Text of ``<prefix>_misra.md``: the MISRA C:2012 deviation record of the two C files."""
-        return misra_record(self.prefix, self.header, self.source)
-
-    @property
-    def unranged(self) -> tuple[str, ...]:
-        """The inputs without a declared range (states, signals, parameters, ``dt``): the proof needs none."""
-        names = (*self.state_names, *self.signal_names, *self.param_names, "dt")
-        return tuple(n for n in names if n not in self.ranges)
-
-    @property
-    def files(self) -> dict[str, str]:
-        """File name -> text (with the EVA proof driver ``<prefix>_proof.c`` when every input has a range)."""
-        out = {f"{self.prefix}.h": self.header, f"{self.prefix}.c": self.source, "README.md": self.readme,
-               f"{self.prefix}_misra.md": self.misra}
-        if not self.unranged:
-            from ._proof import proof_driver
-
-            out[f"{self.prefix}_proof.c"] = proof_driver(self)
-        return out
-
-    def param_index(self, name: str) -> int:
-        """Index of a parameter in ``params`` (the value of ``<PREFIX>_P_<NAME>``)."""
-        try:
-            return self.param_names.index(name)
-        except ValueError:
-            raise ModelError(f"the generated observer has no parameter {name!r} "
-                             f"(parameters: {list(self.param_names)})") from None
-
-    def params_with(self, values: Mapping[str, float] | None = None) -> np.ndarray:
-        """The default parameter vector with some entries replaced by name."""
-        out = np.array(self.default_params, dtype=float)
-        for name, value in (values or {}).items():
-            out[self.param_index(name)] = float(value)
-        return out
-
-    def write(self, directory: str | Path, *, extra: Mapping[str, str] | None = None) -> tuple[Path, ...]:
-        """Write :attr:`files` (``<prefix>.h``, ``<prefix>.c``, ``README.md``, ``<prefix>_misra.md``, with
-        ranges for every input ``<prefix>_proof.c``) and ``extra`` (name -> text) into ``directory``
-        (created if needed).
-
-        All files appear together or none does (:func:`switchobs._atomic.write_files`).
-
-        Raises
-        ------
-        OutputError
-            If a file cannot be written (the message names it); nothing is left behind.
-        """
-        return write_files(directory, {**self.files, **(extra or {})}, what="the generated C into")
-
-    def to_json(self, *, sources: bool = False) -> dict[str, Any]:
-        """What the files hold and mean (and the files' text if ``sources``: what :meth:`from_json` reads)."""
-        out = {
-            "prefix": self.prefix, "real": self.real, "method": self.method, "kind": self.kind,
-            "model": self.model_name, "nx": self.nx, "ns": self.ns, "np": self.np,
-            "states": list(self.state_names), "signals": list(self.signal_names),
-            "parameters": {n: v for n, v in zip(self.param_names, self.default_params)},
-            "guards": [g.to_json() for g in self.guards],
-            "status_codes": {s.name: int(s) for s in StepStatus},
-            "temporaries": self.temporaries, "stack_reals": self.stack_reals,
-            "h_max": None if self.h_max is None else str(self.h_max), "h_max_c": self.h_max_c,
-            "max_substeps": self.max_substeps, "certificate": self.certificate,
-            "files": sorted(self.files), "casadi_version": self.casadi_version,
-            "references": dict(self.references), "original": list(self.original_names),
-            "description": self.description, "equations": list(self.equations),
-            "signal_roles": list(self.signal_roles),
-            "ranges": {n: list(r) for n, r in self.ranges.items()}, "det_floor": self.det_floor,
-        }
-        if sources:
-            out.update(header=self.header, source=self.source, readme=self.readme)
-        return out
-
-    @classmethod
-    def from_json(cls, data: Any) -> GeneratedObserver:
-        """The generated observer of ``to_json(sources=True)`` (without ``step_function``, the casadi function
-        the C was generated from: the files do not need it).
-
-        Raises
-        ------
-        ModelError
-            No sources, a missing key or a malformed part; the message names it.
-        """
-        if not isinstance(data, Mapping) or "source" not in data:
-            raise ModelError("a generated observer JSON needs its files; write it with to_json(sources=True)")
-        try:
-            flat = {**data, "model_name": data["model"], "state_names": data["states"],
-                    "signal_names": data["signals"], "param_names": list(data["parameters"]),
-                    "default_params": list(data["parameters"].values()), "original_names": data["original"],
-                    "guards": [Guard.from_json(g) for g in data["guards"]],
-                    "ranges": {n: (float(r[0]), float(r[1])) for n, r in data.get("ranges", {}).items()}}
-        except (KeyError, TypeError, AttributeError) as exc:
-            raise ModelError(f"not a generated observer JSON ({type(exc).__name__}: {exc})") from None
-        return fields_from_json(cls, flat, error=ModelError, what="generated observer")
-
-    def __str__(self) -> str:
-        params = ", ".join(f"{n}={v:.6g}" for n, v in zip(self.param_names, self.default_params))
-        lines = [
-            f"generated C {self.kind} observer {self.prefix} for model {self.model_name!r} "
-            f"({self.real}, {self.method}, casadi {self.casadi_version})",
-            f"  files: {', '.join(sorted(self.files))}",
-            f"  NX = {self.nx}: {', '.join(self.state_names)}",
-            f"  NS = {self.ns}: {', '.join(self.signal_names)}",
-            f"  NP = {self.np}: {params}",
-            "  checks: " + ("; ".join(str(g) for g in self.guards) or "none beyond finiteness"),
-            f"  stack: {self.temporaries} temporaries, at most {self.stack_reals} reals per step",
-        ]
-        if self.h_max is not None:
-            lines.append(f"  sub-steps: |s|*dt <= H_MAX = {self.h_max_c!r} (certified h_max = {self.h_max}) per step, "
-                         f"at most MAX_SUBSTEPS = {self.max_substeps}, else SUBSTEP_LIMIT = "
-                         f"{int(StepStatus.SUBSTEP_LIMIT)}")
-        if self.ranges:
-            lines.append("  ranges: " + ", ".join(f"{n} in [{lo:.6g}, {hi:.6g}]" for n, (lo, hi) in self.ranges.items())
-                         + ("" if not self.unranged else f"; none for {', '.join(self.unranged)} (no proof driver)"))
-        if self.original_names:
-            lines.append(f"  original coordinates: {', '.join(self.original_names)} = phi^-1(xhat) "
-                         f"({self.prefix}_original)")
-        return "\n".join(lines)
 
 
 # ----------------------------------------------------------------------------- inputs

@@ -2,14 +2,10 @@
 
 from __future__ import annotations
 
-from typing import TYPE_CHECKING
-
 from ._emit import float_literal
 from ._misra import misra_summary
+from ._observer import GeneratedObserver, proof_command
 from ..spec import METHODS, STATUS_TEXT, STEP_METHODS, StepStatus
-
-if TYPE_CHECKING:  # pragma: no cover
-    from ._generate import GeneratedObserver
 
 __all__ = ["readme", "example_program"]
 
@@ -100,8 +96,6 @@ def _ranges_section(gen: "GeneratedObserver") -> list[str]:
     """The declared ranges the step checks and, when every input has one, the proof that relies on them."""
     if not gen.ranges:
         return []
-    from ._proof import proof_command
-
     out = ["## Declared ranges and the proof of no run-time errors", "",
            "The step refuses a value outside its declared range before computing anything: a state (also the "
            f"new state) with `STATE_RANGE` = {int(StepStatus.STATE_RANGE)}, a signal with `SIGNAL_RANGE` = "

@@ -40,7 +40,7 @@ from .._atomic import write_files
 from .._json import JsonRecord
 from .._limits import MAX_PIL_ROWS
 from ..exceptions import CodegenError, DimensionError, PrerequisiteError
-from ._generate import GeneratedObserver
+from ._observer import GeneratedObserver
 
 __all__ = ["Target", "TARGETS", "COMMON_FLAGS", "WARNING_FLAGS", "TargetFootprint", "FunctionStack", "PilResult",
            "TargetBuild", "target_real", "build_files", "measure_footprint", "run_pil", "target_build"]

@@ -528,26 +528,8 @@ class GainDesign:
         PRETTY_MAX_N, sums are printed in sympy's internal order of their terms (``order="none"``):
         sorting them is half the printing time of a symbolic N = 8 design.
         """
-        small = self.n <= PRETTY_MAX_N
-        printer = sp.sstr if small else _unsorted_sstr
-
-        def text(expr: Any) -> str:
-            return printer(readable(expr))
-
-        def mat(M: sp.MatrixBase) -> str:
-            shown = sp.pretty(readable(M), use_unicode=unicode_output()) if small else text(M.tolist())
-            return "\n".join("    " + line for line in shown.splitlines())
-
-        def conds(cs: Sequence[sp.Basic]) -> str:
-            return "\n".join(f"    {text(c)}" for c in cs) if cs else "    (none left: Hurwitz by construction)"
-
+        text, gains, lyapunov = self._blocks(full)
         nf = self.normal_form
-        if full:
-            gains = ["  K_plus =", mat(self.K_plus), "  K_minus =", mat(self.K_minus)]
-            lyapunov = ["  common Lyapunov matrix P =", mat(self.P)]
-        else:
-            gains = [f"  K_plus = {text(list(self.K_plus))}", f"  K_minus = {text(list(self.K_minus))}"]
-            lyapunov = self._compact_P(text)
         lines = [
             f"switched observer design for model {self.model.name!r} (n = {self.n}, choice: {self.choice}"
             f"{', conditional on the coupling constraints' if self.conditional else ''})",
@@ -555,8 +537,7 @@ class GainDesign:
             f"  observable iff: {', '.join(map(text, nf.observability_conditions)) or 'always'}",
             f"  normal form a = {text(list(nf.a))}",
             *gains,
-            "  Routh–Hurwitz conditions for A_plus:", conds(self.hurwitz_plus),
-            "  Routh–Hurwitz conditions for A_minus:", conds(self.hurwitz_minus),
+            *self._routh_lines(text),
             *lyapunov,
             f"  C_plus = {text(list(self.C_plus))},  C_minus = {text(list(self.C_minus))}",
             "  coupling constraints on K_minus (Hoang family):",
@@ -568,6 +549,63 @@ class GainDesign:
                          *self.C_minus]):
             lines.append("  " + ROUNDED_NOTE)
         return "\n".join(lines)
+
+    @property
+    def stored_values(self) -> dict[str, Any]:
+        """The model's stored values of its parameters (a model file's ``[values]``): what :meth:`at` substitutes
+        when given nothing, and what ``switchobs design`` evaluates the design at."""
+        return {k: v for k, v in self.model.values.items() if k in self.model.parameters}
+
+    def describe_at_values(self, full: bool | None = None) -> str:
+        """The gains, the Routh–Hurwitz conditions left and ``P`` of the design :meth:`at` the model's
+        :attr:`stored_values`, as text: what ``switchobs design`` prints after the symbolic design.
+
+        Design symbols stay symbols; ``P`` is printed when no symbol is left in it (else its symbols are named:
+        ``to_json`` of :meth:`at` holds it); ``full`` as in :meth:`describe` (default: as ``str()``, full matrices up
+        to n = PRETTY_MAX_N).
+
+        Raises
+        ------
+        NotHurwitzError, NotObservableError
+            The values break a Routh–Hurwitz or an observability condition (as :meth:`at`).
+        """
+        at = self.at()
+        text, gains, lyapunov = at._blocks(self.n <= PRETTY_MAX_N if full is None else full)
+        values = ", ".join(f"{k} = {text(v)}" for k, v in self.stored_values.items())
+        left = sorted(s.name for s in at.P.free_symbols)
+        if left:
+            lyapunov = [f"  common Lyapunov matrix P: the one above at these values, in {', '.join(left)} "
+                        f"(in full with --json)"]
+        lines = [f"at the model's values {values} (switchobs design --symbolic leaves this out):", *gains,
+                 *at._routh_lines(text), *lyapunov]
+        if is_shortened([*at.K_plus, *at.K_minus, *at.P]):
+            lines.append("  " + ROUNDED_NOTE)
+        return "\n".join(lines)
+
+    def _blocks(self, full: bool) -> tuple[Callable[[Any], str], list[str], list[str]]:
+        """The printer of one expression and the lines of the gains and of ``P`` (full or compact)."""
+        small = self.n <= PRETTY_MAX_N
+        printer = sp.sstr if small else _unsorted_sstr
+
+        def text(expr: Any) -> str:
+            return printer(readable(expr))
+
+        def mat(M: sp.MatrixBase) -> str:
+            shown = sp.pretty(readable(M), use_unicode=unicode_output()) if small else text(M.tolist())
+            return "\n".join("    " + line for line in shown.splitlines())
+
+        if full:
+            return (text, ["  K_plus =", mat(self.K_plus), "  K_minus =", mat(self.K_minus)],
+                    ["  common Lyapunov matrix P =", mat(self.P)])
+        return (text, [f"  K_plus = {text(list(self.K_plus))}", f"  K_minus = {text(list(self.K_minus))}"],
+                self._compact_P(text))
+
+    def _routh_lines(self, text: Callable[[Any], str]) -> list[str]:
+        def conds(cs: Sequence[sp.Basic]) -> str:
+            return "\n".join(f"    {text(c)}" for c in cs) if cs else "    (none left: Hurwitz by construction)"
+
+        return ["  Routh–Hurwitz conditions for A_plus:", conds(self.hurwitz_plus),
+                "  Routh–Hurwitz conditions for A_minus:", conds(self.hurwitz_minus)]
 
     def _compact_P(self, text: Callable[[Any], str]) -> list[str]:
         if not self.normal_form.is_identity:

@@ -8,9 +8,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..loop import (DEFAULT_BETA, DEFAULT_GAMMA, INITIAL_STATE, EstimatorSpec, LoadXbsEstimator,
-                    ObserverXbsEstimator, xbs_estimator)
-from ..observers import adaptive_xbs_observer
+from ..loop import EstimatorSpec, LoadXbsEstimator, ObserverXbsEstimator, xbs_estimator
 from ..plants import BrakingResult, SixPhaseABS, TwoAxleResult, TwoAxleScenario, XbsEstimator, scenario_observer_gains
 from ..plants._metrics import _reconvergence
 
@@ -143,26 +141,13 @@ SEC36_CROSSING_TOL_S = 0.02
 #: Seed 001 Sec. 3.6: when the ABS takes over on each axle [s].
 SEC36_ACTIVATION = {"front": 0.75, "rear": 0.50}
 
-def sec36_estimators(sc: TwoAxleScenario, spec: EstimatorSpec, *, load_signal: bool = True,
-                     h_max: float | None = None) -> tuple[XbsEstimator, XbsEstimator]:
-    """The adaptive observers of the Sec. 3.6 runs, front and rear: ``spec``'s gains, ``a`` read on line from
-    the loads (3.36) the vehicle feeds (``load_signal``, the seed's) or the static one, optionally sub-stepped
-    to ``|s| dt <= h_max``."""
-    if h_max is None:
-        return tuple(xbs_estimator(spec, sc.vehicle.corner(axle), sc.roads.initial, load_signal=load_signal)
-                     for axle in ("front", "rear"))
-    gamma = DEFAULT_GAMMA if spec.gamma is None else spec.gamma
-    out = []
-    for axle in ("front", "rear"):
-        corner = sc.vehicle.corner(axle)
-        params = {"b": corner.b} if load_signal else {"a": corner.a, "b": corner.b}
-        obs = adaptive_xbs_observer(DEFAULT_BETA["adaptive"] if spec.beta is None else spec.beta, [gamma, gamma],
-                                    params=params, h_max=h_max, max_substeps=SEC36_MAX_SUBSTEPS,
-                                    load_signal=load_signal)
-        out.append(LoadXbsEstimator(obs, load_n=corner.load_n, load_gain=corner.radius_m ** 2 / corner.inertia_kg_m2,
-                                    initial_state=INITIAL_STATE["adaptive"]) if load_signal else
-                   ObserverXbsEstimator(obs, initial_state=INITIAL_STATE["adaptive"]))
-    return out[0], out[1]
+def sec36_estimators(sc: TwoAxleScenario, spec: EstimatorSpec, *,
+                     load_signal: bool = True) -> tuple[XbsEstimator, XbsEstimator]:
+    """The adaptive observers of the Sec. 3.6 runs, front and rear: ``spec``'s gains and sub-stepping
+    (``EstimatorSpec.h_max``), ``a`` read on line from the loads (3.36) the vehicle feeds (``load_signal``, the
+    seed's) or the static one."""
+    return tuple(xbs_estimator(spec, sc.vehicle.corner(axle), sc.roads.initial, load_signal=load_signal)
+                 for axle in ("front", "rear"))
 
 class ParameterRecorder:
     """An estimator passed through (load included), recording one estimated parameter after every update."""

@@ -10,7 +10,6 @@ from functools import cached_property
 import numpy as np
 
 from ..loop import INITIAL_STATE, X2_MEASUREMENTS, EncoderX2, EstimatorSpec, xbs_estimator
-from ..observers import adaptive_xbs_observer
 from ..plants import (Accelerometer, BrakingResult, Table41Result, TwoAxleResult, TwoAxleScenario, aguado_sec36,
                       scenario, scenario_observer, scenario_observer_gains, simulate, simulate_two_axle, table41)
 from ..plants import BrakingMetrics
@@ -20,8 +19,8 @@ from . import _layer_pages as _pages
 from ._fig67 import (FIG67_ENCODER, FIG67_PHASES, FIG67_SMALL_ECCENTRICITY, FIG67_SPEEDS_KMH, HalfWindowLate,
                          fig67_scenario)
 from ._msirdi import MsirdiRuns, msirdi_runs
-from ._adaptive import (SEC34_MAX_SUBSTEPS, SEC34_H_MAX, SEC36_FINE_STEP_S, SEC36_H_MAX, SEC36_OBSERVER,
-                              ParameterRecorder, StateRecorder, Traced, sec36_estimators)
+from ._adaptive import (SEC34_MAX_SUBSTEPS, SEC34_H_MAX, SEC36_FINE_STEP_S, SEC36_H_MAX, SEC36_MAX_SUBSTEPS,
+                              SEC36_OBSERVER, ParameterRecorder, StateRecorder, Traced, sec36_estimators)
 
 __all__ = ["Runs"]
 
@@ -63,8 +62,8 @@ class Runs:
         key = (beta, gamma, h_max)
         if key not in self._sec34:
             sc = scenario("aguado-sec34")
-            obs = adaptive_xbs_observer(beta, [gamma, gamma], params={"a": sc.vehicle.a, "b": sc.vehicle.b},
-                                        h_max=h_max, max_substeps=SEC34_MAX_SUBSTEPS)
+            spec = EstimatorSpec("adaptive", beta=beta, gamma=gamma, h_max=h_max, max_substeps=SEC34_MAX_SUBSTEPS)
+            obs = xbs_estimator(spec, sc.vehicle, sc.roads.initial).observer
             est = StateRecorder(obs, initial_state=INITIAL_STATE["adaptive"])
             with np.errstate(over="ignore", invalid="ignore"):
                 res = simulate(sc, estimator=est)
@@ -111,8 +110,8 @@ class Runs:
                     "static-load": run(sc, SEC36_OBSERVER, load_signal=False),
                     "gamma-default": run(first, EstimatorSpec("adaptive")),
                     "gamma-default-fine": run(replace(first, dt_s=SEC36_FINE_STEP_S), EstimatorSpec("adaptive")),
-                    "gamma-default-substeps": simulate_two_axle(sc, estimators=sec36_estimators(
-                        sc, EstimatorSpec("adaptive"), h_max=SEC36_H_MAX)),
+                    "gamma-default-substeps": run(sc, EstimatorSpec("adaptive", h_max=SEC36_H_MAX,
+                                                                    max_substeps=SEC36_MAX_SUBSTEPS)),
                     "gamma-half": run(first, SEC36_OBSERVER)}
 
     @property

@@ -17,6 +17,9 @@ LoadXbsEstimator            -- the same for an observer that reads the wheel loa
                                (seed 001 Sec. 3.6; the two-axle vehicle feeds it the load (3.36))
 SteppingObserver            -- what it needs (Python reference observers and compiled C observers qualify)
 EncoderLoopEstimator        -- XBS observers fed by a simulated encoder with three-stage compensation
+EncoderSamples              -- the one measurement record: the chain's signals at the controller samples;
+                            EncoderLoopRecord, EncoderMeasurements and ReplayResult are subclasses of it (its
+                            fields first, then what their producer adds), kept under their names
 EncoderLoopRecord           -- what the encoder chain and the observers saw
 EncoderX2, X2_MEASUREMENTS  -- the chain's measured x2 (TSA, notch, three-stage) as the controller's input
 encoder_measurements, EncoderMeasurements -- the same chain over a whole recorded run at once (after the plant,
@@ -48,7 +51,7 @@ from ._adapter import LoadXbsEstimator, ObserverXbsEstimator, SteppingObserver
 from ._braking import CONTROLLER_NAMES, BrakingRun, run_braking
 from ._demo import (SETTLE_S, BrakingSummary, DemoSettings, ErrorRow, demo_braking, demo_scenario, road_segments,
                     segment_errors, summarise_braking)
-from ._encoder_batch import EncoderMeasurements, encoder_measurements
+from ._encoder_batch import EncoderMeasurements, EncoderSamples, encoder_measurements
 from ._encoder_loop import X2_MEASUREMENTS, EncoderLoopEstimator, EncoderLoopRecord, EncoderX2
 from ._pil import (PIL_SCENARIO, PIL_TOLERANCE, PilComparison, PilRecord, braking_record, compare_with_reference,
                    reference_observer, reference_run)
@@ -59,7 +62,7 @@ from ._factory import (DEFAULT_BETA, DEFAULT_GAMMA, INITIAL_STATE, OBSERVER_KIND
 
 __all__ = ["EstimatorSpec", "xbs_estimator", "default_method", "OBSERVER_KINDS", "DEFAULT_BETA", "DEFAULT_GAMMA", "INITIAL_STATE",
            "ObserverXbsEstimator", "LoadXbsEstimator", "SteppingObserver", "run_braking", "BrakingRun", "CONTROLLER_NAMES", "EncoderLoopEstimator", "EncoderLoopRecord",
-           "EncoderX2", "X2_MEASUREMENTS", "encoder_measurements", "EncoderMeasurements",
+           "EncoderX2", "X2_MEASUREMENTS", "encoder_measurements", "EncoderMeasurements", "EncoderSamples",
            "DemoSettings", "demo_scenario", "demo_braking", "road_segments", "segment_errors", "ErrorRow",
            "summarise_braking", "BrakingSummary", "SETTLE_S", "braking_record", "PilRecord", "reference_run", "reference_observer",
            "compare_with_reference", "PilComparison", "PIL_SCENARIO", "PIL_TOLERANCE",

@@ -18,24 +18,85 @@ from typing import Any
 import numpy as np
 import numpy.typing as npt
 
-from .._json import JsonRecord
+from .._json import JsonRecord, array_to_json
 from ..exceptions import SimulationError
 from ..sensors import Encoder, ThreeStageEstimator, notch_series
 from ..sensors._tsa import check_order_window, fit_windows
 
-__all__ = ["EncoderMeasurements", "encoder_measurements", "measure_edges", "edge_angles"]
+__all__ = ["EncoderSamples", "EncoderMeasurements", "encoder_measurements", "measure_edges", "edge_angles"]
 
 Array = npt.NDArray[np.float64]
 
 
+def _floats(a: Any) -> list[float | None]:
+    """A 1-D array as a list of floats, NaN as None."""
+    return array_to_json(np.asarray(a, dtype=float))  # type: ignore[no-any-return]
+
+
 @dataclass(frozen=True, eq=False)
-class EncoderMeasurements(JsonRecord, error=SimulationError):
-    """The encoder chain's measurements at the controller samples of a run.
+class EncoderSamples(JsonRecord, error=SimulationError):
+    """The encoder chain's signals at the controller samples: the one measurement record.
+
+    :class:`EncoderMeasurements` (the chain over a recorded run at once), :class:`EncoderLoopRecord` (the chain
+    step by step inside the loop) and :class:`ReplayResult` (the chain over a log) are each this record with
+    what their producer adds (subclasses: the same fields, in the same order, first).
+
+    Attributes
+    ----------
+    t : ndarray
+        Controller sample times [s].
+    t_measured : ndarray
+        Time the measurement of each sample describes: the mean time stamp of the TSA window
+        (NaN until the window is full).
+    x2_tsa, x2_notch, x2_measured : ndarray
+        ``R α - a_x`` from the raw TSA, through the notch (centre ``ω_m``) and after three-stage
+        compensation [m/s²] (seed 001 Secs. 5.2, 6.3, Fig. 6.2).
+    omega_tsa, omega_measured : ndarray
+        Raw TSA and compensated wheel speed [rad/s].
+    vx : ndarray
+        Vehicle speed at the samples [m/s].
+    """
+
+    t: Array
+    t_measured: Array
+    x2_tsa: Array
+    x2_notch: Array
+    x2_measured: Array
+    omega_tsa: Array
+    omega_measured: Array
+    vx: Array
+
+    #: The chain's signals, in field order.
+    SIGNALS = ("t", "t_measured", "x2_tsa", "x2_notch", "x2_measured", "omega_tsa", "omega_measured", "vx")
+
+    @property
+    def lag_s(self) -> Array:
+        """Age of the measurement at each sample, ``t - t_measured`` [s]."""
+        return self.t - self.t_measured
+
+    def signals(self) -> dict[str, Array]:
+        """The chain's signals by name (:attr:`SIGNALS`): the fields a record derived from this one copies."""
+        return {name: getattr(self, name) for name in self.SIGNALS}
+
+    def to_json(self) -> dict[str, Any]:
+        """The signals as lists (NaN as None)."""
+        return {name: _floats(a) for name, a in self.signals().items()}
+
+    def __str__(self) -> str:
+        ok = np.isfinite(self.t_measured)
+        lag = f"{1e3 * float(np.mean(self.lag_s[ok])):.1f} ms" if np.any(ok) else "n/a"
+        return f"encoder samples: {self.t.size} ({int(np.count_nonzero(ok))} measured), mean measurement lag {lag}"
+
+
+@dataclass(frozen=True, eq=False)
+class EncoderMeasurements(EncoderSamples):
+    """The encoder chain's measurements at the controller samples of a run: an :class:`EncoderSamples` with
+    what the observers and a replay need.
 
     Attributes
     ----------
     t, t_measured, x2_tsa, x2_notch, x2_measured, omega_tsa, omega_measured, vx : ndarray
-        As :class:`EncoderLoopRecord` (NaN where the TSA window is not full yet).
+        Of :class:`EncoderSamples` (NaN where the TSA window is not full yet).
     vx_measured : ndarray
         Vehicle speed at ``t_measured`` [m/s] (interpolated in the plant's steps).
     pressure_measured : ndarray
@@ -60,14 +121,6 @@ class EncoderMeasurements(JsonRecord, error=SimulationError):
         from: a log of them replays to the same measurements (:func:`switchobs.loop.replay`).
     """
 
-    t: Array
-    t_measured: Array
-    x2_tsa: Array
-    x2_notch: Array
-    x2_measured: Array
-    omega_tsa: Array
-    omega_measured: Array
-    vx: Array
     vx_measured: Array
     pressure_measured: Array
     sample_step: npt.NDArray[np.int_]
@@ -112,18 +165,16 @@ class EncoderMeasurements(JsonRecord, error=SimulationError):
 
     def to_json(self) -> dict[str, Any]:
         """Arrays as lists (NaN as None)."""
-        def clean(a: Array) -> list[float | None]:
-            return [None if math.isnan(v) else float(v) for v in np.asarray(a, dtype=float)]
-        out: dict[str, Any] = {k: clean(getattr(self, k)) for k in (
-            "t", "t_measured", "x2_tsa", "x2_notch", "x2_measured", "omega_tsa", "omega_measured", "vx",
+        out = super().to_json()
+        out.update({k: _floats(getattr(self, k)) for k in (
             "vx_measured", "pressure_measured", "steps_t", "omega_steps", "vx_steps", "pressure_steps",
-            "edge_times")}
+            "edge_times")})
         out.update(sample_step=self.sample_step.tolist(), events=self.events, edge_teeth=self.edge_teeth.tolist())
         return out
 
     def __str__(self) -> str:
         ok = np.isfinite(self.t_measured)
-        lag = f"{1e3 * float(np.mean((self.t - self.t_measured)[ok])):.1f} ms" if np.any(ok) else "n/a"
+        lag = f"{1e3 * float(np.mean(self.lag_s[ok])):.1f} ms" if np.any(ok) else "n/a"
         return (f"encoder measurements: {self.t.size} samples ({int(np.count_nonzero(ok))} measured), "
                 f"{self.events} edges, mean measurement lag {lag}")
 

@@ -45,12 +45,11 @@ from typing import Any
 import numpy as np
 import numpy.typing as npt
 
-from .._json import JsonRecord
 from ..exceptions import SimulationError
 from ..plants import Replay, replay_updates
 from ..sensors import Encoder, NotchFilter, ThreeStageEstimator, TimeStamper
 from ._adapter import ObserverXbsEstimator, SteppingObserver, check_xbs_signals, initial_xbs_state
-from ._encoder_batch import EncoderMeasurements, encoder_measurements, fixed_edges
+from ._encoder_batch import EncoderMeasurements, EncoderSamples, _floats, encoder_measurements, fixed_edges
 from ._stepping import step_through
 
 __all__ = ["EncoderLoopEstimator", "EncoderLoopRecord", "EncoderX2", "X2_MEASUREMENTS"]
@@ -61,23 +60,13 @@ X2_MEASUREMENTS: tuple[str, ...] = ("tsa", "notch", "three-stage")
 Array = npt.NDArray[np.float64]
 
 @dataclass(frozen=True, eq=False)
-class EncoderLoopRecord(JsonRecord, error=SimulationError):
-    """What the encoder chain and the observers saw.
+class EncoderLoopRecord(EncoderSamples):
+    """What the encoder chain and the observers saw: an :class:`EncoderSamples` with the observers' estimates.
 
     Attributes
     ----------
-    t : ndarray
-        Controller sample times [s].
-    t_measured : ndarray
-        Time the measurement of each sample describes: the mean time stamp of the TSA window
-        (NaN until the window is full).
-    x2_tsa, x2_notch, x2_measured : ndarray
-        ``R α - a_x`` from the raw TSA, through the notch (centre ``ω_m``) and after three-stage
-        compensation [m/s²].
-    omega_tsa, omega_measured : ndarray
-        Raw TSA and compensated wheel speed [rad/s].
-    vx : ndarray
-        Vehicle speed at the samples [m/s].
+    t, t_measured, x2_tsa, x2_notch, x2_measured, omega_tsa, omega_measured, vx : ndarray
+        Of :class:`EncoderSamples` (NaN until the TSA window is full).
     estimates : dict of str -> ndarray
         XBS estimate of each encoder-fed observer at the samples (NaN before the first measurement).
     events : int
@@ -90,37 +79,17 @@ class EncoderLoopRecord(JsonRecord, error=SimulationError):
         Estimates at ``steps_t`` of the observers fed with the plant's exact ``x2``.
     """
 
-    t: Array
-    t_measured: Array
-    x2_tsa: Array
-    x2_notch: Array
-    x2_measured: Array
-    omega_tsa: Array
-    omega_measured: Array
-    vx: Array
     estimates: dict[str, Array]
     events: int
     steps_t: Array
     omega_steps: Array
     beside: dict[str, Array]
 
-    @property
-    def lag_s(self) -> Array:
-        """Age of the measurement at each sample, ``t - t_measured`` [s]."""
-        return self.t - self.t_measured
-
     def to_json(self) -> dict[str, Any]:
         """Arrays as lists (NaN as None)."""
-        def clean(a: Array) -> list[float | None]:
-            return [None if math.isnan(v) else float(v) for v in np.asarray(a, dtype=float)]
-        return {"t": clean(self.t), "t_measured": clean(self.t_measured), "x2_tsa": clean(self.x2_tsa),
-                "x2_notch": clean(self.x2_notch),
-                "x2_measured": clean(self.x2_measured), "omega_tsa": clean(self.omega_tsa),
-                "omega_measured": clean(self.omega_measured), "vx": clean(self.vx),
-                "estimates": {k: clean(v) for k, v in self.estimates.items()},
-                "events": self.events,
-                "steps_t": clean(self.steps_t), "omega_steps": clean(self.omega_steps),
-                "beside": {k: clean(v) for k, v in self.beside.items()}}
+        return {**super().to_json(), "estimates": {k: _floats(v) for k, v in self.estimates.items()},
+                "events": self.events, "steps_t": _floats(self.steps_t), "omega_steps": _floats(self.omega_steps),
+                "beside": {k: _floats(v) for k, v in self.beside.items()}}
 
     def __str__(self) -> str:
         ok = np.isfinite(self.t_measured)

@@ -16,6 +16,7 @@ from dataclasses import dataclass
 from typing import Any
 
 from .._json import JsonRecord
+from .._validate import substep_bound
 from ..exceptions import SimulationError
 from ..plants import Burckhardt, QuarterCar, XbsEstimator, road
 from ..spec import DEFAULT_METHOD
@@ -75,21 +76,32 @@ class EstimatorSpec(JsonRecord, error=SimulationError):
         takes the explicit ones): ``radau3`` and ``midpoint`` are certified for every step length
         (``switchobs certify --discrete``), which one step per encoder measurement needs.  Default
         :func:`default_method` of the kind (radau3; rk4 for the adaptive observer).
+    h_max : float, optional
+        Bound on the observer's step in rescaled time ``|s| dt``: a longer step is split into
+        ``ceil(|s| dt / h_max)`` sub-steps (:class:`switchobs.observers.SwitchedObserver`, the ``h_max`` of a
+        discrete certificate, ``<PREFIX>_H_MAX`` of the C build); default none (one step per sample).
+    max_substeps : int, optional
+        With ``h_max`` only: most sub-steps of one step before the observer refuses it (``SUBSTEP_LIMIT``);
+        default the observer's (``max_substeps`` of :class:`switchobs.observers.SwitchedObserver`).
 
     Raises
     ------
     SimulationError
-        For an unknown kind or implementation, or a ``beta2`` for the adaptive observer (the gains are checked by the
-        observer constructors, e.g. :func:`switchobs.observers.xbs4_observer`).
+        For an unknown kind or implementation, a ``beta2`` for the adaptive observer, or a malformed ``h_max`` /
+        ``max_substeps`` (the gains are checked by the observer constructors, e.g.
+        :func:`switchobs.observers.xbs4_observer`).
 
     Examples
     --------
-    >>> EstimatorSpec("xbs4")
-    EstimatorSpec(kind='xbs4', beta=None, gamma=None, impl='python', beta2=None, method='radau3')
+    >>> EstimatorSpec("xbs4")  # doctest: +NORMALIZE_WHITESPACE
+    EstimatorSpec(kind='xbs4', beta=None, gamma=None, impl='python', beta2=None, method='radau3', h_max=None,
+                  max_substeps=None)
     >>> str(EstimatorSpec("adaptive", beta=80))
     'adaptive observer, beta 80, gamma 10000 (python)'
     >>> str(EstimatorSpec("xbs4", beta=80, beta2=120))
     'xbs4 observer, beta 80/120 (python)'
+    >>> str(EstimatorSpec("adaptive", h_max=1e-4, max_substeps=1000))
+    'adaptive observer, beta 100, gamma 10000 (python, |s| dt <= 0.0001 in at most 1000 sub-steps)'
     """
 
     kind: str
@@ -98,6 +110,8 @@ class EstimatorSpec(JsonRecord, error=SimulationError):
     impl: str = "python"
     beta2: float | None = None
     method: str | None = None
+    h_max: float | None = None
+    max_substeps: int | None = None
 
     def __post_init__(self) -> None:
         if self.kind not in OBSERVER_KINDS:
@@ -109,10 +123,12 @@ class EstimatorSpec(JsonRecord, error=SimulationError):
         if self.beta2 is not None and self.kind == "adaptive":
             raise SimulationError(f"the adaptive observer has one rate beta (seed 001 (3.20)); drop beta2 = "
                                   f"{self.beta2!r}")
+        if self.kind != "none":
+            substep_bound(self.h_max, self.max_substeps, error=SimulationError)
 
     def to_json(self) -> dict[str, Any]:
         return {"kind": self.kind, "beta": self.beta, "beta2": self.beta2, "gamma": self.gamma, "impl": self.impl,
-                "method": self.method}
+                "method": self.method, "h_max": self.h_max, "max_substeps": self.max_substeps}
 
     def __str__(self) -> str:
         if self.kind == "none":
@@ -121,7 +137,9 @@ class EstimatorSpec(JsonRecord, error=SimulationError):
         text = f"{self.kind} observer, beta {beta:g}" + ("" if self.beta2 is None else f"/{self.beta2:g}")
         if self.kind == "adaptive":
             text += f", gamma {DEFAULT_GAMMA if self.gamma is None else self.gamma:g}"
-        return f"{text} ({self.impl}{'' if self.method == default_method(self.kind) else ', ' + self.method})"
+        bound = substep_bound(self.h_max, self.max_substeps, error=SimulationError)
+        substeps = "" if bound is None else f", |s| dt <= {float(bound[0]):g} in at most {bound[1]} sub-steps"
+        return f"{text} ({self.impl}{'' if self.method == default_method(self.kind) else ', ' + self.method}{substeps})"
 
 
 def xbs_estimator(spec: EstimatorSpec | str, vehicle: QuarterCar, initial_road: Burckhardt | str, *,
@@ -174,30 +192,32 @@ def xbs_estimator(spec: EstimatorSpec | str, vehicle: QuarterCar, initial_road: 
     beta2 = beta if spec.beta2 is None else spec.beta2
     gamma = (DEFAULT_GAMMA if spec.gamma is None else spec.gamma) if spec.kind == "adaptive" else None
     c = road(initial_road).c if spec.kind == "xbs3" else None
+    bound = (spec.h_max, spec.max_substeps)
     if load_signal:
-        obs = _observer("adaptive-load", beta, beta2, gamma, spec.impl, spec.method, None, vehicle.b, None)
+        obs = _observer("adaptive-load", beta, beta2, gamma, spec.impl, spec.method, None, vehicle.b, None, *bound)
         return LoadXbsEstimator(obs, load_n=vehicle.load_n, load_gain=vehicle.radius_m ** 2 / vehicle.inertia_kg_m2,
                                 initial_state=INITIAL_STATE["adaptive"])
-    obs = _observer(spec.kind, beta, beta2, gamma, spec.impl, spec.method, vehicle.a, vehicle.b, c)
+    obs = _observer(spec.kind, beta, beta2, gamma, spec.impl, spec.method, vehicle.a, vehicle.b, c, *bound)
     return ObserverXbsEstimator(obs, initial_state=INITIAL_STATE[spec.kind])
 
 
 @functools.lru_cache(maxsize=64)
 def _observer(kind: str, beta: float, beta2: float, gamma: float | None, impl: str, method: str, a: float | None,
-              b: float, c: float | None) -> Any:
+              b: float, c: float | None, h_max: float | None, max_substeps: int | None) -> Any:
     """The observer of :func:`xbs_estimator`, built once per setting: the symbolic set-up and the C
     generation take 0.05-0.7 s, a braking run in the compiled loop 0.02 s; an observer holds no
     run state (the estimator does), so runs can share it."""
     from ..observers import adaptive_xbs_observer, xbs3_observer, xbs4_observer
 
+    bound = {"h_max": h_max, "max_substeps": max_substeps}
     if kind == "xbs3":
-        obs = xbs3_observer(beta, beta2, params={"a": a, "b": -b, "c": c}, method=method)
+        obs = xbs3_observer(beta, beta2, params={"a": a, "b": -b, "c": c}, method=method, **bound)
     elif kind == "xbs4":
-        obs = xbs4_observer(beta, beta2, params={"a": a, "b": -b}, method=method)
+        obs = xbs4_observer(beta, beta2, params={"a": a, "b": -b}, method=method, **bound)
     elif kind == "adaptive":
-        obs = adaptive_xbs_observer(beta, [gamma, gamma], params={"a": a, "b": b}, method=method)
+        obs = adaptive_xbs_observer(beta, [gamma, gamma], params={"a": a, "b": b}, method=method, **bound)
     else:   # "adaptive-load": a is a signal
-        obs = adaptive_xbs_observer(beta, [gamma, gamma], params={"b": b}, method=method, load_signal=True)
+        obs = adaptive_xbs_observer(beta, [gamma, gamma], params={"b": b}, method=method, load_signal=True, **bound)
     if impl == "c":
         from ..codegen import CObserver
 

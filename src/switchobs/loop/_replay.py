@@ -31,7 +31,7 @@ from ..exceptions import LogError, ObserverInputError, SimulationError
 from ..plants import QuarterCar
 from ..sensors import Encoder
 from ._adapter import ObserverXbsEstimator, initial_xbs_state
-from ._encoder_batch import EncoderMeasurements, edge_angles, measure_edges, wheel_edges
+from ._encoder_batch import EncoderMeasurements, EncoderSamples, edge_angles, measure_edges, wheel_edges
 from ._factory import INITIAL_STATE, EstimatorSpec, xbs_estimator
 from ._stepping import step_through
 
@@ -275,13 +275,14 @@ class ReplaySummary(JsonRecord, error=SimulationError):
 
 
 @dataclass(frozen=True, eq=False)
-class ReplayResult(JsonRecord, error=SimulationError):
-    """The encoder chain's signals and the observer's estimates at the controller samples of a replayed log.
+class ReplayResult(EncoderSamples):
+    """The encoder chain's signals and the observer's estimates at the controller samples of a replayed log:
+    an :class:`EncoderSamples` with the estimates and how the replay ended.
 
     Attributes
     ----------
     t, t_measured, x2_tsa, x2_notch, x2_measured, omega_tsa, omega_measured, vx : ndarray
-        As :class:`EncoderLoopRecord` (NaN until the TSA window is full).
+        Of :class:`EncoderSamples` (NaN until the TSA window is full).
     xbs_hat : ndarray
         The observer's XBS estimate at each sample (NaN before the first measurement and from a refused step).
     status : ndarray of int
@@ -291,21 +292,12 @@ class ReplayResult(JsonRecord, error=SimulationError):
         prints).
     """
 
-    t: Array
-    t_measured: Array
-    x2_tsa: Array
-    x2_notch: Array
-    x2_measured: Array
-    omega_tsa: Array
-    omega_measured: Array
-    vx: Array
     xbs_hat: Array
     status: IntArray
     summary: ReplaySummary
 
     #: The columns of :meth:`arrays`, in order.
-    COLUMNS = ("t", "t_measured", "x2_tsa", "x2_notch", "x2_measured", "omega_tsa", "omega_measured", "vx",
-               "xbs_hat", "status")
+    COLUMNS = (*EncoderSamples.SIGNALS, "xbs_hat", "status")
 
     def to_json(self) -> dict[str, Any]:
         """The signals as lists (NaN as None) and the summary."""
@@ -409,9 +401,7 @@ def replay(signals: LogSignals, *, observer: str = "xbs4", method: str = "radau3
                             measured=int(np.count_nonzero(np.isfinite(m.t_measured))), steps=steps,
                             edges=m.events, outcome=outcome, message=message, rate_hz=float(rate_hz),
                             xbs_final=float(hat[-1]) if hat.size else math.nan)
-    return ReplayResult(t=m.t, t_measured=m.t_measured, x2_tsa=m.x2_tsa, x2_notch=m.x2_notch,
-                        x2_measured=m.x2_measured, omega_tsa=m.omega_tsa, omega_measured=m.omega_measured,
-                        vx=m.vx, xbs_hat=hat, status=status, summary=summary)
+    return ReplayResult(**m.signals(), xbs_hat=hat, status=status, summary=summary)
 
 
 def _step(obs: Any, x0: Array, rows: Array, span: Array) -> tuple[Array, int | None, int, str]:

@@ -88,7 +88,7 @@ def _xbs_design(model_name: str, betas: Mapping[str, Any], params: Mapping[str, 
 
 
 def xbs3_observer(beta1: float, beta2: float, *, params: Mapping[str, Any] | None = None,
-                  method: str = DEFAULT_METHOD) -> SwitchedObserver:
+                  method: str = DEFAULT_METHOD, h_max: Any = None, max_substeps: int | None = None) -> SwitchedObserver:
     """The 3D known-road XBS observer of seed 000 eq. (8)-(9) on model abs-xbs3.
 
     State ``(z1, z2, z3)`` = (wheel-acceleration offset x2, XBS mu', -c2 c3);
@@ -105,6 +105,8 @@ def xbs3_observer(beta1: float, beta2: float, *, params: Mapping[str, Any] | Non
         built-in values are the TU Delft rig of seed 000 Fig. 2).
     method : {"radau3", "midpoint", "rk4", "euler"}
         The step method (default radau3, certified for every step length; see :class:`SwitchedObserver`).
+    h_max, max_substeps
+        Sub-stepping of a step with ``|s| dt`` above ``h_max`` (see :class:`SwitchedObserver`); default none.
 
     Examples
     --------
@@ -113,15 +115,17 @@ def xbs3_observer(beta1: float, beta2: float, *, params: Mapping[str, Any] | Non
     [84.0, -19.4987, -21.3333]
     """
     gains = _xbs_design("abs-xbs3", {"beta1": beta1, "beta2": beta2}, params)
-    return SwitchedObserver(builtin_model("abs-xbs3"), gains, params=params, method=method, readout="z2")
+    return SwitchedObserver(builtin_model("abs-xbs3"), gains, params=params, method=method, readout="z2", h_max=h_max,
+                            max_substeps=max_substeps)
 
 
 def xbs4_observer(beta1: float, beta2: float, *, params: Mapping[str, Any] | None = None,
-                  method: str = DEFAULT_METHOD) -> SwitchedObserver:
+                  method: str = DEFAULT_METHOD, h_max: Any = None, max_substeps: int | None = None) -> SwitchedObserver:
     """The 4D unknown-road XBS observer of seed 000 Sec. IV on model abs-xbs4.
 
     State ``(z1, z2, z3, z4)`` = (x2, mu', mu'', alpha0); the error has two
     double eigenvalues ``-beta1``, ``-beta2`` (seed 000 Sec. IV-D).  Readout: ``z2``.
+    The parameters are those of :func:`xbs3_observer` (without ``c``).
 
     Examples
     --------
@@ -129,7 +133,8 @@ def xbs4_observer(beta1: float, beta2: float, *, params: Mapping[str, Any] | Non
     [134.0, -53.717, -3221.504, -213.333]
     """
     gains = _xbs_design("abs-xbs4", {"beta1": beta1, "beta2": beta2}, params)
-    return SwitchedObserver(builtin_model("abs-xbs4"), gains, params=params, method=method, readout="z2")
+    return SwitchedObserver(builtin_model("abs-xbs4"), gains, params=params, method=method, readout="z2", h_max=h_max,
+                            max_substeps=max_substeps)
 
 
 def adaptive_xbs_observer(beta: float, Gamma: Any, *, params: Mapping[str, Any] | None = None,

@@ -1,4 +1,4 @@
-"""ABS plants, brake controllers and braking simulations (seed 000 Secs. II, V; seed 001 Chs. 2-4).
+"""ABS plants, brake controllers and braking simulations (Hoang et al. 2014 Secs. II, V; Aguado-Rojas 2020 Chs. 2-4).
 
 Tyres and roads
     :class:`Burckhardt`, :data:`ROADS`, :func:`road`, :func:`road_names`,

@@ -2,7 +2,7 @@
  * two-phase ABS, optional XBS estimator, and the hybrid RK4 integrator with event location.
  *
  * A statement-for-statement port of switchobs/plants/_hybrid.py (integrate, rk4_step, locate_event,
- * _transitions), _simulate.py (_QuarterCar), _road.py (_RoadState) and _controllers.py (the five- and
+ * _transitions), _plant.py (_QuarterCar), _road.py (_RoadState) and _controllers.py (the five- and
  * two-phase runtimes): the same floating-point operations in the same order (no contraction, the
  * system libm's exp and pow as Python's math), so that a run gives the same numbers as the Python loop.
  * Python prepends the index macros P_* (layout of the parameter vector), OUT_*, EV_*, ST_* and the

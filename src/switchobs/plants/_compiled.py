@@ -34,7 +34,7 @@ from ._estimator import TrueXbs
 from ._hybrid import MAX_CASCADE, HybridRun
 
 if TYPE_CHECKING:
-    from ._simulate import _QuarterCar
+    from ._plant import _QuarterCar
 
 __all__ = ["CompiledObserver", "CompiledEstimator", "compiled_support", "compiler_available", "run_compiled"]
 

@@ -36,7 +36,7 @@ from ._json import from_fields
 from ._vehicle import GRAVITY
 
 if TYPE_CHECKING:
-    from ._simulate import BrakingScenario
+    from ._plant import BrakingScenario
 
 __all__ = ["BrakingMetrics", "Assumption1Status", "Reconvergence", "braking_metrics", "assumption1", "diverged",
            "distance_label"]
