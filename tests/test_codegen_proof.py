@@ -2,25 +2,34 @@
 
 Each proof calls every public function of the header on any finite input (``<prefix>_proof.c``); zero
 alarms under ``-warn-special-float non-finite`` is the claim of docs/codegen.md ("Proof of no run-time
-errors").  A mutant without the determinant check shows that the analysis does find the division.
+errors").  A mutant without the determinant check shows that the analysis does find the division, and a
+user model whose declared range of a divisor holds 0 shows that it finds the model's own divisions.
+
+The variants: abs-xbs3, abs-xbs4, abs-adaptive2, a user model whose d(y) and b(y) divide by signals, and the
+super-twisting observer, each with every method it admits and both real types.  ``make test`` proves a
+representative subset (every method and both real types at least once, every kind of observer);
+``make prove`` (``SWITCHOBS_PROVE_ALL=1``) proves all of them.
 """
 
 from __future__ import annotations
 
+import os
 import re
 import shlex
 import shutil
 import subprocess
 import sys
+import tomllib
 from pathlib import Path
 
 import numpy as np
 import pytest
 
-from switchobs.codegen import StepStatus, compile_observer, generate_observer, proof_driver, proof_record, prove
+from switchobs.codegen import (GeneratedObserver, StepStatus, compile_observer, generate_observer,
+                               generate_super_twisting, proof_driver, proof_record, prove)
 from switchobs.design import design
 from switchobs.exceptions import CodegenError
-from switchobs.model import builtin_model
+from switchobs.model import Model, builtin_model
 
 ROOT = Path(__file__).resolve().parents[1]
 
@@ -44,22 +53,101 @@ def xbs3(method: str, real: str = "double", **options):
                              **options)
 
 
-@pytest.mark.parametrize("method, real, options", [
-    ("radau3", "double", {}),
-    ("rk4", "float", {}),
-    pytest.param("radau3", "float", {}, marks=pytest.mark.slow),
-    pytest.param("midpoint", "double", {}, marks=pytest.mark.slow),
-    pytest.param("euler", "double", {}, marks=pytest.mark.slow),
-    pytest.param("rk4", "double", {"h_max": "1/100"}, marks=pytest.mark.slow),
+#: The states and signals of the other observers, ours: the XBS states and signals as for abs-xbs3; the
+#: adaptive observer's (c, d) beyond what the braking record of tests/test_codegen_target.py reaches (|c|, |d|
+#: < 112) and its sensitivities Upsilon within 1 (the record: < 0.71; within 10, EVA's intervals of the float
+#: rk4 stages grow past FLT_MAX: 2 alarms, none in double); the super-twisting observer's wheel
+#: angle in rad, speed in rad/s and injection, a known acceleration up to 1e4 rad/s^2.  The parameters:
+#: within a factor 2 of their defaults (:func:`parameter_ranges`).
+STATE_SIGNAL_RANGES = {
+    "abs-xbs4": {"z1": (-200, 200), "z2": (-100, 100), "z3": (-1e5, 1e5), "z4": (-1e5, 1e5), "y": (-200, 200),
+                 "vx": (1, 70), "u": (-1e4, 1e4), "dt": (1e-5, 1e-2)},
+    "abs-adaptive2": {"w1": (-200, 200), "w2": (-200, 200), "c": (-200, 200), "d": (-200, 200),
+                      **{f"Upsilon_{w}_{p}": (-1, 1) for w in ("w1", "w2") for p in ("c", "d")},
+                      "y": (-200, 200), "vx": (1, 70), "u": (-1e4, 1e4), "dt": (1e-5, 1e-2)},
+    # d(y) = (0, k/y, log(y + 2)), b(y) = (b, 1/vx, 1/(y - 1) + y^(3/2)): the divisors y, vx and y - 1 are
+    # kept from 0 by the declared ranges of y and vx (the range of y > 1 is the one that makes the proof)
+    "user": {"z1": (-200, 200), "z2": (-1e3, 1e3), "z3": (-1e5, 1e5), "y": (1.5, 200), "vx": (1, 70),
+             "u": (-1e4, 1e4), "dt": (1e-5, 1e-2)},
+    "super-twisting": {"x1_hat": (-1e5, 1e5), "x2_hat": (-1e3, 1e3), "z2": (-1e5, 1e5), "x1": (-1e5, 1e5),
+                       "f1": (-1e4, 1e4), "dt": (1e-5, 1e-2)},
+}
+
+
+def parameter_ranges(gen: GeneratedObserver) -> dict[str, tuple[float, float]]:
+    """Every parameter within a factor 2 of its default (a zero default: within +-1)."""
+    return {n: (-1.0, 1.0) if v == 0 else (min(v / 2, 2 * v), max(v / 2, 2 * v))
+            for n, v in zip(gen.param_names, gen.default_params)}
+
+
+def user_model() -> Model:
+    """examples/my_model.toml with d(y) and b(y) that divide by the signals y and vx and by y - 1."""
+    data = tomllib.loads((ROOT / "examples" / "my_model.toml").read_text("utf-8"))
+    data.update(name="my-wheel-div", d=["0", "k/y", "log(y + 2)"], b=["b", "1/vx", "1/(y - 1) + y^(3/2)"])
+    return Model.from_dict(data)
+
+
+def ranged(name: str, method: str, real: str, h_max: str | None = None,
+           ranges: dict[str, tuple[float, float]] | None = None) -> GeneratedObserver:
+    """The observer ``name`` generated with a declared range of every input (``ranges`` on top)."""
+    if name == "abs-xbs3":
+        return xbs3(method, real, **({} if h_max is None else {"h_max": h_max}))
+
+    def make(rng):
+        options = {"real": real, "ranges": rng}
+        if name == "super-twisting":
+            return generate_super_twisting(400.0, 2000.0, **options)
+        if name == "user":
+            return generate_observer(user_model(), ([1.0, 2.0, 3.0], [-1.0, 2.0, 3.0]), method=method,
+                                     h_max=h_max, **options)
+        m = builtin_model(name)
+        if name == "abs-adaptive2":
+            return generate_observer(m, design(m, "-15,-15"), method=method, h_max=h_max, unknown=["c", "d"],
+                                     Gamma=[50.0, 20.0], **options)
+        return generate_observer(m, design(m, "-10,-10,-20,-20"), method=method, h_max=h_max, **options)
+
+    base = {**STATE_SIGNAL_RANGES[name], **(ranges or {})}
+    return make({**parameter_ranges(make(base)), **base})
+
+
+#: (observer, method, real, h_max) of ``make test``: every method, both real types and every observer kind.
+VARIANTS = [("abs-xbs3", "radau3", "double", None), ("abs-xbs3", "rk4", "float", None),
+            ("abs-adaptive2", "rk4", "float", None), ("user", "midpoint", "double", None),
+            ("user", "euler", "float", None), ("super-twisting", "euler", "float", None),
+            ("abs-xbs4", "radau3", "float", None), ("abs-adaptive2", "rk4", "double", "1/50")]
+#: The rest of the matrix (``make prove``): every method each observer admits, rk4 sub-stepped, both reals.
+_METHODS = {"abs-xbs3": ("euler", "rk4", "midpoint", "radau3"), "abs-xbs4": ("euler", "rk4", "midpoint", "radau3"),
+            "user": ("euler", "rk4", "midpoint", "radau3"), "abs-adaptive2": ("euler", "rk4"),
+            "super-twisting": ("euler",)}
+_H_MAX = {"abs-xbs3": "1/100", "abs-xbs4": "1/100", "user": "1/100", "abs-adaptive2": "1/50"}
+ALL_VARIANTS = [(name, method, real, h_max) for name, methods in _METHODS.items() for real in ("double", "float")
+                for method, h_max in [*((m, None) for m in methods),
+                                      *((("rk4", _H_MAX[name]),) if name in _H_MAX else ())]]
+EXTRA = [v for v in ALL_VARIANTS if v not in VARIANTS]
+assert set(VARIANTS) <= set(ALL_VARIANTS)
+
+
+@pytest.mark.parametrize("name, method, real, h_max", [
+    *VARIANTS,
+    *(pytest.param(*v, marks=pytest.mark.slow) for v in (EXTRA if os.environ.get("SWITCHOBS_PROVE_ALL") == "1"
+                                                          else ())),
 ])
-def test_eva_finds_no_alarm_for_any_finite_input(method, real, options):
-    gen = xbs3(method, real, **options)
+def test_eva_finds_no_alarm_for_any_finite_input(name, method, real, h_max):
+    gen = ranged(name, method, real, h_max)
     assert f"{gen.prefix}_proof.c" in gen.files
     result = prove(gen)
     assert result.alarms == 0, "\n".join(result.unproved)
     assert result.proved >= 4 and result.seconds < 120
     record = proof_record(gen, result)
     assert "**0 alarm(s)**" in record and result.command in record
+
+
+def test_eva_finds_the_division_by_a_signal_whose_range_holds_zero():
+    """The user model's y - 1 divides b(y): with y declared in [0.5, 200] (1 inside) the proof fails on it."""
+    gen = ranged("user", "euler", "double", ranges={"y": (0.5, 200)})
+    result = prove(gen)
+    assert result.alarms > 0 and any("division_by_zero" in u or "is_nan_or_infinite" in u or "non-finite" in u
+                                     for u in result.unproved), result.unproved
 
 
 def test_eva_finds_the_division_when_the_determinant_check_is_removed(tmp_path):
@@ -120,7 +208,7 @@ def test_cli_prove_writes_the_record_and_exits_0(tmp_path):
 def result_command(gen) -> str:
     from switchobs.codegen._proof import proof_command
 
-    return " ".join(proof_command(gen.prefix))
+    return " ".join(proof_command(gen))
 
 
 def test_the_proof_shown_on_the_codegen_page_is_what_the_command_prints(tmp_path, monkeypatch, capsys):
@@ -151,3 +239,46 @@ def test_the_ranged_files_compile_clean_with_strict_warnings(tmp_path):
                                "-Wdouble-promotion", "-Werror", "-c", str(tmp_path / f"{gen.prefix}.c"), "-o",
                                str(tmp_path / "x.o")], capture_output=True, text=True)
         assert proc.returncode == 0, proc.stderr
+
+
+@pytest.mark.parametrize("real", ["double", "float"])
+def test_run_with_no_row_checks_dt_and_the_state_against_their_declared_ranges(real):
+    """The zero-step contract of the ranged build: what a step checks without a row, ranges included (the C
+    _run itself, called past CObserver's own checks, and CObserver.run)."""
+    obs = compile_observer(xbs3("radau3", real))
+    lo, hi = obs.generated.ranges["dt"]
+    dtype = np.float64 if real == "double" else np.float32
+    none = np.zeros((0, obs.generated.ns), dtype=dtype)
+
+    def c_run(x, dt):
+        x = np.array(x, dtype=dtype)
+        before = x.copy()
+        code = obs._run_addr(x.ctypes.data, none.ctypes.data, 0, obs._params_addr, dt, 0)
+        assert x.tobytes() == before.tobytes()  # no row changes nothing
+        return code
+
+    inside, outside = [1.0, 0.5, 10.0], [300.0, 0.5, 10.0]
+    assert c_run(inside, 1e-3) == int(StepStatus.OK)
+    for dt in (0.5, 2 * hi, lo / 2, 0.0, -1e-3, np.nan, np.inf):
+        assert c_run(inside, dt) == int(StepStatus.BAD_DT), dt
+        with pytest.raises(Exception, match="BAD_DT") as info:
+            obs.run(inside, none, dt)
+        assert info.value.code == int(StepStatus.BAD_DT)
+    assert c_run(outside, 1e-3) == int(StepStatus.STATE_RANGE)
+    assert c_run([np.nan, 0.5, 10.0], 1e-3) == int(StepStatus.NONFINITE_STATE)
+    with pytest.raises(Exception, match="STATE_RANGE"):
+        obs.run(outside, none, 1e-3)
+    # the same codes as the first step of one row, at the range's ends too (compared in the real type: a double
+    # just below DT_MIN rounds up to it in float, and the C accepts it)
+    row = np.array([[2.0, 20.0, 100.0]])
+    for dt in (lo, hi, float(np.nextafter(lo, 0.0)), float(np.nextafter(hi, 1.0)), 0.5):
+        accepted = lo <= float(dtype(dt)) <= hi
+        assert (c_run(inside, dt) == int(StepStatus.OK)) == accepted, dt
+        one = obs._run_addr(np.array(inside, dtype=dtype).ctypes.data, row.astype(dtype).ctypes.data, 1,
+                            obs._params_addr, dt, 0)
+        assert (one == int(StepStatus.OK)) == accepted, dt
+        if accepted:
+            assert obs.run(inside, none, dt).shape == (0, 3)
+        else:
+            with pytest.raises(Exception, match="BAD_DT"):
+                obs.run(inside, none, dt)

@@ -196,7 +196,7 @@ def run(args: argparse.Namespace) -> int:
             raise CodegenError(f"lam and alpha must be numbers, got {values['lam']!r}, {values['alpha']!r}") from None
         gen = generate_super_twisting(lam, alpha, real=args.real,
                                       prefix="switchobs_super_twisting" if args.prefix is None else args.prefix,
-                                      command=command)
+                                      command=command, ranges=_ranges(args.ranges))
     else:
         if not (args.spectrum or args.charpoly or args.gains_plus):
             raise SpectrumError("give the gains with --spectrum, --charpoly or --gains-plus")

@@ -38,7 +38,8 @@ from ..exceptions import CodegenError, PrerequisiteError
 if TYPE_CHECKING:
     from ._generate import GeneratedObserver
 
-__all__ = ["ProofResult", "proof_driver", "proof_command", "prove", "proof_record", "EVA_PRECISION"]
+__all__ = ["ProofResult", "proof_driver", "proof_command", "loop_unroll", "prove", "proof_record",
+           "EVA_PRECISION"]
 
 #: ``-eva-precision`` of the proof (0-11): 3 keeps the refusal branches of the checks apart (at 1, 94 alarms on
 #: abs-xbs3 radau3) within seconds per variant.
@@ -47,14 +48,24 @@ EVA_PRECISION = 3
 _ROWS = 2
 
 
-def proof_command(prefix: str, *, precision: int = EVA_PRECISION) -> list[str]:
+def loop_unroll(gen: GeneratedObserver) -> int:
+    """``-eva-auto-loop-unroll`` of the proof: the longest loop over an array of the API or the driver.
+
+    Those loops (state, parameters, signal rows, original state) are unrolled whole, so that every entry they
+    write is known written: unrolled only 4 times, the copies of abs-adaptive2's 8 states through ``cur`` read
+    as uninitialised (6 alarms).  The sub-step loop (``MAX_SUBSTEPS`` turns, 64 by default) stays analysed by
+    widening, bounded by its ``j < n`` and the state checks of every sub-step (unrolled whole, abs-xbs3 rk4
+    ``--h-max 1/100`` took 88 s instead of 37 s on a loaded machine, with the same 0 alarms).
+    """
+    return max(gen.nx, gen.np, _ROWS * gen.ns, _ROWS, len(gen.original_names))
+
+
+def proof_command(gen: GeneratedObserver, *, precision: int = EVA_PRECISION) -> list[str]:
     """The Frama-C command of the proof, run in the directory of the generated files."""
-    # -eva-auto-loop-unroll 4: the sub-step loop (up to MAX_SUBSTEPS turns) is analysed by widening, bounded by
-    # its j < n and the state checks of every sub-step, rather than unrolled (precision 3 unrolls 64 turns:
-    # abs-xbs3 rk4 --h-max 1/100 took 88 s instead of 37 s on a loaded machine, with the same 0 alarms)
-    return ["frama-c", "-eva", "-eva-precision", str(precision), "-eva-auto-loop-unroll", "4",
+    p = gen.prefix
+    return ["frama-c", "-eva", "-eva-precision", str(precision), "-eva-auto-loop-unroll", str(loop_unroll(gen)),
             "-warn-special-float", "non-finite",
-            "-warn-signed-overflow", "-eva-no-show-progress", f"{prefix}.c", f"{prefix}_proof.c"]
+            "-warn-signed-overflow", "-eva-no-show-progress", f"{p}.c", f"{p}_proof.c"]
 
 
 def proof_driver(gen: GeneratedObserver) -> str:
@@ -80,7 +91,7 @@ def proof_driver(gen: GeneratedObserver) -> str:
         f" * 0..{_ROWS}, the optional pointers NULL or not.  The step refuses what lies outside the declared",
         f" * ranges of {p}.h before computing anything, so no alarm means no run-time error for every",
         " * finite input.  Run in this directory (the result is in " + f"{p}_proof.md):",
-        " *   " + " ".join(proof_command(p)),
+        " *   " + " ".join(proof_command(gen)),
         " */",
         f'#include "{p}.h"',
         "",
@@ -201,7 +212,7 @@ def prove(gen: GeneratedObserver, *, directory: str | Path | None = None, timeou
         for name, text in {**gen.files, f"{gen.prefix}_proof.c": driver}.items():
             if name.endswith((".c", ".h")):
                 (where / name).write_text(text)
-        cmd = proof_command(gen.prefix, precision=precision)
+        cmd = proof_command(gen, precision=precision)
         version = subprocess.run([exe, "-version"], capture_output=True, text=True, timeout=60).stdout.strip()
         t0 = time.perf_counter()
         try:

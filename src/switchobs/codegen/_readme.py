@@ -110,7 +110,7 @@ def _ranges_section(gen: "GeneratedObserver") -> list[str]:
         out += [f"`{gen.prefix}_proof.c` is the Frama-C EVA driver of the proof that no call of the API has a "
                 "run-time error for any finite input (`switchobs codegen --prove` runs it and writes "
                 f"`{gen.prefix}_proof.md`); in this directory:", "",
-                "    " + " ".join(proof_command(gen.prefix)), ""]
+                "    " + " ".join(proof_command(gen)), ""]
     return out
 
 
