@@ -19,102 +19,45 @@ import shlex
 import shutil
 import subprocess
 import sys
-import tomllib
 from pathlib import Path
 
 import numpy as np
 import pytest
 
-from switchobs.codegen import (GeneratedObserver, StepStatus, compile_observer, generate_observer,
-                               generate_super_twisting, proof_driver, proof_record, prove)
+from switchobs.codegen import GeneratedObserver, StepStatus, compile_observer, generate_observer, proof_driver, \
+    proof_record, prove
 from switchobs.design import design
 from switchobs.exceptions import CodegenError
-from switchobs.model import Model, builtin_model
+from switchobs.model import builtin_model
+from switchobs.spec import METHODS
+from switchobs.report._repro_target import PROOF_ROWS, XBS3_RANGES, proved_observer
 
 ROOT = Path(__file__).resolve().parents[1]
 
 pytestmark = pytest.mark.skipif(shutil.which("frama-c") is None,
                                 reason="frama-c is not installed: the proof of no run-time errors is NOT checked")
 
-#: Declared ranges of abs-xbs3 (ours): wheel acceleration offset and XBS states, speed 1-70 m/s, 0.01-10 ms
-#: steps, every parameter within about a factor 2 of its default (poles at -100).  docs/codegen.md shows them.
-XBS3_RANGES = {"z1": (-200, 200), "z2": (-100, 100), "z3": (-1e5, 1e5), "y": (-200, 200), "vx": (1, 70),
-               "u": (-1e4, 1e4), "dt": (1e-5, 1e-2), "a": (100, 300), "b": (-8, -2), "c": (17, 68),
-               "K_plus_z1": (167, 668), "K_plus_z2": (-441, -110), "K_plus_z3": (-10667, -2666),
-               "K_minus_z1": (-532, -133), "K_minus_z2": (-224, -55), "K_minus_z3": (2666, 10667)}
 #: The same as ``switchobs codegen --range`` (the command of docs/codegen.md).
 RANGE_OPTION = "--range=" + ",".join(f"{n}={lo:g}:{hi:g}" for n, (lo, hi) in XBS3_RANGES.items())
 PAGE_COMMAND = f"switchobs codegen abs-xbs3 --spectrum=-100,-100,-100 --method=radau3 {RANGE_OPTION} --prove --out gen"
 
 
 def xbs3(method: str, real: str = "double", **options):
-    m = builtin_model("abs-xbs3")
-    return generate_observer(m, design(m, "-100,-100,-100"), method=method, real=real, ranges=XBS3_RANGES,
-                             **options)
-
-
-#: The states and signals of the other observers, ours: the XBS states and signals as for abs-xbs3; the
-#: adaptive observer's (c, d) beyond what the braking record of tests/test_codegen_target.py reaches (|c|, |d|
-#: < 112) and its sensitivities Upsilon within 1 (the record: < 0.71; within 10, EVA's intervals of the float
-#: rk4 stages grow past FLT_MAX: 2 alarms, none in double); the super-twisting observer's wheel
-#: angle in rad, speed in rad/s and injection, a known acceleration up to 1e4 rad/s^2.  The parameters:
-#: within a factor 2 of their defaults (:func:`parameter_ranges`).
-STATE_SIGNAL_RANGES = {
-    "abs-xbs4": {"z1": (-200, 200), "z2": (-100, 100), "z3": (-1e5, 1e5), "z4": (-1e5, 1e5), "y": (-200, 200),
-                 "vx": (1, 70), "u": (-1e4, 1e4), "dt": (1e-5, 1e-2)},
-    "abs-adaptive2": {"w1": (-200, 200), "w2": (-200, 200), "c": (-200, 200), "d": (-200, 200),
-                      **{f"Upsilon_{w}_{p}": (-1, 1) for w in ("w1", "w2") for p in ("c", "d")},
-                      "y": (-200, 200), "vx": (1, 70), "u": (-1e4, 1e4), "dt": (1e-5, 1e-2)},
-    # d(y) = (0, k/y, log(y + 2)), b(y) = (b, 1/vx, 1/(y - 1) + y^(3/2)): the divisors y, vx and y - 1 are
-    # kept from 0 by the declared ranges of y and vx (the range of y > 1 is the one that makes the proof)
-    "user": {"z1": (-200, 200), "z2": (-1e3, 1e3), "z3": (-1e5, 1e5), "y": (1.5, 200), "vx": (1, 70),
-             "u": (-1e4, 1e4), "dt": (1e-5, 1e-2)},
-    "super-twisting": {"x1_hat": (-1e5, 1e5), "x2_hat": (-1e3, 1e3), "z2": (-1e5, 1e5), "x1": (-1e5, 1e5),
-                       "f1": (-1e4, 1e4), "dt": (1e-5, 1e-2)},
-}
-
-
-def parameter_ranges(gen: GeneratedObserver) -> dict[str, tuple[float, float]]:
-    """Every parameter within a factor 2 of its default (a zero default: within +-1)."""
-    return {n: (-1.0, 1.0) if v == 0 else (min(v / 2, 2 * v), max(v / 2, 2 * v))
-            for n, v in zip(gen.param_names, gen.default_params)}
-
-
-def user_model() -> Model:
-    """examples/my_model.toml with d(y) and b(y) that divide by the signals y and vx and by y - 1."""
-    data = tomllib.loads((ROOT / "examples" / "my_model.toml").read_text("utf-8"))
-    data.update(name="my-wheel-div", d=["0", "k/y", "log(y + 2)"], b=["b", "1/vx", "1/(y - 1) + y^(3/2)"])
-    return Model.from_dict(data)
+    return proved_observer("abs-xbs3", method, real, options.pop("h_max", None), **options)
 
 
 def ranged(name: str, method: str, real: str, h_max: str | None = None,
            ranges: dict[str, tuple[float, float]] | None = None) -> GeneratedObserver:
-    """The observer ``name`` generated with a declared range of every input (``ranges`` on top)."""
-    if name == "abs-xbs3":
-        return xbs3(method, real, **({} if h_max is None else {"h_max": h_max}))
-
-    def make(rng):
-        options = {"real": real, "ranges": rng}
-        if name == "super-twisting":
-            return generate_super_twisting(400.0, 2000.0, **options)
-        if name == "user":
-            return generate_observer(user_model(), ([1.0, 2.0, 3.0], [-1.0, 2.0, 3.0]), method=method,
-                                     h_max=h_max, **options)
-        m = builtin_model(name)
-        if name == "abs-adaptive2":
-            return generate_observer(m, design(m, "-15,-15"), method=method, h_max=h_max, unknown=["c", "d"],
-                                     Gamma=[50.0, 20.0], **options)
-        return generate_observer(m, design(m, "-10,-10,-20,-20"), method=method, h_max=h_max, **options)
-
-    base = {**STATE_SIGNAL_RANGES[name], **(ranges or {})}
-    return make({**parameter_ranges(make(base)), **base})
+    """The observer ``name`` with a declared range of every input (docs/codegen.md's proof table's)."""
+    return proved_observer(name, method, real, h_max, ranges)
 
 
-#: (observer, method, real, h_max) of ``make test``: every method, both real types and every observer kind.
+#: (observer, method, real, h_max) of ``make test`` besides the proof table of docs/codegen.md ("On the target",
+#: :data:`PROOF_ROWS`, kept equal to a fresh run by tests/test_reproductions.py): with it, every method (rk4
+#: sub-stepped too), both real types and every kind of observer.
 VARIANTS = [("abs-xbs3", "radau3", "double", None), ("abs-xbs3", "rk4", "float", None),
-            ("abs-adaptive2", "rk4", "float", None), ("user", "midpoint", "double", None),
-            ("user", "euler", "float", None), ("super-twisting", "euler", "float", None),
-            ("abs-xbs4", "radau3", "float", None), ("abs-adaptive2", "rk4", "double", "1/50")]
+            ("user", "euler", "float", None), ("user", "midpoint", "double", None),
+            ("abs-adaptive2", "rk4", "double", "1/50")]
 #: The rest of the matrix (``make prove``): every method each observer admits, rk4 sub-stepped, both reals.
 _METHODS = {"abs-xbs3": ("euler", "rk4", "midpoint", "radau3"), "abs-xbs4": ("euler", "rk4", "midpoint", "radau3"),
             "user": ("euler", "rk4", "midpoint", "radau3"), "abs-adaptive2": ("euler", "rk4"),
@@ -124,7 +67,9 @@ ALL_VARIANTS = [(name, method, real, h_max) for name, methods in _METHODS.items(
                 for method, h_max in [*((m, None) for m in methods),
                                       *((("rk4", _H_MAX[name]),) if name in _H_MAX else ())]]
 EXTRA = [v for v in ALL_VARIANTS if v not in VARIANTS]
-assert set(VARIANTS) <= set(ALL_VARIANTS)
+assert set(VARIANTS) | set(PROOF_ROWS) <= set(ALL_VARIANTS)
+assert {m for _, m, _, h in (*VARIANTS, *PROOF_ROWS) if h is None} == set(METHODS)
+assert {r for _, _, r, _ in VARIANTS} == {"double", "float"} and any(h for *_, h in VARIANTS)
 
 
 @pytest.mark.parametrize("name, method, real, h_max", [
@@ -228,17 +173,27 @@ def test_the_proof_shown_on_the_codegen_page_is_what_the_command_prints(tmp_path
 
 
 def test_the_ranged_files_compile_clean_with_strict_warnings(tmp_path):
-    cc = shutil.which("gcc")
-    if cc is None:
-        pytest.skip("gcc is not installed: the strict compile of the ranged step is NOT checked")
-    for method, real, options in [("radau3", "float", {}), ("rk4", "double", {"h_max": "1/100"})]:
-        gen = xbs3(method, real, **options)
-        for name, text in gen.files.items():
-            (tmp_path / name).write_text(text)
-        proc = subprocess.run([cc, "-std=c99", "-Wall", "-Wextra", "-Wpedantic", "-Wconversion", "-Wfloat-conversion",
-                               "-Wdouble-promotion", "-Werror", "-c", str(tmp_path / f"{gen.prefix}.c"), "-o",
-                               str(tmp_path / "x.o")], capture_output=True, text=True)
-        assert proc.returncode == 0, proc.stderr
+    """The host gcc with the flags of the style guide, and arm-none-eabi-gcc with the target's warning flags
+    (-Werror, docs/codegen.md "On the target") for the Cortex-M4F (float) and the Cortex-M7 (double)."""
+    from switchobs.codegen import TARGETS
+    from switchobs.codegen._target import WARNING_FLAGS
+
+    cc, cross = shutil.which("gcc"), shutil.which("arm-none-eabi-gcc")
+    if cc is None or cross is None:
+        pytest.skip("gcc or arm-none-eabi-gcc is not installed: the strict compile of the ranged step is NOT checked")
+    for name, method, real, h_max in [("abs-xbs3", "radau3", "float", None), ("abs-xbs3", "rk4", "double", "1/100"),
+                                      ("abs-adaptive2", "rk4", "float", "1/50"), ("user", "midpoint", "double", None),
+                                      ("super-twisting", "euler", "float", None)]:
+        gen = ranged(name, method, real, h_max)
+        for file, text in gen.files.items():
+            (tmp_path / file).write_text(text)
+        source, obj = str(tmp_path / f"{gen.prefix}.c"), str(tmp_path / "x.o")
+        target = TARGETS["cortex-m4f" if real == "float" else "cortex-m7"]
+        for cmd in ([cc, "-std=c99", "-Wall", "-Wextra", "-Wpedantic", "-Wconversion", "-Wfloat-conversion",
+                     "-Wdouble-promotion", "-Werror", "-c", source, "-o", obj],
+                    [cross, *target.flags, "-Werror", *WARNING_FLAGS, "-c", source, "-o", obj]):
+            proc = subprocess.run(cmd, capture_output=True, text=True)
+            assert proc.returncode == 0, (name, method, real, cmd[0], proc.stderr)
 
 
 @pytest.mark.parametrize("real", ["double", "float"])
