@@ -237,3 +237,18 @@ def test_run_with_no_row_checks_dt_and_the_state_against_their_declared_ranges(r
         else:
             with pytest.raises(Exception, match="BAD_DT"):
                 obs.run(inside, none, dt)
+
+
+def test_cli_proves_the_super_twisting_observer_with_its_declared_ranges(tmp_path):
+    from switchobs.report._repro_target import STATE_SIGNAL_RANGES
+
+    gen = ranged("super-twisting", "euler", "float")
+    option = "--range=" + ",".join(f"{n}={lo!r}:{hi!r}" for n, (lo, hi) in gen.ranges.items())
+    assert set(STATE_SIGNAL_RANGES["super-twisting"]) < set(gen.ranges)  # lam and alpha too
+    proc = subprocess.run([sys.executable, "-m", "switchobs.cli.main", "codegen", "super-twisting", "--param",
+                           "lam=400", "--param", "alpha=2000", "--real=float", option, "--prove", "--out",
+                           str(tmp_path)], capture_output=True, text=True, timeout=600)
+    assert proc.returncode == 0, proc.stderr
+    assert "no alarm" in proc.stdout
+    assert (tmp_path / f"{gen.prefix}_proof.c").read_text() == gen.files[f"{gen.prefix}_proof.c"]
+    assert "**0 alarm(s)**" in (tmp_path / f"{gen.prefix}_proof.md").read_text()
