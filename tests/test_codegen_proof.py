@@ -252,3 +252,9 @@ def test_cli_proves_the_super_twisting_observer_with_its_declared_ranges(tmp_pat
     assert "no alarm" in proc.stdout
     assert (tmp_path / f"{gen.prefix}_proof.c").read_text() == gen.files[f"{gen.prefix}_proof.c"]
     assert "**0 alarm(s)**" in (tmp_path / f"{gen.prefix}_proof.md").read_text()
+
+
+def test_the_codegen_page_states_the_matrix_that_make_prove_proves():
+    page = (ROOT / "docs/codegen.md").read_text("utf-8")
+    assert f"each in double and float ({len(ALL_VARIANTS)} variants)" in page
+    assert "SWITCHOBS_PROVE_ALL=1" in (ROOT / "Makefile").read_text("utf-8")
