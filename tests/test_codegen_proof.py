@@ -88,11 +88,20 @@ def test_eva_finds_no_alarm_for_any_finite_input(name, method, real, h_max):
 
 
 def test_eva_finds_the_division_by_a_signal_whose_range_holds_zero():
-    """The user model's y - 1 divides b(y): with y declared in [0.5, 200] (1 inside) the proof fails on it."""
+    """The user model's y - 1 divides b(y): with y declared in [0.5, 200] (1 inside) the proof fails on it, and
+    the README and the record name that divisor beforehand."""
+    from switchobs.codegen import divisor_gaps
+
     gen = ranged("user", "euler", "double", ranges={"y": (0.5, 200)})
+    gaps = divisor_gaps(gen)
+    assert gaps == ("y - 1 (denominator of 1/(y - 1)) is in [-0.5, 199] over the declared ranges",)
+    assert f"- `{gaps[0]}`" in gen.readme
+    proved = ranged("user", "euler", "double")  # y in [1.5, 200]
+    assert not divisor_gaps(proved) and "divisor" not in proved.readme
     result = prove(gen)
     assert result.alarms > 0 and any("division_by_zero" in u or "is_nan_or_infinite" in u or "non-finite" in u
                                      for u in result.unproved), result.unproved
+    assert f"- `{gaps[0]}`" in proof_record(gen, result)
 
 
 def test_eva_finds_the_division_when_the_determinant_check_is_removed(tmp_path):

@@ -26,6 +26,7 @@ elf_symbols         -- symbol addresses of a linked program (``nm``), for ``gene
 prove, ProofResult  -- Frama-C EVA proof that the step has no run-time errors over its declared ranges
 proof_driver, proof_record -- the EVA driver ``<prefix>_proof.c`` and the record ``<prefix>_proof.md``
 proof_command, loop_unroll -- the Frama-C command of the proof and its ``-eva-auto-loop-unroll``
+divisor_gaps        -- the model's divisors that the declared ranges do not keep away from 0
 fuzz_harness        -- a libFuzzer harness of the C API with the API contract as its oracle
 """
 
@@ -35,7 +36,7 @@ from ._build import CObserver, cache_directory, compile_observer, compile_source
 from ._fmu import FMI_VERSIONS, GeneratedFMU, generate_fmu
 from ._generate import REALS, GeneratedObserver, default_prefix, generate_observer, generate_super_twisting
 from ._fuzz import fuzz_harness
-from ._proof import ProofResult, loop_unroll, proof_command, proof_driver, proof_record, prove
+from ._proof import ProofResult, divisor_gaps, loop_unroll, proof_command, proof_driver, proof_record, prove
 from ._target import (TARGETS, FunctionStack, PilResult, Target, TargetBuild, TargetFootprint, measure_footprint,
                       run_pil, target_build, target_real)
 
@@ -44,5 +45,5 @@ __all__ = ["CObserver", "FMI_VERSIONS", "GeneratedFMU", "GeneratedObserver", "a2
            "cache_directory", "compile_observer", "compile_sources", "find_compiler", "default_prefix", "domain_guards",
            "generate_observer", "generate_super_twisting", "load_library", "TARGETS", "Target", "target_real",
            "target_build", "TargetBuild", "measure_footprint", "TargetFootprint", "FunctionStack", "run_pil",
-           "PilResult", "ProofResult", "fuzz_harness", "loop_unroll", "proof_command", "proof_driver",
+           "PilResult", "ProofResult", "divisor_gaps", "fuzz_harness", "loop_unroll", "proof_command", "proof_driver",
            "proof_record", "prove"]

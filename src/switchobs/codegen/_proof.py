@@ -38,7 +38,7 @@ from ..exceptions import CodegenError, PrerequisiteError
 if TYPE_CHECKING:
     from ._generate import GeneratedObserver
 
-__all__ = ["ProofResult", "proof_driver", "proof_command", "loop_unroll", "prove", "proof_record",
+__all__ = ["ProofResult", "proof_driver", "proof_command", "loop_unroll", "divisor_gaps", "prove", "proof_record",
            "EVA_PRECISION"]
 
 #: ``-eva-precision`` of the proof (0-11): 3 keeps the refusal branches of the checks apart (at 1, 94 alarms on
@@ -46,6 +46,33 @@ __all__ = ["ProofResult", "proof_driver", "proof_command", "loop_unroll", "prove
 EVA_PRECISION = 3
 #: Rows of the ``_run`` / ``_run_dt`` calls of the driver: their count is any of 0..ROWS.
 _ROWS = 2
+
+
+def divisor_gaps(gen: GeneratedObserver) -> tuple[str, ...]:
+    """The divisors of the model (its ``nonzero`` guards: denominators of ``d``, ``b``, ``s`` and of the
+    parameters) that the declared ranges do not keep away from 0, each with its interval over the ranges.
+
+    The step refuses such a divisor only when it is exactly 0 (``NONFINITE_RESULT``...), so a value next to 0
+    passes and the division by it may overflow: EVA reports it.  Empty when every divisor's interval (interval
+    arithmetic on the declared ranges, :class:`sympy.AccumBounds`) excludes 0, or has no declared range.
+    """
+    import sympy as sp
+
+    out = []
+    for guard in gen.guards:
+        names = {s.name for s in guard.expr.free_symbols}
+        if guard.kind != "nonzero" or not names <= set(gen.ranges):
+            continue
+        env = {s: sp.AccumBounds(*(sp.Rational(v) for v in gen.ranges[s.name])) for s in guard.expr.free_symbols}
+        try:
+            value = guard.expr.subs(env)
+            lo, hi = (value.min, value.max) if isinstance(value, sp.AccumBounds) else (value, value)
+            holds_zero = bool(lo <= 0) and bool(hi >= 0)
+        except (TypeError, ValueError):  # an expression interval arithmetic cannot bound: no hint
+            continue
+        if holds_zero:
+            out.append(f"{guard.expr} ({guard.reason}) is in [{float(lo):g}, {float(hi):g}] over the declared ranges")
+    return tuple(out)
 
 
 def loop_unroll(gen: GeneratedObserver) -> int:
@@ -272,4 +299,8 @@ def proof_record(gen: GeneratedObserver, result: ProofResult) -> str:
                   "conversion) for any finite input, so every call that returns OK is covered."]
     else:
         lines += ["", "Not proved:", "", *(f"- `{u}`" for u in result.unproved)]
+        gaps = divisor_gaps(gen)
+        if gaps:
+            lines += ["", "The declared ranges do not keep these divisors away from 0 (declare ranges that do):", "",
+                      *(f"- `{g}`" for g in gaps)]
     return "\n".join(lines) + "\n"

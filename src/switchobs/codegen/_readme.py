@@ -96,7 +96,7 @@ def _ranges_section(gen: "GeneratedObserver") -> list[str]:
     """The declared ranges the step checks and, when every input has one, the proof that relies on them."""
     if not gen.ranges:
         return []
-    from ._proof import proof_command
+    from ._proof import divisor_gaps, proof_command
 
     out = ["## Declared ranges and the proof of no run-time errors", "",
            "The step refuses a value outside its declared range before computing anything: a state (also the "
@@ -111,6 +111,11 @@ def _ranges_section(gen: "GeneratedObserver") -> list[str]:
                 "run-time error for any finite input (`switchobs codegen --prove` runs it and writes "
                 f"`{gen.prefix}_proof.md`); in this directory:", "",
                 "    " + " ".join(proof_command(gen)), ""]
+        gaps = divisor_gaps(gen)
+        if gaps:
+            out += ["The step refuses a divisor of the model only when it is exactly 0, and the declared ranges do "
+                    "not keep these away from 0, so the proof will report their divisions (declare ranges that do):",
+                    "", *(f"- `{g}`" for g in gaps), ""]
     return out
 
 
