@@ -95,7 +95,7 @@ def test_eva_finds_the_division_by_a_signal_whose_range_holds_zero():
     gen = ranged("user", "euler", "double", ranges={"y": (0.5, 200)})
     gaps = divisor_gaps(gen)
     assert gaps == ("y - 1 (denominator of 1/(y - 1)) is in [-0.5, 199] over the declared ranges",)
-    assert f"- `{gaps[0]}`" in gen.readme
+    assert f"- `{gaps[0]}`" in gen.readme and f"`{gaps[0]}`" in (ROOT / "docs/codegen.md").read_text("utf-8")
     proved = ranged("user", "euler", "double")  # y in [1.5, 200]
     assert not divisor_gaps(proved) and "divisor" not in proved.readme
     result = prove(gen)
