@@ -5,7 +5,7 @@ PY := $(VENV)/bin/python
 STAMP := $(VENV)/.installed
 DEMO_ARGS ?=
 
-.PHONY: demo test bench docs install clean cc-tools figures fuzz
+.PHONY: demo test bench docs install clean cc-tools figures fuzz prove
 
 $(STAMP): pyproject.toml
 	$(PYTHON) -m venv $(VENV)
@@ -52,6 +52,11 @@ FUZZ_EXAMPLES ?= 300
 FUZZ_C_SECONDS ?= 300
 fuzz: $(STAMP) cc-tools
 	SWITCHOBS_FUZZ_EXAMPLES=$(FUZZ_EXAMPLES) SWITCHOBS_FUZZ_C_SECONDS=$(FUZZ_C_SECONDS) $(PY) -m pytest -q -p no:cacheprovider tests/test_fuzz_inputs.py tests/test_errors.py tests/test_fuzz_options.py tests/test_codegen_fuzz.py
+
+# The proof of no run-time errors (Frama-C EVA, tests/test_codegen_proof.py) of every observer, method and real
+# type, sub-stepped rk4 too (make test proves a subset, and the table of docs/codegen.md "On the target").
+prove: $(STAMP) cc-tools
+	SWITCHOBS_PROVE_ALL=1 nice $(PY) -m pytest -q -p no:cacheprovider tests/test_codegen_proof.py
 
 # Every benchmark script (benchmarks/_*.py are helpers), then their result tables into the docs pages.
 # BENCH_QUICK=1: every script with --quick (smaller sizes, fewer runs), printed only: nothing is published.

@@ -195,16 +195,19 @@ def test_record_and_readme_name_the_deviations_and_a_long_prefix_breaks_rule_5_1
     assert not identifier_clashes(ok.prefix, ok.header, ok.source)
 
 
-@pytest.mark.parametrize("real, method, h_max", [("double", "radau3", None), ("float", "radau3", None),
-                                                ("double", "rk4", "1/100")])
-def test_ranged_build_has_no_required_finding_and_its_advisory_ones_are_recorded(tmp_path, real, method, h_max):
+@pytest.mark.parametrize("name, real, method, h_max", [
+    ("abs-xbs3", "double", "radau3", None), ("abs-xbs3", "float", "radau3", None),
+    ("abs-xbs3", "double", "rk4", "1/100"),
+    ("user", "double", "midpoint", None), ("super-twisting", "float", "euler", None)])
+def test_ranged_build_has_no_required_finding_and_its_advisory_ones_are_recorded(tmp_path, name, real, method, h_max):
     """The proved build (declared ranges of every input: range checks, the det floor before the one division,
-    the sub-step's state checks, next initialised) is MISRA-checked like the unranged one."""
-    from test_codegen_proof import xbs3
+    the sub-step's state checks, next initialised, the zero-row range checks) is MISRA-checked like the
+    unranged one, the user model (whose d and b divide by signals) and the super-twisting observer too."""
+    from switchobs.report._repro_target import proved_observer
 
-    gen = xbs3(method, real, **({} if h_max is None else {"h_max": h_max}))
+    gen = proved_observer(name, method, real, h_max)
     assert f"{gen.prefix}_proof.c" in gen.files
-    assert (f"{gen.prefix.upper()}_DET_FLOOR" in gen.header) == (method == "radau3")
+    assert (f"{gen.prefix.upper()}_DET_FLOOR" in gen.header) == (method in ("radau3", "midpoint"))
     rules = check(gen, findings(cppcheck(tmp_path), gen, tmp_path))
     assert set(rules) <= {"2.5", "8.7", "15.5"}
 

@@ -202,7 +202,7 @@ def run(args: argparse.Namespace) -> int:
             raise CodegenError(f"{' and '.join(names)} must be numbers, got "
                                + ", ".join(repr(values[k]) for k in names)) from None
         generate = generate_super_twisting if args.model == SUPER_TWISTING else generate_vehicle_speed
-        gen = generate(*gains, real=args.real, command=command,
+        gen = generate(*gains, real=args.real, command=command, ranges=_ranges(args.ranges),
                        prefix=f"switchobs_{args.model.replace('-', '_')}" if args.prefix is None else args.prefix)
     else:
         if not (args.spectrum or args.charpoly or args.gains_plus):

@@ -27,6 +27,8 @@ calibration_files   -- ``<prefix>_calibration.c/.h``: the named parameter array 
 elf_symbols         -- symbol addresses of a linked program (``nm``), for ``generate_a2l(addresses=...)``
 prove, ProofResult  -- Frama-C EVA proof that the step has no run-time errors over its declared ranges
 proof_driver, proof_record -- the EVA driver ``<prefix>_proof.c`` and the record ``<prefix>_proof.md``
+proof_command, loop_unroll -- the Frama-C command of the proof and its ``-eva-auto-loop-unroll``
+divisor_gaps        -- the model's divisors that the declared ranges do not keep away from 0
 fuzz_harness        -- a libFuzzer harness of the C API with the API contract as its oracle
 """
 
@@ -37,7 +39,7 @@ from ._fmu import (FMI_VERSIONS, FMUVariable, GeneratedFMU, build_fmu, fmi3_stub
                    generate_fmu)
 from ._generate import (REALS, default_prefix, generate_observer, generate_super_twisting,
                         generate_vehicle_speed)
-from ._observer import GeneratedObserver, proof_driver
+from ._observer import GeneratedObserver, divisor_gaps, loop_unroll, proof_command, proof_driver
 from ._fuzz import fuzz_harness
 from ._proof import ProofResult, proof_record, prove
 from ._target import (TARGETS, FunctionStack, PilResult, Target, TargetBuild, TargetFootprint, measure_footprint,
@@ -49,4 +51,5 @@ __all__ = ["CObserver", "FMI_VERSIONS", "FMUVariable", "GeneratedFMU", "build_fm
            "cache_directory", "compile_observer", "compile_sources", "find_compiler", "default_prefix", "domain_guards",
            "generate_observer", "generate_super_twisting", "generate_vehicle_speed", "load_library", "TARGETS", "Target", "target_real",
            "target_build", "TargetBuild", "measure_footprint", "TargetFootprint", "FunctionStack", "run_pil",
-           "PilResult", "ProofResult", "fuzz_harness", "proof_driver", "proof_record", "prove"]
+           "PilResult", "ProofResult", "divisor_gaps", "fuzz_harness", "loop_unroll", "proof_command", "proof_driver",
+           "proof_record", "prove"]

@@ -444,6 +444,18 @@ class CObserver:
             raise ObserverInputError(f"C observer step refused (BAD_DT, code 1): dt = {dt!r} is not a number",
                                      int(StepStatus.BAD_DT)) from None
 
+    def _dt_ok(self, dt: float) -> bool:
+        """dt passes the step's check: finite, > 0 and, when declared, within its range -- compared, as the C
+        compares it, in the C real type (a double just below DT_MIN may round up to it in float)."""
+        if not (math.isfinite(dt) and dt > 0.0):
+            return False
+        if "dt" not in self.generated.ranges:
+            return True
+        with np.errstate(over="ignore", under="ignore"):
+            value = float(self._dtype(dt))
+        lo, hi = self.generated.ranges["dt"]
+        return lo <= value <= hi
+
     def _fail(self, code: int, x: np.ndarray, sig: np.ndarray, dt: float, row: int | None = None) -> ObserverInputError:
         status = StepStatus(code)
         where = f"row {row}: " if row is not None else ""
@@ -451,7 +463,8 @@ class CObserver:
         ranged = lambda names: ", ".join(f"{n} in [{self.generated.ranges[n][0]!r}, "  # noqa: E731
                                          f"{self.generated.ranges[n][1]!r}]" for n in names if n in self.generated.ranges)
         detail = {
-            StepStatus.BAD_DT: f"dt = {dt!r} must be finite and > 0 (seconds)",
+            StepStatus.BAD_DT: f"dt = {dt!r} must be finite and > 0 (seconds)" + (
+                "" if "dt" not in self.generated.ranges else f", within its declared range: {ranged(['dt'])}"),
             StepStatus.NONFINITE_STATE: f"state {named(self.state_names, x)}; reset the observer",
             StepStatus.NONFINITE_SIGNAL: f"signals {named(self.signal_names, sig)}",
             StepStatus.UNDEFINED_TIME_SCALE: f"signals {named(self.signal_names, sig)}",
@@ -505,9 +518,10 @@ class CObserver:
         x, rows_c = self._start(xhat0, signal_rows, "_run")
         dt_f = self._dt(dt)
         k = rows_c.shape[0]
-        if not (math.isfinite(dt_f) and dt_f > 0.0) or not all(map(math.isfinite, x.tolist())):
-            # the checks of the first step, also when there is no row (as the reference does)
-            code = StepStatus.BAD_DT if not (math.isfinite(dt_f) and dt_f > 0.0) else StepStatus.NONFINITE_STATE
+        if not self._dt_ok(dt_f) or not all(map(math.isfinite, x.tolist())):
+            # the checks of the first step, also when there is no row (as the reference does); the state's
+            # declared ranges are the C's to check (the same codes, STATE_RANGE with no row too)
+            code = StepStatus.BAD_DT if not self._dt_ok(dt_f) else StepStatus.NONFINITE_STATE
             raise self._fail(int(code), x, rows_c[0] if k else np.zeros(0), dt_f, 0)
         return self._rows(xhat0, x, rows_c, lambda i: dt_f,
                           lambda x, traj: self._run_addr(x.ctypes.data, rows_c.ctypes.data, k, self._params_addr,

@@ -14,8 +14,9 @@ paths.  After every call the harness checks, and aborts on a violation:
 * status OK means a finite state (and one within its declared ranges);
 * ``_run`` and ``_run_dt`` equal a loop of ``_step`` on the same rows: the same status, the same first
   failing row, the same state bit for bit, the trajectory rows of the successful steps and no other row
-  written; with no row the zero-step contract (``_run``: ``BAD_DT`` for a bad ``dt``, then both
-  ``NONFINITE_STATE`` for a non-finite ``xhat``, else OK), ``xhat`` unchanged;
+  written; with no row the zero-step contract (``_run``: ``BAD_DT`` for a bad ``dt``, also one outside its
+  declared range, then both ``NONFINITE_STATE`` for a non-finite ``xhat`` and ``STATE_RANGE`` for one outside
+  its declared ranges, else OK), ``xhat`` unchanged;
 * ``_status_message`` returns a non-NULL text for every code, the documented one for each status.
 
 Compiled with ``clang -fsanitize=fuzzer,address,undefined`` every memory error
@@ -54,6 +55,8 @@ def fuzz_harness(gen: GeneratedObserver) -> str:
     ranged = [(i, gen.ranges[n]) for i, n in enumerate(gen.state_names) if n in gen.ranges]
     in_range = "".join(f" && x[{i}] >= {float_literal(lo, real)} && x[{i}] <= {float_literal(hi, real)}"
                        for i, (lo, hi) in ranged)
+    dt_ok = (f"dt >= {float_literal(gen.ranges['dt'][0], real)} && dt <= {float_literal(gen.ranges['dt'][1], real)}"
+             if "dt" in gen.ranges else f"dt > ({real})0 && isfinite(dt)")
     original = "" if not gen.original_names else f"""
     case 4: {{ /* _original: status in the set, x untouched on failure, finite on OK */
         {real} x[{P}_NX], sig[{P}_NS], out[{P}_NO], copy[{P}_NO];
@@ -188,10 +191,11 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
                 if (memcmp(x, y, sizeof x) != 0) fail("run with n_steps < 0 changed xhat");
                 break;
             }}
-            if (n == 0) {{ /* no row: _run checks dt (BAD_DT), then both check xhat (NONFINITE_STATE) */
+            if (n == 0) {{ /* no row: _run checks dt (BAD_DT), then both check xhat (NONFINITE_STATE, STATE_RANGE) */
                 int32_t want = 0;
-                if (!per_row && !(dt > ({real})0 && isfinite(dt))) want = {int(StepStatus.BAD_DT)};
+                if (!per_row && !({dt_ok})) want = {int(StepStatus.BAD_DT)};
                 else for (i = 0; i < {P}_NX; ++i) if (!isfinite(y[i])) want = {int(StepStatus.NONFINITE_STATE)};
+                if (want == 0 && !finite_state(y)) want = {int(StepStatus.STATE_RANGE)};
                 if (st != want) fail("run with n_steps = 0 does not keep the zero-step contract");
                 if (memcmp(x, y, sizeof x) != 0) fail("run with n_steps = 0 changed xhat");
                 break;

@@ -493,7 +493,8 @@ def generate_observer(model: Model, gains: GainDesign | tuple[Sequence[float], S
 
 
 def generate_super_twisting(lam: float, alpha: float, *, real: str = "double",
-                            prefix: str = "switchobs_super_twisting", command: str | None = None) -> GeneratedObserver:
+                            prefix: str = "switchobs_super_twisting", command: str | None = None,
+                            ranges: Mapping[str, tuple[float, float]] | None = None) -> GeneratedObserver:
     """Generate the C super-twisting observer of seed 003 eq. (8)-(9), Euler scheme (13).
 
     Parameters
@@ -503,6 +504,9 @@ def generate_super_twisting(lam: float, alpha: float, *, real: str = "double",
         They are runtime parameters ``lam`` and ``alpha``.
     real : {"double", "float"}
     prefix : str
+    ranges : mapping name -> (lo, hi), optional
+        Declared ranges of the states, signals, ``lam``, ``alpha`` and ``dt``, as for
+        :func:`generate_observer`: with a range for every one of them the step is proved free of run-time errors.
 
     Returns
     -------
@@ -527,11 +531,12 @@ def generate_super_twisting(lam: float, alpha: float, *, real: str = "double",
                  references={"observer": "seed 003 eq. (8)-(9)", "discretisation": "seed 003 eq. (13)",
                              "gains": "seed 003 eq. (12)"})
     return _assemble(translate_super_twisting(lam, alpha), info=info, kind="super-twisting", real=real,
-                     method="euler", prefix=prefix, command=command)
+                     method="euler", prefix=prefix, command=command, ranges=ranges)
 
 
 def generate_vehicle_speed(beta: float, *, real: str = "double", prefix: str = "switchobs_vehicle_speed",
-                           command: str | None = None) -> GeneratedObserver:
+                           command: str | None = None,
+                           ranges: Mapping[str, tuple[float, float]] | None = None) -> GeneratedObserver:
     """Generate the C sliding-mode observer of the vehicle speed of seed 003 eq. (15), explicit Euler.
 
     Parameters
@@ -541,6 +546,8 @@ def generate_vehicle_speed(beta: float, *, real: str = "double", prefix: str = "
         A runtime parameter ``beta``.
     real : {"double", "float"}
     prefix : str
+    ranges : mapping name -> (lo, hi), optional
+        Declared ranges of the states, the signal, ``beta`` and ``dt``, as for :func:`generate_observer`.
 
     Returns
     -------
@@ -562,7 +569,7 @@ def generate_vehicle_speed(beta: float, *, real: str = "double", prefix: str = "
                  signal_roles=("measured vehicle speed x3 (m/s)",),
                  references={"observer": "seed 003 eq. (15)", "gain": "seed 003 Theorem 3"})
     return _assemble(translate_vehicle_speed(beta), info=info, kind="vehicle-speed", real=real,
-                     method="euler", prefix=prefix, command=command)
+                     method="euler", prefix=prefix, command=command, ranges=ranges)
 
 
 # ----------------------------------------------------------------------------- text
@@ -645,7 +652,10 @@ def _header(*, tr: Translation, info: _Info, kind: str, real: str, method: str, 
         f" * state to trajectory (row-major, {P}_NX per row; may be NULL).  On error, returns the code of",
         " * the first failing step k: xhat holds the state after the k steps that succeeded and rows",
         " * 0..k-1 of trajectory are written.  xhat and signals are never NULL (BAD_ARGUMENT); n_steps = 0",
-        " * changes nothing and checks what needs no row: dt (BAD_DT), then xhat (NONFINITE_STATE). */",
+        " * changes nothing and checks what needs no row: dt (BAD_DT" + (", also outside its range" if "dt" in ranges
+                                                                          else "")
+        + "), then xhat (NONFINITE_STATE" + (", then STATE_RANGE" if any(n in ranges for n in tr.state_names)
+                                             else "") + "). */",
         f"int32_t {prefix}_run({rt} *xhat, const {rt} *signals, int32_t n_steps, const {rt} *params,",
         f"    {rt} dt, {rt} *trajectory);",
         "",
@@ -847,6 +857,9 @@ def _source(*, tr: Translation, info: _Info, kind: str, real: str, method: str, 
         f"        for (int32_t i = 0; i < {nx}; ++i) {{",
         _refuse(P, "!isfinite(xhat[i])", "NONFINITE_STATE", indent="            ", hint=False),
         "        }",
+        None if state_in is None else _refuse(P, _range_test("xhat", tr.state_names, x_macros, "X", ranges, P,
+                                                             "            "), "STATE_RANGE", indent="        ",
+                                              hint=False),
         "    }",
         "    if (dts != NULL) {",
         "        h = dts;",
@@ -890,9 +903,11 @@ def _source(*, tr: Translation, info: _Info, kind: str, real: str, method: str, 
         f"int32_t {prefix}_run({rt} *xhat, const {rt} *signals, int32_t n_steps, const {rt} *params,",
         f"    {rt} dt, {rt} *trajectory)",
         "{",
-        "    /* no row: dt is checked before the state, in _step's order */",
-        _refuse(P, f"(n_steps == 0) && (xhat != NULL) && (signals != NULL) && !((dt > {zero}) && isfinite(dt))",
-                "BAD_DT", hint=False),
+        "    /* no row: dt is checked before the state, in _step's order"
+        + (" (within its declared range, as a step checks it) */" if "dt" in ranges else " */"),
+        _refuse(P, "(n_steps == 0) && (xhat != NULL) && (signals != NULL) && "
+                + (f"!((dt >= {P}_DT_MIN) && (dt <= {P}_DT_MAX))" if "dt" in ranges
+                   else f"!((dt > {zero}) && isfinite(dt))"), "BAD_DT", hint=False),
         f"    return {prefix}_rows(xhat, signals, n_steps, params, dt, NULL, trajectory);",
         "}",
         "",

@@ -23,7 +23,7 @@ from ..exceptions import CodegenError, ModelError
 from ..spec import Guard, StepStatus
 from ._misra import misra_record
 
-__all__ = ["GeneratedObserver", "proof_driver", "proof_command", "EVA_PRECISION"]
+__all__ = ["GeneratedObserver", "proof_driver", "proof_command", "loop_unroll", "divisor_gaps", "EVA_PRECISION"]
 
 #: ``-eva-precision`` of the proof (0-11): 3 keeps the refusal branches of the checks apart (at 1, 94 alarms on
 #: abs-xbs3 radau3) within seconds per variant.
@@ -251,14 +251,51 @@ class GeneratedObserver:
         return "\n".join(lines)
 
 
-def proof_command(prefix: str, *, precision: int = EVA_PRECISION) -> list[str]:
+def divisor_gaps(gen: GeneratedObserver) -> tuple[str, ...]:
+    """The divisors of the model (its ``nonzero`` guards: denominators of ``d``, ``b``, ``s`` and of the
+    parameters) that the declared ranges do not keep away from 0, each with its interval over the ranges.
+
+    The step refuses such a divisor only when it is exactly 0 (``NONFINITE_RESULT``...), so a value next to 0
+    passes and the division by it may overflow: EVA reports it.  Empty when every divisor's interval (interval
+    arithmetic on the declared ranges, :class:`sympy.AccumBounds`) excludes 0, or has no declared range.
+    """
+    import sympy as sp
+
+    out = []
+    for guard in gen.guards:
+        names = {s.name for s in guard.expr.free_symbols}
+        if guard.kind != "nonzero" or not names <= set(gen.ranges):
+            continue
+        env = {s: sp.AccumBounds(*(sp.Rational(v) for v in gen.ranges[s.name])) for s in guard.expr.free_symbols}
+        try:
+            value = guard.expr.subs(env)
+            lo, hi = (value.min, value.max) if isinstance(value, sp.AccumBounds) else (value, value)
+            holds_zero = bool(lo <= 0) and bool(hi >= 0)
+        except (TypeError, ValueError):  # an expression interval arithmetic cannot bound: no hint
+            continue
+        if holds_zero:
+            out.append(f"{guard.expr} ({guard.reason}) is in [{float(lo):g}, {float(hi):g}] over the declared ranges")
+    return tuple(out)
+
+
+def loop_unroll(gen: GeneratedObserver) -> int:
+    """``-eva-auto-loop-unroll`` of the proof: the longest loop over an array of the API or the driver.
+
+    Those loops (state, parameters, signal rows, original state) are unrolled whole, so that every entry they
+    write is known written: unrolled only 4 times, the copies of abs-adaptive2's 8 states through ``cur`` read
+    as uninitialised (6 alarms).  The sub-step loop (``MAX_SUBSTEPS`` turns, 64 by default) stays analysed by
+    widening, bounded by its ``j < n`` and the state checks of every sub-step (unrolled whole, abs-xbs3 rk4
+    ``--h-max 1/100`` took 88 s instead of 37 s on a loaded machine, with the same 0 alarms).
+    """
+    return max(gen.nx, gen.np, PROOF_ROWS * gen.ns, PROOF_ROWS, len(gen.original_names))
+
+
+def proof_command(gen: GeneratedObserver, *, precision: int = EVA_PRECISION) -> list[str]:
     """The Frama-C command of the proof, run in the directory of the generated files."""
-    # -eva-auto-loop-unroll 4: the sub-step loop (up to MAX_SUBSTEPS turns) is analysed by widening, bounded by
-    # its j < n and the state checks of every sub-step, rather than unrolled (precision 3 unrolls 64 turns:
-    # abs-xbs3 rk4 --h-max 1/100 took 88 s instead of 37 s on a loaded machine, with the same 0 alarms)
-    return ["frama-c", "-eva", "-eva-precision", str(precision), "-eva-auto-loop-unroll", "4",
+    p = gen.prefix
+    return ["frama-c", "-eva", "-eva-precision", str(precision), "-eva-auto-loop-unroll", str(loop_unroll(gen)),
             "-warn-special-float", "non-finite",
-            "-warn-signed-overflow", "-eva-no-show-progress", f"{prefix}.c", f"{prefix}_proof.c"]
+            "-warn-signed-overflow", "-eva-no-show-progress", f"{p}.c", f"{p}_proof.c"]
 
 
 def proof_driver(gen: GeneratedObserver) -> str:
@@ -284,7 +321,7 @@ def proof_driver(gen: GeneratedObserver) -> str:
         f" * 0..{PROOF_ROWS}, the optional pointers NULL or not.  The step refuses what lies outside the declared",
         f" * ranges of {p}.h before computing anything, so no alarm means no run-time error for every",
         " * finite input.  Run in this directory (the result is in " + f"{p}_proof.md):",
-        " *   " + " ".join(proof_command(p)),
+        " *   " + " ".join(proof_command(gen)),
         " */",
         f'#include "{p}.h"',
         "",

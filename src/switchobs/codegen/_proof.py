@@ -34,7 +34,7 @@ from pathlib import Path
 
 from .._json import JsonRecord
 from ..exceptions import CodegenError, PrerequisiteError
-from ._observer import EVA_PRECISION, PROOF_ROWS, GeneratedObserver, proof_command, proof_driver
+from ._observer import EVA_PRECISION, PROOF_ROWS, GeneratedObserver, divisor_gaps, proof_command, proof_driver
 
 __all__ = ["ProofResult", "prove", "proof_record"]
 
@@ -123,7 +123,7 @@ def prove(gen: GeneratedObserver, *, directory: str | Path | None = None, timeou
         for name, text in {**gen.files, f"{gen.prefix}_proof.c": driver}.items():
             if name.endswith((".c", ".h")):
                 (where / name).write_text(text)
-        cmd = proof_command(gen.prefix, precision=precision)
+        cmd = proof_command(gen, precision=precision)
         version = subprocess.run([exe, "-version"], capture_output=True, text=True, timeout=60).stdout.strip()
         t0 = time.perf_counter()
         try:
@@ -183,4 +183,8 @@ def proof_record(gen: GeneratedObserver, result: ProofResult) -> str:
                   "conversion) for any finite input, so every call that returns OK is covered."]
     else:
         lines += ["", "Not proved:", "", *(f"- `{u}`" for u in result.unproved)]
+        gaps = divisor_gaps(gen)
+        if gaps:
+            lines += ["", "The declared ranges do not keep these divisors away from 0 (declare ranges that do):", "",
+                      *(f"- `{g}`" for g in gaps)]
     return "\n".join(lines) + "\n"

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 from ._emit import float_literal
 from ._misra import misra_summary
-from ._observer import GeneratedObserver, proof_command
+from ._observer import GeneratedObserver, divisor_gaps, proof_command
 from ..spec import METHODS, STATUS_TEXT, STEP_METHODS, StepStatus
 
 __all__ = ["readme", "example_program"]
@@ -108,7 +108,12 @@ def _ranges_section(gen: "GeneratedObserver") -> list[str]:
         out += [f"`{gen.prefix}_proof.c` is the Frama-C EVA driver of the proof that no call of the API has a "
                 "run-time error for any finite input (`switchobs codegen --prove` runs it and writes "
                 f"`{gen.prefix}_proof.md`); in this directory:", "",
-                "    " + " ".join(proof_command(gen.prefix)), ""]
+                "    " + " ".join(proof_command(gen)), ""]
+        gaps = divisor_gaps(gen)
+        if gaps:
+            out += ["The step refuses a divisor of the model only when it is exactly 0, and the declared ranges do "
+                    "not keep these away from 0, so the proof will report their divisions (declare ranges that do):",
+                    "", *(f"- `{g}`" for g in gaps), ""]
     return out
 
 
