@@ -36,6 +36,8 @@ from ._repro_abs import (_fig67_section, _reduction_claim, _scenarios_section, _
                          plot_fig67)
 from ._repro_adaptive import SEC34_GAINS, _sec34_section, _sec36_section
 from ._repro_cells import PREDICTED, ROLE, _fitted, _fmt_s, _pct, _row
+from ._repro_claims import (SEC34_PERTURBED_FIGURE, _fig4_section, _fig47_section, _sec34_perturbed_section,
+                            plot_sec34_perturbed)
 from ._repro_encoders import (_all_cases_claim, _chain_abs_section, _chain_braking_section, _encoder_cli_section,
                               _encoder_example_section, tsa_orders, _super_twisting_section, _table61_section,
                               _three_stage_section)
@@ -119,6 +121,7 @@ def _seed000(runs: Runs) -> list[str]:
              f"three roads, re-convergence {_fmt_s(reconverged(fig4, '-> hoang-wet'))} (wet) and "
              f"{_fmt_s(reconverged(fig4, '-> hoang-snow'))} (snow); travelled distance {m4.stopping_distance_m:.2f} m "
              "(the generated C observer gives the same to 1e-12, `tests/test_codegen_simulation.py`).", "",
+             *_fig4_section(runs), "",
              "![seed 000 Fig. 4 scenario](abs_hoang_fig4.png)", "",
              "### Table I: exponential approximation (18)", "",
              _row("road", "$\\theta$ seed", "$\\theta$ ours", "largest deviation", ROLE), _row(*["---"] * 5)]
@@ -152,9 +155,11 @@ def _seed001(runs: Runs) -> list[str]:
                   f"m/s³), $T_D = {a1.dwell_time_s:.4f}$ s, regressor PE {a1.regressor_pe:.3f}", "[ABS plants](abs.md)",
                   PREDICTED),
              *_sec34_section(runs),
+             *_sec34_perturbed_section(runs),
              *_sec36_section(runs),
              "### Chapter 4: Table 4.1 and the Poincaré map", "", *_table41_section(runs), "",
              "![Table 4.1](abs_table41.png)", "",
+             *_fig47_section(runs),
              "Poincaré map (4.13)–(4.18) of the two-phase ABS on dry asphalt ($z_{ref} = 8$, $\\chi_a = -0.1$, "
              "$\\chi_b = 0.1$); the seed states a stable limit cycle ($|P'| < 1$) and the sufficient condition "
              "$\\alpha > (\\delta_{up} + 1)/\\kappa$; the analytic map equals the integrated loop to $10^{-6}$ "
@@ -311,9 +316,9 @@ def _pages(root: Path, runs: Runs) -> tuple[ReproductionPage, ...]:
 
 
 def write_reproductions(root: str | Path = ".") -> tuple[Path, ...]:
-    """Write :func:`reproduction_pages` under ``root`` (all together or not at all) and the figure of
-    Figs. 6.7-6.9 (``docs/figures/reproduction_fig67.png``, when matplotlib is installed); return the paths
-    written."""
+    """Write :func:`reproduction_pages` under ``root`` (all together or not at all) and the figures of
+    Figs. 6.7-6.9 (``docs/figures/reproduction_fig67.png``) and of Sec. 3.4's perturbed scenario
+    (:data:`SEC34_PERTURBED_FIGURE`), when matplotlib is installed; return the paths written."""
     runs = Runs()
     out = write_files(root, {page.path: page.text for page in _pages(Path(root), runs)},
                       what="the reproduction pages under")
@@ -323,7 +328,9 @@ def write_reproductions(root: str | Path = ".") -> tuple[Path, ...]:
         return out
     figure = Path(root) / "docs/figures/reproduction_fig67.png"
     plot_fig67(runs, figure)
-    return (*out, figure)
+    perturbed = Path(root) / SEC34_PERTURBED_FIGURE
+    plot_sec34_perturbed(runs, perturbed)
+    return (*out, figure, perturbed)
 
 
 def stale_pages(root: str | Path = ".") -> tuple[str, ...]:
