@@ -40,13 +40,10 @@ def _sec34_perturbed_section(runs: Runs) -> list[str]:
     keep = (s["t"] >= last[1]) & (s["t"] < last[2])
     xbs_range = float(np.ptp(s["xbs"][keep]))
 
-    def worst(fn):
-        return max(fn(k) for k in augmented)
-
     def pair(label: str, a: float, b: float) -> str:
         return f"{p.rms(label, False, a, b):.3f} → {p.rms(label, True, a, b):.3f}"
 
-    lines = ["", "### Sec. 3.4, perturbed scenario (Figs. 3.6–3.9): an eccentric wheel-speed sensor", "",
+    lines = ["### Sec. 3.4, perturbed scenario (Figs. 3.6–3.9): an eccentric wheel-speed sensor", "",
              "*Seed:* \"the measurement of the wheel acceleration offset is perturbed by periodic (in one mechanical "
              "revolution) oscillations caused by imperfections in the wheel-speed sensors\"; \"the estimation errors "
              "$\\tilde w$, $\\tilde\\theta$ are perturbed [...] but they approach zero as the perturbation vanishes "
@@ -141,7 +138,7 @@ def _fig4_section(runs: Runs) -> list[str]:
     rows = {"exact $x_2$": fig4_roads(exact), "encoder-fed": fig4_roads(fed.result)}
     names = {"dry": "hoang-dry", "wet": "hoang-wet", "snow": "hoang-snow"}
     phases = ", ".join(map(str, FIG4_TRACKING_PHASES))
-    lines = ["", f"Per road (`switchobs.experiments.fig4_roads`): the tracking error $\\xi = x_2 - x_2^*$ of (22) "
+    lines = [f"Per road (`switchobs.experiments.fig4_roads`): the tracking error $\\xi = x_2 - x_2^*$ of (22) "
              f"over the samples in phases {phases}, RMS over the whole road and without its first "
              f"{FIG4_SETTLE_S:g} s (the road change, or on dry the observer's start), beside the RMS of $x_2^*$; the "
              "brake pressure. With the 4D observer fed the exact $x_2$ (`switchobs simulate hoang-fig4`) and fed "
@@ -205,7 +202,7 @@ def _fig47_section(runs: Runs) -> list[str]:
     five, two = f.slip_deviation(f.five), f.slip_deviation(f.two)
     r5, r2 = f.slip_range(f.five), f.slip_range(f.two)
     opt = road(FIG47_ROAD).optimal_slip
-    return ["", f"Fig. 4.7 ({FIG47_ROAD.replace('-', ' ')}, {FIG47_SPEED_KMH:g} km/h, the Table 4.1 cell's runs; "
+    return [f"Fig. 4.7 ({FIG47_ROAD.replace('-', ' ')}, {FIG47_SPEED_KMH:g} km/h, the Table 4.1 cell's runs; "
             "`switchobs.experiments.fig47_runs`):", "", _row(*_HEAD), _row(*["---"] * 5),
             _row("Fig. 4.7: smaller variation of the slip around its optimum with the two-phase ABS",
                  "smaller (phase plane, no number)",

@@ -11,7 +11,8 @@ This module assembles ``docs/reproductions.md``, splices the generated sections
 into the hand-written pages and writes or checks them; the sections come from
 ``_repro_adaptive`` (seed 001 Secs. 3.4, 3.6), ``_repro_abs`` (scenarios, step
 halving, Table 4.1, Figs. 6.7-6.9), ``_repro_encoders`` (Table 6.1, the
-wheel-encoder page) and ``_measured``, the runs they share from :class:`switchobs.experiments.Runs`.
+wheel-encoder page), ``_repro_claims`` (Sec. 3.4's perturbed scenario, Fig. 4 per road and Sec. III-E,
+Fig. 4.7) and ``_measured``, the runs they share from :class:`switchobs.experiments.Runs`.
 """
 
 from __future__ import annotations
