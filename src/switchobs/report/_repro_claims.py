@@ -190,7 +190,7 @@ def _fig4_section(runs: Runs) -> list[str]:
                    "; ".join(f"{lb}: norms differ by {100 * (n - 1):.2f} %, the noise by {100 * (r - 1):.0f} %"
                              for lb, r, n, _ in verdicts),
                    "**does not hold for these gains**: the norms are equal to within a per cent (their largest "
-                   "entry, the same in both modes, dominates them); the H2 norms to $z_2$ predict "
+                   "entry, of one magnitude in both modes, dominates them); the H2 norms to $z_2$ predict "
                    + ", ".join(f"{h:.2f} ({lb})" for lb, _, _, h in verdicts)
                    + " for the measured ratios", "predicted")]
     return lines
