@@ -93,7 +93,12 @@ def _sec34_perturbed_section(runs: Runs) -> list[str]:
                                                for k, (pert, ideal, _) in end_aug.items())
                    + f", against the adaptive observer's {end_adaptive:.3f}",
                    "contradicted in part (below)" if augmented_floor_claim(runs)[0] else _NO_NUMBER, _PREDICTED)]
-    lines += ["", augmented_floor_claim(runs)[1]]
+    lines += ["", augmented_floor_claim(runs)[1], "",
+              "Tested (`tests/test_experiments_claims.py`): `test_aguado2020_sec53_eccentric_x2_is_the_second_"
+              "derivative_of_the_eq57_angle_law`, `test_aguado2020_sec34_fig36_perturbation_is_periodic_and_falls_"
+              "with_the_speed_squared`, `test_aguado2020_sec34_fig37_fig39_both_estimation_errors_perturbed`, "
+              "`test_aguado2020_sec34_fig37_adaptive_error_approaches_zero_as_the_speed_falls`, "
+              "`test_aguado2020_sec34_fig39_augmented_more_sensitive_but_its_error_floor_is_its_own`."]
     lines += ["", "*Chosen by us (the seed does not give them):* the sensor, the eccentricity alone of our Table 6.1 "
               f"encoder ($e/r = {e:g}$, fitted to the seed's Table 6.1, one harmonic per revolution), seen as the "
               "second derivative of its angle law (not through a time-stamping algorithm, whose window adds a fit "
@@ -160,7 +165,8 @@ def _fig4_section(runs: Runs) -> list[str]:
                    "\"road\")", _NO_NUMBER, PREDICTED),
               _row("Fig. 4: the pressure is reduced and follows the tyre force potential", "reduced on each change",
                    "mean pressure per unit of peak friction (dry, wet, snow): "
-                   + ", ".join(f"{v:.0f}" for v in follows) + " bar", _NO_NUMBER, PREDICTED)]
+                   + ", ".join(f"{v:.0f}" for v in follows) + " bar", _NO_NUMBER, PREDICTED),
+              "", "Tested: `test_hoang2014_fig4_tracking_achieved_and_pressure_follows_the_friction_per_road`."]
     lines += ["", "Sec. III-E: \"the noise of the observed variable $\\hat z_2$ is bigger when the wheel "
               "acceleration is positive. A possible explanation [...] might be that the norm of $K^+$ is bigger than "
               "that of $K^-$\" (the 3D observer of Sec. III on the rig's data, seed 000 Fig. 2). The rig's data are "
@@ -188,7 +194,9 @@ def _fig4_section(runs: Runs) -> list[str]:
                    "; ".join(f"{lb}: norms differ by {100 * (n - 1):.2f} %, the noise by {100 * (r - 1):.0f} %"
                              for lb, r, n, _ in verdicts),
                    "contradicted (below)" if gain_norm_claim(runs)[0] else _NO_NUMBER, PREDICTED)]
-    lines += ["", gain_norm_claim(runs)[1]]
+    lines += ["", gain_norm_claim(runs)[1], "",
+              "Tested: `test_hoang2014_sec3e_noise_bigger_while_wheel_accelerates_and_not_explained_by_the_gain_"
+              "norms`."]
     return lines
 
 
@@ -205,7 +213,8 @@ def _fig47_section(runs: Runs) -> list[str]:
                  f"RMS of $\\lambda - \\lambda^*$ ($\\lambda^* = {opt:.3f}$) while the ABS is active: five-phase "
                  f"{five:.4f}, two-phase {two:.4f}, {five / two:.1f} times smaller; 5–95 % of the slip "
                  f"{r5[0]:.3f} … {r5[1]:.3f} against {r2[0]:.3f} … {r2[1]:.3f}",
-                 _NO_NUMBER, f"{PREDICTED} (the Table 4.1 settings; none tuned on Fig. 4.7)"), ""]
+                 _NO_NUMBER, f"{PREDICTED} (the Table 4.1 settings; none tuned on Fig. 4.7)"), "",
+            "Tested: `test_aguado2020_fig47_two_phase_smaller_slip_deviation_on_wet_asphalt_at_120_kmh`.", ""]
 
 
 def augmented_floor_claim(runs: Runs) -> tuple[bool, str]:
