@@ -15,6 +15,12 @@ quarter_car, step_halving, continuous_law, six_phase_roads, simulated_return, ch
                   -- the set-ups and runs behind the measured numbers of the observer, ABS and encoder pages
 msirdi_runs, msirdi_wheel, theorem3_reaching, equivalent_injection, identify_theta, MSIRDI_*
                   -- seed 003 Secs. III-B, IV, V: the vehicle-speed observer, the injections, theta_1 and theta_2
+sec34_perturbed, Sec34Perturbed, eccentric_x2, SEC34_PERTURBED_*
+                  -- seed 001 Sec. 3.4, Figs. 3.6-3.9: the observers on an eccentric wheel-speed sensor's x2
+fig4_roads, Fig4Road, fig4_encoder_run, Fig4Encoder, noise_gains, NoiseGains, FIG4_*
+                  -- seed 000 Fig. 4 and Sec. III-E: tracking and pressure per road, the estimate's noise by sign
+fig47_runs, Fig47, FIG47_ROAD, FIG47_SPEED_KMH
+                  -- seed 001 Fig. 4.7: the slip around its optimum with the two- and the five-phase ABS
 """
 from ._adaptive import (ParameterRecorder, SEC34_AUGMENTED_BETAS, SEC34_BETAS, SEC34_CHANGES, SEC34_FINE_H_MAX,
                         SEC34_GAINS, SEC34_GAMMAS, SEC34_H_MAX, SEC34_LARGE_GAMMA, SEC34_MAX_SUBSTEPS, SEC34_QUICK_S,
@@ -25,6 +31,9 @@ from ._adaptive import (ParameterRecorder, SEC34_AUGMENTED_BETAS, SEC34_BETAS, S
 from ._fig67 import (FIG67_BLOCKED_S, FIG67_ENCODER, FIG67_PHASES, FIG67_SMALL_ECCENTRICITY, FIG67_SPEEDS_KMH,
                      FIG67_SPLIT_M_S, HalfWindowLate, excursion, fast_cycles, fast_phase, fig67_open_loop,
                      fig67_scenario, locks, longest_stay)
+from ._fig47 import FIG47_ROAD, FIG47_SPEED_KMH, Fig47, fig47_runs
+from ._hoang_fig4 import (FIG4_NOISE_WINDOW, FIG4_OBSERVERS, FIG4_ROADS, FIG4_SETTLE_S, FIG4_TRACKING_PHASES,
+                          Fig4Encoder, Fig4Road, NoiseGains, fig4_encoder_run, fig4_roads, noise_gains)
 from ._layer_pages import (CHAIN_ABS_SCENARIOS, CHAIN_TSA_WINDOWS, ENCODER_COMMANDS, POINCARE_KPS, POINCARE_SETTING,
                            POINCARE_ZETAS, QUARTER_CAR_BETAS, QUARTER_CAR_OBSERVERS, QUARTER_CAR_STEPS,
                            STEP_HALVING_STEPS_S, TWO_PHASE_START, ChainBraking, chain_abs, chain_braking,
@@ -37,6 +46,8 @@ from ._msirdi import (MSIRDI_COARSE_STEP_S, MSIRDI_DURATION_S, MSIRDI_REACHING_S
                       Identification, InjectionRow, ReachingRow, equivalent_injection, identify_theta, msirdi_torque,
                       msirdi_wheel, theorem3_reaching, MsirdiRuns, msirdi_runs)
 from ._runs import (Runs)
+from ._sec34_perturbed import (SEC34_PERTURBED_ENCODER, SEC34_PERTURBED_OBSERVERS, Sec34Perturbed, eccentric_x2,
+                               sec34_perturbed)
 from ._table61 import (EncoderFit, NOTCH_RAMPS_S, TABLE61_FIT_UNITS, constant_cells,
                        fit_table61_encoder, notch_from_zero, notch_to_tsa_ratios, reference_1024,
                        seed_speed_spread, speed_exponents, speed_spread, tooth_error_bound, trapezoid_spread_bound,
@@ -63,4 +74,8 @@ __all__ = ["CHAIN_ABS_SCENARIOS", "CHAIN_TSA_WINDOWS", "ChainBraking", "ENCODER_
            "reference_1024", "robustness_runs", "sec36_estimators", "sec36_late_excursions", "sec36_settled",
            "sec36_stays", "seed_speed_spread", "segment_rms", "simulated_return", "six_phase_roads", "speed_exponents",
            "speed_spread", "step_halving", "step_halving_controllers", "theorem3_reaching", "tooth_error_bound",
-           "trapezoid_spread_bound", "tsa_orders", "two_phase_start", "upsilon_excitation"]
+           "trapezoid_spread_bound", "tsa_orders", "two_phase_start", "upsilon_excitation",
+           "SEC34_PERTURBED_ENCODER", "SEC34_PERTURBED_OBSERVERS", "Sec34Perturbed", "eccentric_x2", "sec34_perturbed",
+           "FIG4_NOISE_WINDOW", "FIG4_OBSERVERS", "FIG4_ROADS", "FIG4_SETTLE_S", "FIG4_TRACKING_PHASES",
+           "Fig4Encoder", "Fig4Road", "NoiseGains", "fig4_encoder_run", "fig4_roads", "noise_gains",
+           "FIG47_ROAD", "FIG47_SPEED_KMH", "Fig47", "fig47_runs"]

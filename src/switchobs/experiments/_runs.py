@@ -21,6 +21,9 @@ from ._fig67 import (FIG67_ENCODER, FIG67_PHASES, FIG67_SMALL_ECCENTRICITY, FIG6
 from ._msirdi import MsirdiRuns, msirdi_runs
 from ._adaptive import (SEC34_MAX_SUBSTEPS, SEC34_H_MAX, SEC36_FINE_STEP_S, SEC36_H_MAX, SEC36_MAX_SUBSTEPS,
                               SEC36_OBSERVER, ParameterRecorder, StateRecorder, Traced, sec36_estimators)
+from ._fig47 import Fig47, fig47_runs
+from ._hoang_fig4 import Fig4Encoder, fig4_encoder_run
+from ._sec34_perturbed import Sec34Perturbed, sec34_perturbed
 
 __all__ = ["Runs"]
 
@@ -69,6 +72,22 @@ class Runs:
                 res = simulate(sc, estimator=est)
             self._sec34[key] = Traced(res, tuple(obs.state_names), np.array(est.states))
         return self._sec34[key]
+
+    @cached_property
+    def sec34_perturbed(self) -> Sec34Perturbed:
+        """Seed 001 Sec. 3.4's perturbed scenario (Figs. 3.6-3.9): the observers on the exact and the eccentric
+        sensor's ``x2``."""
+        return sec34_perturbed()
+
+    @cached_property
+    def fig4_encoder(self) -> Fig4Encoder:
+        """Seed 000 Fig. 4 with the encoder chain feeding the 4D observer in the loop and the 3D one beside."""
+        return fig4_encoder_run()
+
+    @cached_property
+    def fig47(self) -> Fig47:
+        """Seed 001 Fig. 4.7: the five- and two-phase ABS on wet asphalt from 120 km/h."""
+        return fig47_runs()
 
     @cached_property
     def two_axle_default(self) -> TwoAxleResult:

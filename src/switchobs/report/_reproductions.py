@@ -11,7 +11,8 @@ This module assembles ``docs/reproductions.md``, splices the generated sections
 into the hand-written pages and writes or checks them; the sections come from
 ``_repro_adaptive`` (seed 001 Secs. 3.4, 3.6), ``_repro_abs`` (scenarios, step
 halving, Table 4.1, Figs. 6.7-6.9), ``_repro_encoders`` (Table 6.1, the
-wheel-encoder page) and ``_measured``, the runs they share from :class:`switchobs.experiments.Runs`.
+wheel-encoder page), ``_repro_claims`` (Sec. 3.4's perturbed scenario, Fig. 4 per road and Sec. III-E,
+Fig. 4.7) and ``_measured``, the runs they share from :class:`switchobs.experiments.Runs`.
 """
 
 from __future__ import annotations
@@ -36,6 +37,8 @@ from ._repro_abs import (_fig67_section, _reduction_claim, _scenarios_section, _
                          plot_fig67)
 from ._repro_adaptive import SEC34_GAINS, _sec34_section, _sec36_section
 from ._repro_cells import PREDICTED, ROLE, _fitted, _fmt_s, _pct, _row
+from ._repro_claims import (SEC34_PERTURBED_FIGURE, _fig4_section, _fig47_section, _sec34_perturbed_section,
+                            augmented_floor_claim, gain_norm_claim, plot_sec34_perturbed)
 from ._repro_encoders import (_all_cases_claim, _chain_abs_section, _chain_braking_section, _encoder_cli_section,
                               _encoder_example_section, tsa_orders, _super_twisting_section, _table61_section,
                               _three_stage_section)
@@ -119,6 +122,7 @@ def _seed000(runs: Runs) -> list[str]:
              f"three roads, re-convergence {_fmt_s(reconverged(fig4, '-> hoang-wet'))} (wet) and "
              f"{_fmt_s(reconverged(fig4, '-> hoang-snow'))} (snow); travelled distance {m4.stopping_distance_m:.2f} m "
              "(the generated C observer gives the same to 1e-12, `tests/test_codegen_simulation.py`).", "",
+             *_fig4_section(runs), "",
              "![seed 000 Fig. 4 scenario](abs_hoang_fig4.png)", "",
              "### Table I: exponential approximation (18)", "",
              _row("road", "$\\theta$ seed", "$\\theta$ ours", "largest deviation", ROLE), _row(*["---"] * 5)]
@@ -152,9 +156,11 @@ def _seed001(runs: Runs) -> list[str]:
                   f"m/s³), $T_D = {a1.dwell_time_s:.4f}$ s, regressor PE {a1.regressor_pe:.3f}", "[ABS plants](abs.md)",
                   PREDICTED),
              *_sec34_section(runs),
+             *_sec34_perturbed_section(runs),
              *_sec36_section(runs),
              "### Chapter 4: Table 4.1 and the Poincaré map", "", *_table41_section(runs), "",
              "![Table 4.1](abs_table41.png)", "",
+             *_fig47_section(runs),
              "Poincaré map (4.13)–(4.18) of the two-phase ABS on dry asphalt ($z_{ref} = 8$, $\\chi_a = -0.1$, "
              "$\\chi_b = 0.1$); the seed states a stable limit cycle ($|P'| < 1$) and the sufficient condition "
              "$\\alpha > (\\delta_{up} + 1)/\\kappa$; the analytic map equals the integrated loop to $10^{-6}$ "
@@ -218,7 +224,11 @@ def _contradicted_claims(runs: Runs) -> list[str]:
     found = [name for name, (contradicted, _) in (
         ("Table 4.1, \"a reduction of up to 1.5 m\" at high speeds (Sec. 4.4)", _reduction_claim(runs.table41)),
         ("Table 6.1, \"in all cases\" the three-stage estimator better than the TSA and the notch (Sec. 6.3)",
-         _all_cases_claim(runs))) if contradicted]
+         _all_cases_claim(runs)),
+        ("Sec. 3.4, the augmented-state observer's error \"does not converge to zero even as the perturbation "
+         "vanishes\" (in part)", augmented_floor_claim(runs)),
+        ("Sec. III-E, the noisier estimate explained by $\\lVert K^+\\rVert > \\lVert K^-\\rVert$",
+         gain_norm_claim(runs))) if contradicted]
     return ["Contradicted by our runs, flagged where they stand: " + "; ".join(found) + "."] if found else []
 
 
@@ -311,9 +321,9 @@ def _pages(root: Path, runs: Runs) -> tuple[ReproductionPage, ...]:
 
 
 def write_reproductions(root: str | Path = ".") -> tuple[Path, ...]:
-    """Write :func:`reproduction_pages` under ``root`` (all together or not at all) and the figure of
-    Figs. 6.7-6.9 (``docs/figures/reproduction_fig67.png``, when matplotlib is installed); return the paths
-    written."""
+    """Write :func:`reproduction_pages` under ``root`` (all together or not at all) and the figures of
+    Figs. 6.7-6.9 (``docs/figures/reproduction_fig67.png``) and of Sec. 3.4's perturbed scenario
+    (:data:`SEC34_PERTURBED_FIGURE`), when matplotlib is installed; return the paths written."""
     runs = Runs()
     out = write_files(root, {page.path: page.text for page in _pages(Path(root), runs)},
                       what="the reproduction pages under")
@@ -323,7 +333,9 @@ def write_reproductions(root: str | Path = ".") -> tuple[Path, ...]:
         return out
     figure = Path(root) / "docs/figures/reproduction_fig67.png"
     plot_fig67(runs, figure)
-    return (*out, figure)
+    perturbed = Path(root) / SEC34_PERTURBED_FIGURE
+    plot_sec34_perturbed(runs, perturbed)
+    return (*out, figure, perturbed)
 
 
 def stale_pages(root: str | Path = ".") -> tuple[str, ...]:
