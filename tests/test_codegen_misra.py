@@ -28,7 +28,7 @@ import pytest
 from switchobs.codegen import (GeneratedObserver, compile_sources, generate_observer, generate_super_twisting,
                                generate_vehicle_speed)
 from switchobs.codegen._emit import kernel
-from switchobs.codegen._misra import CATEGORY, deviations, functions, identifier_clashes
+from switchobs.codegen._misra import CATEGORY, deviations, functions, identifier_clashes, misra_findings
 from switchobs.design import design
 from switchobs.model import Model, builtin_model
 from switchobs.spec import METHODS
@@ -38,9 +38,6 @@ SPECTRA = {"abs-xbs3": "-40,-60,-60", "abs-xbs4": "-10,-10,-20,-20", "abs-adapti
 #: every method, and rk4 sub-stepped (--h-max)
 STEPS = [(m, None) for m in METHODS] + [("rk4", "1/100")]
 REALS = ("double", "float")
-_FINDING = re.compile(r"^(.+?):(\d+):(\S+)$")
-
-
 def cppcheck(tmp_path: Path) -> str:
     """cppcheck with a working misra addon (it reports a known violation of rule 14.4), or a loud skip."""
     exe = shutil.which("cppcheck")
@@ -88,18 +85,7 @@ def _label(method: str, h_max: str | None) -> str:
 
 def findings(exe: str, gen: GeneratedObserver, directory: Path) -> list[tuple[str, int, str]]:
     """(file name, line, rule or cppcheck id) of every finding of cppcheck's misra run on ``<prefix>.c``."""
-    gen.write(directory)
-    proc = subprocess.run([exe, "--addon=misra", "--enable=style", "--std=c99", "-q",
-                           "--template={file}:{line}:{id}", f"{gen.prefix}.c"], cwd=directory, capture_output=True,
-                          text=True, check=False, timeout=300)
-    assert proc.returncode == 0, proc.stderr
-    out = []
-    for line in proc.stderr.splitlines():
-        match = _FINDING.match(line)
-        assert match, f"unexpected cppcheck output: {line!r}"
-        name, number, ident = match.groups()
-        out.append((Path(name).name, int(number), ident.removeprefix("misra-c2012-")))
-    return out
+    return misra_findings(exe, gen.prefix, gen.files, directory)
 
 
 def where(gen: GeneratedObserver, file: str, line: int) -> str:

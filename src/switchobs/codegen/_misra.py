@@ -15,11 +15,14 @@ is :data:`CATEGORY`; the tests classify each cppcheck finding with it.
 from __future__ import annotations
 
 import re
+import subprocess
+import tempfile
 from collections.abc import Sequence
 from dataclasses import dataclass
+from pathlib import Path
 
 __all__ = ["CATEGORY", "Deviation", "deviations", "functions", "identifier_clashes", "misra_record",
-           "misra_summary", "CPPCHECK_COMMAND"]
+           "misra_summary", "misra_findings", "CPPCHECK_COMMAND"]
 
 #: How the files are checked (cppcheck 2.10 with its misra addon).
 CPPCHECK_COMMAND = "cppcheck --addon=misra --enable=style --std=c99 {source}"
@@ -192,6 +195,42 @@ def misra_record(prefix: str, header: str, source: str) -> str:
               "pointer arithmetic (18.4), no heap, no recursion, no global mutable state (Dir 4.12, rules 17.2, "
               "8.9).", ""]
     return "\n".join(lines)
+
+
+_FINDING = re.compile(r"^(.+?):(\d+):(\S+)$")
+
+
+def misra_findings(cppcheck: str, prefix: str, files: dict[str, str],
+                   directory: Path | None = None) -> list[tuple[str, int, str]]:
+    """(file name, line, guideline or cppcheck id) of every finding of cppcheck's misra addon on ``<prefix>.c``
+    (:data:`CPPCHECK_COMMAND`; the header is analysed through its ``#include``).
+
+    ``files`` are the generated files by name, written to ``directory`` (a temporary one by default) and checked
+    there with the executable ``cppcheck``.
+
+    Raises
+    ------
+    RuntimeError
+        cppcheck failed or printed a line that is not a finding.
+    """
+    with tempfile.TemporaryDirectory(prefix="switchobs-misra-") as tmp:
+        where = Path(tmp) if directory is None else directory
+        where.mkdir(parents=True, exist_ok=True)
+        for name, text in files.items():
+            (where / name).write_text(text, encoding="utf-8")
+        proc = subprocess.run([cppcheck, "--addon=misra", "--enable=style", "--std=c99", "-q",
+                               "--template={file}:{line}:{id}", f"{prefix}.c"], cwd=where, capture_output=True,
+                              text=True, check=False, timeout=300)
+    if proc.returncode != 0:
+        raise RuntimeError(f"cppcheck failed on {prefix}.c: {proc.stderr.strip()[:300]}")
+    out = []
+    for line in proc.stderr.splitlines():
+        match = _FINDING.match(line)
+        if not match:
+            raise RuntimeError(f"unexpected cppcheck output: {line!r}")
+        name, number, ident = match.groups()
+        out.append((Path(name).name, int(number), ident.removeprefix("misra-c2012-")))
+    return out
 
 
 def misra_summary(prefix: str, header: str, source: str) -> list[str]:

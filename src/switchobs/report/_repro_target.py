@@ -11,6 +11,7 @@ properties, exact for a given Frama-C.
 
 from __future__ import annotations
 
+import collections
 import shutil
 import subprocess
 from typing import TYPE_CHECKING
@@ -125,7 +126,13 @@ ROWS = (("abs-xbs3", "radau3", 100.0, 100.0, "float", "cortex-m4f"),
 
 def _on_the_target_section(runs: Runs) -> list[str]:  # noqa: ARG001 - the runs of the other sections
     from ..codegen import TARGETS, CObserver, measure_footprint, run_pil   # casadi: not for `reproduce --help`
+    from ..codegen._misra import CATEGORY, CPPCHECK_COMMAND, misra_findings
     from ..observers import xbs3_observer, xbs4_observer
+
+    cppcheck = shutil.which("cppcheck")
+    if cppcheck is None:
+        raise RuntimeError("cppcheck is not installed: the MISRA column of 'On the target' cannot be made "
+                           "(as root on Debian: make cc-tools)")
 
     make = {"abs-xbs3": xbs3_observer, "abs-xbs4": xbs4_observer}
     table, compiler, stack_lines, described = [], "", [], ""
@@ -137,9 +144,13 @@ def _on_the_target_section(runs: Runs) -> list[str]:  # noqa: ARG001 - the runs 
         f, pil = measure_footprint(gen, target), run_pil(gen, target, rec.rows, rec.dt, rec.x0)
         cmp = compare_with_reference(pil, ref, rec.rows, rec.dt, rec.x0)
         compiler = f.compiler
+        kinds = collections.Counter(CATEGORY.get(rule, "other") for _, _, rule in
+                                    misra_findings(cppcheck, gen.prefix, gen.files))
+        misra = " / ".join(str(kinds[k]) for k in ("Mandatory", "Required", "Advisory")) + \
+            (f" (and {kinds['other']} other cppcheck findings)" if kinds["other"] else "")
         table.append([model, method, real, target, f.text_bytes, f.data_bytes + f.bss_bytes, f.worst("_step"),
                       f.worst("_run"), f"{pil.instructions_per_step:.0f}", f"{pil.identical_rows}/{pil.rows}",
-                      f"{cmp.max_relative_error:.1e} (≤ {cmp.tolerance:g})"])
+                      f"{cmp.max_relative_error:.1e} (≤ {cmp.tolerance:g})", misra])
         if model == "abs-xbs3" and target == "cortex-m4f":
             stack_lines = [f"`{s.function}` {s.frame_bytes} B own, {s.worst_bytes} B worst" for s in f.stack]
     qemu = subprocess.run([str(shutil.which("qemu-system-arm")), "--version"], capture_output=True, text=True,
@@ -150,7 +161,12 @@ def _on_the_target_section(runs: Runs) -> list[str]:  # noqa: ARG001 - the runs 
         + "; ".join(f"{n}: `{v}`" for n, v in flags.items()) + ".  The record: " + described + ".",
         "",
         md_table(["model", "method", "real", "target", "text B", "data + bss B", "stack `_step` B", "stack `_run` B",
-                  "instructions per step", "rows bit-identical to the host", "vs Python reference"], table),
+                  "instructions per step", "rows bit-identical to the host", "vs Python reference",
+                  "MISRA mandatory / required / advisory"], table),
+        "",
+        "MISRA: findings of cppcheck's misra addon (`" + CPPCHECK_COMMAND.format(source="<prefix>.c")
+        + "`) on the generated files; every advisory one is listed with its reason in `<prefix>_misra.md` "
+        "(see [MISRA C:2012](#misra-c2012)).",
         "",
         "Per function (abs-xbs3, float, cortex-m4f): " + "; ".join(stack_lines) + ".",
     ]
