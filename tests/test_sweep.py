@@ -132,6 +132,64 @@ def test_a_resumed_sweep_gives_the_same_file_as_an_uninterrupted_one(tmp_path):
     assert killed.read_bytes() == whole.read_bytes()
 
 
+def test_a_parquet_results_file_holds_the_json_lines_rows_and_resumes_after_a_kill(tmp_path):
+    pa = pytest.importorskip("pyarrow", reason="pyarrow is not installed: Parquet results NOT checked")
+    import pyarrow.parquet as pq
+
+    cases = [*QUICK, CertifyCase(model="abs-xbs3")]
+    lines = tmp_path / "rows.jsonl"
+    run_sweep(cases, path=lines, scheduler="none")
+    rows = [json.loads(line) for line in lines.read_text().splitlines()]
+    table_path = tmp_path / "rows.parquet"
+    sweep = run_sweep(cases, path=table_path, scheduler="none")
+    assert sweep.path == table_path and not _engine._journal(table_path).exists()
+    assert [r.to_json() for r in read_results(table_path)] == rows
+    table = pq.read_table(table_path)
+    # typed columns for analysis: the case's and the metrics' scalar fields, None where a kind has none
+    assert table.column("case_id").to_pylist() == [r["case_id"] for r in rows]
+    assert table.schema.field("case.speed_kmh").type == pa.float64()
+    assert table.column("metrics.stopping_distance_m").to_pylist() == [
+        r["metrics"].get("stopping_distance_m") for r in rows]
+    assert table.column("case.changes").to_pylist()[0] == json.dumps(rows[0]["case"]["changes"])
+    with pytest.raises(SimulationError, match="exists; resume it"):
+        run_sweep(cases, path=table_path, scheduler="none")
+    # killed after two cases, the second row torn: the journal holds what a resume needs, no table yet
+    killed = tmp_path / "killed.parquet"
+    journal = _engine._journal(killed)
+    journal.write_text(lines.read_text().splitlines(keepends=True)[0] + lines.read_text().splitlines()[1][:50])
+    with pytest.raises(SimulationError, match="killed.parquet.rows.jsonl' exists; resume it"):
+        run_sweep(cases, path=killed, scheduler="none")
+    resumed = run_sweep(cases, path=killed, resume=True, scheduler="none")
+    assert resumed.resumed == 1 and not journal.exists()
+    assert pq.read_table(killed).equals(table)
+    # a table already written and a resume: nothing runs, the same table
+    again = run_sweep(cases, path=killed, resume=True, scheduler="none")
+    assert again.resumed == len(cases) and pq.read_table(killed).equals(table)
+
+
+def test_cli_sweep_out_parquet(tmp_path, capsys, monkeypatch):
+    pytest.importorskip("pyarrow", reason="pyarrow is not installed: sweep --out *.parquet NOT checked")
+    monkeypatch.chdir(tmp_path)
+    spec = _write_spec(tmp_path, 'name = "tiny"\n[base]\nspeed_kmh = 30.0\n[grid]\nroad = ["dry-asphalt", "snow"]\n')
+    assert main(["sweep", str(spec), "--scheduler", "none", "--out", "r.parquet"]) == 0
+    assert "rows in r.parquet" in capsys.readouterr().out
+    assert [r.case.road for r in read_results(tmp_path / "r.parquet")] == ["dry-asphalt", "snow"]
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["r.parquet", "spec.toml"]
+
+
+def test_a_parquet_results_file_without_pyarrow_is_refused_before_any_case(tmp_path, monkeypatch, capsys):
+    monkeypatch.setitem(sys.modules, "pyarrow", None)
+    monkeypatch.setitem(sys.modules, "pyarrow.parquet", None)
+    with pytest.raises(PrerequisiteError, match="Parquet results need pyarrow"):
+        run_sweep(QUICK, path=tmp_path / "rows.parquet", scheduler="none")
+    assert list(tmp_path.iterdir()) == []
+    (tmp_path / "not.parquet").write_text("case_id,status\n")
+    monkeypatch.undo()
+    pytest.importorskip("pyarrow", reason="pyarrow is not installed: a foreign Parquet file NOT checked")
+    with pytest.raises(SimulationError, match="not a readable Parquet file"):
+        read_results(tmp_path / "not.parquet")
+
+
 def test_pareto_front_and_tuning_pick_a_non_dominated_pair():
     assert pareto_front([(1.0, 5.0), (2.0, 2.0), (3.0, 3.0), (math.inf, 0.1)]) == [0, 1]
 
