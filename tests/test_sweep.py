@@ -12,6 +12,7 @@ import signal
 import sys
 import threading
 import time
+from dataclasses import replace
 from pathlib import Path
 
 import pytest
@@ -190,6 +191,30 @@ def test_a_parquet_results_file_without_pyarrow_is_refused_before_any_case(tmp_p
         read_results(tmp_path / "not.parquet")
 
 
+def test_case_observers_travel_as_source_and_are_used_where_installed(monkeypatch):
+    import pickle
+
+    from switchobs.codegen import CObserver
+    from switchobs.loop import EstimatorSpec, _factory, install_observers, xbs_estimator
+    from switchobs.plants import QuarterCar
+
+    monkeypatch.setattr(_factory, "_INSTALLED", {})
+    case = BrakingCase(observer="xbs4", beta1=80.0, beta2=120.0, impl="c", method="radau3")
+    built = _run.case_observers([case, replace(case, speed_kmh=99.0), replace(case, impl="python"),
+                                 BrakingCase()])
+    assert len(built) == 1 and isinstance(next(iter(built.values())), CObserver)  # one setting, C only
+    data = pickle.dumps(built)                     # what Client.run hands a worker: C source, no binary
+    assert b"\x7fELF" not in data and b"xbs4_step" in data
+    shipped = pickle.loads(data)
+    assert install_observers(shipped) == 1
+    spec = EstimatorSpec("xbs4", beta=80.0, beta2=120.0, impl="c", method="radau3")
+    est = xbs_estimator(spec, QuarterCar(load_n=case.load_n), case.road)
+    assert est.observer is next(iter(shipped.values()))
+    with_installed = run_case(case).to_json()
+    monkeypatch.setattr(_factory, "_INSTALLED", {})
+    assert with_installed == run_case(case).to_json() and with_installed["status"] == "stopped"
+
+
 def test_pareto_front_and_tuning_pick_a_non_dominated_pair():
     assert pareto_front([(1.0, 5.0), (2.0, 2.0), (3.0, 3.0), (math.inf, 0.1)]) == [0, 1]
 
@@ -315,6 +340,21 @@ def _bit_identical_on_a_worker(client):
     assert remote.results[0].metrics["xbs_rms"] == local[0].metrics["xbs_rms"]  # the same float, not close
 
 
+def _workers_take_the_c_observers_built_here(client):
+    """The warm-up: the C observer is built in this process and installed on both workers, whose cases then
+    give the in-process numbers (the same C source, compiled or found in the worker's own cache)."""
+    from switchobs.loop import _factory
+
+    case = BrakingCase(road="wet-asphalt", speed_kmh=40.0, observer="xbs4", beta1=70.0, beta2=90.0, impl="c",
+                       method="radau3", encoder_ppr=60, stop_kmh=10.0, duration_s=0.6)
+    remote = run_sweep([case, replace(case, speed_kmh=45.0)], scheduler=client, batch_size=1)
+    installed = client.run(lambda: sorted(k[:3] for k in _factory._INSTALLED))
+    assert len(installed) == 2 and all(("xbs4", 70.0, 90.0) in keys for keys in installed.values())
+    local = [run_case(c) for c in (case, replace(case, speed_kmh=45.0))]
+    assert [r.to_json() for r in remote.results] == [r.to_json() for r in local]
+    assert remote.results[0].ok and remote.results[0].metrics["xbs_rms"] is not None
+
+
 def _table41_through_the_engine(client):
     spec = load_sweep_spec(ROOT / "examples" / "sweep_table41.toml")
     cases = [c for c in spec.cases if c.speed_kmh in (60.0, 120.0) and c.road in ("dry-asphalt", "wet-cobblestones")]
@@ -364,6 +404,7 @@ def test_on_one_dask_local_cluster(tmp_path):
     with distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=True, dashboard_address=":0",
                                   silence_logs=logging.ERROR) as cluster, distributed.Client(cluster) as client:
         _bit_identical_on_a_worker(client)
+        _workers_take_the_c_observers_built_here(client)
         _table41_through_the_engine(client)
         _a_killed_worker_does_not_lose_the_sweep(client, tmp_path / "rows.jsonl")
 

@@ -23,6 +23,14 @@ case has its row the table is written atomically and the journal removed.  The t
 ``case_id``, ``status``, ``error`` and the scalar fields of the case and the metrics as typed columns
 ``case.NAME`` and ``metrics.NAME`` (a list, or a name whose values mix types, as JSON text) for analysis.
 
+Warm workers: before the first batch goes out, this process builds every C observer of the cases once
+(the symbolic design and the C generation take about a second each, a case some tens of milliseconds) and
+every worker takes them (``Client.run``) with the imports of the simulation stack, so no worker repeats
+them before its first case.  What travels is each observer's generated C source, never a binary: a
+worker compiles it into, or finds it verified in, its own per-user compiled-code cache
+(:func:`switchobs.codegen.load_library`); a worker that joins later, or whose warm-up fails, builds what
+its cases need itself.
+
 A case's warnings (numpy's overflow in a diverging run) are not printed: its row reports the outcome
 (non-finite numbers are null, the status says why).  In this process and on the local cluster, what C code
 prints while a case runs (a solver's diagnostics) goes nowhere either, so that ``--json`` output stays
@@ -54,7 +62,7 @@ from .._validate import check_work
 from ..exceptions import PrerequisiteError, SimulationError
 from ._case import BrakingCase, Case
 from ._grid import check_case_count
-from ._run import STATUS_ERROR, STATUS_LOST, CaseResult, run_case
+from ._run import STATUS_ERROR, STATUS_LOST, CaseResult, case_observers, run_case
 
 __all__ = ["run_sweep", "SweepResult", "read_results", "SCHEDULER_NONE", "SCHEDULER_LOCAL", "dask_client",
            "check_sweep_size", "PARQUET_ENDINGS"]
@@ -565,6 +573,7 @@ def _run_on_dask(todo: list[Case], take: Any, *, scheduler: Any, workers: int | 
     try:
         n = len(client.scheduler_info().get("workers", {})) or workers or 1
         batches = _batches(todo, n, batch_size)
+        _warm_workers(client, todo)
         progress(f"sweep: {len(todo)} cases in {len(batches)} batches on {engine}")
         # the local cluster's workers run one case at a time: their C output can be silenced (module notes)
         futures = client.map(_run_batch, batches, series=series, quiet=local, pure=False)
@@ -580,3 +589,22 @@ def _run_on_dask(todo: list[Case], take: Any, *, scheduler: Any, workers: int | 
     finally:
         close()
     return engine
+
+
+def _warm_workers(client: Any, cases: Sequence[Case]) -> None:
+    """The cases' C observers built here once and installed on every worker, with the stack's imports
+    (module notes).  A worker whose warm-up fails is left as it is: its cases build what they need."""
+    built = case_observers(cases)
+    progress(f"sweep: warming the workers ({len(built)} C observer{'s' if len(built) != 1 else ''} built here)")
+    try:
+        client.run(_warm_worker, built, on_error="return")
+    except Exception:  # noqa: BLE001 - a warm-up that cannot be sent costs time, not results
+        pass
+
+
+def _warm_worker(built: dict[Any, Any]) -> int:
+    """On a worker: the simulation stack imported and the observers ``built`` installed (their number)."""
+    from ..loop import install_observers
+    from ..plants import simulate  # noqa: F401 - the import a first case would pay
+
+    return install_observers(built)
