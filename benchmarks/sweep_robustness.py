@@ -159,8 +159,9 @@ def main() -> None:
              f"for the processors; the CPU time is the work."]
     with tempfile.TemporaryDirectory() as tmp:
         small, small_cases = small_study(Path(tmp), 5 if args.quick else 50, 1 if args.quick else args.repeats)
-    notes.append(f"The {small_cases}-case study: wall time from the command's start to its exit, the cluster's "
-                 "processes started before it and stopped after; the cluster row includes building the four C "
+    notes.append(f"The {small_cases}-case study: wall time from the command's start to its exit, median [min–max] "
+                 f"of {1 if args.quick else args.repeats} runs of each, interleaved; the cluster's processes are "
+                 "started before each run and stopped after it; the cluster row includes building the four C "
                  "observers in the client and handing them to the workers.")
     publish("sweep_robustness",
             "The Monte-Carlo robustness study on the default local Dask cluster (one single-threaded worker "
