@@ -15,7 +15,8 @@ Then a small study on a real cluster: the spec with 50 draws per gain pair (200 
 started before it (``dask scheduler`` and two ``dask worker --nthreads 1``, fresh for each run: their first
 case would import the stack and build the four observers), wall time of the whole ``switchobs`` process,
 median [min–max] of ``--repeats`` runs.  The workers are warmed once per study: the client builds the C
-observers and hands them to every worker before the first batch (``switchobs.sweep`` module notes).
+observers (one task each, spread over the workers) and hands them to every worker before the first batch
+(``switchobs.sweep`` module notes).
 
 Run: ``python benchmarks/sweep_robustness.py [--quick] [--count N] [--sample K] [--repeats R]`` (``--count``:
 draws per gain pair instead of the spec's 250; ``--quick``: 2 draws, 4 sampled cases, a 20-case cluster
@@ -85,23 +86,28 @@ def small_study(tmp: Path, count: int, repeats: int) -> tuple[list[str], int]:
     spec.write_text(re.sub(r"(?m)^count = \d+", f"count = {count}", SPEC.read_text()), encoding="utf-8")
     cases = len(load_sweep_spec(spec).cases)
     walls: dict[str, list[float]] = {"none": [], "cluster": []}
+    cpus: dict[str, list[float]] = {"none": [], "cluster": []}
     for _ in range(repeats):                     # interleaved: a change of the machine's load hits both
         for where in ("none", "cluster"):
             out = tmp / f"small-{where}.jsonl"
             out.unlink(missing_ok=True)
+            before = resource.getrusage(resource.RUSAGE_CHILDREN)
             with dask_cluster(tmp) if where == "cluster" else _nothing() as address:
                 command = ["sweep", str(spec), "--out", str(out), "-q", "--scheduler", address or "none"]
                 t0 = time.perf_counter()
                 proc = subprocess.run([switchobs_exe(), *command], capture_output=True, text=True, check=False)
                 walls[where].append(time.perf_counter() - t0)
+            after = resource.getrusage(resource.RUSAGE_CHILDREN)   # the cluster's processes reaped by now
+            cpus[where].append((after.ru_utime - before.ru_utime) + (after.ru_stime - before.ru_stime))
             if proc.returncode != 0:
                 raise SystemExit(f"switchobs {' '.join(command)} failed ({proc.returncode}): {proc.stderr.strip()}")
-    none, cluster = Stats(tuple(walls["none"])), Stats(tuple(walls["cluster"]))
-    rows = ["| the spec with `count = %d` draws per pair (%d cases) | wall, whole process [s] | cases/s |" % (count, cases),
-            "| --- | ---: | ---: |",
-            f"| `--scheduler none` (in-process) | {none.show()} | {number(cases / none.median)} |",
+    (none, cluster), (cpu_none, cpu_cluster) = ((Stats(tuple(d["none"])), Stats(tuple(d["cluster"])))
+                                                for d in (walls, cpus))
+    rows = [f"| the spec with `count = {count}` draws per pair ({cases} cases) | wall, whole process [s] | cases/s "
+            "| CPU, all processes [s] |", "| --- | ---: | ---: | ---: |",
+            f"| `--scheduler none` (in-process) | {none.show()} | {number(cases / none.median)} | {cpu_none.show()} |",
             f"| `--scheduler tcp://…`: `dask scheduler`, 2 × `dask worker --nthreads 1` | {cluster.show()} "
-            f"| {number(cases / cluster.median)} |"]
+            f"| {number(cases / cluster.median)} | {cpu_cluster.show()} |"]
     return rows, cases
 
 
@@ -162,7 +168,9 @@ def main() -> None:
     notes.append(f"The {small_cases}-case study: wall time from the command's start to its exit, median [min–max] "
                  f"of {1 if args.quick else args.repeats} runs of each, interleaved; the cluster's processes are "
                  "started before each run and stopped after it; the cluster row includes building the four C "
-                 "observers in the client and handing them to the workers.")
+                 "observers (one task each on the workers) and handing them to every worker. CPU: the command's, "
+                 "and for the cluster also its scheduler's and workers' from their start to their stop (their "
+                 "start-up included).")
     publish("sweep_robustness",
             "The Monte-Carlo robustness study on the default local Dask cluster (one single-threaded worker "
             "process per core), as one whole `switchobs` process from start to exit (interpreter start-up, "

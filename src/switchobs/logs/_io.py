@@ -265,7 +265,7 @@ class Log:
         t = self._masters.get(group)
         fill_t = t is None
         if t is None:
-            t = self._masters[group] = np.empty(total)
+            t = np.empty(total)
         at = 0
         try:
             # asammdf hands the channel fragment by fragment of the group's data blocks
@@ -291,6 +291,7 @@ class Log:
         if at != total:
             raise LogError(f"{what}: channel {name!r} of {str(self.path)!r} holds {at} of the {total} samples its "
                            "group declares")
+        self._masters[group] = t            # complete: the group's other channels share it
         unit = str(self._mdf.groups[group].channels[index].unit or "")
         return Channel(name, t, values, present, unit)
 

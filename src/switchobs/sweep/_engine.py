@@ -23,10 +23,10 @@ case has its row the table is written atomically and the journal removed.  The t
 ``case_id``, ``status``, ``error`` and the scalar fields of the case and the metrics as typed columns
 ``case.NAME`` and ``metrics.NAME`` (a list, or a name whose values mix types, as JSON text) for analysis.
 
-Warm workers: before the first batch goes out, this process builds every C observer of the cases once
-(the symbolic design and the C generation take about a second each, a case some tens of milliseconds) and
-every worker takes them (``Client.run``) with the imports of the simulation stack, so no worker repeats
-them before its first case.  What travels is each observer's generated C source, never a binary: a
+Warm workers: before the first batch goes out, every C observer of the cases is built once (the symbolic
+design and the C generation take about a second each, a case some tens of milliseconds), one build task
+per observer spread over the workers, and every worker takes them all (``Client.run``) with the imports of
+the simulation stack, so no worker repeats a design before its first case.  What travels is each observer's generated C source, never a binary: a
 worker compiles it into, or finds it verified in, its own per-user compiled-code cache
 (:func:`switchobs.codegen.load_library`); a worker that joins later, or whose warm-up fails, builds what
 its cases need itself.
@@ -62,7 +62,7 @@ from .._validate import check_work
 from ..exceptions import PrerequisiteError, SimulationError
 from ._case import BrakingCase, Case
 from ._grid import check_case_count
-from ._run import STATUS_ERROR, STATUS_LOST, CaseResult, case_observers, run_case
+from ._run import STATUS_ERROR, STATUS_LOST, CaseResult, build_observers, observer_settings, run_case
 
 __all__ = ["run_sweep", "SweepResult", "read_results", "SCHEDULER_NONE", "SCHEDULER_LOCAL", "dask_client",
            "check_sweep_size", "PARQUET_ENDINGS"]
@@ -592,12 +592,23 @@ def _run_on_dask(todo: list[Case], take: Any, *, scheduler: Any, workers: int | 
 
 
 def _warm_workers(client: Any, cases: Sequence[Case]) -> None:
-    """The cases' C observers built here once and installed on every worker, with the stack's imports
-    (module notes).  A worker whose warm-up fails is left as it is: its cases build what they need."""
-    built = case_observers(cases)
-    progress(f"sweep: warming the workers ({len(built)} C observer{'s' if len(built) != 1 else ''} built here)")
+    """The cases' C observers built once, one task each on the workers, and installed on every worker with
+    the stack's imports (module notes).  A build or a warm-up that fails is left out: the cases concerned
+    build what they need."""
+    settings = observer_settings(cases)
+    if not settings:
+        return
+    progress(f"sweep: warming the workers ({len(settings)} C observer{'s' if len(settings) != 1 else ''})")
+    built: dict[Any, Any] = {}
     try:
-        client.run(_warm_worker, built, on_error="return")
+        futures = client.map(build_observers, [[s] for s in settings], pure=False)
+        for future in futures:
+            try:
+                built.update(future.result())
+            except Exception:  # noqa: BLE001 - a build that fails here fails again in its cases, as a row
+                pass
+        if built:
+            client.run(_warm_worker, built, on_error="return")
     except Exception:  # noqa: BLE001 - a warm-up that cannot be sent costs time, not results
         pass
 
