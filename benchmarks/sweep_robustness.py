@@ -14,8 +14,8 @@ Then a small study on a real cluster: the spec with 50 draws per gain pair (200 
 ``switchobs sweep ... --scheduler none`` against the same command on a cluster of separate processes
 started before it (``dask scheduler`` and two ``dask worker --nthreads 1``, fresh for each run: their first
 case would import the stack and build the four observers), wall time of the whole ``switchobs`` process,
-median [min–max] of ``--repeats`` runs.  The workers are warmed once per study: the client builds the C
-observers (one task each, spread over the workers) and hands them to every worker before the first batch
+median [min–max] of ``--repeats`` runs.  The workers are warmed once per study: the C observers are built
+one task each, spread over the workers, and handed to every worker before the first batch
 (``switchobs.sweep`` module notes).
 
 Run: ``python benchmarks/sweep_robustness.py [--quick] [--count N] [--sample K] [--repeats R]`` (``--count``:
