@@ -174,9 +174,9 @@ def main() -> None:
     publish("sweep_robustness",
             "The Monte-Carlo robustness study on the default local Dask cluster (one single-threaded worker "
             "process per core), as one whole `switchobs` process from start to exit (interpreter start-up, "
-            "cluster start, the observer's design and C build on each worker, the cases, the tables, plots "
-            "and tuning), run once; the encoder chain runs over the compiled plant's run afterwards "
-            "(`switchobs.plants.simulate`, replay).",
+            "cluster start, the C observers' design and build, once each on the workers and then handed to "
+            "every worker, the cases, the tables, plots and tuning), run once; the encoder chain runs over the "
+            "compiled plant's run afterwards (`switchobs.plants.simulate`, replay).",
             [table, small], notes, write=not args.quick)
 
 
