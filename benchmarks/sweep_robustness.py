@@ -10,22 +10,35 @@ one whole ``switchobs`` process from start to exit.  Measured:
 * the CPU time per case, in-process on the first cases of the study (``run_case``, ``time.process_time``,
   after one warm-up case that designs and compiles the observer), median [min–max].
 
-Run: ``python benchmarks/sweep_robustness.py [--quick] [--count N] [--sample K]`` (``--count``: draws per
-gain pair instead of the spec's 250; ``--quick``: 2 draws, 4 sampled cases, printed and not written).
+Then a small study on a real cluster: the spec with 50 draws per gain pair (200 cases, four C observers),
+``switchobs sweep ... --scheduler none`` against the same command on a cluster of separate processes
+started before it (``dask scheduler`` and two ``dask worker --nthreads 1``, fresh for each run: their first
+case would import the stack and build the four observers), wall time of the whole ``switchobs`` process,
+median [min–max] of ``--repeats`` runs.  The workers are warmed once per study: the C observers are built
+one task each, spread over the workers, and handed to every worker before the first batch
+(``switchobs.sweep`` module notes).
+
+Run: ``python benchmarks/sweep_robustness.py [--quick] [--count N] [--sample K] [--repeats R]`` (``--count``:
+draws per gain pair instead of the spec's 250; ``--quick``: 2 draws, 4 sampled cases, a 20-case cluster
+study once, printed and not written).
 """
 
 from __future__ import annotations
 
 import argparse
+import json
 import os
 import re
 import resource
 import subprocess
+import sys
 import tempfile
 import time
+from collections.abc import Iterator
+from contextlib import contextmanager
 from pathlib import Path
 
-from _harness import Stats, cpu, number, publish, switchobs_exe
+from _harness import MIN_REPEATS, Stats, cpu, number, publish, switchobs_exe
 
 from switchobs.sweep import load_sweep_spec, read_results, run_case
 
@@ -33,11 +46,82 @@ ROOT = Path(__file__).resolve().parents[1]
 SPEC = ROOT / "examples" / "sweep_robustness.toml"
 
 
+@contextmanager
+def dask_cluster(workdir: Path, workers: int = 2) -> Iterator[str]:
+    """A Dask scheduler and ``workers`` single-threaded workers as separate processes; yields the address."""
+    dask = str(Path(sys.executable).with_name("dask"))
+    info = workdir / "scheduler.json"
+    info.unlink(missing_ok=True)
+    quiet = {"stdout": subprocess.DEVNULL, "stderr": subprocess.DEVNULL, "cwd": workdir}
+    procs = [subprocess.Popen([dask, "scheduler", "--port", "0", "--dashboard-address", ":0",
+                               "--scheduler-file", str(info)], **quiet)]
+    try:
+        deadline = time.monotonic() + 60
+        while not info.exists():
+            if time.monotonic() > deadline:
+                raise SystemExit("the dask scheduler did not start within 60 s")
+            time.sleep(0.1)
+        time.sleep(0.2)                            # the file is written whole, then read
+        address = json.loads(info.read_text())["address"]
+        procs += [subprocess.Popen([dask, "worker", address, "--nthreads", "1", "--nworkers", "1",
+                                    "--dashboard-address", ":0"], **quiet) for _ in range(workers)]
+        import distributed
+
+        with distributed.Client(address, timeout="60s") as client:
+            client.wait_for_workers(workers, timeout=120)
+        yield address
+    finally:
+        for proc in reversed(procs):
+            proc.terminate()
+        for proc in procs:
+            try:
+                proc.wait(timeout=30)
+            except subprocess.TimeoutExpired:
+                proc.kill()
+
+
+def small_study(tmp: Path, count: int, repeats: int) -> tuple[list[str], int]:
+    """Rows of the in-process / cluster table for the spec with ``count`` draws per pair, and its cases."""
+    spec = tmp / f"robustness-{count}.toml"
+    spec.write_text(re.sub(r"(?m)^count = \d+", f"count = {count}", SPEC.read_text()), encoding="utf-8")
+    cases = len(load_sweep_spec(spec).cases)
+    walls: dict[str, list[float]] = {"none": [], "cluster": []}
+    cpus: dict[str, list[float]] = {"none": [], "cluster": []}
+    for _ in range(repeats):                     # interleaved: a change of the machine's load hits both
+        for where in ("none", "cluster"):
+            out = tmp / f"small-{where}.jsonl"
+            out.unlink(missing_ok=True)
+            before = resource.getrusage(resource.RUSAGE_CHILDREN)
+            with dask_cluster(tmp) if where == "cluster" else _nothing() as address:
+                command = ["sweep", str(spec), "--out", str(out), "-q", "--scheduler", address or "none"]
+                t0 = time.perf_counter()
+                proc = subprocess.run([switchobs_exe(), *command], capture_output=True, text=True, check=False)
+                walls[where].append(time.perf_counter() - t0)
+            after = resource.getrusage(resource.RUSAGE_CHILDREN)   # the cluster's processes reaped by now
+            cpus[where].append((after.ru_utime - before.ru_utime) + (after.ru_stime - before.ru_stime))
+            if proc.returncode != 0:
+                raise SystemExit(f"switchobs {' '.join(command)} failed ({proc.returncode}): {proc.stderr.strip()}")
+    (none, cluster), (cpu_none, cpu_cluster) = ((Stats(tuple(d["none"])), Stats(tuple(d["cluster"])))
+                                                for d in (walls, cpus))
+    rows = [f"| the spec with `count = {count}` draws per pair ({cases} cases) | wall, whole process [s] | cases/s "
+            "| CPU, all processes [s] |", "| --- | ---: | ---: | ---: |",
+            f"| `--scheduler none` (in-process) | {none.show()} | {number(cases / none.median)} | {cpu_none.show()} |",
+            f"| `--scheduler tcp://…`: `dask scheduler`, 2 × `dask worker --nthreads 1` | {cluster.show()} "
+            f"| {number(cases / cluster.median)} | {cpu_cluster.show()} |"]
+    return rows, cases
+
+
+@contextmanager
+def _nothing() -> Iterator[None]:
+    yield None
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--quick", action="store_true", help="2 draws per pair, 4 sampled cases; not written")
     parser.add_argument("--count", type=int, help="draws per gain pair (default: the spec's)")
     parser.add_argument("--sample", type=int, default=20, help="cases timed in-process (default 20)")
+    parser.add_argument("--repeats", type=int, default=MIN_REPEATS, help="runs of the small study on each engine")
     args = parser.parse_args()
     count = 2 if args.quick else args.count
     sample = 4 if args.quick else args.sample
@@ -79,13 +163,21 @@ def main() -> None:
              f"cases of the study ({number(sum(per_case.values) / len(per_case.values))} s on average). On a "
              f"machine shared with other jobs (load average above its cores) the wall time measures the queue "
              f"for the processors; the CPU time is the work."]
+    with tempfile.TemporaryDirectory() as tmp:
+        small, small_cases = small_study(Path(tmp), 5 if args.quick else 50, 1 if args.quick else args.repeats)
+    notes.append(f"The {small_cases}-case study: wall time from the command's start to its exit, median [min–max] "
+                 f"of {1 if args.quick else args.repeats} runs of each, interleaved; the cluster's processes are "
+                 "started before each run and stopped after it; the cluster row includes building the four C "
+                 "observers (one task each on the workers) and handing them to every worker. CPU: the command's, "
+                 "and for the cluster also its scheduler's and workers' from their start to their stop (their "
+                 "start-up included).")
     publish("sweep_robustness",
             "The Monte-Carlo robustness study on the default local Dask cluster (one single-threaded worker "
             "process per core), as one whole `switchobs` process from start to exit (interpreter start-up, "
-            "cluster start, the observer's design and C build on each worker, the cases, the tables, plots "
-            "and tuning), run once; the encoder chain runs over the compiled plant's run afterwards "
-            "(`switchobs.plants.simulate`, replay).",
-            [table], notes, write=not args.quick)
+            "cluster start, the C observers' design and build, once each on the workers and then handed to "
+            "every worker, the cases, the tables, plots and tuning), run once; the encoder chain runs over the "
+            "compiled plant's run afterwards (`switchobs.plants.simulate`, replay).",
+            [table, small], notes, write=not args.quick)
 
 
 if __name__ == "__main__":

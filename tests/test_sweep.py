@@ -12,6 +12,7 @@ import signal
 import sys
 import threading
 import time
+from dataclasses import replace
 from pathlib import Path
 
 import pytest
@@ -130,6 +131,88 @@ def test_a_resumed_sweep_gives_the_same_file_as_an_uninterrupted_one(tmp_path):
     resumed = run_sweep(cases, path=killed, resume=True, scheduler="none")
     assert resumed.resumed == 3 and resumed.results[-1].metrics["recovery_s"]
     assert killed.read_bytes() == whole.read_bytes()
+
+
+def test_a_parquet_results_file_holds_the_json_lines_rows_and_resumes_after_a_kill(tmp_path):
+    pa = pytest.importorskip("pyarrow", reason="pyarrow is not installed: Parquet results NOT checked")
+    import pyarrow.parquet as pq
+
+    cases = [*QUICK, CertifyCase(model="abs-xbs3")]
+    lines = tmp_path / "rows.jsonl"
+    run_sweep(cases, path=lines, scheduler="none")
+    rows = [json.loads(line) for line in lines.read_text().splitlines()]
+    table_path = tmp_path / "rows.parquet"
+    sweep = run_sweep(cases, path=table_path, scheduler="none")
+    assert sweep.path == table_path and not _engine._journal(table_path).exists()
+    assert [r.to_json() for r in read_results(table_path)] == rows
+    table = pq.read_table(table_path)
+    # typed columns for analysis: the case's and the metrics' scalar fields, None where a kind has none
+    assert table.column("case_id").to_pylist() == [r["case_id"] for r in rows]
+    assert table.schema.field("case.speed_kmh").type == pa.float64()
+    assert table.column("metrics.stopping_distance_m").to_pylist() == [
+        r["metrics"].get("stopping_distance_m") for r in rows]
+    assert table.column("case.changes").to_pylist()[0] == json.dumps(rows[0]["case"]["changes"])
+    with pytest.raises(SimulationError, match="exists; resume it"):
+        run_sweep(cases, path=table_path, scheduler="none")
+    # killed after two cases, the second row torn: the journal holds what a resume needs, no table yet
+    killed = tmp_path / "killed.parquet"
+    journal = _engine._journal(killed)
+    journal.write_text(lines.read_text().splitlines(keepends=True)[0] + lines.read_text().splitlines()[1][:50])
+    with pytest.raises(SimulationError, match="killed.parquet.rows.jsonl' exists; resume it"):
+        run_sweep(cases, path=killed, scheduler="none")
+    resumed = run_sweep(cases, path=killed, resume=True, scheduler="none")
+    assert resumed.resumed == 1 and not journal.exists()
+    assert pq.read_table(killed).equals(table)
+    # a table already written and a resume: nothing runs, the same table
+    again = run_sweep(cases, path=killed, resume=True, scheduler="none")
+    assert again.resumed == len(cases) and pq.read_table(killed).equals(table)
+
+
+def test_cli_sweep_out_parquet(tmp_path, capsys, monkeypatch):
+    pytest.importorskip("pyarrow", reason="pyarrow is not installed: sweep --out *.parquet NOT checked")
+    monkeypatch.chdir(tmp_path)
+    spec = _write_spec(tmp_path, 'name = "tiny"\n[base]\nspeed_kmh = 30.0\n[grid]\nroad = ["dry-asphalt", "snow"]\n')
+    assert main(["sweep", str(spec), "--scheduler", "none", "--out", "r.parquet"]) == 0
+    assert "rows in r.parquet" in capsys.readouterr().out
+    assert [r.case.road for r in read_results(tmp_path / "r.parquet")] == ["dry-asphalt", "snow"]
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["r.parquet", "spec.toml"]
+
+
+def test_a_parquet_results_file_without_pyarrow_is_refused_before_any_case(tmp_path, monkeypatch, capsys):
+    monkeypatch.setitem(sys.modules, "pyarrow", None)
+    monkeypatch.setitem(sys.modules, "pyarrow.parquet", None)
+    with pytest.raises(PrerequisiteError, match="Parquet results need pyarrow"):
+        run_sweep(QUICK, path=tmp_path / "rows.parquet", scheduler="none")
+    assert list(tmp_path.iterdir()) == []
+    (tmp_path / "not.parquet").write_text("case_id,status\n")
+    monkeypatch.undo()
+    pytest.importorskip("pyarrow", reason="pyarrow is not installed: a foreign Parquet file NOT checked")
+    with pytest.raises(SimulationError, match="not a readable Parquet file"):
+        read_results(tmp_path / "not.parquet")
+
+
+def test_case_observers_travel_as_source_and_are_used_where_installed(monkeypatch):
+    import pickle
+
+    from switchobs.codegen import CObserver
+    from switchobs.loop import EstimatorSpec, _factory, install_observers, xbs_estimator
+    from switchobs.plants import QuarterCar
+
+    monkeypatch.setattr(_factory, "_INSTALLED", {})
+    case = BrakingCase(observer="xbs4", beta1=80.0, beta2=120.0, impl="c", method="radau3")
+    built = _run.case_observers([case, replace(case, speed_kmh=99.0), replace(case, impl="python"),
+                                 BrakingCase()])
+    assert len(built) == 1 and isinstance(next(iter(built.values())), CObserver)  # one setting, C only
+    data = pickle.dumps(built)                     # what Client.run hands a worker: C source, no binary
+    assert b"\x7fELF" not in data and b"xbs4_step" in data
+    shipped = pickle.loads(data)
+    assert install_observers(shipped) == 1
+    spec = EstimatorSpec("xbs4", beta=80.0, beta2=120.0, impl="c", method="radau3")
+    est = xbs_estimator(spec, QuarterCar(load_n=case.load_n), case.road)
+    assert est.observer is next(iter(shipped.values()))
+    with_installed = run_case(case).to_json()
+    monkeypatch.setattr(_factory, "_INSTALLED", {})
+    assert with_installed == run_case(case).to_json() and with_installed["status"] == "stopped"
 
 
 def test_pareto_front_and_tuning_pick_a_non_dominated_pair():
@@ -257,6 +340,21 @@ def _bit_identical_on_a_worker(client):
     assert remote.results[0].metrics["xbs_rms"] == local[0].metrics["xbs_rms"]  # the same float, not close
 
 
+def _workers_take_the_c_observers_built_here(client):
+    """The warm-up: the C observer is built in this process and installed on both workers, whose cases then
+    give the in-process numbers (the same C source, compiled or found in the worker's own cache)."""
+    from switchobs.loop import _factory
+
+    case = BrakingCase(road="wet-asphalt", speed_kmh=40.0, observer="xbs4", beta1=70.0, beta2=90.0, impl="c",
+                       method="radau3", encoder_ppr=60, stop_kmh=10.0, duration_s=0.6)
+    remote = run_sweep([case, replace(case, speed_kmh=45.0)], scheduler=client, batch_size=1)
+    installed = client.run(lambda: sorted(k[:3] for k in _factory._INSTALLED))
+    assert len(installed) == 2 and all(("xbs4", 70.0, 90.0) in keys for keys in installed.values())
+    local = [run_case(c) for c in (case, replace(case, speed_kmh=45.0))]
+    assert [r.to_json() for r in remote.results] == [r.to_json() for r in local]
+    assert remote.results[0].ok and remote.results[0].metrics["xbs_rms"] is not None
+
+
 def _table41_through_the_engine(client):
     spec = load_sweep_spec(ROOT / "examples" / "sweep_table41.toml")
     cases = [c for c in spec.cases if c.speed_kmh in (60.0, 120.0) and c.road in ("dry-asphalt", "wet-cobblestones")]
@@ -306,6 +404,7 @@ def test_on_one_dask_local_cluster(tmp_path):
     with distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=True, dashboard_address=":0",
                                   silence_logs=logging.ERROR) as cluster, distributed.Client(cluster) as client:
         _bit_identical_on_a_worker(client)
+        _workers_take_the_c_observers_built_here(client)
         _table41_through_the_engine(client)
         _a_killed_worker_does_not_lose_the_sweep(client, tmp_path / "rows.jsonl")
 

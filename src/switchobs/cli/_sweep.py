@@ -1,7 +1,8 @@
 """``switchobs sweep SPEC.toml``: a design-space or robustness sweep on Dask, its tables, figures and tuned gains.
 
 The spec file (TOML, ``docs/sweeps.md``) lists the cases (a grid, Monte-Carlo draws per grid point) and
-what to show of them.  Rows stream to ``--out`` (JSON Lines, one per case, keyed by its hash);
+what to show of them.  Rows stream to ``--out`` (JSON Lines, one per case, keyed by its hash; a ``.parquet``
+ending: the same rows as a Parquet table, streamed to a journal beside it until the table is written);
 ``--resume`` continues a killed sweep; ``--scheduler`` picks the engine: ``local`` (a LocalCluster, one
 process per core), ``tcp://HOST:PORT`` (an existing Dask cluster) or ``none`` (serially, in-process).
 The whole spec and the sweep's size (``--max-cases``, ``--max-steps``: :data:`switchobs._limits.MAX_SWEEP_CASES`,
@@ -33,7 +34,8 @@ def register(sub: argparse._SubParsersAction) -> None:
                                    "one JSON line per case, print the summary tables, draw the heatmaps and, "
                                    "with --tune, pick the Pareto-optimal observer gains.")
     p.add_argument("spec", metavar="SPEC", help="sweep spec file (TOML; see docs/sweeps.md and examples/*.toml)")
-    p.add_argument("--out", metavar="JSONL", help="results file (default: <spec name>.jsonl)")
+    p.add_argument("--out", metavar="RESULTS", help="results file: JSON Lines, or a Parquet table for a .parquet "
+                                                    "ending (needs pyarrow) (default: <spec name>.jsonl)")
     p.add_argument("--resume", action="store_true", help="keep the rows already in --out and run the rest")
     p.add_argument("--scheduler", default="local", metavar="WHERE",
                    help="local (LocalCluster, default), tcp://HOST:PORT (an existing Dask scheduler) or none "

@@ -36,12 +36,12 @@ from typing import Any
 import numpy as np
 
 from ..loop import EncoderMeasurements, ReplayResult, replay
-from ._io import FORMATS, Channel, Log, log_format, read_log, write_mdf, write_table
+from ._io import CHUNK_ROWS, FORMATS, Channel, Log, log_format, read_log, write_mdf, write_table
 from ._map import UNITS, ChannelMap, ChannelSpec, log_signals
 from ._plot import plot_replay
 
 __all__ = ["replay_log", "ChannelMap", "ChannelSpec", "UNITS", "read_log", "Log", "Channel", "log_signals",
-           "write_result", "write_table", "write_mdf", "write_braking_log", "FORMATS", "log_format",
+           "write_result", "write_table", "write_mdf", "write_braking_log", "FORMATS", "log_format", "CHUNK_ROWS",
            "RESULT_UNITS", "plot_replay"]
 
 #: Units of the columns :func:`write_result` writes.

@@ -5,6 +5,13 @@ column of a table has the table's time column).  The file's size is checked befo
 (``MAX_LOG_BYTES``) and a channel's length before it is converted (``MAX_LOG_SAMPLES``), so a huge log is
 refused by its size, never read whole.  Cells left empty (a null in Parquet, an empty field in CSV) are
 kept as a mask: a column of encoder edges is shorter than the signals beside it in one table.
+
+Channels are read when asked for, in chunks into arrays of their final size: an MDF4 channel fragment by
+fragment of its group's data blocks (asammdf's ``iter_get``; each group's time stamps once), a Parquet
+column by batches of :data:`CHUNK_ROWS` rows (pyarrow's ``iter_batches``, that column only), a CSV file
+row by row into 8 bytes a value, only the columns the channel map names (:meth:`Log.want`).  Reading
+thus holds the channels asked for and one chunk, not the file's other channels or a decoded copy of
+the whole file (``tests/test_logs_memory.py`` measures the peak on a long log).
 """
 
 from __future__ import annotations
@@ -24,9 +31,12 @@ from .._atomic import atomic_file
 from .._limits import MAX_LOG_BYTES, MAX_LOG_SAMPLES
 from ..exceptions import LogError, PrerequisiteError
 
-__all__ = ["FORMATS", "Channel", "Log", "log_format", "read_log", "write_table", "write_mdf"]
+__all__ = ["FORMATS", "Channel", "Log", "log_format", "read_log", "write_table", "write_mdf", "CHUNK_ROWS"]
 
 Array = npt.NDArray[np.float64]
+
+#: Rows of a channel read at a time (module notes): 2 MB of float64 values.
+CHUNK_ROWS = 262_144
 
 #: File name endings of each log format.
 FORMATS: dict[str, tuple[str, ...]] = {"mdf": (".mf4", ".mdf"), "parquet": (".parquet", ".pq"), "csv": (".csv",)}
@@ -101,7 +111,9 @@ class Log:
             raise LogError(f"the log {str(path)!r} has {size} bytes (limit MAX_LOG_BYTES = {MAX_LOG_BYTES}); "
                            "cut it into shorter logs")
         self._time, self._factor = time_channel, time_factor
-        self._table: dict[str, tuple[Array, npt.NDArray[np.bool_]]] | None = None
+        self._parquet: Any = None
+        self._columns: dict[str, tuple[Array, npt.NDArray[np.bool_]]] = {}
+        self._masters: dict[int, Array] = {}
         self._mdf: Any = None
         if self.format == "mdf":
             asammdf = _asammdf()
@@ -111,51 +123,88 @@ class Log:
                 raise LogError(f"the log {str(path)!r} is not a readable MDF file: {exc}") from None
             # asammdf names each group's master "time"; a channel of the map is never the master
             self.names = sorted(n for n in self._mdf.channels_db if n != "time")
-        else:
-            self._table = self._read_table()
-            self.names = [n for n in self._table if n != self._time]
-
-    # ------------------------------------------------------------------ tables
-    def _read_table(self) -> dict[str, tuple[Array, npt.NDArray[np.bool_]]]:
-        if self.format == "parquet":
+        elif self.format == "parquet":
             _, pq = _pyarrow()
             try:
-                meta = pq.read_metadata(str(self.path))
-                rows = meta.num_rows
-                if rows > MAX_LOG_SAMPLES:
-                    raise LogError(f"the log {str(self.path)!r} has {rows} rows (limit MAX_LOG_SAMPLES = "
-                                   f"{MAX_LOG_SAMPLES}); cut it into shorter logs")
-                table = pq.read_table(str(self.path))
-            except LogError:
-                raise
+                self._parquet = pq.ParquetFile(str(self.path))
+                rows = self._parquet.metadata.num_rows
+                columns = list(self._parquet.schema_arrow.names)
             except Exception as exc:
                 raise LogError(f"the log {str(self.path)!r} is not a readable Parquet file: {exc}") from None
-            out = {}
-            for name in table.column_names:
-                col = table.column(name)
-                try:
-                    present = ~np.asarray(col.is_null().to_numpy(zero_copy_only=False), dtype=bool)
-                    out[name] = (np.asarray(col.to_numpy(zero_copy_only=False), dtype=float), present)
-                except (TypeError, ValueError, NotImplementedError):
-                    raise LogError(f"column {name!r} of {str(self.path)!r} is not numeric "
-                                   f"({col.type})") from None
-            return out
-        return self._read_csv()
+            if rows > MAX_LOG_SAMPLES:
+                raise LogError(f"the log {str(self.path)!r} has {rows} rows (limit MAX_LOG_SAMPLES = "
+                               f"{MAX_LOG_SAMPLES}); cut it into shorter logs")
+            self._rows, self._all = int(rows), columns
+            self.names = [n for n in columns if n != self._time]
+        else:
+            self._all = self._csv_header()
+            self.names = [n for n in self._all if n != self._time]
+        self._wanted: set[str] | None = None
 
-    def _read_csv(self) -> dict[str, tuple[Array, npt.NDArray[np.bool_]]]:
+    def want(self, names: Sequence[str]) -> None:
+        """The channels that will be asked for: a CSV file is then parsed for those (and its time) only."""
+        self._wanted = set(names)
+
+    # ------------------------------------------------------------------ tables
+    def _column(self, name: str) -> tuple[Array, npt.NDArray[np.bool_]]:
+        """A column of the table (values and which cells hold one); a Parquet column read batch by batch."""
+        if self.format == "csv":
+            if name not in self._columns:
+                wanted = set(self._all) if self._wanted is None else self._wanted | {name, self._time}
+                self._columns.update(self._read_csv(wanted - set(self._columns)))
+            return self._columns[name]
+        if name not in self._columns:
+            values, present = np.empty(self._rows), np.empty(self._rows, dtype=bool)
+            at = 0
+            try:
+                for batch in self._parquet.iter_batches(batch_size=CHUNK_ROWS, columns=[name],
+                                                        use_pandas_metadata=False):
+                    col = batch.column(0)
+                    k = len(col)
+                    try:
+                        values[at:at + k] = np.asarray(col.to_numpy(zero_copy_only=False), dtype=float)
+                        present[at:at + k] = ~np.asarray(col.is_null().to_numpy(zero_copy_only=False), dtype=bool)
+                    except (TypeError, ValueError, NotImplementedError):
+                        raise LogError(f"column {name!r} of {str(self.path)!r} is not numeric "
+                                       f"({col.type})") from None
+                    at += k
+            except LogError:
+                raise
+            except Exception as exc:   # pyarrow's own kinds for a damaged file
+                raise LogError(f"column {name!r} of {str(self.path)!r} cannot be read: {exc}") from None
+            if at != self._rows:
+                raise LogError(f"column {name!r} of {str(self.path)!r} has {at} rows, the file says {self._rows}")
+            self._columns[name] = (values, present)
+        return self._columns[name]
+
+    def _csv_header(self) -> list[str]:
+        """The column names of a CSV log (its first row), checked."""
+        try:
+            with open(self.path, newline="", encoding="utf-8") as f:
+                header = next(csv.reader(f), None)
+        except UnicodeDecodeError as exc:
+            raise LogError(f"the log {str(self.path)!r} is not UTF-8 text ({exc.reason} at byte {exc.start})") from None
+        except OSError as exc:
+            raise LogError(f"cannot read the log {str(self.path)!r}: {exc.strerror}") from None
+        if not header:
+            raise LogError(f"the log {str(self.path)!r} is empty; a CSV log starts with a header row")
+        header = [h.strip() for h in header]
+        dup = sorted({h for h in header if header.count(h) > 1})
+        if dup:
+            raise LogError(f"the log {str(self.path)!r} has the column {dup[0]!r} twice")
+        return header
+
+    def _read_csv(self, wanted: set[str]) -> dict[str, tuple[Array, npt.NDArray[np.bool_]]]:
+        """The columns ``wanted`` of a CSV log, row by row (every row's field count checked)."""
+        header = self._all
+        picked = [i for i, h in enumerate(header) if h in wanted]
         try:
             with open(self.path, newline="", encoding="utf-8") as f:
                 reader = csv.reader(f)
-                header = next(reader, None)
-                if not header:
-                    raise LogError(f"the log {str(self.path)!r} is empty; a CSV log starts with a header row")
-                header = [h.strip() for h in header]
-                dup = sorted({h for h in header if header.count(h) > 1})
-                if dup:
-                    raise LogError(f"the log {str(self.path)!r} has the column {dup[0]!r} twice")
+                next(reader, None)
                 # 8 bytes a value and 1 a flag (lists of floats would take 5 times that for a large log)
-                cols = [array("d") for _ in header]
-                filled = [bytearray() for _ in header]
+                cols = [array("d") for _ in picked]
+                filled = [bytearray() for _ in picked]
                 for line, row in enumerate(reader, start=2):
                     if line - 1 > MAX_LOG_SAMPLES:
                         raise LogError(f"the log {str(self.path)!r} has more than {MAX_LOG_SAMPLES} rows "
@@ -163,8 +212,8 @@ class Log:
                     if len(row) != len(header):
                         raise LogError(f"{str(self.path)!r} line {line}: {len(row)} fields, the header has "
                                        f"{len(header)}")
-                    for c, fill, cell in zip(cols, filled, row):
-                        cell = cell.strip()
+                    for c, fill, i in zip(cols, filled, picked):
+                        cell = row[i].strip()
                         fill.append(1 if cell else 0)
                         try:
                             c.append(float(cell) if cell else math.nan)
@@ -174,9 +223,10 @@ class Log:
             raise LogError(f"the log {str(self.path)!r} is not UTF-8 text ({exc.reason} at byte {exc.start})") from None
         except OSError as exc:
             raise LogError(f"cannot read the log {str(self.path)!r}: {exc.strerror}") from None
-        # an empty cell is a missing value; "nan" written out is a NaN sample (refused where a value is needed)
-        return {h: (np.frombuffer(c, dtype=float).copy(), np.frombuffer(f, dtype=np.uint8).astype(bool))
-                for h, c, f in zip(header, cols, filled)}
+        # an empty cell is a missing value; "nan" written out is a NaN sample (refused where a value is needed);
+        # the arrays are views of the buffers filled above (no second copy of the file's numbers)
+        return {header[i]: (np.frombuffer(c, dtype=float), np.frombuffer(f, dtype=np.bool_))
+                for i, c, f in zip(picked, cols, filled)}
 
     # ------------------------------------------------------------------ channels
     def channel(self, name: str, *, what: str) -> Channel:
@@ -196,28 +246,54 @@ class Log:
                 raise LogError(f"{what}: channel {name!r} is in {len(groups)} groups of {str(self.path)!r} (groups "
                                f"{', '.join(map(str, groups))}); the channel map cannot choose: give the log "
                                "unique channel names")
-            try:
-                sig = self._mdf.get(name)
-            except Exception as exc:
-                raise LogError(f"{what}: channel {name!r} of {str(self.path)!r} cannot be read: {exc}") from None
-            if sig.samples.size > MAX_LOG_SAMPLES:
-                raise LogError(f"{what}: channel {name!r} has {sig.samples.size} samples "
-                               f"(limit MAX_LOG_SAMPLES = {MAX_LOG_SAMPLES})")
-            samples = sig.samples
-            mask = np.ma.getmaskarray(samples) if isinstance(samples, np.ma.MaskedArray) else None
-            try:
-                values = np.asarray(np.ma.getdata(samples), dtype=float)
-            except (TypeError, ValueError):
-                raise LogError(f"{what}: channel {name!r} is not numeric ({samples.dtype})") from None
-            present = np.ones(values.size, dtype=bool) if mask is None else ~mask
-            return Channel(name, np.asarray(sig.timestamps, dtype=float), values, present, str(sig.unit or ""))
-        assert self._table is not None
-        if self._time not in self._table:
+            return self._mdf_channel(name, groups[0], what)
+        if self._time not in self._all:
             raise LogError(f"the time column {self._time!r} is not in the log {str(self.path)!r}; it has "
-                           + ", ".join(repr(n) for n in self._table) + " (set [time] channel in the channel map)")
-        values, present = self._table[name]
-        t = self._table[self._time][0]
+                           + ", ".join(repr(n) for n in self._all) + " (set [time] channel in the channel map)")
+        values, present = self._column(name)
+        t = self._column(self._time)[0]
         return Channel(name, t * self._factor if self._factor != 1.0 else t, values, present, "")
+
+    def _mdf_channel(self, name: str, group: int, what: str) -> Channel:
+        """An MDF4 channel read fragment by fragment of its group into arrays of its length (module notes)."""
+        index = next(i for g, i in self._mdf.channels_db[name] if g == group)
+        total = int(self._mdf.groups[group].channel_group.cycles_nr)
+        if total > MAX_LOG_SAMPLES:
+            raise LogError(f"{what}: channel {name!r} has {total} samples (limit MAX_LOG_SAMPLES = {MAX_LOG_SAMPLES})")
+        values, present = np.empty(total), np.ones(total, dtype=bool)
+        # the group's time stamps are read once for all its channels
+        t = self._masters.get(group)
+        fill_t = t is None
+        if t is None:
+            t = np.empty(total)
+        at = 0
+        try:
+            # asammdf hands the channel fragment by fragment of the group's data blocks
+            for sig in self._mdf.iter_get(name, group=group, index=index):
+                samples = sig.samples
+                count = samples.size
+                if at + count > total:
+                    raise LogError(f"{what}: channel {name!r} of {str(self.path)!r} holds more than the {total} "
+                                   "samples its group declares")
+                try:
+                    values[at:at + count] = np.asarray(np.ma.getdata(samples), dtype=float)
+                except (TypeError, ValueError):
+                    raise LogError(f"{what}: channel {name!r} is not numeric ({samples.dtype})") from None
+                if isinstance(samples, np.ma.MaskedArray):
+                    present[at:at + count] = ~np.ma.getmaskarray(samples)
+                if fill_t:
+                    t[at:at + count] = np.asarray(sig.timestamps, dtype=float)
+                at += count
+        except LogError:
+            raise
+        except Exception as exc:
+            raise LogError(f"{what}: channel {name!r} of {str(self.path)!r} cannot be read: {exc}") from None
+        if at != total:
+            raise LogError(f"{what}: channel {name!r} of {str(self.path)!r} holds {at} of the {total} samples its "
+                           "group declares")
+        self._masters[group] = t            # complete: the group's other channels share it
+        unit = str(self._mdf.groups[group].channels[index].unit or "")
+        return Channel(name, t, values, present, unit)
 
 
 def read_log(path: str | Path, *, time_channel: str = "t", time_factor: float = 1.0) -> Log:

@@ -317,6 +317,9 @@ def log_signals(log: Log, cmap: ChannelMap) -> LogSignals:
         _unit_agrees(ch, spec, kind, what)
         return _values(ch, what, spec.factor)
 
+    log.want([s.channel for s in (cmap.speed, cmap.acceleration, cmap.pressure, cmap.pressure_rate, cmap.edges,
+                                  cmap.wheel_speed) if s is not None]
+             + [str(n) for n in (cmap.teeth, cmap.counter, cmap.capture) if n])
     first = ("speed", cmap.speed) if cmap.speed is not None else ("acceleration", cmap.acceleration)
     second = ("pressure", cmap.pressure) if cmap.pressure is not None else ("pressure_rate", cmap.pressure_rate)
     assert first[1] is not None and second[1] is not None

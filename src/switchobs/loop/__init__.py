@@ -57,8 +57,8 @@ from ._pil import (PIL_SCENARIO, PIL_TOLERANCE, PilComparison, PilRecord, brakin
                    reference_observer, reference_run)
 from ._replay import (LogSignals, ReplayResult, ReplaySummary, edges_from_counts, edges_from_wheel_speed,
                       ideal_encoder, measurements_signals, pressure_from_rate, replay, speed_from_acceleration, zero_order_hold)
-from ._factory import (DEFAULT_BETA, DEFAULT_GAMMA, INITIAL_STATE, OBSERVER_KINDS, EstimatorSpec, default_method,
-                       xbs_estimator)
+from ._factory import (DEFAULT_BETA, DEFAULT_GAMMA, INITIAL_STATE, OBSERVER_KINDS, EstimatorSpec, compiled_observers,
+                       default_method, install_observers, xbs_estimator)
 
 __all__ = ["EstimatorSpec", "xbs_estimator", "default_method", "OBSERVER_KINDS", "DEFAULT_BETA", "DEFAULT_GAMMA", "INITIAL_STATE",
            "ObserverXbsEstimator", "LoadXbsEstimator", "SteppingObserver", "run_braking", "BrakingRun", "CONTROLLER_NAMES", "EncoderLoopEstimator", "EncoderLoopRecord",
@@ -68,4 +68,5 @@ __all__ = ["EstimatorSpec", "xbs_estimator", "default_method", "OBSERVER_KINDS",
            "compare_with_reference", "PilComparison", "PIL_SCENARIO", "PIL_TOLERANCE",
            "LogSignals", "replay", "ReplayResult", "ReplaySummary",
            "zero_order_hold", "pressure_from_rate", "speed_from_acceleration", "edges_from_counts",
-           "edges_from_wheel_speed", "measurements_signals", "ideal_encoder"]
+           "edges_from_wheel_speed", "measurements_signals", "ideal_encoder", "compiled_observers",
+           "install_observers"]

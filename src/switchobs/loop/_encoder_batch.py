@@ -394,14 +394,9 @@ def measure_edges(tt: Array, vv: Array, pressure: Array, stamps: Array, angles: 
         dv = vv[i + 1] - vv[i]
         return vv[i] + w * dv, pressure[i] + w * (pressure[i + 1] - pressure[i]), dv / span
 
-    fits = fit_windows(stamps, angles, pushed - 1, ts, m, n)
+    fits = fit_windows(stamps, angles, pushed - 1, ts, m, n, compiled=compiled)
     ok = np.flatnonzero(pushed >= n)
-    win = stamps[pushed[ok, None] + np.arange(-n, 0)]
-    total = np.zeros(ok.size)
-    for j in range(n):
-        total = total + win[:, j]
-    tc = np.full(ts.size, np.nan)
-    tc[ok] = total / n
+    tc = fits[3]                          # the window's mean time stamp, as window_mean sums it
     th_m, om_m, al_m = fits[0, ok], fits[1, ok], fits[2, ok]
     om_c, al_c = comp.run(th_m, om_m, al_m)
     notched = notch_series(al_m, om_m, dt_s=1.0 / rate, damping=notch_damping, compiled=compiled)

@@ -167,7 +167,7 @@ class EncoderLoopEstimator:
         self._base = fixed_edges(encoder)
         self._nominal = encoder.nominal_angles()
         # validate the chain settings now rather than at the first sample
-        TimeStamper(order=order, window=window)
+        TimeStamper(order=order, window=window, compiled=compiled)
         ThreeStageEstimator(harmonics, dt_s=1.0 / rate_hz, compiled=compiled)
         NotchFilter(dt_s=1.0 / rate_hz, damping=notch_damping)
 
@@ -188,7 +188,7 @@ class EncoderLoopEstimator:
             self._next_edge()
         self._pending: deque[tuple[float, float]] = deque()
         self._stamps: deque[float] = deque(maxlen=self._window)
-        self._tsa = TimeStamper(order=self._order, window=self._window)
+        self._tsa = TimeStamper(order=self._order, window=self._window, compiled=self._compiled)
         self._comp = ThreeStageEstimator(self._harmonics, dt_s=1.0 / self._rate, compiled=self._compiled)
         self._notch = NotchFilter(dt_s=1.0 / self._rate, damping=self._damping)
         #: the latest measured x2 of each kind of X2_MEASUREMENTS (0, free rolling, before the first)

@@ -6,12 +6,19 @@ models of seed 000 (abs-xbs3, abs-xbs4) write the brake input as ``+b u`` with
 ``b = +R γ_b / J``, so the sign of :attr:`QuarterCar.b` is flipped for the
 former; ``a = R² Fz / J`` is the vehicle's; the 3D observer knows the road's
 ``c = -c2``.
+
+A process can be handed observers built in another one (:func:`compiled_observers`,
+:func:`install_observers`): a sweep's client builds each C observer of a study once and its Dask
+workers take them instead of repeating the symbolic design.  What travels is the generated C source
+(a :class:`switchobs.codegen.CObserver` pickles as its files and parameters), never a binary: each
+process compiles it into, or finds it verified in, its own compiled-code cache
+(:func:`switchobs.codegen.load_library`).
 """
 
 from __future__ import annotations
 
 import functools
-from collections.abc import Mapping
+from collections.abc import Iterable, Mapping
 from dataclasses import dataclass
 from typing import Any
 
@@ -23,7 +30,7 @@ from ..spec import DEFAULT_METHOD
 from ._adapter import LoadXbsEstimator, ObserverXbsEstimator
 
 __all__ = ["EstimatorSpec", "xbs_estimator", "default_method", "OBSERVER_KINDS", "DEFAULT_BETA", "DEFAULT_GAMMA",
-           "INITIAL_STATE"]
+           "INITIAL_STATE", "compiled_observers", "install_observers"]
 
 #: Observer kinds: the three reference XBS observers and ``none`` (no estimator).
 OBSERVER_KINDS = ("xbs3", "xbs4", "adaptive", "none")
@@ -188,22 +195,68 @@ def xbs_estimator(spec: EstimatorSpec | str, vehicle: QuarterCar, initial_road: 
         raise SimulationError(f"load_signal: only the adaptive observer reads the load on line, not {spec.kind!r}")
     if spec.kind == "none":
         return None
-    beta = DEFAULT_BETA[spec.kind] if spec.beta is None else spec.beta
-    beta2 = beta if spec.beta2 is None else spec.beta2
-    gamma = (DEFAULT_GAMMA if spec.gamma is None else spec.gamma) if spec.kind == "adaptive" else None
-    c = road(initial_road).c if spec.kind == "xbs3" else None
-    bound = (spec.h_max, spec.max_substeps)
+    obs = _observer(*_observer_key(spec, vehicle, initial_road, load_signal))
     if load_signal:
-        obs = _observer("adaptive-load", beta, beta2, gamma, spec.impl, spec.method, None, vehicle.b, None, *bound)
         return LoadXbsEstimator(obs, load_n=vehicle.load_n, load_gain=vehicle.radius_m ** 2 / vehicle.inertia_kg_m2,
                                 initial_state=INITIAL_STATE["adaptive"])
-    obs = _observer(spec.kind, beta, beta2, gamma, spec.impl, spec.method, vehicle.a, vehicle.b, c, *bound)
     return ObserverXbsEstimator(obs, initial_state=INITIAL_STATE[spec.kind])
 
 
-@functools.lru_cache(maxsize=64)
+#: ``(kind, beta, beta2, gamma, impl, method, a, b, c, h_max, max_substeps)``: the arguments of :func:`_observer`.
+ObserverKey = tuple[Any, ...]
+
+
+def _observer_key(spec: EstimatorSpec, vehicle: QuarterCar, initial_road: Burckhardt | str,
+                  load_signal: bool = False) -> ObserverKey:
+    """The arguments of :func:`_observer` for the observer of ``spec`` (not ``none``) on ``vehicle``."""
+    beta = DEFAULT_BETA[spec.kind] if spec.beta is None else spec.beta
+    beta2 = beta if spec.beta2 is None else spec.beta2
+    gamma = (DEFAULT_GAMMA if spec.gamma is None else spec.gamma) if spec.kind == "adaptive" else None
+    assert spec.method is not None               # __post_init__ sets it
+    bound = (spec.h_max, spec.max_substeps)
+    if load_signal:
+        return ("adaptive-load", beta, beta2, gamma, spec.impl, spec.method, None, vehicle.b, None, *bound)
+    c = road(initial_road).c if spec.kind == "xbs3" else None
+    return (spec.kind, beta, beta2, gamma, spec.impl, spec.method, vehicle.a, vehicle.b, c, *bound)
+
+
+#: Observers handed to this process by :func:`install_observers`, by their :func:`_observer` arguments.
+_INSTALLED: dict[ObserverKey, Any] = {}
+
+
+def compiled_observers(settings: Iterable[tuple[EstimatorSpec, QuarterCar, Burckhardt | str]]
+                       ) -> dict[ObserverKey, Any]:
+    """The C observers (``impl = "c"``) of ``(spec, vehicle, initial_road)`` settings, each built once here:
+    what :func:`install_observers` takes in another process (module notes).  Other settings are left out."""
+    out: dict[ObserverKey, Any] = {}
+    for spec, vehicle, initial_road in settings:
+        if spec.kind != "none" and spec.impl == "c":
+            key = _observer_key(spec, vehicle, initial_road)
+            if key not in out:
+                out[key] = _observer(*key)
+    return out
+
+
+def install_observers(observers: Mapping[ObserverKey, Any]) -> int:
+    """Use ``observers`` (from :func:`compiled_observers`, unpickled here: each C observer compiled into or
+    found in this process's own compiled-code cache) for their settings instead of building them; their
+    number."""
+    _INSTALLED.update(observers)
+    return len(observers)
+
+
 def _observer(kind: str, beta: float, beta2: float, gamma: float | None, impl: str, method: str, a: float | None,
               b: float, c: float | None, h_max: float | None, max_substeps: int | None) -> Any:
+    """The observer of :func:`xbs_estimator`: one installed in this process, else :func:`_build_observer`."""
+    key = (kind, beta, beta2, gamma, impl, method, a, b, c, h_max, max_substeps)
+    installed = _INSTALLED.get(key)
+    return installed if installed is not None else _build_observer(*key)
+
+
+@functools.lru_cache(maxsize=64)
+def _build_observer(kind: str, beta: float, beta2: float, gamma: float | None, impl: str, method: str,
+                    a: float | None, b: float, c: float | None, h_max: float | None,
+                    max_substeps: int | None) -> Any:
     """The observer of :func:`xbs_estimator`, built once per setting: the symbolic set-up and the C
     generation take 0.05-0.7 s, a braking run in the compiled loop 0.02 s; an observer holds no
     run state (the estimator does), so runs can share it."""

@@ -1,4 +1,5 @@
-/* Kernels of the encoder chain: the three-stage estimator and the notch of _three_stage.py in C.
+/* Kernels of the encoder chain: the TSA fit of _tsa.py, the three-stage estimator and the notch of
+ * _three_stage.py in C.
  *
  * A port statement for statement of ThreeStageEstimator.update (stage 1 _RevolutionDetrend or _HighPass,
  * stage 2 _Rls, stage 3 the compensation) and NotchFilter.update: the same floating-point operations in
@@ -9,7 +10,14 @@
  *
  * cfg (read only): CFG_* below.  state: STATE_* scalars, then the detrend's ring buffers (rows: theta,
  * omega, alpha; sums: running sums of omega and alpha), then Gamma and theta of the velocity RLS, then
- * those of the acceleration RLS; switchobs/sensors/_kernels.py lays it out.
+ * those of the acceleration RLS, then the regressors of each sample in the detrend's ring (Phi_w, Phi_a,
+ * |Phi_w|^2, |Phi_a|^2: the identification of the revolution's centre sample reuses those computed when
+ * it was the newest, the same function of the same numbers); switchobs/sensors/_kernels.py lays it out.
+ *
+ * The TSA fit (switchobs_tsa_fit) solves each window's least-squares problem by Householder QR as LAPACK's
+ * dgeqr2 does (the reference _tsa._fit calls LAPACK through numpy), with the reflections applied to the
+ * right-hand side instead of forming Q: the same method, its own rounding (tests/test_sensors_kernels.py
+ * states the tolerance).  The window's mean time stamp is summed oldest first, as measure_edges sums it.
  */
 #include <math.h>
 #include <stdint.h>
@@ -27,6 +35,8 @@ int switchobs_three_stage_update(const double *cfg, double *state, double theta,
                                  double *out);
 void switchobs_notch_run(double *state, double dt, double damping, int64_t n, const double *u,
                          const double *centre, double *out);
+void switchobs_tsa_fit(int64_t count, const double *times, const double *angles, const int64_t *last,
+                       const double *t_eval, int64_t n, int64_t m, double *work, double *out);
 
 /* (Phi_w, Phi_a, |Phi_w|^2, |Phi_a|^2): ThreeStageEstimator.regressors */
 static void regressors(const double *cfg, double th, double om, double al, double *pw, double *pa, double *nw,
@@ -87,7 +97,7 @@ static void integral(const double *rows, const double *sums, int64_t size, doubl
     out[1] = s[1] + frac * r[2];
 }
 
-/* _RevolutionDetrend.__call__: 1 and (theta, omega, alpha, zeta_omega, zeta_alpha) of the centre, or 0 */
+/* _RevolutionDetrend.__call__: 1 and (theta, omega, alpha, zeta_omega, zeta_alpha, centre) of the centre, or 0 */
 static int detrend(const double *cfg, double *state, double th, double om, double al, double *out) {
     int64_t size = (int64_t)cfg[CFG_SIZE];
     double *rows = state + ST_HEAD, *sums = rows + 3 * size;
@@ -128,6 +138,7 @@ static int detrend(const double *cfg, double *state, double th, double om, doubl
     out[2] = mid[2];
     out[3] = mid[1] - (4.0 * one0 - two0) / 3.0;
     out[4] = mid[2] - (4.0 * one1 - two1) / 3.0;
+    out[5] = (double)(centre % size);
     return 1;
 }
 
@@ -138,19 +149,20 @@ int switchobs_three_stage_update(const double *cfg, double *state, double theta,
     int d = 2 * (int)cfg[CFG_M];
     int64_t size = (int64_t)cfg[CFG_SIZE];
     double *gw = state + ST_HEAD + 5 * size, *tw = gw + d * d, *ga = tw + d, *ta = ga + d * d;
-    double pw[MAX_DIM], pa[MAX_DIM], nw, na;
+    double *cache = ta + d, local[2 * MAX_DIM + 2];
     if (d > MAX_DIM) return 1;
-    regressors(cfg, theta, omega, alpha, pw, pa, &nw, &na);
+    /* this sample's regressors, in the ring slot the detrend gives it (highpass: no ring) */
+    double *pw = size > 0 ? cache + (((int64_t)state[ST_K] + 1) % size) * (2 * d + 2) : local, *pa = pw + d;
+    regressors(cfg, theta, omega, alpha, pw, pa, pa + d, pa + d + 1);
     if (cfg[CFG_HIGHPASS] != 0.0) {
-        rls_step(cfg, d, gw, tw, pw, nw, highpass(cfg, state + ST_HPW_ON, omega));
-        rls_step(cfg, d, ga, ta, pa, na, highpass(cfg, state + ST_HPA_ON, alpha));
+        rls_step(cfg, d, gw, tw, pw, pa[d], highpass(cfg, state + ST_HPW_ON, omega));
+        rls_step(cfg, d, ga, ta, pa, pa[d + 1], highpass(cfg, state + ST_HPA_ON, alpha));
     } else {
-        double c[5];
+        double c[6];
         if (detrend(cfg, state, theta, omega, alpha, c)) {
-            double cw[MAX_DIM], ca[MAX_DIM], cnw, cna;
-            regressors(cfg, c[0], c[1], c[2], cw, ca, &cnw, &cna);
-            rls_step(cfg, d, gw, tw, cw, cnw, c[3]);
-            rls_step(cfg, d, ga, ta, ca, cna, c[4]);
+            const double *cw = cache + (int64_t)c[5] * (2 * d + 2), *ca = cw + d;
+            rls_step(cfg, d, gw, tw, cw, ca[d], c[3]);
+            rls_step(cfg, d, ga, ta, ca, ca[d + 1], c[4]);
         }
     }
     out[0] = omega - dot(d, pw, tw);
@@ -190,5 +202,68 @@ void switchobs_notch_run(double *state, double dt, double damping, int64_t n, co
         state[2] = (r2 - g * r1) / det;
         state[3] = u[i];
         out[i] = u[i] - xi2 * state[2];
+    }
+}
+
+/* p(x) = c[0] + c[1] x + ... + c[deg] x^deg by Horner's rule */
+static double horner(const double *c, int64_t deg, double x) {
+    double acc = c[deg];
+    for (int64_t k = deg - 1; k >= 0; --k) acc = acc * x + c[k];
+    return acc;
+}
+
+/* _tsa._fit over count windows: window i holds the n events last[i] - n + 1 .. last[i]; the order-m
+ * polynomial in s = (t - t0) / span is fitted to theta - theta0 (seed 001 (5.2)-(5.3), Appendix C) and it
+ * and its derivatives are evaluated at t_eval[i] (5.4)-(5.5).  out (4 x count, row major): theta, omega,
+ * alpha and the window's mean time stamp.  work: n * (m + 2) + 2 * (m + 1) doubles. */
+void switchobs_tsa_fit(int64_t count, const double *times, const double *angles, const int64_t *last,
+                       const double *t_eval, int64_t n, int64_t m, double *work, double *out) {
+    int64_t cols = m + 1;
+    double *a = work, *y = work + n * cols, *p = y + n, *dp = p + cols;   /* a: column major, n x cols */
+    for (int64_t i = 0; i < count; ++i) {
+        const double *tw = times + last[i] - n + 1, *thw = angles + last[i] - n + 1;
+        double t0 = tw[0], span = tw[n - 1] - t0, total = 0.0;
+        for (int64_t j = 0; j < n; ++j) {
+            double s = (tw[j] - t0) / span, power = 1.0;
+            for (int64_t k = 0; k < cols; ++k) {
+                a[k * n + j] = power;
+                power *= s;
+            }
+            y[j] = thw[j] - thw[0];
+            total += tw[j];
+        }
+        /* Householder QR, column by column: H = I - tau v v^T with v[k] = 1 maps a[k.., k] onto beta e_k */
+        for (int64_t k = 0; k < cols; ++k) {
+            double *ak = a + k * n;
+            double xnorm2 = 0.0;
+            for (int64_t j = k + 1; j < n; ++j) xnorm2 += ak[j] * ak[j];
+            double alpha0 = ak[k];
+            if (xnorm2 == 0.0) continue;       /* already triangular in this column: H = I */
+            double beta = sqrt(alpha0 * alpha0 + xnorm2);
+            if (alpha0 > 0.0) beta = -beta;
+            double tau = (beta - alpha0) / beta, scale = 1.0 / (alpha0 - beta);
+            for (int64_t j = k + 1; j < n; ++j) ak[j] *= scale;
+            ak[k] = beta;
+            for (int64_t c = k + 1; c <= cols; ++c) {     /* the later columns, then y (c == cols) */
+                double *ac = c < cols ? a + c * n : y;
+                double w = ac[k];
+                for (int64_t j = k + 1; j < n; ++j) w += ak[j] * ac[j];
+                w *= tau;
+                ac[k] -= w;
+                for (int64_t j = k + 1; j < n; ++j) ac[j] -= w * ak[j];
+            }
+        }
+        for (int64_t k = cols - 1; k >= 0; --k) {       /* R p = (Q^T y)[0 .. m] */
+            double acc = y[k];
+            for (int64_t c = k + 1; c < cols; ++c) acc -= a[c * n + k] * p[c];
+            p[k] = acc / a[k * n + k];
+        }
+        double se = (t_eval[i] - t0) / span;
+        for (int64_t k = 1; k < cols; ++k) dp[k - 1] = p[k] * (double)k;
+        out[i] = thw[0] + horner(p, m, se);
+        out[count + i] = horner(dp, m - 1, se) / span;
+        for (int64_t k = 1; k < m; ++k) dp[k - 1] = dp[k] * (double)k;
+        out[2 * count + i] = horner(dp, m - 2, se) / (span * span);
+        out[3 * count + i] = total / (double)n;
     }
 }

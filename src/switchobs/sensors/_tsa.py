@@ -19,6 +19,7 @@ import numpy.typing as npt
 
 from .._json import JsonRecord, array_to_json
 from ..exceptions import SimulationError
+from ._kernels import tsa_fit, use_kernels
 from ._validate import as_signal, check_increasing, check_int, check_positive
 
 __all__ = ["TsaEstimate", "time_stamping", "tsa_condition_number", "controller_times", "TimeStamper"]
@@ -113,6 +114,7 @@ def time_stamping(
     *,
     order: int = 2,
     window: int = 15,
+    compiled: bool | None = None,
 ) -> TsaEstimate:
     """Run the time-stamping algorithm at every controller sample.
 
@@ -133,6 +135,9 @@ def time_stamping(
         Polynomial order ``m`` (the seed uses 2).
     window : int
         Number of events ``n > m``.
+    compiled : bool or None
+        The C kernel (``True``), the numpy reference (``False``) or the kernel when a C compiler is
+        installed (``None``); they agree to rounding.
 
     Returns
     -------
@@ -142,6 +147,8 @@ def time_stamping(
     ------
     SimulationError
         ``window <= order``, NaN entries, non-increasing time stamps or length mismatch.
+    CodegenError
+        ``compiled=True`` without a working C compiler.
 
     References
     ----------
@@ -162,25 +169,37 @@ def time_stamping(
     ts = as_signal(sample_times, "sample times")
     check_increasing(ts, "sample times")
     last = np.searchsorted(tt, ts, side="right") - 1
-    out = fit_windows(tt, th, last, ts, m, n)
+    out = fit_windows(tt, th, last, ts, m, n, compiled=compiled)
     return TsaEstimate(t=ts, theta=out[0], omega=out[1], alpha=out[2], last_event=last, order=m, window=n)
 
 
 def fit_windows(times: Array, angles: Array, last: npt.NDArray[np.int_], sample_times: Array, order: int,
-                window: int) -> Array:
-    """``(theta, omega, alpha)`` rows (3 x samples) of the fits of the events ``last - window + 1 .. last``.
+                window: int, *, compiled: bool | None = None) -> Array:
+    """``(theta, omega, alpha, t_mean)`` rows (4 x samples) of the fits of the events ``last - window + 1 ..
+    last``, ``t_mean`` the mean of their time stamps (summed oldest first).
 
     NaN where ``last < window - 1``.  Each window's numbers are those of :meth:`TimeStamper.estimate`
-    on the same events (the batched factorisations run the same LAPACK calls matrix by matrix).
+    with the same ``compiled`` on the same events (the batched factorisations run the same LAPACK calls
+    matrix by matrix; the C kernel runs window by window).
     """
-    out = np.full((3, sample_times.size), np.nan)
+    out = np.full((4, sample_times.size), np.nan)
     rows = np.flatnonzero(last >= window - 1)
+    if rows.size and int(last[rows[-1]]) >= times.size:
+        raise SimulationError(f"event {int(last[rows[-1]])} asked for of {times.size}")
+    if use_kernels(compiled):
+        out[:, rows] = tsa_fit(times, angles, last[rows], sample_times[rows], order, window)
+        return out
     # the batched matrices hold rows x n x (m + 1) numbers: a chunk of rows at a time keeps memory bounded
     chunk = max(1, _FIT_CHUNK // (window * (order + 1)))
     for start in range(0, rows.size, chunk):
         sel = rows[start:start + chunk]
         idx = last[sel, None] + np.arange(-window + 1, 1)
-        out[:, sel] = _fit(times[idx], angles[idx], sample_times[sel], order)
+        tw = times[idx]
+        out[:3, sel] = _fit(tw, angles[idx], sample_times[sel], order)
+        total = np.zeros(sel.size)
+        for j in range(window):
+            total = total + tw[:, j]
+        out[3, sel] = total / window
     return out
 
 
@@ -221,10 +240,20 @@ class TimeStamper:
     ----------
     order, window : int
         Polynomial order ``m`` and number of events ``n > m``.
+    compiled : bool or None
+        As :func:`time_stamping`: the estimates equal its estimates with the same ``compiled`` bit for bit.
+
+    Raises
+    ------
+    SimulationError
+        ``window <= order``.
+    CodegenError
+        ``compiled=True`` without a working C compiler.
     """
 
-    def __init__(self, *, order: int = 2, window: int = 15) -> None:
+    def __init__(self, *, order: int = 2, window: int = 15, compiled: bool | None = None) -> None:
         self.order, self.window = check_order_window(order, window)
+        self._compiled = use_kernels(compiled)
         self._t: deque[float] = deque(maxlen=self.window)
         self._th: deque[float] = deque(maxlen=self.window)
 
@@ -242,5 +271,9 @@ class TimeStamper:
         """``(theta, omega, alpha)`` at time ``t``, NaNs until ``window`` events have arrived."""
         if len(self._t) < self.window:
             return math.nan, math.nan, math.nan
+        if self._compiled:
+            fit = tsa_fit(np.array(self._t), np.array(self._th), np.array([self.window - 1]), np.array([float(t)]),
+                          self.order, self.window)
+            return float(fit[0, 0]), float(fit[1, 0]), float(fit[2, 0])
         th, om, al = _fit(np.array([self._t]), np.array([self._th]), np.array([t]), self.order)
         return float(th[0]), float(om[0]), float(al[0])

@@ -15,6 +15,22 @@ with its error; when a worker dies, the scheduler re-runs its batches elsewhere 
 every case has its row, the file is rewritten in case order (atomically), so a sweep that was killed
 and resumed ends with the same file as one that ran through.
 
+A results path ending in ``.parquet`` (or ``.pq``) gets the same rows as a Parquet table (pyarrow, the
+optional extra ``switchobs[logs]``): a Parquet file cannot grow row by row, so the rows stream to the journal
+``<path>.rows.jsonl`` beside it (JSON Lines, as above: what a resume reads after a kill), and when every
+case has its row the table is written atomically and the journal removed.  The table has one row per case:
+``row`` holds the JSON Lines row (``read_results`` reads it back, equal to the JSON Lines file's), and
+``case_id``, ``status``, ``error`` and the scalar fields of the case and the metrics as typed columns
+``case.NAME`` and ``metrics.NAME`` (a list, or a name whose values mix types, as JSON text) for analysis.
+
+Warm workers: before the first batch goes out, every C observer of the cases is built once (the symbolic
+design and the C generation take about a second each, a case some tens of milliseconds), one build task
+per observer spread over the workers, and every worker takes them all (``Client.run``) with the imports of
+the simulation stack, so no worker repeats a design before its first case.  What travels is each observer's generated C source, never a binary: a
+worker compiles it into, or finds it verified in, its own per-user compiled-code cache
+(:func:`switchobs.codegen.load_library`); a worker that joins later, or whose warm-up fails, builds what
+its cases need itself.
+
 A case's warnings (numpy's overflow in a diverging run) are not printed: its row reports the outcome
 (non-finite numbers are null, the status says why).  In this process and on the local cluster, what C code
 prints while a case runs (a solver's diagnostics) goes nowhere either, so that ``--json`` output stays
@@ -46,10 +62,10 @@ from .._validate import check_work
 from ..exceptions import PrerequisiteError, SimulationError
 from ._case import BrakingCase, Case
 from ._grid import check_case_count
-from ._run import STATUS_ERROR, STATUS_LOST, CaseResult, run_case
+from ._run import STATUS_ERROR, STATUS_LOST, CaseResult, build_observers, observer_settings, run_case
 
 __all__ = ["run_sweep", "SweepResult", "read_results", "SCHEDULER_NONE", "SCHEDULER_LOCAL", "dask_client",
-           "check_sweep_size"]
+           "check_sweep_size", "PARQUET_ENDINGS"]
 
 SCHEDULER_NONE = "none"
 SCHEDULER_LOCAL = "local"
@@ -171,10 +187,84 @@ def _flush_c_streams() -> None:
         pass
 
 
+#: Endings of a results path written as a Parquet table (module notes).
+PARQUET_ENDINGS = (".parquet", ".pq")
+
+
+def _is_parquet(path: Path) -> bool:
+    return path.suffix.lower() in PARQUET_ENDINGS
+
+
+def _journal(path: Path) -> Path:
+    """Where the rows of a Parquet results file stream until the table is written (module notes)."""
+    return path.with_name(path.name + ".rows.jsonl")
+
+
+def _pyarrow() -> tuple[Any, Any]:
+    try:
+        import pyarrow
+        import pyarrow.parquet
+    except ImportError:
+        raise PrerequisiteError("Parquet results need pyarrow: pip install \"switchobs[logs]\" (or pip install "
+                                "pyarrow), or write JSON Lines (--out NAME.jsonl)") from None
+    return pyarrow, pyarrow.parquet
+
+
 def read_results(path: str | Path) -> list[CaseResult]:
-    """The rows of a results file; a last line cut short by a kill is left out."""
-    rows, _ = _read_rows(Path(path))
+    """The rows of a results file (JSON Lines, or a Parquet table: module notes); a last line cut short by a
+    kill is left out."""
+    file = Path(path)
+    rows = _read_parquet(file) if _is_parquet(file) else _read_rows(file)[0]
     return [CaseResult.from_json(r) for r in rows]
+
+
+def _read_parquet(path: Path) -> list[dict[str, Any]]:
+    """The rows of a Parquet results file, from its ``row`` column."""
+    _, pq = _pyarrow()
+    try:
+        names = pq.read_schema(str(path)).names
+        table = pq.read_table(str(path), columns=["row"]) if "row" in names else None
+    except Exception as exc:  # noqa: BLE001 - pyarrow raises its own kinds for a file that is not Parquet
+        raise SimulationError(f"{path}: not a readable Parquet file ({exc}); is this a sweep results "
+                              "file?") from None
+    try:
+        if table is None:
+            raise KeyError("row")
+        rows = [json.loads(text) for text in table.column("row").to_pylist()]
+    except (KeyError, TypeError, ValueError) as exc:
+        raise SimulationError(f"{path}: not a sweep results table (no JSON rows in a 'row' column: "
+                              f"{type(exc).__name__}); is this a sweep results file?") from None
+    bad = next((i for i, row in enumerate(rows, 1) if not _is_row(row)), None)
+    if bad is not None:
+        raise SimulationError(f"{path}: row {bad} is not a result row; is this a sweep results file?")
+    return rows
+
+
+def _flat_columns(rows: list[dict[str, Any]]) -> dict[str, list[Any]]:
+    """``case.NAME`` and ``metrics.NAME`` columns of the rows' scalar fields (None where a row has none)."""
+    # sorted: a row read back from JSON Lines has its keys sorted, a fresh one in field order
+    names = sorted({(part, key) for row in rows for part in ("case", "metrics") for key in (row.get(part) or {})})
+    return {f"{part}.{key}": [(row.get(part) or {}).get(key) for row in rows] for part, key in names}
+
+
+def _write_parquet(path: Path, rows: list[dict[str, Any]]) -> None:
+    """The rows as a Parquet table, atomically (module notes)."""
+    pa, pq = _pyarrow()
+    columns: dict[str, Any] = {
+        "case_id": pa.array([r["case_id"] for r in rows], type=pa.string()),
+        "status": pa.array([r["status"] for r in rows], type=pa.string()),
+        "error": pa.array([r.get("error") for r in rows], type=pa.string())}
+    for name, values in _flat_columns(rows).items():
+        try:
+            if any(isinstance(v, (list, dict)) for v in values):
+                raise TypeError("not scalar")
+            columns[name] = pa.array(values)
+        except (TypeError, ValueError, pa.ArrowException):   # lists, or numbers beside text: as JSON text
+            columns[name] = pa.array([None if v is None else json.dumps(v, sort_keys=True) for v in values],
+                                     type=pa.string())
+    columns["row"] = pa.array([json.dumps(r, sort_keys=True) for r in rows], type=pa.string())
+    with atomic_file(path, what="the results file") as partial:
+        pq.write_table(pa.table(columns), str(partial))
 
 
 def _is_row(row: Any) -> bool:
@@ -342,8 +432,8 @@ def run_sweep(cases: Iterable[Case], *, path: str | Path | None = None, resume: 
     ----------
     cases : iterable of BrakingCase or CertifyCase
     path : str or Path, optional
-        JSON Lines file of the rows (one per case, keyed by ``case_id``), created with the first row.  An
-        existing file needs ``resume=True``.
+        JSON Lines file of the rows (one per case, keyed by ``case_id``), created with the first row, or a
+        Parquet table (``.parquet``, ``.pq``: module notes).  An existing file needs ``resume=True``.
     resume : bool
         Keep the rows already in ``path`` (except ``lost`` ones) and run only the other cases.
     scheduler : "local", "none", "tcp://HOST:PORT" or distributed.Client
@@ -371,7 +461,7 @@ def run_sweep(cases: Iterable[Case], *, path: str | Path | None = None, resume: 
     OutputError
         ``path`` cannot be written (checked before any case runs).
     PrerequisiteError
-        Dask is needed and missing, or its scheduler cannot be reached.
+        Dask is needed and missing, or its scheduler cannot be reached; pyarrow for a Parquet ``path``.
 
     Examples
     --------
@@ -393,14 +483,25 @@ def run_sweep(cases: Iterable[Case], *, path: str | Path | None = None, resume: 
     if local:
         _local_workers(workers)
     done: dict[str, dict[str, Any]] = {}
-    file = None if path is None else check_output_file(path, what="the results file")
+    target = None if path is None else check_output_file(path, what="the results file")
+    table = target is not None and _is_parquet(target)
+    if table:
+        _pyarrow()                                   # before any case runs
+    # the file the rows stream to: the results file, or the journal of a Parquet table
+    file = _journal(target) if table and target is not None else target
+    if file is not None and table:
+        check_output_file(file, what="the results journal")
     good = 0
     existed = file is not None and file.exists()
-    if file is not None and existed:
+    tabled = table and target is not None and target.exists()
+    if target is not None and (existed or tabled):
         if not resume:
-            raise SimulationError(f"the results file {str(file)!r} exists; resume it (--resume) or choose "
+            found = file if existed else target
+            raise SimulationError(f"the results file {str(found)!r} exists; resume it (--resume) or choose "
                                   f"another path")
-        rows, good = _read_rows(file)
+        rows, good = _read_rows(file) if existed and file is not None else ([], 0)
+        if tabled:
+            rows = _read_parquet(target) + rows      # a journal's rows are newer than the table's
         foreign = [row for row in rows if row["case_id"] not in unique]
         if foreign:
             raise SimulationError(f"the results file {str(file)!r} holds {len(foreign)} row(s) of cases that are "
@@ -443,9 +544,13 @@ def run_sweep(cases: Iterable[Case], *, path: str | Path | None = None, resume: 
             sink[0].close()
     results = tuple(CaseResult.from_json(done[k]) for k in order)
     results = tuple(replace(r, wall_time_s=walls.get(k, 0.0)) for k, r in zip(order, results))
-    if file is not None:
-        _canonical(file, [done[k] for k in order])
-    return SweepResult(results=results, path=file, engine=engine, resumed=resumed,
+    if table and target is not None:
+        _write_parquet(target, [done[k] for k in order])
+        if file is not None:
+            file.unlink(missing_ok=True)
+    elif target is not None:
+        _canonical(target, [done[k] for k in order])
+    return SweepResult(results=results, path=target, engine=engine, resumed=resumed,
                        wall_time_s=time.perf_counter() - t0)
 
 
@@ -468,6 +573,7 @@ def _run_on_dask(todo: list[Case], take: Any, *, scheduler: Any, workers: int | 
     try:
         n = len(client.scheduler_info().get("workers", {})) or workers or 1
         batches = _batches(todo, n, batch_size)
+        _warm_workers(client, todo)
         progress(f"sweep: {len(todo)} cases in {len(batches)} batches on {engine}")
         # the local cluster's workers run one case at a time: their C output can be silenced (module notes)
         futures = client.map(_run_batch, batches, series=series, quiet=local, pure=False)
@@ -483,3 +589,33 @@ def _run_on_dask(todo: list[Case], take: Any, *, scheduler: Any, workers: int | 
     finally:
         close()
     return engine
+
+
+def _warm_workers(client: Any, cases: Sequence[Case]) -> None:
+    """The cases' C observers built once, one task each on the workers, and installed on every worker with
+    the stack's imports (module notes).  A build or a warm-up that fails is left out: the cases concerned
+    build what they need."""
+    settings = observer_settings(cases)
+    if not settings:
+        return
+    progress(f"sweep: warming the workers ({len(settings)} C observer{'s' if len(settings) != 1 else ''})")
+    built: dict[Any, Any] = {}
+    try:
+        futures = client.map(build_observers, [[s] for s in settings], pure=False)
+        for future in futures:
+            try:
+                built.update(future.result())
+            except Exception:  # noqa: BLE001 - a build that fails here fails again in its cases, as a row
+                pass
+        if built:
+            client.run(_warm_worker, built, on_error="return")
+    except Exception:  # noqa: BLE001 - a warm-up that cannot be sent costs time, not results
+        pass
+
+
+def _warm_worker(built: dict[Any, Any]) -> int:
+    """On a worker: the simulation stack imported and the observers ``built`` installed (their number)."""
+    from ..loop import install_observers
+    from ..plants import simulate  # noqa: F401 - the import a first case would pay
+
+    return install_observers(built)

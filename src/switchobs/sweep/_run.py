@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import math
 import time
+from collections.abc import Iterable
 from fractions import Fraction
 from dataclasses import dataclass, field
 from typing import Any
@@ -18,7 +19,8 @@ from typing import Any
 from ..exceptions import SwitchobsError
 from ._case import BrakingCase, Case, CertifyCase, case_from_json
 
-__all__ = ["CaseResult", "run_case", "STATUS_ERROR", "STATUS_LOST", "SERIES_COLUMNS", "NUMERIC_METRICS"]
+__all__ = ["CaseResult", "run_case", "STATUS_ERROR", "STATUS_LOST", "SERIES_COLUMNS", "NUMERIC_METRICS",
+           "case_observers", "observer_settings", "build_observers"]
 
 #: Status of a case that raised (its message is in :attr:`CaseResult.error`).
 STATUS_ERROR = "error"
@@ -140,6 +142,44 @@ def run_case(case: Case, *, series: bool = False) -> CaseResult:
         return CaseResult(case, STATUS_ERROR, {}, error=f"{type(exc).__name__}: {exc}",
                           wall_time_s=time.perf_counter() - t0)
     return CaseResult(case, status, metrics, series=kept, wall_time_s=time.perf_counter() - t0)
+
+
+def observer_settings(cases: Iterable[Case]) -> list[tuple[Any, Any, str]]:
+    """The ``(spec, vehicle, initial road)`` of each distinct C observer the braking ``cases`` run (the
+    settings :func:`switchobs.loop.compiled_observers` builds)."""
+    from ..loop import EstimatorSpec
+    from ..plants import QuarterCar
+
+    seen: dict[tuple[Any, ...], tuple[Any, Any, str]] = {}
+    for case in cases:
+        if isinstance(case, BrakingCase) and case.observer != "none" and case.impl == "c":
+            spec = EstimatorSpec(case.observer, beta=case.beta1, beta2=case.beta2, gamma=case.gamma,
+                                 impl=case.impl, method=case.method)
+            # xbs3 reads the initial road; the others do not: one setting per what the observer depends on
+            road = case.road if case.observer == "xbs3" else ""
+            seen.setdefault((spec, case.load_n, road), (spec, QuarterCar(load_n=case.load_n), case.road))
+    return list(seen.values())
+
+
+def build_observers(settings: Iterable[tuple[Any, Any, str]]) -> dict[Any, Any]:
+    """The C observers of ``settings`` (:func:`observer_settings`), each built once in this process (the
+    symbolic design, the C generation and the compilation): what a sweep hands its workers
+    (:func:`switchobs.loop.install_observers`) so that none repeats them.  A setting that cannot be built is
+    left out: its cases report the error."""
+    from ..loop import compiled_observers
+
+    built: dict[Any, Any] = {}
+    for setting in settings:
+        try:
+            built.update(compiled_observers([setting]))
+        except SwitchobsError:
+            continue
+    return built
+
+
+def case_observers(cases: Iterable[Case]) -> dict[Any, Any]:
+    """:func:`build_observers` of the cases' :func:`observer_settings`."""
+    return build_observers(observer_settings(cases))
 
 
 def _controller(case: BrakingCase) -> Any:
