@@ -75,8 +75,10 @@ def wheel(tmp_path_factory) -> Path:
     return found
 
 
-def _environment(tmp: Path, wheel: Path, install: str, *, casadi: bool) -> Path:
-    """A fresh venv holding the wheel installed as the README says (``install`` is its pip line)."""
+def _environment(tmp: Path, wheel: Path, install: str, *, extra: str) -> Path:
+    """A fresh venv holding the wheel installed as the README says (``install`` is its pip line), with the
+    ``extra`` its comment names ("base": no extra)."""
+    casadi = extra != "base"
     venv = tmp / "venv"
     assert _run([sys.executable, "-m", "venv", "--without-pip", str(venv)], tmp).returncode == 0
     python = venv / "bin" / "python"
@@ -93,7 +95,9 @@ def _environment(tmp: Path, wheel: Path, install: str, *, casadi: bool) -> Path:
         (site / "casadi.py").write_text(_MISSING.format("casadi"), encoding="utf-8")
     words = shlex.split(install, comments=True)
     assert words[:4] == ["pip", "install", "--find-links", "dist"], words
-    requirement = words[4] if casadi else "switchobs"
+    named = {"codegen": words[4], "base": "switchobs", "all": "switchobs[all]"}
+    assert all(f'"{r}"' in install for r in named.values()), install   # the three the README names
+    requirement = named[extra]
     done = _run([str(python), "-m", "pip", "install", "-q", "--no-index", "--find-links", str(wheel.parent),
                  requirement], tmp)
     assert done.returncode == 0, done.stderr
@@ -101,11 +105,11 @@ def _environment(tmp: Path, wheel: Path, install: str, *, casadi: bool) -> Path:
 
 
 @pytest.mark.slow
-@pytest.mark.parametrize("extra", ["base", "codegen"])
+@pytest.mark.parametrize("extra", ["base", "codegen", "all"])
 def test_the_readme_user_path_runs_from_an_installed_wheel(wheel, tmp_path, extra):
     pytest.importorskip("casadi")   # the codegen environment takes it from here
     pips, commands = _user_path()
-    venv = _environment(tmp_path, wheel, pips[1], casadi=extra != "base")
+    venv = _environment(tmp_path, wheel, pips[1], extra=extra)
     work = tmp_path / "work"       # outside the repository
     work.mkdir()
     env = _clean_env()
@@ -123,7 +127,11 @@ def test_the_readme_user_path_runs_from_an_installed_wheel(wheel, tmp_path, extr
             continue
         assert proc.returncode == 0, f"{line}: {proc.stderr}"
     assert (work / "fig4.png").read_bytes()[:8] == b"\x89PNG\r\n\x1a\n" and (work / "cert.json").is_file()
-    assert (work / "c").is_dir() == (extra == "codegen")
+    assert (work / "c").is_dir() == (extra != "base")
+    if extra == "all":   # what each extra brings is installed and imports in the user's environment
+        found = _run([str(venv / "bin" / "python"), "-c", "import dask.distributed, fmpy, asammdf, pyarrow; "
+                      "from importlib.metadata import requires; print(sorted(requires('switchobs')))"], work, env)
+        assert found.returncode == 0, found.stderr
     # a repository command refuses in one line outside a checkout
     proc = _run([str(venv / "bin" / "switchobs"), "reproduce", "--check"], work, env)
     assert proc.returncode == 2 and proc.stderr.count("\n") == 1 and "checkout" in proc.stderr
