@@ -314,10 +314,9 @@ def certify(family: FamilyLike, *, names: Sequence[str] | None = None, output: A
         An exact Hespanha certificate known beforehand (the design's common P),
         checked exactly before any LMI (see :func:`common_lyapunov`).
     arithmetic : {"exact", "interval"}
-        How the checks decide strict definiteness: exact rational elimination, or
-        first an LDL' in arb balls with outward rounding (rigorous too, and much
-        faster for large ``P`` with long rationals; exact wherever it cannot decide).
-        Recorded in the document's provenance.
+        Recorded in the document's provenance; both decide the same way (see
+        :data:`switchobs.exact.ARITHMETICS`): an LDL' in arb balls with outward rounding
+        first, a proof where it decides, and the exact elimination elsewhere.
 
     Returns
     -------

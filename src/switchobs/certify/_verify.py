@@ -96,7 +96,7 @@ class VerificationReport:
         model-gain link; a model that is not built in: its A and C), one sentence each.
         ``switchobs verify --strict`` fails when there is any.
     arithmetic : str
-        ``"exact"`` or ``"interval"`` (strict definiteness by arb balls where they decide it).
+        ``"exact"`` or ``"interval"``, as asked (both decide the same way).
     """
 
     holds: bool
@@ -422,9 +422,9 @@ def verify_certificate(doc: Mapping[str, Any] | str | Path, *, model: Any = None
         recorded parameter values are compared with the ``observer`` section.
         By default the built-in model named in ``provenance.model`` (if any).
     arithmetic : {"exact", "interval"}
-        ``"interval"`` proves strict definiteness by an LDL' in arb balls (outward
-        rounding) where it can and falls back to exact arithmetic elsewhere: still
-        rigorous, much faster for large matrices with long rationals (n = 64).
+        Both decide the same way (see :data:`switchobs.exact.ARITHMETICS`): definiteness by
+        an LDL' in arb balls (outward rounding), a proof where it decides, and the exact
+        elimination elsewhere.  The name is shown in the report.
 
     Returns
     -------

@@ -11,10 +11,10 @@ The module deliberately imports nothing from numpy, scipy, cvxpy or sympy, so
 that the certificate checker built on it (:mod:`switchobs.certify._verify`)
 shares no code with the floating-point pipeline that produced a certificate.
 
-Large strict definiteness checks may instead run in interval arithmetic
-(``with arithmetic("interval"):``): an LDL' elimination in python-flint's
-``arb`` balls (outward rounding, 256 to 4096 bits) proves ``M > 0`` when every
-pivot's ball is positive; whatever it cannot prove is decided exactly as above.
+Every definiteness check first runs an LDL' elimination in python-flint's
+``arb`` balls (outward rounding, 256 to 4096 bits): pivot balls of one sign are a
+proof (each contains the exact pivot); whatever they cannot decide is decided by
+the exact elimination above.
 """
 
 from __future__ import annotations
@@ -23,7 +23,6 @@ import math
 import operator
 from collections.abc import Iterable, Iterator, Sequence
 from contextlib import contextmanager
-from contextvars import ContextVar
 from dataclasses import dataclass
 from fractions import Fraction
 from typing import Any
@@ -212,17 +211,17 @@ def sqrt_upper(x: Fraction, bits: int = 64) -> Fraction:
 
 
 # ------------------------------------------------------------------ definiteness
-#: How strict definiteness is decided: ``"exact"`` (rational Bareiss, standard library) or ``"interval"``
-#: (arb balls first, exact when they cannot decide).
+#: Accepted names of the arithmetic (``--arithmetic``): both decide exactly, the ``arb`` enclosure first
+#: (see :func:`definiteness`).  ``"interval"`` named that first try when it was not yet the default; it is
+#: kept so that scripts and the certificates recording it in their provenance keep working.
 ARITHMETICS = ("exact", "interval")
-_ARITHMETIC: ContextVar[str] = ContextVar("switchobs_arithmetic", default="exact")
-#: Working precisions [bits] of the interval LDL', tried in turn.
+#: Working precisions [bits] of the interval LDL', tried in turn for a strict claim.
 INTERVAL_BITS = (256, 1024, 4096)
 
 
 @contextmanager
 def arithmetic(kind: str) -> Iterator[None]:
-    """Decide strict definiteness in ``kind`` arithmetic inside the block (see the module docstring).
+    """Check that ``kind`` is one of :data:`ARITHMETICS` and run the block (both decide the same way).
 
     Raises
     ------
@@ -231,29 +230,38 @@ def arithmetic(kind: str) -> Iterator[None]:
     """
     if kind not in ARITHMETICS:
         raise CertificateError(f"arithmetic {kind!r} is unknown; use one of {', '.join(ARITHMETICS)}")
-    token = _ARITHMETIC.set(kind)
-    try:
-        yield
-    finally:
-        _ARITHMETIC.reset(token)
+    yield
 
 
-def _interval_positive_definite(N: Sequence[Sequence[int]]) -> bool:
-    """``N > 0`` proven by an LDL' elimination in arb balls (True), or not proven (False).
+def _negative_minor(rows: Sequence[int], k: int) -> Definiteness:
+    return Definiteness(False, k, f"the principal minor on rows/columns {[i + 1 for i in rows] + [k + 1]} "
+                                  "is negative")
 
-    Every ball contains the exact value of its entry, so positive pivot balls are the
-    exact pivots' signs: the ratios of consecutive leading principal minors (Sylvester).
+
+def _enclosed_definiteness(N: Sequence[Sequence[int]], *, strict: bool) -> Definiteness | None:
+    """``N > 0`` proven, or a leading principal minor proven negative, by an LDL' in arb balls; else None.
+
+    Every ball contains the exact value of its entry (outward rounding), so a pivot ball that
+    lies right of 0 is a proof that the exact pivot is positive: the pivots are the ratios of
+    consecutive leading principal minors, and positive pivots prove ``N > 0`` (Sylvester's
+    criterion), which implies ``N >= 0``.  A pivot ball left of 0 after positive ones proves the
+    leading principal minor of that size negative, which refutes both claims with the same index
+    and reason as the exact elimination.  A ball containing 0 decides nothing: a strict claim is
+    retried at a higher precision, a semidefinite one (whose zero pivots are exact zeros as a
+    rule) goes to the exact elimination at once.
     """
     import flint
 
     n = len(N)
     saved = flint.ctx.prec
     try:
-        for bits in INTERVAL_BITS:
+        for bits in INTERVAL_BITS if strict else INTERVAL_BITS[:1]:
             flint.ctx.prec = bits
             a = [[flint.arb(x) for x in row] for row in N]
             for k in range(n):
                 p = a[k][k]
+                if p < 0:
+                    return _negative_minor(range(k), k)
                 if not p > 0:
                     break
                 row_k = a[k]
@@ -264,10 +272,10 @@ def _interval_positive_definite(N: Sequence[Sequence[int]]) -> bool:
                         row_i[j] -= f * row_k[j]
                         a[j][i] = row_i[j]
             else:
-                return True
+                return Definiteness(True)
     finally:
         flint.ctx.prec = saved
-    return False
+    return None
 
 
 @dataclass(frozen=True)
@@ -292,7 +300,13 @@ class Definiteness:
 def definiteness(M: Sequence[Sequence[Any]], *, strict: bool) -> Definiteness:
     """Exactly decide ``M > 0`` (``strict``) or ``M >= 0`` for a symmetric rational matrix.
 
-    Fraction-free symmetric Bareiss elimination on ``N = d M`` (integers, python-flint's ``fmpz``).
+    First an enclosure: an LDL' elimination of ``N = d M`` (integers) in python-flint's ``arb``
+    balls (midpoint and radius, outward rounding).  When every pivot ball is positive, or one is
+    negative after positive ones, that *is* the proof -- each ball contains the exact pivot, so its
+    sign is the exact pivot's sign -- not a floating-point estimate; the verdict, index and reason
+    are those of the exact elimination.  Only when a ball contains 0 (a singular or nearly singular
+    leading block, a semidefinite matrix with a zero pivot) does the exact elimination decide:
+    fraction-free symmetric Bareiss elimination on ``N`` (python-flint's ``fmpz``).
     After eliminating the pivots ``K``, entry ``(i, j)`` of the working matrix
     is the minor ``det N[K+i, K+j]``, so the diagonal pivots are leading
     principal minors (Sylvester's criterion) and every division is exact.
@@ -305,6 +319,13 @@ def definiteness(M: Sequence[Sequence[Any]], *, strict: bool) -> Definiteness:
     DimensionError
         If ``M`` is not square or not symmetric.
     """
+    a = _symmetric_integer_form(M)
+    enclosed = _enclosed_definiteness(a, strict=strict)
+    return enclosed if enclosed is not None else _eliminated_definiteness(a, strict=strict)
+
+
+def _symmetric_integer_form(M: Sequence[Sequence[Any]]) -> list[list[Any]]:
+    """``d M`` as integers (``d`` the common denominator) after checking that ``M`` is square and symmetric."""
     n = len(M)
     if any(len(row) != n for row in M):
         raise DimensionError(f"definiteness needs a square matrix, got {n} rows of lengths {[len(r) for r in M]}")
@@ -314,25 +335,28 @@ def definiteness(M: Sequence[Sequence[Any]], *, strict: bool) -> Definiteness:
                 raise DimensionError(f"matrix is not symmetric: entry ({i + 1},{j + 1}) = {M[i][j]} but "
                                      f"({j + 1},{i + 1}) = {M[j][i]}")
     if _all_int(M):
-        a = [list(row) for row in M]
-    else:
-        a, _ = integer_form([[Fraction(x) for x in row] for row in M])
-    if strict and _ARITHMETIC.get() == "interval" and _interval_positive_definite(a):
-        return Definiteness(True)
+        return [list(row) for row in M]
+    return integer_form([[Fraction(x) for x in row] for row in M])[0]
+
+
+def _eliminated_definiteness(N: Sequence[Sequence[Any]], *, strict: bool) -> Definiteness:
+    """The exact fraction-free elimination of :func:`definiteness` on the symmetric integer matrix ``N``."""
     # GMP integers (python-flint): the same operations, 7x faster than Python's ints at n = 64 on
     # 150-digit entries (the minors grow to n times the digits)
     import flint
 
-    a = [[flint.fmpz(x) for x in row] for row in a]
+    n = len(N)
+    a = [[flint.fmpz(x) for x in row] for row in N]
     prev = flint.fmpz(1)
     kept: list[int] = []
     for k in range(n):
         p = a[k][k]
         rest = range(k + 1, n)
-        if p < 0 or (p == 0 and strict):
-            rows = [i + 1 for i in kept] + [k + 1]
-            sign = "negative" if p < 0 else "zero"
-            return Definiteness(False, k, f"the principal minor on rows/columns {rows} is {sign}")
+        if p < 0:
+            return _negative_minor(kept, k)
+        if p == 0 and strict:
+            return Definiteness(False, k, f"the principal minor on rows/columns {[i + 1 for i in kept] + [k + 1]} "
+                                          "is zero")
         if p == 0:
             bad = next((j for j in rest if a[k][j] != 0), None)
             if bad is not None:
