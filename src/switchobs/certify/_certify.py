@@ -41,7 +41,7 @@ from ._lyapunov import (DEFAULT_EPS, LyapunovResult, SingularSum, _reading, comm
 from ._planar import PlanarClassification, classify_planar
 from ._schema import (ANY_DWELL, ArbitrarySwitching, BoxSection, CertificateDocument, CertificateKind,
                       FamilySection, DiscreteSection, ObserverSection, PlanarEntry, Verdict)
-from ._verify import VerificationReport, implied_verdict, verify_certificate
+from ._verify import VerificationReport, checked_once, implied_verdict, verify_certificate
 
 __all__ = ["CertificationReport", "certify", "certify_model", "verdict_text"]
 
@@ -338,7 +338,7 @@ def certify(family: FamilyLike, *, names: Sequence[str] | None = None, output: A
     fam = as_family(family, names)
     if dwell not in ("auto", True, False):
         raise CertificateError(f"dwell must be 'auto', True or False, got {dwell!r}")
-    with exact_arithmetic(arithmetic):
+    with exact_arithmetic(arithmetic), checked_once():  # each entry checked once: candidates and document
         return _certify(fam, output, dwell, eps, solvers, observer, provenance, discrete, box, candidate,
                         arithmetic)
 

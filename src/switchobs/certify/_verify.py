@@ -49,9 +49,11 @@ Certificate kinds and what they prove (``W_p(P) = A_p' P + P A_p``):
 from __future__ import annotations
 
 import json
-from collections.abc import Mapping, Sequence
+from collections.abc import Iterator, Mapping, Sequence
 from dataclasses import dataclass, field
 from fractions import Fraction
+from contextlib import contextmanager
+from contextvars import ContextVar
 from math import gcd
 from pathlib import Path
 from typing import Any
@@ -69,7 +71,10 @@ from ._schema import (ANY_DWELL, ArbitrarySwitching, CertificateDocument, Certif
 from ._provenance import model_link
 
 __all__ = ["Check", "VerificationReport", "verify_certificate", "load_certificate", "implied_verdict",
-           "planar_case_exact"]
+           "planar_case_exact", "check_entry", "checked_once"]
+
+#: The entry checks decided so far in one command (see :func:`checked_once`); None outside it.
+_DECIDED: ContextVar[dict[tuple[Any, ...], Check] | None] = ContextVar("switchobs_decided_checks", default=None)
 
 
 @dataclass(frozen=True)
@@ -470,17 +475,9 @@ def _verify(doc: Mapping[str, Any] | str | Path, how: str, model: Any) -> Verifi
     for cert in document.certificates:
         kind = cert.kind
         progress(f"verify: {kind.value} certificate (n = {len(As[0])}, {len(As)} modes)")
-        if kind is CertificateKind.STRICT_CQLF:
-            c = _check_strict(names, As, cert)
-        elif kind is CertificateKind.HESPANHA:
-            c = _check_hespanha(names, As, cert)
-        elif kind in (CertificateKind.NO_STRICT_CQLF, CertificateKind.NO_COMMON_LYAPUNOV):
-            c = _check_dual(names, As, cert)
-        elif kind is CertificateKind.SINGULAR_SUM:
-            c = _check_singular_sum(names, As, cert)
-        elif kind is CertificateKind.DWELL_TIME:
-            c = _check_dwell(names, As, cert)
-            if c.holds:
+        if kind is not CertificateKind.PLANAR:
+            c = check_entry(names, As, cert)
+            if kind is CertificateKind.DWELL_TIME and c.holds:
                 dwell.append(to_fraction(cert.tau_D, what="dwell-time tau_D"))
         else:
             if len(As) != 2 or len(As[0]) != 2:
@@ -512,6 +509,55 @@ def _verify(doc: Mapping[str, Any] | str | Path, how: str, model: Any) -> Verifi
                               parameters={_text(k): _text(v) for k, v in parameters.items()}
                               if isinstance(parameters, Mapping) else {},
                               gains=gains, unchecked=unchecked, arithmetic=how)
+
+
+@contextmanager
+def checked_once() -> Iterator[None]:
+    """Inside the block every certificate entry is checked once: :func:`check_entry` records its verdicts.
+
+    ``certify`` decides its candidates with :func:`check_entry` (the verifier's own checks, not a
+    producer's copy of them) and then verifies the document it wrote: an entry of that document
+    equal to a candidate already decided (the same family and the same rationals, as written) is
+    not eliminated again.  Everything else (the verdict, the sections, the model link) is checked
+    by :func:`verify_certificate` as always; ``switchobs verify`` and a call outside this block
+    decide every entry afresh.
+    """
+    token = _DECIDED.set({})
+    try:
+        yield
+    finally:
+        _DECIDED.reset(token)
+
+
+#: The fields each kind of entry is checked from (margins, methods and solver names are not).
+_CHECKED_FIELDS = {CertificateKind.STRICT_CQLF: ("P",), CertificateKind.HESPANHA: ("P", "C"),
+                   CertificateKind.NO_STRICT_CQLF: ("R",), CertificateKind.NO_COMMON_LYAPUNOV: ("R",),
+                   CertificateKind.SINGULAR_SUM: ("v",), CertificateKind.DWELL_TIME: ("tau_D", "P")}
+
+
+def check_entry(names: Sequence[str], As: Sequence[Matrix], cert: Any) -> Check:
+    """Check one certificate entry (any kind but ``planar``) exactly against the family ``As``.
+
+    Inside :func:`checked_once` an entry already decided against the same family is not checked again.
+    """
+    check = {CertificateKind.STRICT_CQLF: _check_strict, CertificateKind.HESPANHA: _check_hespanha,
+             CertificateKind.NO_STRICT_CQLF: _check_dual, CertificateKind.NO_COMMON_LYAPUNOV: _check_dual,
+             CertificateKind.SINGULAR_SUM: _check_singular_sum, CertificateKind.DWELL_TIME: _check_dwell}[cert.kind]
+    decided = _DECIDED.get()
+    if decided is None:
+        return check(names, As, cert)
+    key = (cert.kind, tuple(names), _as_text(As), *(_as_text(getattr(cert, f)) for f in _CHECKED_FIELDS[cert.kind]))
+    if key not in decided:
+        decided[key] = check(names, As, cert)
+    return decided[key]
+
+
+def _as_text(value: Any) -> Any:
+    """Nested tuples of the entries' texts: equal keys are the same rationals (``str`` of a Fraction is
+    the certificate's own notation; a hand-written ``"0.5"`` merely misses the record)."""
+    if isinstance(value, (list, tuple)):
+        return tuple(_as_text(x) for x in value)
+    return str(value)
 
 
 def _check_cost(doc: Mapping[str, Any], n: int) -> None:
