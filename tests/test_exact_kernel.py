@@ -153,3 +153,20 @@ def test_the_exact_lyapunov_solution_solves_the_equation():
     P = lyapunov_solve(A, Q)
     AtP = ref_matmul(transpose(A), P)
     assert [[AtP[i][j] + AtP[j][i] + Q[i][j] for j in range(2)] for i in range(2)] == [[0, 0], [0, 0]]
+
+
+def test_the_eigenvalue_enclosure_decides_hurwitz_as_the_routh_array_does():
+    from switchobs.certify._family import _hurwitz_enclosed, _hurwitz_exact, _hurwitz_routh
+
+    rng = Random(5)
+    decided = 0
+    for n in (2, 5, 9):
+        for shift in (Fraction(-3), Fraction(0), Fraction(3)):
+            A = [[_entry(rng, 6) / 10 ** 6 + (shift if i == j else 0) for j in range(n)] for i in range(n)]
+            enclosed = _hurwitz_enclosed(A)
+            decided += enclosed is not None
+            assert enclosed in (None, _hurwitz_routh(A)) and _hurwitz_exact(A) == _hurwitz_routh(A)
+    assert decided >= 6
+    # an eigenvalue on the axis: the balls straddle it, the exact Routh array refuses
+    nilpotent = [[Fraction(0), Fraction(1)], [Fraction(0), Fraction(0)]]
+    assert _hurwitz_enclosed(nilpotent) is None and not _hurwitz_exact(nilpotent)

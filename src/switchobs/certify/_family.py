@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 from collections.abc import Mapping, Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, field, replace
 from typing import Any, Union
 
 import numpy as np
@@ -13,7 +13,7 @@ from sympy.polys.matrices import DomainMatrix
 from ..design import routh_first_column
 from ..exceptions import CertificateError, DimensionError, ModelError, NotHurwitzError
 from ..model import matrix_rows
-from ..exact import Matrix, float_matrix, fraction_matrix, matrix_strings
+from ..exact import Matrix, float_matrix, fraction_matrix, integer_form, matrix_strings
 
 __all__ = ["Family", "as_family", "format_spectrum", "FamilyLike"]
 
@@ -30,11 +30,14 @@ class Family:
         The matrices as :class:`fractions.Fraction` rows (floats are taken at
         their exact binary value, strings and sympy Rationals exactly).
     numeric : tuple of numpy.ndarray
+    hurwitz : bool
+        Every matrix was proven Hurwitz by :func:`as_family` (not proven again when the family is passed on).
     """
 
     names: tuple[str, ...]
     exact: tuple[Matrix, ...]
     numeric: tuple[np.ndarray, ...]
+    hurwitz: bool = field(default=False, compare=False, repr=False)
 
     @property
     def n(self) -> int:
@@ -103,9 +106,47 @@ def _spectrum(M: np.ndarray, exact: Matrix | None) -> np.ndarray:
                            for f, m in factors for _ in range(m)])
 
 
+#: Working precisions [bits] of the eigenvalue enclosures of :func:`_hurwitz_exact`, tried in turn.
+EIGENVALUE_BITS = (256, 1024)
+
+
 def _hurwitz_exact(M: Matrix) -> bool:
-    """Routh array of the exact characteristic polynomial (QQ, flint-backed): floating-point eigenvalues
-    of a large observer's error matrix can land on the wrong side of the axis (seed 004 gains grow fast with n)."""
+    """``M`` is Hurwitz, decided rigorously: floating-point eigenvalues of a large observer's error matrix can
+    land on the wrong side of the axis (seed 004 gains grow fast with n).
+
+    First python-flint's ``acb_mat.eig(multiple=True)`` (Rump's verified enclosures, with multiplicities) of
+    the exact matrix in complex balls: every ball contains an eigenvalue, counted with multiplicity, so balls
+    left of the imaginary axis prove ``M`` Hurwitz and one right of it proves it is not.  When the balls
+    cannot be isolated or straddle the axis, the Routh array of the exact characteristic polynomial (QQ,
+    flint-backed) decides: at n = 32 with the 4000-digit entries of a dense 6-digit model that costs 4 s
+    per matrix, the enclosure 0.2 s.
+    """
+    verdict = _hurwitz_enclosed(M)
+    return verdict if verdict is not None else _hurwitz_routh(M)
+
+
+def _hurwitz_enclosed(M: Matrix) -> bool | None:
+    import flint
+
+    N, d = integer_form(M)
+    saved = flint.ctx.prec
+    try:
+        for bits in EIGENVALUE_BITS:
+            flint.ctx.prec = bits
+            try:
+                eig = (flint.acb_mat(flint.fmpz_mat(N)) / d).eig(multiple=True)
+            except ValueError:   # not isolated at this precision
+                continue
+            if all(z.real < 0 for z in eig):
+                return True
+            if any(z.real > 0 for z in eig):
+                return False
+    finally:
+        flint.ctx.prec = saved
+    return None
+
+
+def _hurwitz_routh(M: Matrix) -> bool:
     dm = DomainMatrix([[QQ(x.numerator, x.denominator) for x in row] for row in M], (len(M), len(M)), QQ)
     alpha = [QQ.to_sympy(c) for c in dm.charpoly()[1:]]
     column = routh_first_column(alpha)
@@ -167,7 +208,7 @@ def as_family(matrices: FamilyLike, names: Sequence[str] | None = None, *, hurwi
                                      "all matrices of a family must have the same size")
         fam = Family(tuple(str(x) for x in names), tuple(exact),
                      tuple(float_matrix(M) for M in exact))
-    if hurwitz:
+    if hurwitz and not fam.hurwitz:
         for nm, M, E in zip(fam.names, fam.numeric, fam.exact):
             if not np.all(np.isfinite(M)):
                 raise ModelError(f"{nm} has entries too large for floating point")
@@ -175,4 +216,5 @@ def as_family(matrices: FamilyLike, names: Sequence[str] | None = None, *, hurwi
                 raise NotHurwitzError(f"{nm} is not Hurwitz: its spectrum is {format_spectrum(M)}; every matrix "
                                       "of the family must have eigenvalues with negative real part "
                                       "(check the gains against the Routh-Hurwitz conditions)")
+        fam = replace(fam, hurwitz=True)
     return fam

@@ -50,7 +50,7 @@ from __future__ import annotations
 
 import json
 from collections.abc import Iterator, Mapping, Sequence
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from fractions import Fraction
 from contextlib import contextmanager
 from contextvars import ContextVar
@@ -517,7 +517,7 @@ def checked_once() -> Iterator[None]:
 
     ``certify`` decides its candidates with :func:`check_entry` (the verifier's own checks, not a
     producer's copy of them) and then verifies the document it wrote: an entry of that document
-    equal to a candidate already decided (the same family and the same rationals, as written) is
+    equal to a candidate already decided (the same family and the same rationals) is
     not eliminated again.  Everything else (the verdict, the sections, the model link) is checked
     by :func:`verify_certificate` as always; ``switchobs verify`` and a call outside this block
     decide every entry afresh.
@@ -546,18 +546,28 @@ def check_entry(names: Sequence[str], As: Sequence[Matrix], cert: Any) -> Check:
     decided = _DECIDED.get()
     if decided is None:
         return check(names, As, cert)
-    key = (cert.kind, tuple(names), _as_text(As), *(_as_text(getattr(cert, f)) for f in _CHECKED_FIELDS[cert.kind]))
+    try:   # the rationals themselves (parsed once, then checked as parsed): a cheap hash, whatever their notation
+        parsed = {f: _parsed(getattr(cert, f)) for f in _CHECKED_FIELDS[cert.kind]}
+    except (SwitchobsError, TypeError, ValueError):
+        return check(names, As, cert)   # malformed: the check itself names the problem
+    cert = replace(cert, **parsed)
+    key = (cert.kind, tuple(names), _frozen(As), *(_frozen(v) for v in parsed.values()))
     if key not in decided:
         decided[key] = check(names, As, cert)
     return decided[key]
 
 
-def _as_text(value: Any) -> Any:
-    """Nested tuples of the entries' texts: equal keys are the same rationals (``str`` of a Fraction is
-    the certificate's own notation; a hand-written ``"0.5"`` merely misses the record)."""
+def _parsed(value: Any) -> Any:
+    """``value`` with every number an exact Fraction (nested lists kept as lists)."""
     if isinstance(value, (list, tuple)):
-        return tuple(_as_text(x) for x in value)
-    return str(value)
+        return [_parsed(x) for x in value]
+    if value is None or isinstance(value, Mapping):
+        raise TypeError("not a number")
+    return to_fraction(value)
+
+
+def _frozen(value: Any) -> Any:
+    return tuple(_frozen(x) for x in value) if isinstance(value, (list, tuple)) else value
 
 
 def _check_cost(doc: Mapping[str, Any], n: int) -> None:

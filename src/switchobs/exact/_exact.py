@@ -207,10 +207,7 @@ def _all_int(M: Sequence[Sequence[Any]]) -> bool:
 
 def integer_form(M: Sequence[Sequence[Fraction]]) -> tuple[list[list[int]], int]:
     """``(N, d)`` with ``M = N / d``, ``N`` integer and ``d > 0`` the lcm of the denominators."""
-    d = 1
-    for row in M:
-        for x in row:
-            d = d * x.denominator // math.gcd(d, x.denominator)
+    d = math.lcm(*{x.denominator for row in M for x in row})   # distinct denominators: few for decimal data
     return [[x.numerator * (d // x.denominator) for x in row] for row in M], d
 
 
