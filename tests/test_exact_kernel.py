@@ -170,3 +170,22 @@ def test_the_eigenvalue_enclosure_decides_hurwitz_as_the_routh_array_does():
     # an eigenvalue on the axis: the balls straddle it, the exact Routh array refuses
     nilpotent = [[Fraction(0), Fraction(1)], [Fraction(0), Fraction(0)]]
     assert _hurwitz_enclosed(nilpotent) is None and not _hurwitz_exact(nilpotent)
+
+
+def test_the_design_recheck_of_a_numeric_design_runs_on_the_kernel(tmp_path):
+    import sympy as sp
+
+    from switchobs.design import design_gains
+    from switchobs.design._recheck import _fractions, lyapunov_residual_is_zero
+    from switchobs.model import load_model
+
+    path = tmp_path / "decimal.toml"
+    path.write_text('name = "decimal"\nstates = ["x1", "x2", "x3"]\noutput = "y"\n'
+                    'A = [["-1.23457", "1", "0"], ["0.5", "-2.5", "1"], ["0", "0", "-0.731"]]\n'
+                    'C = ["1", "0", "0"]\ntime_scale = "y"\n', encoding="utf-8")
+    design = design_gains(load_model(str(path)), spectrum="-1,-1.5,-2.03125")
+    Q = sp.Matrix(design.C_plus).T * sp.Matrix(design.C_plus)
+    assert _fractions(design.A_plus) is not None and _fractions(sp.Matrix([[sp.Symbol("a")]])) is None
+    assert lyapunov_residual_is_zero(design.A_plus, design.P, Q)
+    assert not lyapunov_residual_is_zero(design.A_plus, design.P, 2 * Q)
+    assert all(design.verify().values())
