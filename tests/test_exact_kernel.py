@@ -157,19 +157,24 @@ def test_the_exact_lyapunov_solution_solves_the_equation():
 
 def test_the_eigenvalue_enclosure_decides_hurwitz_as_the_routh_array_does():
     from switchobs.certify._family import _hurwitz_enclosed, _hurwitz_exact, _hurwitz_routh
+    from switchobs.exact import integer_form
 
     rng = Random(5)
     decided = 0
     for n in (2, 5, 9):
         for shift in (Fraction(-3), Fraction(0), Fraction(3)):
             A = [[_entry(rng, 6) / 10 ** 6 + (shift if i == j else 0) for j in range(n)] for i in range(n)]
-            enclosed = _hurwitz_enclosed(A)
+            enclosed = _hurwitz_enclosed(*integer_form(A))
             decided += enclosed is not None
             assert enclosed in (None, _hurwitz_routh(A)) and _hurwitz_exact(A) == _hurwitz_routh(A)
     assert decided >= 6
+    # long entries take the enclosure first: the same verdicts
+    huge = [[Fraction(-3 * 10 ** 1200 + 1, 10 ** 1200), Fraction(1)], [Fraction(0), Fraction(-1, 7)]]
+    assert _hurwitz_enclosed(*integer_form(huge)) is True and _hurwitz_exact(huge)
+    assert not _hurwitz_exact([[-x for x in row] for row in huge])
     # an eigenvalue on the axis: the balls straddle it, the exact Routh array refuses
     nilpotent = [[Fraction(0), Fraction(1)], [Fraction(0), Fraction(0)]]
-    assert _hurwitz_enclosed(nilpotent) is None and not _hurwitz_exact(nilpotent)
+    assert _hurwitz_enclosed(*integer_form(nilpotent)) is None and not _hurwitz_exact(nilpotent)
 
 
 def test_the_design_recheck_of_a_numeric_design_runs_on_the_kernel(tmp_path):

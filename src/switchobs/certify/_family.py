@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import math
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field, replace
 from typing import Any, Union
@@ -106,41 +107,49 @@ def _spectrum(M: np.ndarray, exact: Matrix | None) -> np.ndarray:
                            for f, m in factors for _ in range(m)])
 
 
-#: Working precisions [bits] of the eigenvalue enclosures of :func:`_hurwitz_exact`, tried in turn.
-EIGENVALUE_BITS = (256, 1024)
+#: Working precision [bits] of the eigenvalue enclosure of :func:`_hurwitz_exact`.
+EIGENVALUE_BITS = 256
+#: Digits of the integer form above which the enclosure is tried before the exact characteristic polynomial.
+ENCLOSURE_DIGITS = 1000
 
 
 def _hurwitz_exact(M: Matrix) -> bool:
     """``M`` is Hurwitz, decided rigorously: floating-point eigenvalues of a large observer's error matrix can
     land on the wrong side of the axis (seed 004 gains grow fast with n).
 
-    First python-flint's ``acb_mat.eig(multiple=True)`` (Rump's verified enclosures, with multiplicities) of
-    the exact matrix in complex balls: every ball contains an eigenvalue, counted with multiplicity, so balls
-    left of the imaginary axis prove ``M`` Hurwitz and one right of it proves it is not.  When the balls
-    cannot be isolated or straddle the axis, the Routh array of the exact characteristic polynomial (QQ,
-    flint-backed) decides: at n = 32 with the 4000-digit entries of a dense 6-digit model that costs 4 s
-    per matrix, the enclosure 0.2 s.
+    The Routh array of the exact characteristic polynomial (QQ, flint-backed) decides.  Its cost grows with
+    the digits of the entries: at n = 32 with the 4000-digit entries of a dense 6-digit model it is 4 s per
+    matrix.  For entries beyond :data:`ENCLOSURE_DIGITS` digits python-flint's ``acb_mat.eig(multiple=True)``
+    (Rump's verified enclosures, with multiplicities) runs first, in complex balls of
+    :data:`EIGENVALUE_BITS` bits, 0.2 s there: every ball contains an eigenvalue, counted with
+    multiplicity, so balls left of the imaginary axis prove ``M`` Hurwitz and one right of it proves it is
+    not; balls that cannot be isolated or straddle the axis leave it to the Routh array.  (For the
+    300-digit entries of a 64-state chain the Routh array takes 0.2 s and the enclosure 1 to 18 s.)
     """
-    verdict = _hurwitz_enclosed(M)
-    return verdict if verdict is not None else _hurwitz_routh(M)
+    N, d = integer_form(M)
+    bits = max(max(abs(x).bit_length() for row in N for x in row), d.bit_length())
+    if bits * math.log10(2) > ENCLOSURE_DIGITS:
+        verdict = _hurwitz_enclosed(N, d)
+        if verdict is not None:
+            return verdict
+    return _hurwitz_routh(M)
 
 
-def _hurwitz_enclosed(M: Matrix) -> bool | None:
+def _hurwitz_enclosed(N: Sequence[Sequence[int]], d: int) -> bool | None:
+    """The verdict of the eigenvalue enclosure of ``N / d``, or None when it cannot decide."""
     import flint
 
-    N, d = integer_form(M)
     saved = flint.ctx.prec
     try:
-        for bits in EIGENVALUE_BITS:
-            flint.ctx.prec = bits
-            try:
-                eig = (flint.acb_mat(flint.fmpz_mat(N)) / d).eig(multiple=True)
-            except ValueError:   # not isolated at this precision
-                continue
-            if all(z.real < 0 for z in eig):
-                return True
-            if any(z.real > 0 for z in eig):
-                return False
+        flint.ctx.prec = EIGENVALUE_BITS
+        try:
+            eig = (flint.acb_mat(flint.fmpz_mat(N)) / d).eig(multiple=True)
+        except ValueError:   # not isolated at this precision
+            return None
+        if all(z.real < 0 for z in eig):
+            return True
+        if any(z.real > 0 for z in eig):
+            return False
     finally:
         flint.ctx.prec = saved
     return None
