@@ -1,7 +1,11 @@
 """Exact rational linear algebra (standard library rationals, python-flint integers and balls).
 
 Everything here works on matrices stored as lists of rows of
-:class:`fractions.Fraction` (or of Python ``int`` for the integer kernels).
+:class:`fractions.Fraction` (or of Python ``int`` for the integer kernels); the
+arithmetic runs on python-flint: products on ``fmpz_mat`` over a common
+denominator, rank, reduced forms and solutions on ``fmpz_mat``/``fmpq_mat``, the
+modular observability test on ``nmod_mat``, the LDL' factor read off the
+fraction-free elimination.
 Definiteness is decided by fraction-free symmetric Bareiss elimination on an
 integer multiple of the matrix, which is exact and fast: the intermediate
 numbers are minors of the matrix, so their size grows linearly with the step,
@@ -466,8 +470,6 @@ def solve(M: Sequence[Sequence[Any]], B: Sequence[Sequence[Any]]) -> list[list[F
     DimensionError
         If ``M`` is singular (its rank is named).
     """
-    import flint
-
     n = len(M)
     try:
         X = _fmpq_mat(M).solve(_fmpq_mat(B))
