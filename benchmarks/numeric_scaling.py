@@ -10,7 +10,6 @@ fresh process (``subprocess``, interpreter start-up and imports included):
   singular-sum proof, Hespanha with the design's exact P, the document re-checked exactly; the
   Geromel-Colaneri bisection does not run, the Hespanha certificate gives every dwell time);
 * verify  -- ``switchobs verify CERT`` (the independent exact checker);
-* the same two with ``--arithmetic interval`` (strict definiteness by arb balls);
 
 beside what a user would write instead, on the same family ``A_plus, A_minus`` (floats) in the same run,
 like for like (``_numeric_baseline.py``):
@@ -50,7 +49,7 @@ TIMEOUT_S = 900
 ROOT = Path(__file__).resolve().parents[1]
 BASELINE = Path(__file__).resolve().with_name("_numeric_baseline.py")
 POLES = ("-2", "-3", "-5/2", "-7/2")
-COMMANDS = ("design", "certify", "verify", "certify interval", "verify interval")
+COMMANDS = ("design", "certify", "verify")
 SOLVERS = ("CLARABEL", "SCS")
 SOLVER_NAMES = {"CLARABEL": "Clarabel", "SCS": "SCS"}
 GOAL_N, GOAL_RATIO = 32, 3.0
@@ -117,15 +116,11 @@ def measure(n: int, tmp: Path, repeats: int, env: dict[str, str], warm_up: bool)
     model = tmp / f"chain-{n}.toml"
     model.write_text(chain_model(n), encoding="utf-8")
     cert = tmp / f"chain-{n}.json"
-    cert_interval = tmp / f"chain-{n}-interval.json"
     family = tmp / f"chain-{n}.npz"
     exe, py = switchobs_exe(), sys.executable
     commands = {"design": [exe, "design", str(model), "--spectrum", spectrum(n), "--json"],
                 "certify": [exe, "certify", str(model), "--spectrum", spectrum(n), "--out", str(cert)],
                 "verify": [exe, "verify", str(cert)],
-                "certify interval": [exe, "certify", str(model), "--spectrum", spectrum(n), "--arithmetic",
-                                     "interval", "--out", str(cert_interval)],
-                "verify interval": [exe, "verify", str(cert_interval), "--arithmetic", "interval"],
                 "certify in process": [py, str(BASELINE), "certify", str(model), spectrum(n)],
                 **{f"lmi {s}": [py, str(BASELINE), "lmi", str(family), s] for s in SOLVERS}}
     # "certify in process" is the time the child prints; an LMI child gives both its process and its solve
@@ -223,9 +218,9 @@ def main() -> None:
         for k, n in enumerate(sizes):
             results[n] = measure(n, Path(tmp), args.repeats, env, warm_up=k == 0 and not args.quick)
             print(f"n = {n} done", file=sys.stderr, flush=True)
-    whole = ["| n | design [s] | certify [s] | verify [s] | certify, interval [s] | verify, interval [s] "
+    whole = ["| n | design [s] | certify [s] | verify [s] "
              "| cvxpy LMI, Clarabel [s] | cvxpy LMI, SCS [s] | certify vs LMI |",
-             "|---:|---:|---:|---:|---:|---:|---:|---:|---|"]
+             "|---:|---:|---:|---:|---:|---:|---|"]
     inproc = ["| n | `certify_model` [s] | cvxpy LMI, Clarabel [s] | cvxpy LMI, SCS [s] | scipy Lyapunov [ms] "
               "| certify vs LMI | plain LMI, Clarabel |",
               "|---:|---:|---:|---:|---:|---|---|"]
@@ -243,8 +238,8 @@ def main() -> None:
               f"{args.repeats} runs. First table: whole processes (interpreter start-up and imports included, "
               "`RUSAGE_CHILDREN`): `switchobs design --json` (exact gains, Routh array, $P$, re-check); "
               "`switchobs certify --out` (no strict CQLF by the exact singular-sum proof, Hespanha from the "
-              "design's exact $P$, the document re-checked exactly); `switchobs verify`; the same two with "
-              "`--arithmetic interval`; and what a user writes instead, a `python` script (numpy, scipy, cvxpy) "
+              "design's exact $P$, the document re-checked exactly); `switchobs verify`; "
+              "and what a user writes instead, a `python` script (numpy, scipy, cvxpy) "
               "that balances the float family $A_\\pm$ (a diagonal similarity by LAPACK gebal, scaled to unit "
               "norm: the entries of $A_-$ reach $10^{23}$ at $n = 32$) and solves the minimal common-$P$ LMI "
               "with a margin, $\\max t$: $\\operatorname{tr} P = n$, $P \\succeq tI$, "
@@ -274,8 +269,7 @@ def main() -> None:
     notes = [f"Goals of issue 12 (this run): certify at n = 32 below 5 s: "
              + (f"{results[32]['certify'].median:.2g} s CPU" if 32 in results else "not run")
              + f"; certify at n = 64 below 60 s: "
-             + (f"{results[64]['certify'].median:.2g} s CPU exact, {results[64]['certify interval'].median:.2g} s "
-                "interval" if 64 in results else "not run")
+             + (f"{results[64]['certify'].median:.2g} s CPU" if 64 in results else "not run")
              + f"; design at n = 64 below 5 s: "
              + (f"{results[64]['design'].median:.2g} s CPU" if 64 in results else "not run")
              + f"; certify within {GOAL_RATIO:.0f}× the minimal cvxpy LMI at n = {GOAL_N}, like for like: {goal}."

@@ -222,6 +222,17 @@ def test_a_certificate_within_the_work_bound_is_checked():
     assert time.perf_counter() - start < 30
 
 
+def test_a_dense_certificate_near_the_work_bound_is_checked_in_seconds():
+    # 64 x 64 of about 300 digits, just inside MAX_CERTIFICATE_WORK: the arb enclosure proves the three
+    # definiteness claims (12 s of exact elimination before it became the first try)
+    n = MAX_DIMENSION
+    doc = _certificate(n, int((MAX_CERTIFICATE_WORK / n**3) ** 0.5) - 40)
+    start = time.process_time()
+    report = verify_certificate(doc)
+    assert report.holds, report
+    assert time.process_time() - start < 10
+
+
 @pytest.mark.parametrize("change, match", [({"version": True}, "unsupported certificate version True"),
                                            ({"version": 1.0}, "unsupported certificate version 1.0"),
                                            ({"provenance": {"model": 3}}, "'provenance.model' must be"),

@@ -10,9 +10,9 @@ import sympy as sp
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from switchobs.exact._exact import (_full_rank_mod_p, _interval_positive_definite, arithmetic, definiteness,
-                                      expm_enclosure, fraction_matrix, integer_form, lyapunov_form, nullspace,
-                                      observable, rank, to_fraction)
+from switchobs.exact._exact import (Definiteness, _eliminated_definiteness, _enclosed_definiteness,
+                                      _full_rank_mod_p, arithmetic, definiteness, expm_enclosure, fraction_matrix,
+                                      integer_form, lyapunov_form, nullspace, observable, rank, to_fraction)
 from switchobs.exact import factor_rows, range_basis, short_sqrt_lower
 from switchobs.exceptions import CertificateError, DimensionError
 
@@ -33,21 +33,32 @@ def test_definiteness_agrees_with_sympy_on_integer_matrices(M):
     S = sp.Matrix(M)
     assert definiteness(M, strict=True).holds == bool(S.is_positive_definite)
     assert definiteness(M, strict=False).holds == bool(S.is_positive_semidefinite)
-    with arithmetic("interval"):
-        assert definiteness(M, strict=True).holds == bool(S.is_positive_definite)
+    for strict in (True, False):
+        assert definiteness(M, strict=strict) == _eliminated_definiteness(M, strict=strict)
 
 
-def test_interval_arithmetic_proves_an_ill_conditioned_matrix_and_leaves_failures_to_the_exact_check():
+def test_the_enclosure_proves_an_ill_conditioned_matrix_and_leaves_zero_pivots_to_the_exact_elimination():
     n = 12
     hilbert = [[Fraction(1, i + j + 1) for j in range(n)] for i in range(n)]   # smallest eigenvalue 1.05e-16
-    assert _interval_positive_definite(integer_form(hilbert)[0])
-    with arithmetic("interval"):
-        assert definiteness(hilbert, strict=True).holds
-        shifted = [[x - (Fraction(1, 10**15) if i == j else 0) for j, x in enumerate(row)]
-                   for i, row in enumerate(hilbert)]
-        assert not definiteness(shifted, strict=True).holds   # not proven by the balls, refuted exactly
-        bad = definiteness([[1, 2], [2, 1]], strict=True)
+    N = integer_form(hilbert)[0]
+    assert _enclosed_definiteness(N, strict=True) == Definiteness(True)
+    assert definiteness(hilbert, strict=True).holds
+    shifted = [[x - (Fraction(1, 10**15) if i == j else 0) for j, x in enumerate(row)]
+               for i, row in enumerate(hilbert)]
+    refuted = _enclosed_definiteness(integer_form(shifted)[0], strict=True)   # a minor proven negative
+    assert refuted is not None and refuted == _eliminated_definiteness(integer_form(shifted)[0], strict=True)
+    assert not refuted.holds
+    # a zero pivot is beyond the balls: the exact elimination names it
+    singular = [[1, 1, 0], [1, 1, 0], [0, 0, 1]]
+    assert _enclosed_definiteness(singular, strict=True) is None
+    assert _enclosed_definiteness(singular, strict=False) is None
+    assert definiteness(singular, strict=True).reason == "the principal minor on rows/columns [1, 2] is zero"
+    assert definiteness(singular, strict=False).holds
+    bad = definiteness([[1, 2], [2, 1]], strict=True)
     assert not bad.holds and bad.reason == "the principal minor on rows/columns [1, 2] is negative"
+    for kind in ("exact", "interval"):   # both names decide the same way
+        with arithmetic(kind):
+            assert definiteness([[1, 2], [2, 1]], strict=True) == bad
     with pytest.raises(CertificateError, match="arithmetic 'float' is unknown"):
         with arithmetic("float"):
             pass

@@ -27,6 +27,7 @@ __all__ = [
     "TransformError",
     "OutputError",
     "LogError",
+    "StructureLostWarning",
     "EXTRAS",
     "install_hint",
 ]
@@ -112,6 +113,12 @@ class OutputError(SwitchobsError, OSError):
 class LogError(SwitchobsError, ValueError):
     """A measurement log or channel map that cannot be replayed (a channel missing, an unknown unit, time stamps
     that are not increasing, NaN samples, a file beyond the limits)."""
+
+
+class StructureLostWarning(UserWarning):
+    """A float input lost an exact structure that the certificate of the exact object relies on (e.g. a
+    ``control.StateSpace`` pair exported by ``GainDesign.to_statespace`` no longer satisfies
+    ``A_plus + A_minus = (K_minus - K_plus) C`` after rounding); the message names it and what to certify instead."""
 
 
 #: Optional third-party packages -> the extra of switchobs that installs them (``pip install "switchobs[EXTRA]"``).

@@ -16,6 +16,7 @@ from __future__ import annotations
 import json
 import math
 import time
+import warnings
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field, replace
 from fractions import Fraction
@@ -28,10 +29,11 @@ import sympy as sp
 from .._atomic import write_text
 from .._progress import progress
 from ..design import GainDesign
-from ..exceptions import CertificateError, FreeSymbolError, SpectrumError
-from ..model import Model, user_matrix
+from ..exceptions import CertificateError, FreeSymbolError, SpectrumError, StructureLostWarning, SwitchobsError
+from ..model import Model, is_statespace, statespace_matrices, user_matrix
 from ._box import BoxCertificate, certify_box
-from ..exact import (arithmetic as exact_arithmetic, fraction_matrix, matrix_strings, short_sqrt_lower)
+from ..exact import (arithmetic as exact_arithmetic, fraction_matrix, is_zero, matmul, matrix_strings,
+                     short_sqrt_lower)
 from ._family import Family, FamilyLike, as_family
 from ._discrete import DiscreteCertificate, discrete_certificate, stability_function
 from ._dwell import DwellTimeResult, dwell_time
@@ -41,7 +43,7 @@ from ._lyapunov import (DEFAULT_EPS, LyapunovResult, SingularSum, _reading, comm
 from ._planar import PlanarClassification, classify_planar
 from ._schema import (ANY_DWELL, ArbitrarySwitching, BoxSection, CertificateDocument, CertificateKind,
                       FamilySection, DiscreteSection, ObserverSection, PlanarEntry, Verdict)
-from ._verify import VerificationReport, implied_verdict, verify_certificate
+from ._verify import VerificationReport, checked_once, implied_verdict, verify_certificate
 
 __all__ = ["CertificationReport", "certify", "certify_model", "verdict_text"]
 
@@ -314,10 +316,9 @@ def certify(family: FamilyLike, *, names: Sequence[str] | None = None, output: A
         An exact Hespanha certificate known beforehand (the design's common P),
         checked exactly before any LMI (see :func:`common_lyapunov`).
     arithmetic : {"exact", "interval"}
-        How the checks decide strict definiteness: exact rational elimination, or
-        first an LDL' in arb balls with outward rounding (rigorous too, and much
-        faster for large ``P`` with long rationals; exact wherever it cannot decide).
-        Recorded in the document's provenance.
+        Recorded in the document's provenance; both decide the same way (see
+        :data:`switchobs.exact.ARITHMETICS`): an LDL' in arb balls with outward rounding
+        first, a proof where it decides, and the exact elimination elsewhere.
 
     Returns
     -------
@@ -330,6 +331,13 @@ def certify(family: FamilyLike, *, names: Sequence[str] | None = None, output: A
         An unknown ``discrete`` method, or ``discrete`` without ``output``; an unknown ``dwell``
         or ``arithmetic``.
 
+    Warns
+    -----
+    StructureLostWarning
+        The family is a float ``StateSpace`` pair exported by :meth:`GainDesign.to_statespace` whose
+        rounding broke ``A_plus + A_minus = (K_minus - K_plus) C`` (seed 004 Theorem 1) and no Hespanha
+        certificate holds: the verdict is the rounded pair's; certify the design itself for the design's.
+
     Examples
     --------
     >>> rep = certify([[[-1, -1], [1, 0]], [[-1, 1], [-1, 0]]], output=[[1, 0]])
@@ -339,9 +347,45 @@ def certify(family: FamilyLike, *, names: Sequence[str] | None = None, output: A
     fam = as_family(family, names)
     if dwell not in ("auto", True, False):
         raise CertificateError(f"dwell must be 'auto', True or False, got {dwell!r}")
-    with exact_arithmetic(arithmetic):
-        return _certify(fam, output, dwell, eps, solvers, observer, provenance, discrete, box, candidate,
-                        arithmetic)
+    with exact_arithmetic(arithmetic), checked_once():  # each entry checked once: candidates and document
+        report = _certify(fam, output, dwell, eps, solvers, observer, provenance, discrete, box, candidate,
+                          arithmetic)
+    lost = _rounded_observer_pair(family) if not report.hespanha.certified else ""
+    if lost:
+        warnings.warn(StructureLostWarning(lost), stacklevel=2)
+    return report
+
+
+def _rounded_observer_pair(family: Any) -> str:
+    """The warning for a float ``StateSpace`` pair exported by :meth:`GainDesign.to_statespace`, or ``""``.
+
+    ``to_statespace`` writes ``B = -K_plus`` for ``A_plus`` and ``B = K_minus`` for ``A_minus``, so the pair
+    of a Theorem 1 design (seed 004) satisfies ``A_plus + A_minus = (K_minus - K_plus) C = (B_plus + B_minus) C``
+    exactly, the structure its exact common P rests on.  Floats rounded it away when the identity fails exactly
+    but holds to rounding error (relative 1e-9): then the weaker verdict is the rounding's, not the design's.
+    """
+    if isinstance(family, Mapping):
+        family = list(family.values())
+    if not isinstance(family, (list, tuple)) or len(family) != 2 or not all(map(is_statespace, family)):
+        return ""
+    try:
+        (Ap, Bp, Cp, _), (Am, Bm, Cm, _) = (statespace_matrices(sys) for sys in family)
+    except SwitchobsError:
+        return ""
+    if Bp.shape != (len(Ap), 1) or Bm.shape != Bp.shape or not np.array_equal(Cp, Cm):
+        return ""
+    scale = max(np.max(np.abs(Ap)), np.max(np.abs(Am)), np.max(np.abs((Bp + Bm) @ Cp)), 1e-300)
+    exact = [fraction_matrix(M) for M in (Ap, Am, Bp + Bm, Cp)]
+    residual = [[a + b - c for a, b, c in zip(ra, rb, rc)]
+                for ra, rb, rc in zip(exact[0], exact[1], matmul(exact[2], exact[3]))]
+    gap = float(max(abs(x) for row in residual for x in row)) / scale
+    if is_zero(residual) or gap > 1e-9:
+        return ""
+    return ("the StateSpace pair looks like GainDesign.to_statespace's export of a Theorem 1 design, but float "
+            f"rounding broke A_plus + A_minus = (K_minus - K_plus) C (off by {gap:.1e} relative), the structure "
+            "of the design's exact common Lyapunov P, and no Hespanha certificate holds for the rounded pair: its "
+            "verdict is not the design's; certify the design itself "
+            "(certify_model(model, gains=design)) for the design's verdict")
 
 
 def _certify(fam: Family, output: Any, dwell: bool | str, eps: float, solvers: Sequence[str],

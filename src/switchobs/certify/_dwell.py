@@ -33,7 +33,7 @@ from ._family import Family, FamilyLike, as_family
 from ._lyapunov import _matrices, _reading
 from ..lmi import DEFAULT_SOLVERS, SolveInfo, balance, solve
 from ._schema import DwellTimeEntry
-from ._verify import _check_dwell
+from ._verify import check_entry
 
 __all__ = ["DwellTimeResult", "dwell_time", "gc_margin", "CERTIFY_ATTEMPTS"]
 
@@ -236,7 +236,7 @@ def dwell_time(family: FamilyLike, *, names: Sequence[str] | None = None, eps: f
         if t <= eps:
             continue
         Ps = [dyadic(P / np.outer(bal.d, bal.d), 52) for P in Ps_b]
-        check = _check_dwell(fam.names, fam.exact, DwellTimeEntry(str(tau), Ps))
+        check = check_entry(fam.names, fam.exact, DwellTimeEntry(str(tau), Ps))
         if check.holds:
             return DwellTimeResult(fam, tau, True, lo / bal.sigma, hi / bal.sigma, tuple(Ps), t, info, iterations,
                                    solve_s, time.perf_counter() - t0)

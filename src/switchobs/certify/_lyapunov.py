@@ -26,7 +26,7 @@ from ..exact import (FACE_TOLERANCES, Matrix, dyadic, factor_rows, float_matrix,
 from ._family import Family, FamilyLike, as_family
 from ..lmi import DEFAULT_SOLVERS, SolveInfo, balance, dual_margin, primal_margin
 from ._schema import CertificateKind, DualEntry, LyapunovEntry, SingularSumEntry
-from ._verify import _check_dual, _check_hespanha, _check_singular_sum, _check_strict
+from ._verify import check_entry
 
 __all__ = ["LyapunovResult", "DualCertificate", "SingularSum", "common_lyapunov", "strict_common_lyapunov",
            "infeasibility_certificate", "singular_sum", "DEFAULT_EPS"]
@@ -198,7 +198,7 @@ def singular_sum(family: FamilyLike, *, names: Sequence[str] | None = None) -> S
     v = kernel_vector(total)
     if v is None:
         return None
-    if not _check_singular_sum(fam.names, fam.exact, SingularSumEntry([str(x) for x in v])).holds:
+    if not check_entry(fam.names, fam.exact, SingularSumEntry([str(x) for x in v])).holds:
         return None
     return SingularSum(tuple(v), time.perf_counter() - t0)
 
@@ -399,7 +399,7 @@ def common_lyapunov(family: FamilyLike, *, output: Any = None, names: Sequence[s
         t0 = time.perf_counter()
         P = fraction_matrix(candidate[0], what="candidate P", rows=fam.n, cols=fam.n)
         Cs = [fraction_matrix(C, what="candidate C", cols=fam.n) for C in candidate[1]]
-        if _check_hespanha(fam.names, fam.exact, LyapunovEntry(CertificateKind.HESPANHA, P, Cs)).holds:
+        if check_entry(fam.names, fam.exact, LyapunovEntry(CertificateKind.HESPANHA, P, Cs)).holds:
             return LyapunovResult("hespanha", fam, True, True, math.nan, eps, P, tuple(Cs), None,
                                   "exact P of the gain design", time.perf_counter() - t0)
     bal = balance(fam.numeric)
@@ -422,7 +422,7 @@ def common_lyapunov(family: FamilyLike, *, output: Any = None, names: Sequence[s
     P = dyadic(P_num)
     Cs = _interior_outputs(fam, P, P_num)
     if Cs is not None:
-        check = _check_hespanha(fam.names, fam.exact, LyapunovEntry(CertificateKind.HESPANHA, P, Cs))
+        check = check_entry(fam.names, fam.exact, LyapunovEntry(CertificateKind.HESPANHA, P, Cs))
         if check.holds:
             return LyapunovResult("hespanha", fam, True, True, float(t), eps, P, tuple(Cs), info,
                                   "direct rounding", time.perf_counter() - t0)
@@ -435,7 +435,7 @@ def common_lyapunov(family: FamilyLike, *, output: Any = None, names: Sequence[s
         Cs = _factors(Ws)
         if Cs is None:
             continue
-        check = _check_hespanha(fam.names, fam.exact, LyapunovEntry(CertificateKind.HESPANHA, P, Cs))
+        check = check_entry(fam.names, fam.exact, LyapunovEntry(CertificateKind.HESPANHA, P, Cs))
         if check.holds:
             return LyapunovResult("hespanha", fam, True, True, float(t), eps, P, tuple(Cs), info,
                                   f"facial projection (face tol {tol:g})", time.perf_counter() - t0)
@@ -502,7 +502,7 @@ def strict_common_lyapunov(family: FamilyLike, *, names: Sequence[str] | None = 
                               time.perf_counter() - t0, "no strict common P found numerically", d)
     P_num = _unbalance_P(P_b, bal.d)
     P = dyadic(P_num)
-    check = _check_strict(fam.names, fam.exact, LyapunovEntry(CertificateKind.STRICT_CQLF, P))
+    check = check_entry(fam.names, fam.exact, LyapunovEntry(CertificateKind.STRICT_CQLF, P))
     if check.holds:
         return LyapunovResult("strict-cqlf", fam, True, True, float(t), eps, P, None, info, "direct rounding",
                               time.perf_counter() - t0)
@@ -538,7 +538,7 @@ def infeasibility_certificate(family: FamilyLike, *, names: Sequence[str] | None
     detail = ""
     if s > eps:
         Rs = [psd_dyadic(R) for R in R_num]
-        check = _check_dual(fam.names, fam.exact, DualEntry(CertificateKind.NO_COMMON_LYAPUNOV, Rs))
+        check = check_entry(fam.names, fam.exact, DualEntry(CertificateKind.NO_COMMON_LYAPUNOV, Rs))
         if check.holds:
             return DualCertificate("no-common-lyapunov", True, tuple(Rs), float(s), info, "direct rounding",
                                    time.perf_counter() - t0)
@@ -553,7 +553,7 @@ def infeasibility_certificate(family: FamilyLike, *, names: Sequence[str] | None
             Rs = [[[x / top for x in row] for row in R] for R in Rs]
             S = [[x / top for x in row] for row in S]
         kind = "no-strict-cqlf" if all(x == 0 for row in S for x in row) else "no-common-lyapunov"
-        check = _check_dual(fam.names, fam.exact, DualEntry(CertificateKind(kind), Rs))
+        check = check_entry(fam.names, fam.exact, DualEntry(CertificateKind(kind), Rs))
         if check.holds:
             return DualCertificate(kind, True, tuple(Rs), float(s), info, f"facial projection (face tol {tol:g})",
                                    time.perf_counter() - t0)

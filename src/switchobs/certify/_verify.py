@@ -49,9 +49,11 @@ Certificate kinds and what they prove (``W_p(P) = A_p' P + P A_p``):
 from __future__ import annotations
 
 import json
-from collections.abc import Mapping, Sequence
-from dataclasses import dataclass, field
+from collections.abc import Iterator, Mapping, Sequence
+from dataclasses import dataclass, field, replace
 from fractions import Fraction
+from contextlib import contextmanager
+from contextvars import ContextVar
 from math import gcd
 from pathlib import Path
 from typing import Any
@@ -69,7 +71,10 @@ from ._schema import (ANY_DWELL, ArbitrarySwitching, CertificateDocument, Certif
 from ._provenance import model_link
 
 __all__ = ["Check", "VerificationReport", "verify_certificate", "load_certificate", "implied_verdict",
-           "planar_case_exact"]
+           "planar_case_exact", "check_entry", "checked_once"]
+
+#: The entry checks decided so far in one command (see :func:`checked_once`); None outside it.
+_DECIDED: ContextVar[dict[tuple[Any, ...], Check] | None] = ContextVar("switchobs_decided_checks", default=None)
 
 
 @dataclass(frozen=True)
@@ -96,7 +101,7 @@ class VerificationReport:
         model-gain link; a model that is not built in: its A and C), one sentence each.
         ``switchobs verify --strict`` fails when there is any.
     arithmetic : str
-        ``"exact"`` or ``"interval"`` (strict definiteness by arb balls where they decide it).
+        ``"exact"`` or ``"interval"``, as asked (both decide the same way).
     """
 
     holds: bool
@@ -422,9 +427,9 @@ def verify_certificate(doc: Mapping[str, Any] | str | Path, *, model: Any = None
         recorded parameter values are compared with the ``observer`` section.
         By default the built-in model named in ``provenance.model`` (if any).
     arithmetic : {"exact", "interval"}
-        ``"interval"`` proves strict definiteness by an LDL' in arb balls (outward
-        rounding) where it can and falls back to exact arithmetic elsewhere: still
-        rigorous, much faster for large matrices with long rationals (n = 64).
+        Both decide the same way (see :data:`switchobs.exact.ARITHMETICS`): definiteness by
+        an LDL' in arb balls (outward rounding), a proof where it decides, and the exact
+        elimination elsewhere.  The name is shown in the report.
 
     Returns
     -------
@@ -470,17 +475,9 @@ def _verify(doc: Mapping[str, Any] | str | Path, how: str, model: Any) -> Verifi
     for cert in document.certificates:
         kind = cert.kind
         progress(f"verify: {kind.value} certificate (n = {len(As[0])}, {len(As)} modes)")
-        if kind is CertificateKind.STRICT_CQLF:
-            c = _check_strict(names, As, cert)
-        elif kind is CertificateKind.HESPANHA:
-            c = _check_hespanha(names, As, cert)
-        elif kind in (CertificateKind.NO_STRICT_CQLF, CertificateKind.NO_COMMON_LYAPUNOV):
-            c = _check_dual(names, As, cert)
-        elif kind is CertificateKind.SINGULAR_SUM:
-            c = _check_singular_sum(names, As, cert)
-        elif kind is CertificateKind.DWELL_TIME:
-            c = _check_dwell(names, As, cert)
-            if c.holds:
+        if kind is not CertificateKind.PLANAR:
+            c = check_entry(names, As, cert)
+            if kind is CertificateKind.DWELL_TIME and c.holds:
                 dwell.append(to_fraction(cert.tau_D, what="dwell-time tau_D"))
         else:
             if len(As) != 2 or len(As[0]) != 2:
@@ -512,6 +509,65 @@ def _verify(doc: Mapping[str, Any] | str | Path, how: str, model: Any) -> Verifi
                               parameters={_text(k): _text(v) for k, v in parameters.items()}
                               if isinstance(parameters, Mapping) else {},
                               gains=gains, unchecked=unchecked, arithmetic=how)
+
+
+@contextmanager
+def checked_once() -> Iterator[None]:
+    """Inside the block every certificate entry is checked once: :func:`check_entry` records its verdicts.
+
+    ``certify`` decides its candidates with :func:`check_entry` (the verifier's own checks, not a
+    producer's copy of them) and then verifies the document it wrote: an entry of that document
+    equal to a candidate already decided (the same family and the same rationals) is
+    not eliminated again.  Everything else (the verdict, the sections, the model link) is checked
+    by :func:`verify_certificate` as always; ``switchobs verify`` and a call outside this block
+    decide every entry afresh.
+    """
+    token = _DECIDED.set({})
+    try:
+        yield
+    finally:
+        _DECIDED.reset(token)
+
+
+#: The fields each kind of entry is checked from (margins, methods and solver names are not).
+_CHECKED_FIELDS = {CertificateKind.STRICT_CQLF: ("P",), CertificateKind.HESPANHA: ("P", "C"),
+                   CertificateKind.NO_STRICT_CQLF: ("R",), CertificateKind.NO_COMMON_LYAPUNOV: ("R",),
+                   CertificateKind.SINGULAR_SUM: ("v",), CertificateKind.DWELL_TIME: ("tau_D", "P")}
+
+
+def check_entry(names: Sequence[str], As: Sequence[Matrix], cert: Any) -> Check:
+    """Check one certificate entry (any kind but ``planar``) exactly against the family ``As``.
+
+    Inside :func:`checked_once` an entry already decided against the same family is not checked again.
+    """
+    check = {CertificateKind.STRICT_CQLF: _check_strict, CertificateKind.HESPANHA: _check_hespanha,
+             CertificateKind.NO_STRICT_CQLF: _check_dual, CertificateKind.NO_COMMON_LYAPUNOV: _check_dual,
+             CertificateKind.SINGULAR_SUM: _check_singular_sum, CertificateKind.DWELL_TIME: _check_dwell}[cert.kind]
+    decided = _DECIDED.get()
+    if decided is None:
+        return check(names, As, cert)
+    try:   # the rationals themselves (parsed once, then checked as parsed): a cheap hash, whatever their notation
+        parsed = {f: _parsed(getattr(cert, f)) for f in _CHECKED_FIELDS[cert.kind]}
+    except (SwitchobsError, TypeError, ValueError):
+        return check(names, As, cert)   # malformed: the check itself names the problem
+    cert = replace(cert, **parsed)
+    key = (cert.kind, tuple(names), _frozen(As), *(_frozen(v) for v in parsed.values()))
+    if key not in decided:
+        decided[key] = check(names, As, cert)
+    return decided[key]
+
+
+def _parsed(value: Any) -> Any:
+    """``value`` with every number an exact Fraction (nested lists kept as lists)."""
+    if isinstance(value, (list, tuple)):
+        return [_parsed(x) for x in value]
+    if value is None or isinstance(value, Mapping):
+        raise TypeError("not a number")
+    return to_fraction(value)
+
+
+def _frozen(value: Any) -> Any:
+    return tuple(_frozen(x) for x in value) if isinstance(value, (list, tuple)) else value
 
 
 def _check_cost(doc: Mapping[str, Any], n: int) -> None:

@@ -49,8 +49,8 @@ def register(sub: argparse._SubParsersAction) -> None:
                    help="uncertain parameter range, e.g. a=150:230 (repeatable): adds a 'box' section, valid for "
                         "every value in the box, even varying in time")
     p.add_argument("--arithmetic", choices=("exact", "interval"), default="exact",
-                   help="decide strict definiteness in the exact re-checks exactly (default) or by interval "
-                        "arithmetic with outward rounding where it can (rigorous, much faster at n = 64); "
+                   help="kept for scripts: both names decide definiteness the same way, by an interval (arb) "
+                        "enclosure that is a proof where it decides and the exact elimination elsewhere; "
                         "recorded in the certificate's provenance")
     p.add_argument("--json", action="store_true", help="print the full report as JSON")
     p.add_argument("--exact", action="store_true",

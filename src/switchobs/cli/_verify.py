@@ -28,8 +28,8 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--strict", action="store_true",
                    help="fail (exit 1) when a section is missing or a link cannot be checked")
     p.add_argument("--arithmetic", choices=("exact", "interval"), default="exact",
-                   help="decide strict definiteness exactly (default) or by interval arithmetic with outward "
-                        "rounding where it can (rigorous, much faster for large certificates, e.g. n = 64)")
+                   help="kept for scripts: both names decide definiteness the same way, by an interval (arb) "
+                        "enclosure that is a proof where it decides and the exact elimination elsewhere")
     p.add_argument("--json", action="store_true", help="print the report as JSON")
     p.set_defaults(func=run)
 

@@ -1,7 +1,11 @@
 """Exact rational linear algebra (standard library rationals, python-flint integers and balls).
 
 Everything here works on matrices stored as lists of rows of
-:class:`fractions.Fraction` (or of Python ``int`` for the integer kernels).
+:class:`fractions.Fraction` (or of Python ``int`` for the integer kernels); the
+arithmetic runs on python-flint: products on ``fmpz_mat`` over a common
+denominator, rank, reduced forms and solutions on ``fmpz_mat``/``fmpq_mat``, the
+modular observability test on ``nmod_mat``, the LDL' factor read off the
+fraction-free elimination.
 Definiteness is decided by fraction-free symmetric Bareiss elimination on an
 integer multiple of the matrix, which is exact and fast: the intermediate
 numbers are minors of the matrix, so their size grows linearly with the step,
@@ -11,19 +15,17 @@ The module deliberately imports nothing from numpy, scipy, cvxpy or sympy, so
 that the certificate checker built on it (:mod:`switchobs.certify._verify`)
 shares no code with the floating-point pipeline that produced a certificate.
 
-Large strict definiteness checks may instead run in interval arithmetic
-(``with arithmetic("interval"):``): an LDL' elimination in python-flint's
-``arb`` balls (outward rounding, 256 to 4096 bits) proves ``M > 0`` when every
-pivot's ball is positive; whatever it cannot prove is decided exactly as above.
+Every definiteness check first runs an LDL' elimination in python-flint's
+``arb`` balls (outward rounding, 256 to 4096 bits): pivot balls of one sign are a
+proof (each contains the exact pivot); whatever they cannot decide is decided by
+the exact elimination above.
 """
 
 from __future__ import annotations
 
 import math
-import operator
 from collections.abc import Iterable, Iterator, Sequence
 from contextlib import contextmanager
-from contextvars import ContextVar
 from dataclasses import dataclass
 from fractions import Fraction
 from typing import Any
@@ -35,7 +37,7 @@ __all__ = [
     "Matrix", "to_fraction", "fraction_matrix", "matrix_strings", "identity", "zeros", "transpose",
     "matmul", "add", "sub", "scale", "lyapunov_form", "integer_form", "Definiteness", "definiteness",
     "rank", "nullspace", "solve", "observable", "expm_enclosure", "inf_norm", "sqrt_lower", "sqrt_upper",
-    "is_zero", "ARITHMETICS", "arithmetic", "float_matrix",
+    "is_zero", "ARITHMETICS", "arithmetic", "float_matrix", "ldl_psd", "lyapunov_solve",
 ]
 
 Matrix = list[list[Fraction]]
@@ -132,9 +134,46 @@ def transpose(M: Sequence[Sequence[Any]]) -> list[list[Any]]:
 
 
 def matmul(A: Sequence[Sequence[Any]], B: Sequence[Sequence[Any]]) -> list[list[Any]]:
-    """Product of two matrices of ints or Fractions (exact)."""
-    Bt = transpose(B)
-    return [[sum(map(operator.mul, row, col), start=0) for col in Bt] for row in A]
+    """Product of two rational matrices (exact): ints for integer inputs, Fractions otherwise.
+
+    Entries may be ints, Fractions or any rational with ``numerator``/``denominator`` (python-flint's
+    ``fmpq``).  The product runs on python-flint's ``fmpz_mat`` over a common denominator of each
+    factor (``A = N_A / d_A``), in C; only the entries of the result become Fractions.
+    """
+    cols = len(B[0]) if B else 0
+    if not A or not B or not cols:
+        return [[0] * cols for _ in A]
+    NA, dA, int_A = _integer_rows(A)
+    NB, dB, int_B = _integer_rows(B)
+    return _from_fmpz(_fmpz_mat(NA) * _fmpz_mat(NB), dA * dB, int_A and int_B)
+
+
+def _integer_rows(M: Sequence[Sequence[Any]]) -> tuple[Sequence[Sequence[int]], int, bool]:
+    """``(N, d, ints)``: ``M = N / d`` with ``N`` integer, ``d > 0``; ``ints`` when every entry is an int."""
+    if _all_int(M):
+        return M, 1, True
+    N, d = integer_form([[_rational(x) for x in row] for row in M])
+    return N, d, False
+
+
+def _rational(x: Any) -> Fraction:
+    if isinstance(x, (int, Fraction)):
+        return Fraction(x)
+    return Fraction(int(x.numerator), int(x.denominator))
+
+
+def _fmpz_mat(N: Sequence[Sequence[int]]) -> Any:
+    import flint
+
+    return flint.fmpz_mat([[int(x) for x in row] for row in N])
+
+
+def _from_fmpz(M: Any, d: int, ints: bool) -> list[list[Any]]:
+    """The entries of the ``fmpz_mat`` ``M`` divided by ``d``: ints if ``ints`` (then ``d = 1``), else Fractions."""
+    rows = M.tolist()
+    if ints:
+        return [[int(x) for x in row] for row in rows]
+    return [[Fraction(int(x), d) for x in row] for row in rows]
 
 
 def add(A: Sequence[Sequence[Any]], B: Sequence[Sequence[Any]]) -> list[list[Any]]:
@@ -156,20 +195,14 @@ def is_zero(M: Iterable[Iterable[Any]]) -> bool:
 def lyapunov_form(A: Sequence[Sequence[Any]], P: Sequence[Sequence[Any]]) -> list[list[Any]]:
     """``A' P + P A`` (exact), ints for integer inputs and Fractions otherwise.
 
-    The products run on integer matrices over a common denominator (``A = N_A / d_A``,
+    The products run on python-flint's integer matrices over a common denominator (``A = N_A / d_A``,
     ``P = N_P / d_P``) and only the ``n^2`` entries of the result become Fractions: the same
     values as Fraction arithmetic throughout, without a gcd in each of the ``n^3`` products.
     """
-    int_A, int_P = _all_int(A), _all_int(P)
-    NA, dA = (A, 1) if int_A else integer_form([[Fraction(x) for x in row] for row in A])
-    NP, dP = (P, 1) if int_P else integer_form([[Fraction(x) for x in row] for row in P])
-    AtP = matmul(transpose(NA), NP)
-    n = len(P)
-    S = [[AtP[i][j] + AtP[j][i] for j in range(n)] for i in range(n)]
-    if int_A and int_P:
-        return S
-    d = dA * dP
-    return [[Fraction(x, d) for x in row] for row in S]
+    NA, dA, int_A = _integer_rows(A)
+    NP, dP, int_P = _integer_rows(P)
+    AtP = _fmpz_mat(NA).transpose() * _fmpz_mat(NP)
+    return _from_fmpz(AtP + AtP.transpose(), dA * dP, int_A and int_P)
 
 
 def _all_int(M: Sequence[Sequence[Any]]) -> bool:
@@ -178,11 +211,8 @@ def _all_int(M: Sequence[Sequence[Any]]) -> bool:
 
 def integer_form(M: Sequence[Sequence[Fraction]]) -> tuple[list[list[int]], int]:
     """``(N, d)`` with ``M = N / d``, ``N`` integer and ``d > 0`` the lcm of the denominators."""
-    d = 1
-    for row in M:
-        for x in row:
-            d = d * x.denominator // math.gcd(d, x.denominator)
-    return [[int(x * d) for x in row] for row in M], d
+    d = math.lcm(*{x.denominator for row in M for x in row})   # distinct denominators: few for decimal data
+    return [[x.numerator * (d // x.denominator) for x in row] for row in M], d
 
 
 def float_matrix(M: Sequence[Sequence[Any]]) -> Any:
@@ -212,17 +242,17 @@ def sqrt_upper(x: Fraction, bits: int = 64) -> Fraction:
 
 
 # ------------------------------------------------------------------ definiteness
-#: How strict definiteness is decided: ``"exact"`` (rational Bareiss, standard library) or ``"interval"``
-#: (arb balls first, exact when they cannot decide).
+#: Accepted names of the arithmetic (``--arithmetic``): both decide exactly, the ``arb`` enclosure first
+#: (see :func:`definiteness`).  ``"interval"`` named that first try when it was not yet the default; it is
+#: kept so that scripts and the certificates recording it in their provenance keep working.
 ARITHMETICS = ("exact", "interval")
-_ARITHMETIC: ContextVar[str] = ContextVar("switchobs_arithmetic", default="exact")
-#: Working precisions [bits] of the interval LDL', tried in turn.
+#: Working precisions [bits] of the interval LDL', tried in turn for a strict claim.
 INTERVAL_BITS = (256, 1024, 4096)
 
 
 @contextmanager
 def arithmetic(kind: str) -> Iterator[None]:
-    """Decide strict definiteness in ``kind`` arithmetic inside the block (see the module docstring).
+    """Check that ``kind`` is one of :data:`ARITHMETICS` and run the block (both decide the same way).
 
     Raises
     ------
@@ -231,29 +261,38 @@ def arithmetic(kind: str) -> Iterator[None]:
     """
     if kind not in ARITHMETICS:
         raise CertificateError(f"arithmetic {kind!r} is unknown; use one of {', '.join(ARITHMETICS)}")
-    token = _ARITHMETIC.set(kind)
-    try:
-        yield
-    finally:
-        _ARITHMETIC.reset(token)
+    yield
 
 
-def _interval_positive_definite(N: Sequence[Sequence[int]]) -> bool:
-    """``N > 0`` proven by an LDL' elimination in arb balls (True), or not proven (False).
+def _negative_minor(rows: Sequence[int], k: int) -> Definiteness:
+    return Definiteness(False, k, f"the principal minor on rows/columns {[i + 1 for i in rows] + [k + 1]} "
+                                  "is negative")
 
-    Every ball contains the exact value of its entry, so positive pivot balls are the
-    exact pivots' signs: the ratios of consecutive leading principal minors (Sylvester).
+
+def _enclosed_definiteness(N: Sequence[Sequence[int]], *, strict: bool) -> Definiteness | None:
+    """``N > 0`` proven, or a leading principal minor proven negative, by an LDL' in arb balls; else None.
+
+    Every ball contains the exact value of its entry (outward rounding), so a pivot ball that
+    lies right of 0 is a proof that the exact pivot is positive: the pivots are the ratios of
+    consecutive leading principal minors, and positive pivots prove ``N > 0`` (Sylvester's
+    criterion), which implies ``N >= 0``.  A pivot ball left of 0 after positive ones proves the
+    leading principal minor of that size negative, which refutes both claims with the same index
+    and reason as the exact elimination.  A ball containing 0 decides nothing: a strict claim is
+    retried at a higher precision, a semidefinite one (whose zero pivots are exact zeros as a
+    rule) goes to the exact elimination at once.
     """
     import flint
 
     n = len(N)
     saved = flint.ctx.prec
     try:
-        for bits in INTERVAL_BITS:
+        for bits in INTERVAL_BITS if strict else INTERVAL_BITS[:1]:
             flint.ctx.prec = bits
             a = [[flint.arb(x) for x in row] for row in N]
             for k in range(n):
                 p = a[k][k]
+                if p < 0:
+                    return _negative_minor(range(k), k)
                 if not p > 0:
                     break
                 row_k = a[k]
@@ -264,10 +303,10 @@ def _interval_positive_definite(N: Sequence[Sequence[int]]) -> bool:
                         row_i[j] -= f * row_k[j]
                         a[j][i] = row_i[j]
             else:
-                return True
+                return Definiteness(True)
     finally:
         flint.ctx.prec = saved
-    return False
+    return None
 
 
 @dataclass(frozen=True)
@@ -292,7 +331,13 @@ class Definiteness:
 def definiteness(M: Sequence[Sequence[Any]], *, strict: bool) -> Definiteness:
     """Exactly decide ``M > 0`` (``strict``) or ``M >= 0`` for a symmetric rational matrix.
 
-    Fraction-free symmetric Bareiss elimination on ``N = d M`` (integers, python-flint's ``fmpz``).
+    First an enclosure: an LDL' elimination of ``N = d M`` (integers) in python-flint's ``arb``
+    balls (midpoint and radius, outward rounding).  When every pivot ball is positive, or one is
+    negative after positive ones, that *is* the proof -- each ball contains the exact pivot, so its
+    sign is the exact pivot's sign -- not a floating-point estimate; the verdict, index and reason
+    are those of the exact elimination.  Only when a ball contains 0 (a singular or nearly singular
+    leading block, a semidefinite matrix with a zero pivot) does the exact elimination decide:
+    fraction-free symmetric Bareiss elimination on ``N`` (python-flint's ``fmpz``).
     After eliminating the pivots ``K``, entry ``(i, j)`` of the working matrix
     is the minor ``det N[K+i, K+j]``, so the diagonal pivots are leading
     principal minors (Sylvester's criterion) and every division is exact.
@@ -305,6 +350,13 @@ def definiteness(M: Sequence[Sequence[Any]], *, strict: bool) -> Definiteness:
     DimensionError
         If ``M`` is not square or not symmetric.
     """
+    a = _symmetric_integer_form(M)
+    enclosed = _enclosed_definiteness(a, strict=strict)
+    return enclosed if enclosed is not None else _eliminated_definiteness(a, strict=strict)
+
+
+def _symmetric_integer_form(M: Sequence[Sequence[Any]]) -> list[list[Any]]:
+    """``d M`` as integers (``d`` the common denominator) after checking that ``M`` is square and symmetric."""
     n = len(M)
     if any(len(row) != n for row in M):
         raise DimensionError(f"definiteness needs a square matrix, got {n} rows of lengths {[len(r) for r in M]}")
@@ -314,32 +366,53 @@ def definiteness(M: Sequence[Sequence[Any]], *, strict: bool) -> Definiteness:
                 raise DimensionError(f"matrix is not symmetric: entry ({i + 1},{j + 1}) = {M[i][j]} but "
                                      f"({j + 1},{i + 1}) = {M[j][i]}")
     if _all_int(M):
-        a = [list(row) for row in M]
-    else:
-        a, _ = integer_form([[Fraction(x) for x in row] for row in M])
-    if strict and _ARITHMETIC.get() == "interval" and _interval_positive_definite(a):
-        return Definiteness(True)
+        return [list(row) for row in M]
+    return integer_form([[Fraction(x) for x in row] for row in M])[0]
+
+
+def _eliminated_definiteness(N: Sequence[Sequence[Any]], *, strict: bool) -> Definiteness:
+    """The exact fraction-free elimination of :func:`definiteness` on the symmetric integer matrix ``N``."""
+    return _symmetric_bareiss(N, strict=strict)[0]
+
+
+def _symmetric_bareiss(N: Sequence[Sequence[Any]], *, strict: bool, factor: bool = False
+                       ) -> tuple[Definiteness, list[list[Fraction]] | None, list[Fraction] | None]:
+    """Fraction-free symmetric elimination of the integer matrix ``N``: the verdict and, with ``factor``,
+    ``N = L diag(d) L'`` (unit lower ``L``; ``d_k`` the ratio of consecutive pivots, 0 at a dropped index).
+
+    Before step ``k`` entry ``(i, k)`` is the minor ``det N[K+i, K+k]`` and the pivot ``det N[K+k, K+k]``
+    (``K`` the kept indices), so ``L[i][k] = a[i][k] / a[k][k]`` and ``d_k = a[k][k] / previous pivot``:
+    the ``LDL'`` of rational elimination, without its ``n^3`` gcds.
+    """
     # GMP integers (python-flint): the same operations, 7x faster than Python's ints at n = 64 on
     # 150-digit entries (the minors grow to n times the digits)
     import flint
 
-    a = [[flint.fmpz(x) for x in row] for row in a]
+    n = len(N)
+    a = [[flint.fmpz(x) for x in row] for row in N]
+    L = [[Fraction(int(i == j)) for j in range(n)] for i in range(n)] if factor else None
+    d = [Fraction(0)] * n if factor else None
     prev = flint.fmpz(1)
     kept: list[int] = []
     for k in range(n):
         p = a[k][k]
         rest = range(k + 1, n)
-        if p < 0 or (p == 0 and strict):
-            rows = [i + 1 for i in kept] + [k + 1]
-            sign = "negative" if p < 0 else "zero"
-            return Definiteness(False, k, f"the principal minor on rows/columns {rows} is {sign}")
+        if p < 0:
+            return _negative_minor(kept, k), None, None
+        if p == 0 and strict:
+            return Definiteness(False, k, f"the principal minor on rows/columns {[i + 1 for i in kept] + [k + 1]} "
+                                          "is zero"), None, None
         if p == 0:
             bad = next((j for j in rest if a[k][j] != 0), None)
             if bad is not None:
                 return Definiteness(False, k, f"a zero pivot at {k + 1} has a nonzero coupling to {bad + 1} "
                                               f"(the principal minor on {[i + 1 for i in kept] + [k + 1, bad + 1]} "
-                                              "is negative)")
+                                              "is negative)"), None, None
             continue
+        if factor:
+            d[k] = Fraction(int(p), int(prev))
+            for i in rest:
+                L[i][k] = Fraction(int(a[i][k]), int(p))
         for i in rest:
             aik = a[i][k]
             row_i = a[i]
@@ -349,48 +422,92 @@ def definiteness(M: Sequence[Sequence[Any]], *, strict: bool) -> Definiteness:
                 a[j][i] = v
         prev = p
         kept.append(k)
-    return Definiteness(True)
+    return Definiteness(True), L, d
+
+
+def ldl_psd(M: Sequence[Sequence[Any]]) -> tuple[Matrix, list[Fraction]] | None:
+    """Exact ``M = L diag(d) L'`` of a positive semidefinite rational matrix (``None`` if ``M`` is not PSD).
+
+    ``L`` is unit lower triangular; a zero ``d_k`` has a unit column ``k`` (the semidefinite LDL' rule).
+    The fraction-free elimination of :func:`definiteness` on ``N = c M`` gives it: ``d = d_N / c``.
+    """
+    N = _symmetric_integer_form(M)
+    c = 1 if _all_int(M) else integer_form([[Fraction(x) for x in row] for row in M])[1]
+    verdict, L, d = _symmetric_bareiss(N, strict=False, factor=True)
+    if not verdict.holds:
+        return None
+    return L, [x / c for x in d]
 
 
 # ------------------------------------------------------------- rank and kernels
-def _rref(M: Sequence[Sequence[Fraction]]) -> tuple[list[list[Fraction]], list[int]]:
-    A = [[Fraction(x) for x in row] for row in M]
-    rows = len(A)
-    cols = len(A[0]) if rows else 0
-    pivots: list[int] = []
-    r = 0
-    for c in range(cols):
-        piv = next((i for i in range(r, rows) if A[i][c] != 0), None)
-        if piv is None:
-            continue
-        A[r], A[piv] = A[piv], A[r]
-        inv = 1 / A[r][c]
-        A[r] = [x * inv for x in A[r]]
-        for i in range(rows):
-            if i != r and A[i][c] != 0:
-                f = A[i][c]
-                A[i] = [x - f * y for x, y in zip(A[i], A[r])]
-        pivots.append(c)
-        r += 1
-        if r == rows:
-            break
-    return A[:r], pivots
+def _rref(M: Sequence[Sequence[Any]]) -> tuple[list[list[Fraction]], list[int]]:
+    """Reduced row-echelon form (nonzero rows) and pivot columns, by python-flint's ``fmpq_mat``.
 
+    Each row is scaled to integers first (the row space, hence the reduced form, is unchanged).
+    """
+    import flint
 
+    rows = len(M)
+    cols = len(M[0]) if rows else 0
+    if not rows or not cols:
+        return [], []
+    ints = [integer_form([[_rational(x) for x in row]])[0][0] for row in M]
+    R, r = flint.fmpq_mat(_fmpz_mat(ints)).rref()
+    out = [[Fraction(int(x.p), int(x.q)) for x in row] for row in R.tolist()[:r]]
+    return out, [next(c for c, x in enumerate(row) if x != 0) for row in out]
 def rank(M: Sequence[Sequence[Any]]) -> int:
-    """Exact rank of a rational matrix."""
+    """Exact rank of a rational matrix (python-flint's ``fmpz_mat``, each row scaled to integers)."""
     if not M or not M[0]:
         return 0
-    return len(_rref(M)[1])
+    return _fmpz_mat([integer_form([[_rational(x) for x in row]])[0][0] for row in M]).rank()
 
 
 def solve(M: Sequence[Sequence[Any]], B: Sequence[Sequence[Any]]) -> list[list[Fraction]]:
-    """``X`` with ``M X = B`` for a square nonsingular rational ``M`` (exact Gauss-Jordan)."""
+    """``X`` with ``M X = B`` for a square nonsingular rational ``M`` (python-flint's ``fmpq_mat``, in C).
+
+    Raises
+    ------
+    DimensionError
+        If ``M`` is singular (its rank is named).
+    """
     n = len(M)
-    R, pivots = _rref([list(row) + list(b) for row, b in zip(M, B)])
-    if pivots[:n] != list(range(n)):
-        raise DimensionError(f"the {n} x {n} matrix is singular (rank {sum(p < n for p in pivots)})")
-    return [row[n:] for row in R]
+    try:
+        X = _fmpq_mat(M).solve(_fmpq_mat(B))
+    except ZeroDivisionError:
+        raise DimensionError(f"the {n} x {n} matrix is singular (rank {rank(M)})") from None
+    return [[Fraction(int(x.p), int(x.q)) for x in row] for row in X.tolist()]
+
+
+def _fmpq_mat(M: Sequence[Sequence[Any]]) -> Any:
+    import flint
+
+    N, d, _ = _integer_rows(M)
+    return flint.fmpq_mat(_fmpz_mat(N)) / d
+
+
+def lyapunov_solve(A: Sequence[Sequence[Any]], Q: Sequence[Sequence[Any]]) -> list[list[Fraction]]:
+    """The exact ``P`` with ``A' P + P A = -Q`` (unique when no two eigenvalues of ``A`` sum to 0).
+
+    The Kronecker system ``(I (x) A' + A' (x) I) vec(P) = -vec(Q)`` of ``n^2`` unknowns, by :func:`solve`
+    (the ``n = 16`` system of 256 unknowns takes milliseconds).
+
+    Raises
+    ------
+    DimensionError
+        If the system is singular.
+    """
+    n = len(A)
+    At = transpose(A)
+    rows = []
+    for i in range(n):
+        for j in range(n):
+            row: list[Any] = [0] * (n * n)
+            for k in range(n):
+                row[k * n + j] += At[i][k]   # (A' P)_ij
+                row[i * n + k] += A[k][j]    # (P A)_ij
+            rows.append(row)
+    vec = solve(rows, [[-Q[i][j]] for i in range(n) for j in range(n)])
+    return [[vec[i * n + j][0] for j in range(n)] for i in range(n)]
 
 
 def nullspace(M: Sequence[Sequence[Any]], cols: int | None = None) -> list[list[Fraction]]:
@@ -418,34 +535,24 @@ def _full_rank_mod_p(A: Sequence[Sequence[Fraction]], C: Sequence[Sequence[Fract
     """The Krylov rows of ``(d A, d C)`` (``d`` the common denominator) have rank ``n`` modulo a prime.
 
     Their determinant is then a nonzero integer, so ``(A, C)`` is observable; the converse
-    can fail (the prime may divide it), and a False answer proves nothing.  The integers stay
-    below ``2**61``: ``O(n^3)`` small operations instead of the exact elimination's big rationals.
+    can fail (the prime may divide it), and a False answer proves nothing.  The products and the
+    rank run on python-flint's ``nmod_mat`` (word-size residues, in C): ``O(n^3)`` small operations
+    instead of the exact elimination's big rationals.
     """
+    import flint
+
     n = len(A)
-    NA, _ = integer_form([[Fraction(x) for x in row] for row in A])
-    NC, _ = integer_form([[Fraction(x) for x in row] for row in C])
     p = _PRIME
-    At = [[x % p for x in col] for col in zip(*NA)]
-    pivots: dict[int, list[int]] = {}  # echelon rows mod p, by leading column
-    frontier = [[x % p for x in row] for row in NC]
-    while frontier and len(pivots) < n:
-        grown = []
-        for row in frontier:
-            r = list(row)
-            for c in range(n):
-                if r[c] and c in pivots:
-                    f = r[c]
-                    r = [(x - f * y) % p for x, y in zip(r, pivots[c])]
-            lead = next((c for c in range(n) if r[c]), None)
-            if lead is None:
-                continue
-            inv = pow(r[lead], -1, p)
-            pivots[lead] = [x * inv % p for x in r]
-            grown.append(row)
-        frontier = [[sum(x * y for x, y in zip(row, col)) % p for col in At] for row in grown]
-    return len(pivots) == n
-
-
+    NA = flint.nmod_mat([[x % p for x in row] for row in integer_form([[_rational(x) for x in r] for r in A])[0]], p)
+    block = flint.nmod_mat([[x % p for x in row] for row in integer_form([[_rational(x) for x in r] for r in C])[0]],
+                           p)
+    rows: list[list[int]] = []
+    for _ in range(n):  # C A^k for k < n span the Krylov space (Cayley-Hamilton)
+        rows += [[int(x) for x in row] for row in block.tolist()]
+        if len(rows) >= n and flint.nmod_mat(rows, p).rank() == n:
+            return True
+        block = block * NA
+    return False
 def observable(A: Sequence[Sequence[Fraction]], C: Sequence[Sequence[Fraction]]) -> tuple[bool, int]:
     """Exact observability of ``(A, C)``: grow the row space of ``C, CA, CA^2, ...`` until it stops.
 

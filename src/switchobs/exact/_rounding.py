@@ -28,12 +28,9 @@ from fractions import Fraction
 from typing import Any
 
 import numpy as np
-from sympy import QQ
-from sympy.polys.matrices import DomainMatrix
+from ._exact import Matrix, definiteness, float_matrix, ldl_psd, matmul, nullspace, solve, sqrt_lower, transpose
 
-from ._exact import Matrix, definiteness, float_matrix, matmul, sqrt_lower, transpose
-
-__all__ = ["dyadic", "psd_dyadic", "factor_rows", "ldl_psd", "range_basis", "project_primal", "project_dual",
+__all__ = ["dyadic", "psd_dyadic", "factor_rows", "range_basis", "project_primal", "project_dual",
            "kernel_vector", "MAX_PROJECTION_UNKNOWNS", "FACE_TOLERANCES", "short_sqrt_lower", "normalise"]
 
 #: Projection is exact rational elimination; beyond this many unknowns it is skipped (too slow).
@@ -67,31 +64,6 @@ def normalise(P: Matrix, *others: Matrix) -> tuple[Matrix, ...]:
     if c <= 0:
         return (P, *others)
     return tuple([[x / c for x in row] for row in M] for M in (P, *others))
-
-
-def ldl_psd(M: Sequence[Sequence[Fraction]]) -> tuple[Matrix, list[Fraction]] | None:
-    """Exact ``M = L diag(d) L'`` of a PSD rational matrix (``None`` if ``M`` is not PSD)."""
-    n = len(M)
-    A = [[Fraction(x) for x in row] for row in M]
-    L = [[Fraction(int(i == j)) for j in range(n)] for i in range(n)]
-    d = [Fraction(0)] * n
-    for k in range(n):
-        p = A[k][k]
-        if p < 0:
-            return None
-        if p == 0:
-            if any(A[k][j] != 0 for j in range(k + 1, n)):
-                return None
-            continue
-        d[k] = p
-        for i in range(k + 1, n):
-            L[i][k] = A[i][k] / p
-        for i in range(k + 1, n):
-            lik = L[i][k]
-            if lik:
-                for j in range(k + 1, n):
-                    A[i][j] -= lik * A[k][j]
-    return L, d
 
 
 def short_sqrt_lower(x: Fraction, bits: int = 20) -> Fraction:
@@ -184,24 +156,18 @@ def _symmetrised(M: Matrix) -> Matrix:
 
 
 def _q(M: Sequence[Sequence[Any]]) -> list[list[Any]]:
-    """Entries as QQ elements (flint's fmpq when installed): the same Python loops, in C arithmetic."""
-    return [[QQ(int(x.numerator), int(x.denominator)) for x in row] for row in M]
+    """Entries as python-flint's ``fmpq``: the coefficient loops below in C arithmetic."""
+    import flint
 
-
-def _qq(rows: Sequence[Sequence[Any]], cols: int) -> DomainMatrix:
-    return DomainMatrix(_q(rows), (len(rows), cols), QQ).to_dense()
-
-
-def _fraction(x: Any) -> Fraction:
-    return Fraction(int(x.numerator), int(x.denominator))
+    return [[flint.fmpq(int(x.numerator), int(x.denominator)) for x in row] for row in M]
 
 
 def kernel_vector(M: Sequence[Sequence[Any]]) -> list[Fraction] | None:
     """A nonzero integer vector ``v`` (no common factor) with ``M v = 0`` for a square rational ``M``, or None."""
-    N = _qq(M, len(M[0])).nullspace()
-    if N.shape[0] == 0:
+    N = nullspace(M)
+    if not N:
         return None
-    row = [_fraction(N[0, j].element) for j in range(N.shape[1])]
+    row = N[0]
     den = math.lcm(*(x.denominator for x in row))
     ints = [int(x * den) for x in row]
     g = math.gcd(*ints)
@@ -234,16 +200,14 @@ def _project(columns: list[list[Matrix]], start: Sequence[Fraction]) -> list[Fra
         for i in range(n):
             for j in range(i, n):
                 rows.append([columns[m][e][i][j] for m in range(k)])
-    # Exact linear algebra over QQ (flint-backed DomainMatrix): the producer's side may be fast;
-    # the independent checker re-decides the result with the standard library only.
-    N = _qq(rows, k).nullspace()
-    if N.shape[0] == 0:
+    # The projection is unique, whichever basis of the solution space the rows of N are
+    N = nullspace(rows, k)
+    if not N:
         return None
-    # z = N' (N N')^-1 N start  (the rows of N span the solution space)
-    z0 = _qq([[x] for x in start], 1)
-    y = (N * N.transpose()).lu_solve(N * z0)
-    z = N.transpose() * y
-    return [_fraction(z[m, 0].element) for m in range(k)]
+    # z = N' (N N')^-1 N start
+    Nt = transpose(N)
+    y = solve(matmul(N, Nt), matmul(N, [[x] for x in start]))
+    return [row[0] for row in matmul(Nt, y)]
 
 
 def project_primal(As: Sequence[Matrix], P_num: np.ndarray, rel_tol: float
@@ -318,7 +282,7 @@ def project_dual(As: Sequence[Matrix], R_nums: Sequence[np.ndarray], rel_tol: fl
         start += _face_start(U, R, r)
     for A, U, r in zip(As, faces, ranks):
         Uq = _q(U)
-        AU = matmul(_q(A), Uq) if r else Uq
+        AU = _q(matmul(A, U)) if r else Uq
         for a, b in _sym_units(r):  # A U E_ab U' + (A U E_ab U')'
             columns.append([_symmetrised(_unit_image(Uq, a, b, AU))])
     if s_rank:

@@ -64,8 +64,9 @@ if TYPE_CHECKING:  # imported where an LMI is built (see _lmi)
 
 from .._json import JsonRecord, fields_from_json
 from .._limits import check_double
-from ..exact import (Matrix, add, definiteness, dyadic, float_matrix, fraction_matrix, identity, lyapunov_form, matmul,
-                     matrix_strings, observable, rank, scale, sub, to_fraction, transpose)
+from ..exact import (Matrix, add, definiteness, dyadic, float_matrix, fraction_matrix, identity, lyapunov_form,
+                     lyapunov_solve, matmul, matrix_strings, observable, rank, scale, sub, to_fraction, transpose)
+from ..exact import solve as solve_exact
 from ..exceptions import CertificateError, DimensionError, ModelError, NotObservableError, SolverFailure
 from ..lmi import DEFAULT_SOLVERS, SolveInfo, primal_margin, solve
 from ..model import Model, ParameterBox, user_matrix
@@ -219,37 +220,6 @@ def decay_holds(A: Matrix, X: Matrix, rate: Fraction) -> str:
     return "" if r.holds else f"A' X + X A + 2 rate X < 0 fails: {r.reason}"
 
 
-def _solve_exact(M: Matrix, rhs: Matrix) -> Matrix:
-    """``X`` with ``M X = rhs`` exactly (python-flint's ``fmpq_mat``: fraction-free, in C; the Kronecker
-    system of an ``n = 16`` Lyapunov equation, 256 unknowns, takes milliseconds where sympy's took seconds).
-
-    Raises ``ZeroDivisionError`` if ``M`` is singular."""
-    import flint
-
-    def q(rows: Matrix) -> Any:
-        return flint.fmpq_mat(len(rows), len(rows[0]), [flint.fmpq(int(f.numerator), int(f.denominator))
-                                                        for row in rows for f in map(Fraction, row)])
-
-    sol = q(M).solve(q(rhs))
-    return [[Fraction(int(sol[i, j].p), int(sol[i, j].q)) for j in range(sol.ncols())] for i in range(sol.nrows())]
-
-
-def _lyapunov_exact(A: Matrix, Q: Matrix) -> Matrix:
-    """The exact ``P`` with ``A' P + P A = -Q`` (``A`` Hurwitz), by the Kronecker system."""
-    n = len(A)
-    At = transpose(A)
-    rows = []
-    for i in range(n):
-        for j in range(n):
-            row = [Fraction(0)] * (n * n)
-            for k in range(n):
-                row[k * n + j] += At[i][k]   # (A' P)_ij
-                row[i * n + k] += A[k][j]    # (P A)_ij
-            rows.append(row)
-    vec = _solve_exact(rows, [[-Q[i][j]] for i in range(n) for j in range(n)])
-    return [[vec[i * n + j][0] for j in range(n)] for i in range(n)]
-
-
 # ----------------------------------------------------------------------------- preconditioning
 def riccati_scaling(A: np.ndarray, C: np.ndarray, signs: Sequence[int]) -> np.ndarray:
     """The change of coordinates ``z~ = S z`` in which the modes' Kalman filters have ``X~ = I``.
@@ -356,8 +326,8 @@ def decay_certificate(mats: Sequence[Matrix], rate: Fraction, S: np.ndarray, sta
         pass
     if len(mats) == 1:
         try:
-            X = _lyapunov_exact(add(mats[0], scale(rate, identity(n))), _unscale(identity(n), S))
-        except ZeroDivisionError:
+            X = lyapunov_solve(add(mats[0], scale(rate, identity(n))), _unscale(identity(n), S))
+        except DimensionError:
             return None, "A + rate I is singular"
         if check(X):
             return X, ""
@@ -587,14 +557,14 @@ def synthesize_gains(A: Any, C: Any, *, decay_rate: Any, noise_weight: float = 0
         X_plus = X_minus = P
     else:
         try:
-            P = _lyapunov_exact(A_plus, matmul(transpose(C_ex), C_ex))
-            K_minus = sub(K_plus, _solve_exact(P, transpose(C_ex)))
-        except ZeroDivisionError:
+            P = lyapunov_solve(A_plus, matmul(transpose(C_ex), C_ex))
+            K_minus = sub(K_plus, solve_exact(P, transpose(C_ex)))
+        except DimensionError:
             return fail("A_plus of the rounded gain is singular for the Lyapunov equation", info, solve_s)
         A_minus = add(scale(-1, A_ex), matmul(K_minus, C_ex))
         X_plus, why = decay_certificate([A_plus], rate, point.S[0], point.X_scaled[0], solvers)
         # A_minus = P^-1 A_plus' P, so X_minus = P X_plus^-1 P proves the same decay rate
-        X_minus = None if X_plus is None else matmul(matmul(P, _solve_exact(X_plus, identity(n))), P)
+        X_minus = None if X_plus is None else matmul(matmul(P, solve_exact(X_plus, identity(n))), P)
         reason = (f"no exact decay certificate for A_plus ({why})" if X_minus is None else
                   decay_holds(A_minus, X_minus, rate) or hespanha_pair_holds(A_plus, A_minus, P, C_ex))
     exact_s = time.perf_counter() - t0
