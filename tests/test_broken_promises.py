@@ -9,6 +9,7 @@ command in a subprocess.
 from __future__ import annotations
 
 import json
+import math
 import os
 import subprocess
 import sys
@@ -19,6 +20,7 @@ import numpy as np
 import pytest
 
 from switchobs import _limits
+from switchobs.exact import elimination_work
 from switchobs._limits import MAX_CERTIFICATE_WORK, MAX_DIMENSION, MAX_INPUT_FILE_BYTES, read_text
 from switchobs.certify import verify_certificate
 from switchobs.certify._schema import CertificateDocument
@@ -205,10 +207,18 @@ def _certificate(n: int, digits: int) -> dict:
                         "common_lyapunov": "exists"}, "provenance": {}}
 
 
+def _digits_at_the_work_bound(n: int) -> int:
+    """The digits D at which the products of an n-state certificate reach MAX_CERTIFICATE_WORK (the inverse of
+    the estimate of certify/_verify._check_cost: n**3 products weighted by (bits / 64 + 1) ** 1.5)."""
+    bits = 64 * ((MAX_CERTIFICATE_WORK / (n * n * (n + 1))) ** (2 / 3) - 1)
+    assert elimination_work(n, round(bits)) * 2 * n == pytest.approx(MAX_CERTIFICATE_WORK, rel=1e-3)
+    return int(bits / math.log2(10))
+
+
 @pytest.mark.parametrize("arithmetic", ["exact", "interval"])
 def test_a_certificate_beyond_the_work_bound_is_refused_at_once(arithmetic):
     n = MAX_DIMENSION
-    digits = int((MAX_CERTIFICATE_WORK / n**3) ** 0.5) + 50  # just above the bound, inside the size limits
+    digits = _digits_at_the_work_bound(n) + 50  # just above the bound, inside the size limits
     start = time.perf_counter()
     with pytest.raises(CertificateError, match="would take too long.*MAX_CERTIFICATE_WORK"):
         verify_certificate(_certificate(n, digits), arithmetic=arithmetic)
@@ -223,10 +233,10 @@ def test_a_certificate_within_the_work_bound_is_checked():
 
 
 def test_a_dense_certificate_near_the_work_bound_is_checked_in_seconds():
-    # 64 x 64 of about 300 digits, just inside MAX_CERTIFICATE_WORK: the arb enclosure proves the three
-    # definiteness claims (12 s of exact elimination before it became the first try)
+    # 64 x 64 just inside MAX_CERTIFICATE_WORK: the arb enclosure proves the three definiteness claims (12 s
+    # of exact elimination at 300 digits before it became the first try)
     n = MAX_DIMENSION
-    doc = _certificate(n, int((MAX_CERTIFICATE_WORK / n**3) ** 0.5) - 40)
+    doc = _certificate(n, _digits_at_the_work_bound(n) - 40)
     start = time.process_time()
     report = verify_certificate(doc)
     assert report.holds, report
@@ -312,3 +322,22 @@ def test_an_h_max_that_overflows_float_is_bad_input(tmp_path, capsys):
     out, err = capsys.readouterr()
     assert err.count("\n") == 1 and "h_max = 1e+50 overflows a float" in err
     assert not (tmp_path / "c").exists()
+
+
+def test_the_exact_elimination_stops_at_the_work_bound(monkeypatch):
+    """A semidefinite claim goes to the exact elimination (its zero pivots are exact zeros), whose minors grow
+    with every pivot: it counts its work as it goes and stops at the bound (lowered here so that the test is
+    quick) instead of running for minutes, and a claim within the bound is decided as before."""
+    import switchobs.exact._exact as kernel
+
+    rng = np.random.default_rng(7)
+    n, half = 24, 10 ** 250
+    B = [[int(rng.integers(-9, 10)) * half + int(rng.integers(0, 10**6)) for _ in range(n - 1)] for _ in range(n)]
+    N = [[sum(B[i][k] * B[j][k] for k in range(n - 1)) for j in range(n)] for i in range(n)]  # rank n - 1
+    assert kernel.definiteness(N, strict=False).holds
+    monkeypatch.setattr(kernel, "MAX_CERTIFICATE_WORK", 1e6)
+    start = time.process_time()
+    with pytest.raises(CertificateError, match=r"exact elimination of a 24 x 24 matrix would take too long.*"
+                                               r"MAX_CERTIFICATE_WORK"):
+        kernel.definiteness(N, strict=False)
+    assert time.process_time() - start < 2

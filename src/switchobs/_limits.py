@@ -68,12 +68,13 @@ MAX_DIMENSION = 64
 MAX_READ_WAIT_S = 10
 #: Characters of a model's or system's name (one line of printable text).
 MAX_NAME_LENGTH = 200
-#: Estimated work of a certificate's exact check, ``n**3 * D**2``: ``n`` states, ``D`` the digits of its largest
-#: matrix written over one common denominator (the common denominator's digits plus the longest numerator's).
-#: Elimination in exact rationals costs about ``n**3`` operations on numbers of about ``D`` digits that grow
-#: with the elimination.  The certificate ``certify`` writes for the 64-state chain of the benchmarks has
-#: ``D = 246`` (1.6e10); the bound admits ``D`` up to 338 at n = 64, 968 at n = 20, 5477 at n = 10.
-MAX_CERTIFICATE_WORK = 30_000_000_000
+#: Work of a certificate's exact check, in the units of :func:`switchobs.exact.elimination_work` (entry updates
+#: weighted by ``(bits / 64) ** 1.5``, about 5.5e7 a second on the 2-core test machine, within 15 % for dense
+#: 16-64 state matrices of 100-4000 digits): checked for the products before any arithmetic (``n**3`` products
+#: of the largest matrix's digits over one common denominator) and counted by the exact elimination as it goes,
+#: which stops at the bound, so no certificate costs much more than 7 s of elimination.  The 6-digit decimal
+#: 64-state chain that ``certify`` writes needs 2.8e8 for its products (D = 2010 digits).
+MAX_CERTIFICATE_WORK = 400_000_000
 #: A dwell-time certificate is checked while ``||A_p||_inf * tau_D <= 2**MAX_DWELL_BITS`` (the enclosure of
 #: ``exp(A_p tau_D)`` takes that many squarings); beyond, the check fails as undecidable in reasonable time.
 MAX_DWELL_BITS = 64

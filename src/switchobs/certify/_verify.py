@@ -62,7 +62,7 @@ from .._limits import (MAX_CERTIFICATE_BYTES, MAX_CERTIFICATE_DIGITS, MAX_CERTIF
                        digits, read_text)
 from .._progress import progress
 from ..exceptions import CertificateError, SwitchobsError
-from ..exact import (Matrix, add, definiteness, expm_enclosure, fraction_matrix, inf_norm,
+from ..exact import (Matrix, add, definiteness, elimination_work, expm_enclosure, fraction_matrix, inf_norm,
                      integer_form, is_zero, lyapunov_form, matmul, observable, scale, sqrt_upper,
                      to_fraction, transpose, arithmetic as _arithmetic)
 from ._schema import (ANY_DWELL, ArbitrarySwitching, CertificateDocument, CertificateKind, Check, DualEntry,
@@ -571,20 +571,24 @@ def _frozen(value: Any) -> Any:
 
 
 def _check_cost(doc: Mapping[str, Any], n: int) -> None:
-    """Refuse a certificate whose exact check would take too long, before any of it: the estimate
-    ``n**3 * D**2`` of :data:`~switchobs._limits.MAX_CERTIFICATE_WORK` over every matrix of the document.
-
-    A 100 x 100 family of 3000-digit rationals is within the size limits but would take hours: the sums of
-    exact products over distinct denominators grow the digits with every term.
+    """Refuse a certificate whose exact products would take too long, before any of them: ``n**3`` products of
+    entries of ``D`` digits (``D`` those of its largest matrix over one common denominator), each counted as
+    :func:`~switchobs.exact.elimination_work` counts them, against :data:`~switchobs._limits.MAX_CERTIFICATE_WORK`.
+    The elimination then counts its own work as it goes (:func:`~switchobs.exact.definiteness`): the minors it
+    forms grow with every pivot, which no estimate made before it can bound tightly.
     """
-    cap = int((MAX_CERTIFICATE_WORK / max(n, 1) ** 3) ** 0.5)  # the most digits D a matrix may have
     for where, rows in _matrices(doc):
-        size = _common_digits(rows, cap)
-        if size > cap:
+        size = _common_digits(rows, MAX_CERTIFICATE_DIGITS * 2)
+        work = elimination_work(n, round(size * _BITS_PER_DIGIT)) * 2 * n
+        if work > MAX_CERTIFICATE_WORK:
             raise CertificateError(f"certificate '{where}': its exact check would take too long (n = {n} states, "
-                                   f"a matrix of at least {size} digits over one common denominator: about "
-                                   f"{n ** 3 * size ** 2:.2g} > {MAX_CERTIFICATE_WORK:.2g} = MAX_CERTIFICATE_WORK, "
-                                   "estimated n**3 * digits**2); round the certificate to fewer digits")
+                                   f"a matrix of at least {size} digits over one common denominator: its products "
+                                   f"alone {work:.2g} > {MAX_CERTIFICATE_WORK:.2g} = MAX_CERTIFICATE_WORK); round "
+                                   "the certificate to fewer digits")
+
+
+#: log2(10): the bits of a decimal digit.
+_BITS_PER_DIGIT = 3.3219280948873626
 
 
 def _matrices(data: Any, where: str = "") -> Any:

@@ -20,7 +20,7 @@ Interval, monomial_range, box_pieces, vertex_values, evaluate_terms, observer_pa
                                                               -- polytopes of matrices over parameter boxes
 """
 
-from ._exact import (ARITHMETICS, Definiteness, Matrix, add, arithmetic, definiteness, expm_enclosure, float_matrix,
+from ._exact import (elimination_work, ARITHMETICS, Definiteness, Matrix, add, arithmetic, definiteness, expm_enclosure, float_matrix,
                      fraction_matrix, identity, inf_norm, integer_form, is_zero, ldl_psd, lyapunov_form,
                      lyapunov_solve, matmul, matrix_strings, nullspace, observable, rank, scale, solve, sqrt_lower,
                      sqrt_upper, sub, to_fraction, transpose, zeros)
@@ -29,7 +29,7 @@ from ._polytope import (Interval, box_pieces, evaluate_terms, monomial_range, ob
 from ._rounding import (FACE_TOLERANCES, MAX_PROJECTION_UNKNOWNS, dyadic, factor_rows, kernel_vector, normalise,
                         project_dual, project_primal, psd_dyadic, range_basis, short_sqrt_lower)
 
-__all__ = ["ARITHMETICS", "Definiteness", "Matrix", "add", "arithmetic", "definiteness", "expm_enclosure",
+__all__ = ["ARITHMETICS", "Definiteness", "Matrix", "add", "arithmetic", "definiteness", "elimination_work", "expm_enclosure",
            "float_matrix", "fraction_matrix", "identity", "inf_norm", "integer_form", "is_zero", "ldl_psd",
            "lyapunov_form", "lyapunov_solve", "matmul", "matrix_strings", "nullspace", "observable", "rank", "scale",
            "solve", "sqrt_lower", "sqrt_upper", "sub", "to_fraction", "transpose", "zeros", "FACE_TOLERANCES",
