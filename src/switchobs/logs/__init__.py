@@ -16,6 +16,7 @@ log_signals               -- a log and a map -> LogSignals (units, counters, whe
 write_result              -- a ReplayResult as an MDF4, Parquet or CSV log
 plot_replay               -- its figure (wheel speed, x2, XBS estimate; matplotlib)
 write_table, write_mdf, write_braking_log -- write logs (a simulated braking's chain inputs, in a layout)
+braking_log_map           -- the channel map of a log write_braking_log writes (TOML text)
 FORMATS, log_format       -- file endings of the formats
 
 Example
@@ -41,7 +42,7 @@ from ._map import UNITS, ChannelMap, ChannelSpec, log_signals
 from ._plot import plot_replay
 
 __all__ = ["replay_log", "ChannelMap", "ChannelSpec", "UNITS", "read_log", "Log", "Channel", "log_signals",
-           "write_result", "write_table", "write_mdf", "write_braking_log", "FORMATS", "log_format", "CHUNK_ROWS",
+           "write_result", "write_table", "write_mdf", "write_braking_log", "braking_log_map", "FORMATS", "log_format", "CHUNK_ROWS",
            "RESULT_UNITS", "plot_replay"]
 
 #: Units of the columns :func:`write_result` writes.
@@ -129,3 +130,37 @@ def write_braking_log(path: str | Path, measurements: EncoderMeasurements, *, la
         return write_mdf(path, [(t, {k: (v, {"vx": "m/s", "p": "bar"}.get(k, "")) for k, v in columns.items()
                                      if k != "t"})])
     return write_table(path, columns)
+
+
+def braking_log_map(layout: str = "edges", *, ppr: int = 60, clock_hz: float = 1e6) -> str:
+    """The channel map (TOML text) of a log in ``layout`` of :func:`write_braking_log` (its channel names and
+    units), for an encoder of ``ppr`` pulses per revolution; ``clock_hz`` is the capture clock of the
+    ``counter`` layout.  The maps of ``docs/replay.md``.
+
+    Raises
+    ------
+    LogError
+        An unknown layout.
+
+    Examples
+    --------
+    >>> print(braking_log_map())
+    [encoder]
+    ppr = 60
+    edges = { channel = "edge_time", unit = "s", teeth = "edge_tooth" }
+    [signals]
+    speed = { channel = "vx", unit = "m/s" }
+    pressure = { channel = "p", unit = "bar" }
+    <BLANKLINE>
+    """
+    if layout == "edges":
+        encoder = 'edges = { channel = "edge_time", unit = "s", teeth = "edge_tooth" }'
+    elif layout == "counter":
+        # 1e6, not %g's 1e+06: the page's spelling (TOML reads both)
+        clock = f"{clock_hz:g}".replace("e+0", "e").replace("e+", "e")
+        encoder = f'counter = {{ channel = "tooth_count", capture = "capture_ticks", clock_hz = {clock} }}'
+    else:
+        from ..exceptions import LogError
+        raise LogError(f"unknown log layout {layout!r}; use edges or counter")
+    return (f"[encoder]\nppr = {ppr}\n{encoder}\n[signals]\nspeed = {{ channel = \"vx\", unit = \"m/s\" }}\n"
+            'pressure = { channel = "p", unit = "bar" }\n')
