@@ -1,7 +1,8 @@
 /* The FMI 3.0 functions every co-simulation wrapper of switchobs defines alike (the observer's and the quarter
  * car's), written once here and inserted into each wrapper by switchobs.codegen.fmi3_common.  They use the
- * wrapper's swobs_instance (fields mode, environment, log), SWOBS_INST, SWOBS_TOKEN, SWOBS_TERMINATED,
- * swobs_fail, swobs_reset, and swobs_start: the wrapper's own set-up of a new zeroed instance. */
+ * wrapper's swobs_instance (fields mode, time, environment, log), SWOBS_INST, SWOBS_TOKEN, SWOBS_TERMINATED,
+ * swobs_fail, swobs_reset, swobs_do_step, swobs_start (its own set-up of a new zeroed instance), and
+ * SWOBS_ENDED(inst) / SWOBS_EARLY(inst): whether the last doStep ended the simulation / returned early. */
 
 const char *fmi3GetVersion(void) { return fmi3Version; }
 
@@ -78,4 +79,20 @@ fmi3Status fmi3Reset(fmi3Instance instance)
 fmi3Status fmi3EnterStepMode(fmi3Instance instance)
 {
     return instance == NULL ? fmi3Error : fmi3OK;  /* exitInitializationMode already entered step mode */
+}
+
+fmi3Status fmi3DoStep(fmi3Instance instance, fmi3Float64 currentCommunicationPoint,
+    fmi3Float64 communicationStepSize, fmi3Boolean noSetFMUStatePriorToCurrentPoint,
+    fmi3Boolean *eventHandlingNeeded, fmi3Boolean *terminateSimulation, fmi3Boolean *earlyReturn,
+    fmi3Float64 *lastSuccessfulTime)
+{
+    fmi3Status status;
+    (void)noSetFMUStatePriorToCurrentPoint;
+    if (instance == NULL) return fmi3Error;
+    status = swobs_do_step(SWOBS_INST, currentCommunicationPoint, communicationStepSize);
+    if (eventHandlingNeeded != NULL) *eventHandlingNeeded = fmi3False;
+    if (terminateSimulation != NULL) *terminateSimulation = SWOBS_ENDED(SWOBS_INST) ? fmi3True : fmi3False;
+    if (earlyReturn != NULL) *earlyReturn = SWOBS_EARLY(SWOBS_INST) ? fmi3True : fmi3False;
+    if (lastSuccessfulTime != NULL) *lastSuccessfulTime = SWOBS_INST->time;
+    return status;
 }

@@ -219,6 +219,9 @@ static swobs_instance *swobs_start(swobs_instance *inst, fmi3String instanceName
     (void)earlyReturnAllowed;
     return swobs_setup(inst, instanceName);
 }
+/* of fmi3DoStep: the observer never asks to end the simulation, and a doStep never returns early */
+#define SWOBS_ENDED(inst) 0
+#define SWOBS_EARLY(inst) 0
 
 fmi3Status fmi3EnterInitializationMode(fmi3Instance instance, fmi3Boolean toleranceDefined, fmi3Float64 tolerance,
                                        fmi3Float64 startTime, fmi3Boolean stopTimeDefined, fmi3Float64 stopTime)
@@ -300,22 +303,6 @@ fmi3Status fmi3GetOutputDerivatives(fmi3Instance instance, const fmi3ValueRefere
     (void)valueReferences; (void)nValueReferences; (void)orders; (void)values; (void)nValues;
     return instance == NULL ? fmi3Error
         : swobs_fail(SWOBS_INST, "fmi3GetOutputDerivatives", "the outputs are held between communication points");
-}
-
-fmi3Status fmi3DoStep(fmi3Instance instance, fmi3Float64 currentCommunicationPoint,
-    fmi3Float64 communicationStepSize, fmi3Boolean noSetFMUStatePriorToCurrentPoint,
-    fmi3Boolean *eventHandlingNeeded, fmi3Boolean *terminateSimulation, fmi3Boolean *earlyReturn,
-    fmi3Float64 *lastSuccessfulTime)
-{
-    fmi3Status status;
-    (void)noSetFMUStatePriorToCurrentPoint;
-    if (instance == NULL) return fmi3Error;
-    status = swobs_do_step(SWOBS_INST, currentCommunicationPoint, communicationStepSize);
-    if (eventHandlingNeeded != NULL) *eventHandlingNeeded = fmi3False;
-    if (terminateSimulation != NULL) *terminateSimulation = fmi3False;
-    if (earlyReturn != NULL) *earlyReturn = fmi3False;
-    if (lastSuccessfulTime != NULL) *lastSuccessfulTime = SWOBS_INST->time;
-    return status;
 }
 
 /* The functions every wrapper shares, then those of other interface types and features: an error each. */

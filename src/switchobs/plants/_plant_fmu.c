@@ -139,6 +139,9 @@ static swobs_instance *swobs_start(swobs_instance *inst, fmi3String instanceName
     inst->early_allowed = earlyReturnAllowed != fmi3False;
     return inst;
 }
+/* of fmi3DoStep: the braking has stopped or timed out; the last doStep returned early */
+#define SWOBS_ENDED(inst) ((inst)->ended)
+#define SWOBS_EARLY(inst) ((inst)->early)
 
 fmi3Status fmi3EnterInitializationMode(fmi3Instance instance, fmi3Boolean toleranceDefined, fmi3Float64 tolerance,
                                        fmi3Float64 startTime, fmi3Boolean stopTimeDefined, fmi3Float64 stopTime)
@@ -210,22 +213,6 @@ fmi3Status fmi3GetInt32(fmi3Instance instance, const fmi3ValueReference valueRef
         values[k] = (fmi3Int32)SWOBS_INST->run.L.phase;
     }
     return fmi3OK;
-}
-
-fmi3Status fmi3DoStep(fmi3Instance instance, fmi3Float64 currentCommunicationPoint,
-    fmi3Float64 communicationStepSize, fmi3Boolean noSetFMUStatePriorToCurrentPoint,
-    fmi3Boolean *eventHandlingNeeded, fmi3Boolean *terminateSimulation, fmi3Boolean *earlyReturn,
-    fmi3Float64 *lastSuccessfulTime)
-{
-    fmi3Status status;
-    (void)noSetFMUStatePriorToCurrentPoint;
-    if (instance == NULL) return fmi3Error;
-    status = swobs_do_step(SWOBS_INST, currentCommunicationPoint, communicationStepSize);
-    if (eventHandlingNeeded != NULL) *eventHandlingNeeded = fmi3False;
-    if (terminateSimulation != NULL) *terminateSimulation = SWOBS_INST->ended ? fmi3True : fmi3False;
-    if (earlyReturn != NULL) *earlyReturn = SWOBS_INST->early ? fmi3True : fmi3False;
-    if (lastSuccessfulTime != NULL) *lastSuccessfulTime = SWOBS_INST->time;
-    return status;
 }
 
 /* The functions every wrapper shares, then those of other interface types, variable types and features: an
