@@ -42,8 +42,8 @@ from ._map import UNITS, ChannelMap, ChannelSpec, log_signals
 from ._plot import plot_replay
 
 __all__ = ["replay_log", "ChannelMap", "ChannelSpec", "UNITS", "read_log", "Log", "Channel", "log_signals",
-           "write_result", "write_table", "write_mdf", "write_braking_log", "braking_log_map", "FORMATS", "log_format", "CHUNK_ROWS",
-           "RESULT_UNITS", "plot_replay"]
+           "write_result", "write_table", "write_mdf", "write_braking_log", "braking_log_map", "FORMATS", "log_format",
+           "CHUNK_ROWS", "RESULT_UNITS", "plot_replay"]
 
 #: Units of the columns :func:`write_result` writes.
 RESULT_UNITS: dict[str, str] = {"t": "s", "t_measured": "s", "x2_tsa": "m/s^2", "x2_notch": "m/s^2",
