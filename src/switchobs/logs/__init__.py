@@ -36,6 +36,7 @@ from typing import Any
 
 import numpy as np
 
+from ..exceptions import LogError
 from ..loop import EncoderMeasurements, ReplayResult, replay
 from ._io import CHUNK_ROWS, FORMATS, Channel, Log, log_format, read_log, write_mdf, write_table
 from ._map import UNITS, ChannelMap, ChannelSpec, log_signals
@@ -89,6 +90,10 @@ def write_result(result: ReplayResult, path: str | Path, *, fmt: str | None = No
     return write_table(path, columns, fmt=fmt)
 
 
+def _unknown_layout(layout: str) -> LogError:
+    return LogError(f"unknown log layout {layout!r}; use edges or counter")
+
+
 def write_braking_log(path: str | Path, measurements: EncoderMeasurements, *, layout: str = "edges",
                       rate_hz: float = 1000.0, clock_hz: float = 1e6) -> Path:
     """Write what the encoder chain read in a simulated braking as a log (tests and the docs' example).
@@ -117,8 +122,7 @@ def write_braking_log(path: str | Path, measurements: EncoderMeasurements, *, la
         return write_table(path, {"t": m.steps_t, "vx": m.vx_steps, "p": m.pressure_steps,
                                   "edge_time": m.edge_times, "edge_tooth": m.edge_teeth.astype(float)})
     if layout != "counter":
-        from ..exceptions import LogError
-        raise LogError(f"unknown log layout {layout!r}; use edges or counter")
+        raise _unknown_layout(layout)
     t = np.arange(int(np.ceil(m.steps_t[0] * rate_hz)), int(np.floor(m.steps_t[-1] * rate_hz)) + 1) / rate_hz
     seen = np.searchsorted(m.edge_times, t, side="right")        # edges stamped by each sample
     count = np.where(seen > 0, m.edge_teeth[np.maximum(seen - 1, 0)], int(m.edge_teeth[0]) - 1)
@@ -160,7 +164,6 @@ def braking_log_map(layout: str = "edges", *, ppr: int = 60, clock_hz: float = 1
         clock = f"{clock_hz:g}".replace("e+0", "e").replace("e+", "e")
         encoder = f'counter = {{ channel = "tooth_count", capture = "capture_ticks", clock_hz = {clock} }}'
     else:
-        from ..exceptions import LogError
-        raise LogError(f"unknown log layout {layout!r}; use edges or counter")
+        raise _unknown_layout(layout)
     return (f"[encoder]\nppr = {ppr}\n{encoder}\n[signals]\nspeed = {{ channel = \"vx\", unit = \"m/s\" }}\n"
             'pressure = { channel = "p", unit = "bar" }\n')
