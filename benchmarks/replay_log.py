@@ -24,18 +24,10 @@ from pathlib import Path
 import numpy as np
 from _harness import MIN_REPEATS, Stats, cli_cpu, cpu, number, publish
 
-from switchobs.logs import ChannelMap, log_signals, read_log, write_mdf, write_result
+from switchobs.logs import ChannelMap, braking_log_map, log_signals, read_log, write_mdf, write_result
 from switchobs.loop import edges_from_wheel_speed, ideal_encoder, replay
 
 DURATION_S, QUICK_DURATION_S, SHORT_S = 60.0, 10.0, 1.0
-MAP = """
-[encoder]
-ppr = 60
-edges = { channel = "edge_time", unit = "s", teeth = "edge_tooth" }
-[signals]
-speed = { channel = "vx", unit = "m/s" }
-pressure = { channel = "p", unit = "bar" }
-"""
 
 
 def write_drive(path: Path, duration: float) -> int:
@@ -73,7 +65,7 @@ def main() -> None:
     duration = QUICK_DURATION_S if args.quick else DURATION_S
     with tempfile.TemporaryDirectory() as tmp:
         d = Path(tmp)
-        (d / "map.toml").write_text(MAP, encoding="utf-8")
+        (d / "map.toml").write_text(braking_log_map(), encoding="utf-8")
         edges = write_drive(d / "long.mf4", duration)
         write_drive(d / "short.mf4", SHORT_S)
         whole = ["| `switchobs replay` | CPU, whole process [s] | 1 s log [s] | after start-up [s] | × real time |",

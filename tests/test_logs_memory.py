@@ -21,21 +21,13 @@ import sys
 import numpy as np
 import pytest
 
-from switchobs.logs import CHUNK_ROWS, write_mdf, write_table
+from switchobs.logs import CHUNK_ROWS, braking_log_map, write_mdf, write_table
 from switchobs.loop import edges_from_wheel_speed, ideal_encoder
 
 from test_logs_replay import needs
 
 DURATION_S = 300.0
 UNUSED = 20
-MAP = """
-[encoder]
-ppr = 60
-edges = { channel = "edge_time", unit = "s", teeth = "edge_tooth" }
-[signals]
-speed = { channel = "vx", unit = "m/s" }
-pressure = { channel = "p", unit = "bar" }
-"""
 #: The reading's peak above the arrays it returns: at most TIMES times them plus the reader's allowance [bytes].
 TIMES = 2.0
 ALLOWANCE = {"csv": 8 * 8 * CHUNK_ROWS, "parquet": 64 * 2**20, "mf4": 4 * 32 * 2**20}
@@ -80,7 +72,7 @@ def test_reading_a_long_log_holds_the_named_channels_and_a_few_chunks(tmp_path, 
                          (stamps, {"edge_time": (stamps, "s"), "edge_tooth": (teeth, "")})])
     else:
         write_table(path, {"t": t, "vx": vx, "p": p, **unused, "edge_time": stamps, "edge_tooth": teeth.astype(float)})
-    (tmp_path / "map.toml").write_text(MAP, encoding="utf-8")
+    (tmp_path / "map.toml").write_text(braking_log_map(), encoding="utf-8")
     proc = subprocess.run([sys.executable, "-c", MEASURE, str(path), str(tmp_path / "map.toml")],
                           capture_output=True, text=True, check=False)
     assert proc.returncode == 0, proc.stderr

@@ -23,7 +23,8 @@ import pytest
 
 from switchobs.cli.main import main
 from switchobs.exceptions import LogError
-from switchobs.logs import ChannelMap, read_log, replay_log, write_braking_log, write_mdf, write_result, write_table
+from switchobs.logs import (ChannelMap, braking_log_map, read_log, replay_log, write_braking_log, write_mdf,
+                            write_result, write_table)
 from switchobs.loop import (INITIAL_STATE, EncoderLoopEstimator, EstimatorSpec, LogSignals, ReplayResult,
                             edges_from_counts, measurements_signals, replay, xbs_estimator)
 from switchobs.plants import BrakingScenario, RoadChange, RoadSchedule, simulate
@@ -36,22 +37,8 @@ TIER1_RMS, TIER2_RMS, TIER2_ERROR = 0.15, 1.5, 1.1
 SC = BrakingScenario(RoadSchedule("dry-asphalt", [RoadChange("snow", at_time_s=0.6)]), speed_m_s=60 / 3.6,
                      duration_s=1.5, stop_speed_m_s=10 / 3.6)
 
-EDGES_MAP = """
-[encoder]
-ppr = 60
-edges = { channel = "edge_time", unit = "s", teeth = "edge_tooth" }
-[signals]
-speed = { channel = "vx", unit = "m/s" }
-pressure = { channel = "p", unit = "bar" }
-"""
-COUNTER_MAP = """
-[encoder]
-ppr = 60
-counter = { channel = "tooth_count", capture = "capture_ticks", clock_hz = 1e6 }
-[signals]
-speed = { channel = "vx", unit = "m/s" }
-pressure = { channel = "p", unit = "bar" }
-"""
+#: The channel maps of the logs write_braking_log writes (the maps of docs/replay.md).
+EDGES_MAP, COUNTER_MAP = braking_log_map("edges"), braking_log_map("counter")
 
 
 def needs(fmt: str) -> None:
@@ -365,6 +352,14 @@ def test_the_units_table_of_the_page_is_the_codes():
     rows = dict(re.findall(r"^\| (\w+) \| (`.*`) \|$", text, re.M))
     assert {k: [u.strip("`") for u in v.split(", ")] for k, v in rows.items() if k in UNITS} == \
         {k: list(v) for k, v in UNITS.items()}
+
+
+def test_the_pages_channel_maps_are_those_of_the_written_logs():
+    assert _block('toml title="edges.toml"') == braking_log_map("edges")
+    assert _block('toml title="counter.toml"') == braking_log_map("counter", ppr=60, clock_hz=1e6)
+    assert "ppr = 7\n" in braking_log_map(ppr=7) and "clock_hz = 32768 }" in braking_log_map("counter", clock_hz=32768)
+    with pytest.raises(LogError, match="unknown log layout 'wheel'"):
+        braking_log_map("wheel")
 
 
 def test_the_pages_example_runs_as_shown(tmp_path, monkeypatch, capsys):

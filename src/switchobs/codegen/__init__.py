@@ -35,7 +35,7 @@ fuzz_harness        -- a libFuzzer harness of the C API with the API contract as
 from ..spec import METHODS, STATUS_TEXT, Guard, StepStatus, domain_guards
 from ._a2l import a2l_symbols, calibration_files, elf_symbols, generate_a2l
 from ._build import CObserver, cache_directory, compile_observer, compile_sources, find_compiler, load_library
-from ._fmu import (FMI_VERSIONS, FMUVariable, GeneratedFMU, build_fmu, fmi3_stubs, fmi_headers, fmu_token,
+from ._fmu import (FMI_VERSIONS, FMUVariable, GeneratedFMU, build_fmu, fmi3_common, fmi_headers, fmu_token,
                    generate_fmu)
 from ._generate import (REALS, default_prefix, generate_observer, generate_super_twisting,
                         generate_vehicle_speed)
@@ -45,7 +45,7 @@ from ._proof import ProofResult, proof_record, prove
 from ._target import (TARGETS, FunctionStack, PilResult, Target, TargetBuild, TargetFootprint, measure_footprint,
                       run_pil, target_build, target_real)
 
-__all__ = ["CObserver", "FMI_VERSIONS", "FMUVariable", "GeneratedFMU", "build_fmu", "fmi3_stubs", "fmi_headers",
+__all__ = ["CObserver", "FMI_VERSIONS", "FMUVariable", "GeneratedFMU", "build_fmu", "fmi3_common", "fmi_headers",
            "fmu_token", "GeneratedObserver", "a2l_symbols", "calibration_files",
            "elf_symbols", "generate_a2l", "generate_fmu", "Guard", "METHODS", "REALS", "STATUS_TEXT", "StepStatus",
            "cache_directory", "compile_observer", "compile_sources", "find_compiler", "default_prefix", "domain_guards",

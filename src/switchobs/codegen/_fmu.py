@@ -42,13 +42,14 @@ from ._build import BUILD_FLAGS, compile_sources
 from ._emit import float_literal
 from ._observer import GeneratedObserver
 
-__all__ = ["FMI_VERSIONS", "FMUVariable", "GeneratedFMU", "build_fmu", "fmi3_stubs", "fmi_headers", "fmu_token",
+__all__ = ["FMI_VERSIONS", "FMUVariable", "GeneratedFMU", "build_fmu", "fmi3_common", "fmi_headers", "fmu_token",
            "generate_fmu"]
 
 #: The FMI versions of :func:`generate_fmu`.
 FMI_VERSIONS = (2, 3)
 
 _TEMPLATE = Path(__file__).with_name("_fmu_wrapper.c")
+_FMI3_COMMON = Path(__file__).with_name("_fmi3_common.c")
 #: Portable build (no -march=native), no contraction into FMAs: the host build's arithmetic.
 _FLAGS = (*BUILD_FLAGS, "-ffp-contract=off")
 
@@ -79,11 +80,19 @@ def fmi_headers(version: int) -> dict[str, str]:
 _TYPEDEF = re.compile(r"typedef\s+fmi3Status\s+(fmi3\w+)TYPE\s*\((.*?)\);", re.S)
 
 
-def fmi3_stubs(template: str) -> str:
-    """Definitions of the FMI 3.0 functions a wrapper ``template`` does not implement (model exchange, scheduled
-    execution, clocks, FMU state...): each returns ``fmi3Error`` with a log message through the wrapper's
-    ``swobs_fail(SWOBS_INST, function, why)``.  FMI 3.0 importers (FMPy) load every function of
-    ``fmi3Functions.h``, so all are defined; the signatures come from the standard's own header."""
+def fmi3_common(template: str) -> str:
+    """The FMI 3.0 functions of a co-simulation wrapper ``template`` that every wrapper defines alike
+    (``_fmi3_common.c``: the version, instantiation, event mode, termination, reset, step mode), then those neither
+    defines (model exchange, scheduled execution, clocks, FMU state...), each returning ``fmi3Error`` with a log
+    message through the wrapper's ``swobs_fail(SWOBS_INST, function, why)``.  FMI 3.0 importers (FMPy) load every
+    function of ``fmi3Functions.h``, so all are defined; the signatures come from the standard's own header.
+    Used by :func:`generate_fmu` and the quarter car's plant FMU (:func:`switchobs.plants.generate_plant_fmu`)."""
+    common = _FMI3_COMMON.read_text(encoding="utf-8")
+    return common + "\n" + _fmi3_stubs(template + common)
+
+
+def _fmi3_stubs(template: str) -> str:
+    """Definitions of the FMI 3.0 functions of ``fmi3FunctionTypes.h`` that ``template`` does not define."""
     types_header = fmi_headers(3)["fmi3FunctionTypes.h"]
     defined = set(re.findall(r"\b(fmi3\w+)\s*\(fmi3Instance instance", template)) | \
         set(re.findall(r"SWOBS_NONE\((fmi3\w+),", template))
@@ -352,7 +361,7 @@ def generate_fmu(gen: GeneratedObserver, *, fmi_version: int = 3, initial_state:
     template = _TEMPLATE.read_text(encoding="utf-8")
     # the token names this exact observer and interface: any change of the sources changes it
     token = fmu_token(gen.header, gen.source, str(fmi_version), repr(x0))
-    wrapper = Template(template).substitute(stubs=fmi3_stubs(template) if fmi_version == 3 else "",
+    wrapper = Template(template).substitute(fmi3_common=fmi3_common(template) if fmi_version == 3 else "",
         prefix=gen.prefix, P=P, version=fmi_version, no=len(gen.original_names), token=token,
         discard=f"fmi{fmi_version}Discard",
         allocation="fmi2CallbackFunctions.allocateMemory" if fmi_version == 2 else "calloc (FMI 3.0 passes no "

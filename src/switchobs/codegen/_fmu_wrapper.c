@@ -212,58 +212,16 @@ static swobs_status swobs_do_step(swobs_instance *inst, double t, double h)
 
 #define SWOBS_INST ((swobs_instance *)instance)
 
-const char *fmi3GetVersion(void) { return fmi3Version; }
-
-fmi3Status fmi3SetDebugLogging(fmi3Instance instance, fmi3Boolean loggingOn, size_t nCategories,
-                               const fmi3String categories[])
+/* The set-up of a new instance in fmi3InstantiateCoSimulation (of the shared FMI 3.0 functions): a doStep never
+ * returns early. */
+static swobs_instance *swobs_start(swobs_instance *inst, fmi3String instanceName, fmi3Boolean earlyReturnAllowed)
 {
-    (void)instance; (void)loggingOn; (void)nCategories; (void)categories;  /* errors and discards are always logged */
-    return fmi3OK;
-}
-
-fmi3Instance fmi3InstantiateModelExchange(fmi3String instanceName, fmi3String instantiationToken,
-    fmi3String resourcePath, fmi3Boolean visible, fmi3Boolean loggingOn, fmi3InstanceEnvironment instanceEnvironment,
-    fmi3LogMessageCallback logMessage)
-{
-    (void)instanceName; (void)instantiationToken; (void)resourcePath; (void)visible; (void)loggingOn;
-    if (logMessage != NULL) logMessage(instanceEnvironment, fmi3Error, "logStatusError",
-                                       "this FMU supports co-simulation only");
-    return NULL;
-}
-
-fmi3Instance fmi3InstantiateCoSimulation(fmi3String instanceName, fmi3String instantiationToken,
-    fmi3String resourcePath, fmi3Boolean visible, fmi3Boolean loggingOn, fmi3Boolean eventModeUsed,
-    fmi3Boolean earlyReturnAllowed, const fmi3ValueReference requiredIntermediateVariables[],
-    size_t nRequiredIntermediateVariables, fmi3InstanceEnvironment instanceEnvironment,
-    fmi3LogMessageCallback logMessage, fmi3IntermediateUpdateCallback intermediateUpdate)
-{
-    swobs_instance *inst;
-    (void)resourcePath; (void)visible; (void)loggingOn; (void)eventModeUsed; (void)earlyReturnAllowed;
-    (void)requiredIntermediateVariables; (void)nRequiredIntermediateVariables; (void)intermediateUpdate;
-    if (instantiationToken == NULL || strcmp(instantiationToken, SWOBS_TOKEN) != 0) {
-        if (logMessage != NULL) logMessage(instanceEnvironment, fmi3Error, "logStatusError",
-                                           "the instantiation token does not match this FMU's " SWOBS_TOKEN);
-        return NULL;
-    }
-    /* FMI 3.0 passes no memory callbacks: the instance is the one calloc of the FMU */
-    inst = (swobs_instance *)calloc(1u, sizeof *inst);
-    if (inst == NULL) return NULL;
-    inst->environment = instanceEnvironment;
-    inst->log = logMessage;
+    (void)earlyReturnAllowed;
     return swobs_setup(inst, instanceName);
 }
-
-fmi3Instance fmi3InstantiateScheduledExecution(fmi3String instanceName, fmi3String instantiationToken,
-    fmi3String resourcePath, fmi3Boolean visible, fmi3Boolean loggingOn, fmi3InstanceEnvironment instanceEnvironment,
-    fmi3LogMessageCallback logMessage, fmi3ClockUpdateCallback clockUpdate,
-    fmi3LockPreemptionCallback lockPreemption, fmi3UnlockPreemptionCallback unlockPreemption)
-{
-    (void)clockUpdate; (void)lockPreemption; (void)unlockPreemption;
-    return fmi3InstantiateModelExchange(instanceName, instantiationToken, resourcePath, visible, loggingOn,
-                                        instanceEnvironment, logMessage);
-}
-
-void fmi3FreeInstance(fmi3Instance instance) { free(instance); }
+/* of fmi3DoStep: the observer never asks to end the simulation, and a doStep never returns early */
+#define SWOBS_ENDED(inst) 0
+#define SWOBS_EARLY(inst) 0
 
 fmi3Status fmi3EnterInitializationMode(fmi3Instance instance, fmi3Boolean toleranceDefined, fmi3Float64 tolerance,
                                        fmi3Float64 startTime, fmi3Boolean stopTimeDefined, fmi3Float64 stopTime)
@@ -278,25 +236,6 @@ fmi3Status fmi3EnterInitializationMode(fmi3Instance instance, fmi3Boolean tolera
 fmi3Status fmi3ExitInitializationMode(fmi3Instance instance)
 {
     return instance == NULL ? fmi3Error : swobs_exit_initialization(SWOBS_INST);
-}
-
-fmi3Status fmi3EnterEventMode(fmi3Instance instance)
-{
-    return instance == NULL ? fmi3Error : swobs_fail(SWOBS_INST, "fmi3EnterEventMode", "this FMU has no event mode");
-}
-
-fmi3Status fmi3Terminate(fmi3Instance instance)
-{
-    if (instance == NULL) return fmi3Error;
-    SWOBS_INST->mode = SWOBS_TERMINATED;
-    return fmi3OK;
-}
-
-fmi3Status fmi3Reset(fmi3Instance instance)
-{
-    if (instance == NULL) return fmi3Error;
-    swobs_reset(SWOBS_INST);
-    return fmi3OK;
 }
 
 fmi3Status fmi3GetFloat64(fmi3Instance instance, const fmi3ValueReference valueReferences[],
@@ -358,11 +297,6 @@ SWOBS_NONE(fmi3SetUInt64, const fmi3UInt64)
 SWOBS_NONE(fmi3SetBoolean, const fmi3Boolean)
 SWOBS_NONE(fmi3SetString, const fmi3String)
 
-fmi3Status fmi3EnterStepMode(fmi3Instance instance)
-{
-    return instance == NULL ? fmi3Error : fmi3OK;  /* exitInitializationMode already entered step mode */
-}
-
 fmi3Status fmi3GetOutputDerivatives(fmi3Instance instance, const fmi3ValueReference valueReferences[],
     size_t nValueReferences, const fmi3Int32 orders[], fmi3Float64 values[], size_t nValues)
 {
@@ -371,24 +305,8 @@ fmi3Status fmi3GetOutputDerivatives(fmi3Instance instance, const fmi3ValueRefere
         : swobs_fail(SWOBS_INST, "fmi3GetOutputDerivatives", "the outputs are held between communication points");
 }
 
-fmi3Status fmi3DoStep(fmi3Instance instance, fmi3Float64 currentCommunicationPoint,
-    fmi3Float64 communicationStepSize, fmi3Boolean noSetFMUStatePriorToCurrentPoint,
-    fmi3Boolean *eventHandlingNeeded, fmi3Boolean *terminateSimulation, fmi3Boolean *earlyReturn,
-    fmi3Float64 *lastSuccessfulTime)
-{
-    fmi3Status status;
-    (void)noSetFMUStatePriorToCurrentPoint;
-    if (instance == NULL) return fmi3Error;
-    status = swobs_do_step(SWOBS_INST, currentCommunicationPoint, communicationStepSize);
-    if (eventHandlingNeeded != NULL) *eventHandlingNeeded = fmi3False;
-    if (terminateSimulation != NULL) *terminateSimulation = fmi3False;
-    if (earlyReturn != NULL) *earlyReturn = fmi3False;
-    if (lastSuccessfulTime != NULL) *lastSuccessfulTime = SWOBS_INST->time;
-    return status;
-}
-
-/* The functions of other interface types and features: an error each. */
-${stubs}
+/* The functions every wrapper shares, then those of other interface types and features: an error each. */
+${fmi3_common}
 #else  /* ------------------------------------------------------------------------------------------------ FMI 2 */
 
 #define SWOBS_INST ((swobs_instance *)c)

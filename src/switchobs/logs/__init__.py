@@ -16,6 +16,7 @@ log_signals               -- a log and a map -> LogSignals (units, counters, whe
 write_result              -- a ReplayResult as an MDF4, Parquet or CSV log
 plot_replay               -- its figure (wheel speed, x2, XBS estimate; matplotlib)
 write_table, write_mdf, write_braking_log -- write logs (a simulated braking's chain inputs, in a layout)
+braking_log_map           -- the channel map of a log write_braking_log writes (TOML text)
 FORMATS, log_format       -- file endings of the formats
 
 Example
@@ -35,14 +36,15 @@ from typing import Any
 
 import numpy as np
 
+from ..exceptions import LogError
 from ..loop import EncoderMeasurements, ReplayResult, replay
 from ._io import CHUNK_ROWS, FORMATS, Channel, Log, log_format, read_log, write_mdf, write_table
 from ._map import UNITS, ChannelMap, ChannelSpec, log_signals
 from ._plot import plot_replay
 
 __all__ = ["replay_log", "ChannelMap", "ChannelSpec", "UNITS", "read_log", "Log", "Channel", "log_signals",
-           "write_result", "write_table", "write_mdf", "write_braking_log", "FORMATS", "log_format", "CHUNK_ROWS",
-           "RESULT_UNITS", "plot_replay"]
+           "write_result", "write_table", "write_mdf", "write_braking_log", "braking_log_map", "FORMATS", "log_format",
+           "CHUNK_ROWS", "RESULT_UNITS", "plot_replay"]
 
 #: Units of the columns :func:`write_result` writes.
 RESULT_UNITS: dict[str, str] = {"t": "s", "t_measured": "s", "x2_tsa": "m/s^2", "x2_notch": "m/s^2",
@@ -88,6 +90,10 @@ def write_result(result: ReplayResult, path: str | Path, *, fmt: str | None = No
     return write_table(path, columns, fmt=fmt)
 
 
+def _unknown_layout(layout: str) -> LogError:
+    return LogError(f"unknown log layout {layout!r}; use edges or counter")
+
+
 def write_braking_log(path: str | Path, measurements: EncoderMeasurements, *, layout: str = "edges",
                       rate_hz: float = 1000.0, clock_hz: float = 1e6) -> Path:
     """Write what the encoder chain read in a simulated braking as a log (tests and the docs' example).
@@ -116,8 +122,7 @@ def write_braking_log(path: str | Path, measurements: EncoderMeasurements, *, la
         return write_table(path, {"t": m.steps_t, "vx": m.vx_steps, "p": m.pressure_steps,
                                   "edge_time": m.edge_times, "edge_tooth": m.edge_teeth.astype(float)})
     if layout != "counter":
-        from ..exceptions import LogError
-        raise LogError(f"unknown log layout {layout!r}; use edges or counter")
+        raise _unknown_layout(layout)
     t = np.arange(int(np.ceil(m.steps_t[0] * rate_hz)), int(np.floor(m.steps_t[-1] * rate_hz)) + 1) / rate_hz
     seen = np.searchsorted(m.edge_times, t, side="right")        # edges stamped by each sample
     count = np.where(seen > 0, m.edge_teeth[np.maximum(seen - 1, 0)], int(m.edge_teeth[0]) - 1)
@@ -129,3 +134,36 @@ def write_braking_log(path: str | Path, measurements: EncoderMeasurements, *, la
         return write_mdf(path, [(t, {k: (v, {"vx": "m/s", "p": "bar"}.get(k, "")) for k, v in columns.items()
                                      if k != "t"})])
     return write_table(path, columns)
+
+
+def braking_log_map(layout: str = "edges", *, ppr: int = 60, clock_hz: float = 1e6) -> str:
+    """The channel map (TOML text) of a log in ``layout`` of :func:`write_braking_log` (its channel names and
+    units), for an encoder of ``ppr`` pulses per revolution; ``clock_hz`` is the capture clock of the
+    ``counter`` layout.  The maps of ``docs/replay.md``.
+
+    Raises
+    ------
+    LogError
+        An unknown layout.
+
+    Examples
+    --------
+    >>> print(braking_log_map())
+    [encoder]
+    ppr = 60
+    edges = { channel = "edge_time", unit = "s", teeth = "edge_tooth" }
+    [signals]
+    speed = { channel = "vx", unit = "m/s" }
+    pressure = { channel = "p", unit = "bar" }
+    <BLANKLINE>
+    """
+    if layout == "edges":
+        encoder = 'edges = { channel = "edge_time", unit = "s", teeth = "edge_tooth" }'
+    elif layout == "counter":
+        # 1e6, not %g's 1e+06: the page's spelling (TOML reads both)
+        clock = f"{clock_hz:g}".replace("e+0", "e").replace("e+", "e")
+        encoder = f'counter = {{ channel = "tooth_count", capture = "capture_ticks", clock_hz = {clock} }}'
+    else:
+        raise _unknown_layout(layout)
+    return (f"[encoder]\nppr = {ppr}\n{encoder}\n[signals]\nspeed = {{ channel = \"vx\", unit = \"m/s\" }}\n"
+            'pressure = { channel = "p", unit = "bar" }\n')

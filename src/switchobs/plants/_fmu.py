@@ -85,7 +85,7 @@ def generate_plant_fmu(scenario: BrakingScenario, *, observer_in_loop: bool = Tr
     ('switchobs_quarter_car.fmu', 1, 6)
     """
     # codegen needs casadi, which a base install lacks (as the compiled loop, _compiled.py)
-    from ..codegen import FMUVariable, build_fmu, fmi3_stubs, fmi_headers, fmu_token
+    from ..codegen import FMUVariable, build_fmu, fmi3_common, fmi_headers, fmu_token
 
     if not isinstance(scenario, BrakingScenario):
         raise SimulationError(f"the plant FMU needs a BrakingScenario, got {type(scenario).__name__}")
@@ -105,13 +105,14 @@ def generate_plant_fmu(scenario: BrakingScenario, *, observer_in_loop: bool = Tr
     template = resources.files(__package__).joinpath(_TEMPLATE).read_text(encoding="utf-8")
     loop = resources.files(__package__).joinpath("_closed_loop.c").read_text(encoding="utf-8")
     source = _defines(None, len(SERIES), False) + loop
-    token_texts = (source, template, repr(params.tolist()), repr(roads))
+    shared = fmi3_common(template)
+    token_texts = (source, template, shared, repr(params.tolist()), repr(roads))
     token = fmu_token(*token_texts)
     wrapper = Template(template).substitute(
         identifier=identifier, scenario=scenario.name, np=len(_P), no=len(PLANT_OUTPUTS), token=token,
         par_start=", ".join(repr(float(v)) for v in params),   # finite: repr is a C double literal
         roads=", ".join(repr(float(v)) for v in roads) or "0.0",
-        n_roads_rows=max(len(roads), 1), n_roads=len(changes), stubs=fmi3_stubs(template))
+        n_roads_rows=max(len(roads), 1), n_roads=len(changes), fmi3_common=shared)
     # one translation unit: the loop's static functions, then the FMI functions
     variables = [FMUVariable("time", 0, "real", "independent", "continuous", description="simulation time"),
                  FMUVariable("xbs_hat", 1, "real", "input", "continuous", 0.0,

@@ -131,60 +131,17 @@ static fmi3Status swobs_do_step(swobs_instance *inst, double t, double h)
     return fmi3OK;
 }
 
-const char *fmi3GetVersion(void) { return fmi3Version; }
-
-fmi3Status fmi3SetDebugLogging(fmi3Instance instance, fmi3Boolean loggingOn, size_t nCategories,
-                               const fmi3String categories[])
+/* The set-up of a new instance in fmi3InstantiateCoSimulation (of the shared FMI 3.0 functions). */
+static swobs_instance *swobs_start(swobs_instance *inst, fmi3String instanceName, fmi3Boolean earlyReturnAllowed)
 {
-    (void)instance; (void)loggingOn; (void)nCategories; (void)categories;  /* errors are always logged */
-    return fmi3OK;
-}
-
-fmi3Instance fmi3InstantiateCoSimulation(fmi3String instanceName, fmi3String instantiationToken,
-    fmi3String resourcePath, fmi3Boolean visible, fmi3Boolean loggingOn, fmi3Boolean eventModeUsed,
-    fmi3Boolean earlyReturnAllowed, const fmi3ValueReference requiredIntermediateVariables[],
-    size_t nRequiredIntermediateVariables, fmi3InstanceEnvironment instanceEnvironment,
-    fmi3LogMessageCallback logMessage, fmi3IntermediateUpdateCallback intermediateUpdate)
-{
-    swobs_instance *inst;
-    (void)instanceName; (void)resourcePath; (void)visible; (void)loggingOn; (void)eventModeUsed;
-    (void)requiredIntermediateVariables; (void)nRequiredIntermediateVariables;
-    (void)intermediateUpdate;
-    if (instantiationToken == NULL || strcmp(instantiationToken, SWOBS_TOKEN) != 0) {
-        if (logMessage != NULL) logMessage(instanceEnvironment, fmi3Error, "logStatusError",
-                                           "the instantiation token does not match this FMU's " SWOBS_TOKEN);
-        return NULL;
-    }
-    inst = (swobs_instance *)calloc(1u, sizeof *inst);
-    if (inst == NULL) return NULL;
-    inst->environment = instanceEnvironment;
-    inst->log = logMessage;
+    (void)instanceName;
     swobs_reset(inst);
     inst->early_allowed = earlyReturnAllowed != fmi3False;
     return inst;
 }
-
-fmi3Instance fmi3InstantiateModelExchange(fmi3String instanceName, fmi3String instantiationToken,
-    fmi3String resourcePath, fmi3Boolean visible, fmi3Boolean loggingOn, fmi3InstanceEnvironment instanceEnvironment,
-    fmi3LogMessageCallback logMessage)
-{
-    (void)instanceName; (void)instantiationToken; (void)resourcePath; (void)visible; (void)loggingOn;
-    if (logMessage != NULL) logMessage(instanceEnvironment, fmi3Error, "logStatusError",
-                                       "this FMU supports co-simulation only");
-    return NULL;
-}
-
-fmi3Instance fmi3InstantiateScheduledExecution(fmi3String instanceName, fmi3String instantiationToken,
-    fmi3String resourcePath, fmi3Boolean visible, fmi3Boolean loggingOn, fmi3InstanceEnvironment instanceEnvironment,
-    fmi3LogMessageCallback logMessage, fmi3ClockUpdateCallback clockUpdate,
-    fmi3LockPreemptionCallback lockPreemption, fmi3UnlockPreemptionCallback unlockPreemption)
-{
-    (void)clockUpdate; (void)lockPreemption; (void)unlockPreemption;
-    return fmi3InstantiateModelExchange(instanceName, instantiationToken, resourcePath, visible, loggingOn,
-                                        instanceEnvironment, logMessage);
-}
-
-void fmi3FreeInstance(fmi3Instance instance) { free(instance); }
+/* of fmi3DoStep: the braking has stopped or timed out; the last doStep returned early */
+#define SWOBS_ENDED(inst) ((inst)->ended)
+#define SWOBS_EARLY(inst) ((inst)->early)
 
 fmi3Status fmi3EnterInitializationMode(fmi3Instance instance, fmi3Boolean toleranceDefined, fmi3Float64 tolerance,
                                        fmi3Float64 startTime, fmi3Boolean stopTimeDefined, fmi3Float64 stopTime)
@@ -202,25 +159,6 @@ fmi3Status fmi3ExitInitializationMode(fmi3Instance instance)
     /* the parameters are fixed: the run starts from them */
     braking_start(&SWOBS_INST->run, SWOBS_INST->par, swobs_roads, ${n_roads});
     SWOBS_INST->mode = SWOBS_STEP;
-    return fmi3OK;
-}
-
-fmi3Status fmi3EnterEventMode(fmi3Instance instance)
-{
-    return instance == NULL ? fmi3Error : swobs_fail(SWOBS_INST, "fmi3EnterEventMode", "this FMU has no event mode");
-}
-
-fmi3Status fmi3Terminate(fmi3Instance instance)
-{
-    if (instance == NULL) return fmi3Error;
-    SWOBS_INST->mode = SWOBS_TERMINATED;
-    return fmi3OK;
-}
-
-fmi3Status fmi3Reset(fmi3Instance instance)
-{
-    if (instance == NULL) return fmi3Error;
-    swobs_reset(SWOBS_INST);
     return fmi3OK;
 }
 
@@ -277,26 +215,6 @@ fmi3Status fmi3GetInt32(fmi3Instance instance, const fmi3ValueReference valueRef
     return fmi3OK;
 }
 
-fmi3Status fmi3EnterStepMode(fmi3Instance instance)
-{
-    return instance == NULL ? fmi3Error : fmi3OK;  /* exitInitializationMode already entered step mode */
-}
-
-fmi3Status fmi3DoStep(fmi3Instance instance, fmi3Float64 currentCommunicationPoint,
-    fmi3Float64 communicationStepSize, fmi3Boolean noSetFMUStatePriorToCurrentPoint,
-    fmi3Boolean *eventHandlingNeeded, fmi3Boolean *terminateSimulation, fmi3Boolean *earlyReturn,
-    fmi3Float64 *lastSuccessfulTime)
-{
-    fmi3Status status;
-    (void)noSetFMUStatePriorToCurrentPoint;
-    if (instance == NULL) return fmi3Error;
-    status = swobs_do_step(SWOBS_INST, currentCommunicationPoint, communicationStepSize);
-    if (eventHandlingNeeded != NULL) *eventHandlingNeeded = fmi3False;
-    if (terminateSimulation != NULL) *terminateSimulation = SWOBS_INST->ended ? fmi3True : fmi3False;
-    if (earlyReturn != NULL) *earlyReturn = SWOBS_INST->early ? fmi3True : fmi3False;
-    if (lastSuccessfulTime != NULL) *lastSuccessfulTime = SWOBS_INST->time;
-    return status;
-}
-
-/* The functions of other interface types, variable types and features: an error each. */
-${stubs}
+/* The functions every wrapper shares, then those of other interface types, variable types and features: an
+ * error each. */
+${fmi3_common}
