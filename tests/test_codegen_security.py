@@ -96,8 +96,13 @@ def test_c_comment_leaves_no_comment_delimiter_splice_or_line_break(text):
 
 
 def test_c_comment_keeps_plain_text_as_it_is():
-    text = "3D XBS-like wheel model with a drift, the example of examples/design_my_model.py (seed 000 eq. (7))"
+    text = "3D XBS-like wheel model with a drift, the example of examples/design_my_model.py (eq. (7))"
     assert c_comment(text) == text
+
+
+def test_c_comment_cites_the_papers_by_author_and_year_in_ascii():
+    text = "the observer (seed 000 eq. (8)-(9), seed 004); seed 002 is not a paper"
+    assert c_comment(text) == "the observer (Hoang et al. 2014 eq. (8)-(9), Pasillas-Lepine); seed 002 is not a paper"
 
 
 def test_a_name_with_a_trailing_newline_is_refused_before_it_becomes_a_c_macro(tmp_path, capsys):
