@@ -52,7 +52,7 @@ def _hostile_model(tmp_path: Path, text: str) -> Path:
     # a name is one line of printable ASCII (the model reader may refuse others); it still reaches the files
     name = re.sub(r"[^ -~]", " ", "w " + text)
     source = re.sub(r'^name = .*$', lambda _: f"name = {_toml_string(name)}", source, count=1, flags=re.M)
-    source = source.replace('model = "seed 000', f"hostile = {_toml_string(text)}\nmodel = \"seed 000")
+    source = source.replace('model = "Hoang', f"hostile = {_toml_string(text)}\nmodel = \"Hoang")
     path = tmp_path / "hostile.toml"
     path.write_text(source, "utf-8")
     return path
