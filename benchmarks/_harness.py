@@ -22,6 +22,8 @@ from dataclasses import dataclass
 from datetime import datetime, timezone
 from pathlib import Path
 
+from switchobs._papers import cite
+
 RESULTS = Path(__file__).resolve().parent / "results"
 MIN_REPEATS = 5
 _LOAD_AT_START = os.getloadavg()[0]
@@ -119,7 +121,7 @@ def publish(script: str, method: str, tables: Sequence[Sequence[str]], notes: Se
         parts += ["", *table]
     for note in notes:
         parts += ["", note]
-    text = "\n".join(parts) + "\n"
+    text = cite("\n".join(parts) + "\n")   # the pages cite the papers by author and year
     path = RESULTS / f"{script}.md"
     print(text, end="", flush=True)
     if write:

@@ -30,7 +30,7 @@ fig3 = scenario("hoang-fig3")
 if FAST:
     fig3 = replace(fig3, duration_s=4.5)
 res3 = simulate(fig3, estimator=observer(), observer_in_loop=False)
-print("seed 000 Fig. 3:", res3, sep="\n")
+print("Hoang et al. 2014 Fig. 3:", res3, sep="\n")
 after = [r for r in res3.metrics.reconvergence if r.label == "-> hoang-wet"][0]
 print(f"re-converged within 10 % {after.time_s:.3f} s after the change to the wet road (seed: a fraction of a second)")
 assert res3.status == "duration" and after.time_s is not None and after.time_s < 0.5
@@ -38,7 +38,7 @@ plot_braking(res3).savefig(OUT / "hoang2014_fig3.png", dpi=110)
 
 fig4 = scenario("hoang-fig4")
 res4 = simulate(fig4, estimator=observer(), observer_in_loop=True)
-print("seed 000 Fig. 4:", res4, sep="\n")
+print("Hoang et al. 2014 Fig. 4:", res4, sep="\n")
 s = res4.series
 for name, (a, b) in {"dry": (0.5, 3.0), "wet": (3.0, 4.0), "snow": (4.0, 7.0)}.items():
     sel = (s["t"] >= a) & (s["t"] < b)

@@ -52,7 +52,7 @@ for kp, (P, fp) in maps.items():
     ax.plot(fp.zeta, fp.zeta, "o", color=ax.lines[-1].get_color())
 ax.set_xlabel("ζ1° = z1 / z_ref at the start of phase 1")
 ax.set_ylabel("P(ζ1°)")
-ax.set_title("seed 001 (4.13): Poincaré map of the two-phase ABS, dry asphalt")
+ax.set_title("Aguado-Rojas 2020 (4.13): Poincaré map of the two-phase ABS, dry asphalt")
 ax.legend(fontsize=8)
 fig.tight_layout()
 fig.savefig(OUT / "poincare_two_phase.png", dpi=100)

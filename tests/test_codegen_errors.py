@@ -428,7 +428,7 @@ def test_cli_codegen_writes_the_files_and_json(tmp_path, capsys):
     assert "SWITCHOBS_SUPER_TWISTING_P_ALPHA 1" in (tmp_path / "st" / "switchobs_super_twisting.h").read_text()
     assert main(["codegen", "vehicle-speed", "--param", "beta=24", "--out", str(tmp_path / "vs")]) == 0
     assert "#define SWITCHOBS_VEHICLE_SPEED_X_Z3 1" in (tmp_path / "vs" / "switchobs_vehicle_speed.h").read_text()
-    assert "The gain `beta` of seed 003 eq. (15)" in (tmp_path / "vs" / "README.md").read_text()
+    assert "The gain `beta` of M'Sirdi et al. 2008 eq. (15)" in (tmp_path / "vs" / "README.md").read_text()
 
 
 @pytest.mark.parametrize("argv, message", [
@@ -440,7 +440,7 @@ def test_cli_codegen_writes_the_files_and_json(tmp_path, capsys):
     (["abs-adaptive2", "--spectrum", "-1,-1", "--unknown", "c,d", "--gamma", "x"], "--gamma expects numbers"),
     (["super-twisting", "--param", "lam=1"], "missing ['alpha']"),
     (["super-twisting", "--param", "lam=1", "--param", "alpha=2", "--method", "rk4"], "Euler scheme"),
-    (["vehicle-speed", "--param", "lam=1"], "takes --param beta=... (seed 003 (15), Theorem 3: beta > eta); "
+    (["vehicle-speed", "--param", "lam=1"], "takes --param beta=... (M'Sirdi et al. 2008 (15), Theorem 3: beta > eta); "
                                             "missing ['beta'], unexpected ['lam']"),
     (["vehicle-speed", "--param", "beta=-3"], "beta = -3.0 must be a finite number > 0"),
     (["vehicle-speed", "--param", "beta=3", "--h-max", "0.1"], "no rescaled-time certificate"),

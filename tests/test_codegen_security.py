@@ -52,7 +52,7 @@ def _hostile_model(tmp_path: Path, text: str) -> Path:
     # a name is one line of printable ASCII (the model reader may refuse others); it still reaches the files
     name = re.sub(r"[^ -~]", " ", "w " + text)
     source = re.sub(r'^name = .*$', lambda _: f"name = {_toml_string(name)}", source, count=1, flags=re.M)
-    source = source.replace('model = "seed 000', f"hostile = {_toml_string(text)}\nmodel = \"seed 000")
+    source = source.replace('model = "Hoang', f"hostile = {_toml_string(text)}\nmodel = \"Hoang")
     path = tmp_path / "hostile.toml"
     path.write_text(source, "utf-8")
     return path
@@ -96,8 +96,13 @@ def test_c_comment_leaves_no_comment_delimiter_splice_or_line_break(text):
 
 
 def test_c_comment_keeps_plain_text_as_it_is():
-    text = "3D XBS-like wheel model with a drift, the example of examples/design_my_model.py (seed 000 eq. (7))"
+    text = "3D XBS-like wheel model with a drift, the example of examples/design_my_model.py (eq. (7))"
     assert c_comment(text) == text
+
+
+def test_c_comment_cites_the_papers_by_author_and_year_in_ascii():
+    text = "the observer (seed 000 eq. (8)-(9), seed 004); seed 002 is not a paper"
+    assert c_comment(text) == "the observer (Hoang et al. 2014 eq. (8)-(9), Pasillas-Lepine); seed 002 is not a paper"
 
 
 def test_a_name_with_a_trailing_newline_is_refused_before_it_becomes_a_c_macro(tmp_path, capsys):

@@ -31,7 +31,7 @@ def test_simulate_single_road_json_and_plot(capsys, tmp_path):
 def test_simulate_scenario_text_reports_reconvergence(capsys):
     code, out, _ = run(capsys, "hoang-fig3", "--duration", "3.5", "--observer", "xbs3")
     assert code == 0
-    assert out.startswith("seed 000 Fig. 3")
+    assert out.startswith("Hoang et al. 2014 Fig. 3")
     assert "-> hoang-wet" in out and "re-convergence within 10 %" in out and "Assumption 1" in out
 
 
@@ -52,7 +52,7 @@ def test_simulate_two_axle_scenario_json(capsys, tmp_path):
     png = tmp_path / "sec36.png"
     code, out, _ = run(capsys, "aguado-sec36", "--duration", "1.5", "--json", "--plot", str(png))
     data = json.loads(out)
-    assert code == 0 and data["observer"] == "adaptive" and data["description"].startswith("seed 001 Sec. 3.6")
+    assert code == 0 and data["observer"] == "adaptive" and data["description"].startswith("Aguado-Rojas 2020 Sec. 3.6")
     m = data["metrics"]
     assert m["front"]["load_max_n"] > data["scenario"]["vehicle"]["static_loads_n"][0]
     assert m["speed_error_mean_pct"] < 0 and png.exists()

@@ -11,7 +11,7 @@ several do, e.g. ``switchobs.model.ParameterBox`` rather than its re-export from
 a member of such an object.  A role naming something the pages do not render (a private module, a private
 member, a name outside switchobs) stays as code, without the role.  The docstrings cite the papers by their
 seed number (``seed 000 eq. (13)``, the files of the specification); the pages cite them by author and year
-(``Hoang et al. 2014 eq. (13)``, :data:`PAPERS`), equation numbers kept.  The source is not changed.
+(``Hoang et al. 2014 eq. (13)``, ``switchobs._papers.cite``), equation numbers kept.  The source is not changed.
 
 Used by mkdocs.yml (``plugins: mkdocstrings: handlers: python: options: extensions``).
 """
@@ -23,10 +23,8 @@ from typing import Any
 
 from griffe import Alias, Extension, Module, Object
 
-#: The papers by their seed number, as the user-facing pages cite them.
-PAPERS = {"000": "Hoang et al. 2014", "001": "Aguado-Rojas 2020", "003": "M'Sirdi et al. 2008",
-          "004": "Pasillas-Lépine"}
-SEED = re.compile(r"\b[Ss]eed (00[0134])\b")
+from switchobs._papers import cite
+
 #: A Sphinx role: ``:kind:`target``` or ``:kind:`text <target>```.
 ROLE = re.compile(r":(?:py:)?(?P<kind>func|meth|class|data|attr|mod|exc|obj|const):`(?P<body>[^`]+)`")
 
@@ -41,7 +39,7 @@ class SphinxRoles(Extension):
         for obj in _objects(pkg):
             if obj.docstring is not None:
                 text = ROLE.sub(lambda m, o=obj: _link(m, o, pkg, public), obj.docstring.value)
-                obj.docstring.value = SEED.sub(lambda m: PAPERS[m.group(1)], text)
+                obj.docstring.value = cite(text)
 
 
 def _objects(obj: Object):

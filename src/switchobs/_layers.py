@@ -4,7 +4,7 @@ Each floor is a tuple of packages of equal rank (they may import one another's m
 finds circles).  ``tests/test_public_api.py`` checks every import against this table and ``docs/developer.md``
 shows it as the map of the layers, each package with the first sentence of its docstring
 (:func:`layer_map`).  Layer-free helpers (``switchobs._validate``, ``_limits``, ``_json``, ``_atomic``,
-``_progress``, ``_display``, ``_figures``, ``exceptions``) sit below every floor.
+``_progress``, ``_display``, ``_figures``, ``_papers``, ``exceptions``) sit below every floor.
 """
 
 from __future__ import annotations

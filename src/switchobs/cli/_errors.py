@@ -26,6 +26,7 @@ import warnings
 from collections.abc import Callable
 from typing import Any
 
+from .._papers import cite
 from ..exceptions import EXTRAS, FreeSymbolError, OutputError, SwitchobsError, install_hint
 
 __all__ = ["EXIT_OK", "EXIT_FAILED", "EXIT_BAD_INPUT", "EXIT_INTERRUPTED", "DEBUG_ENV", "EXTRAS", "guarded",
@@ -152,7 +153,7 @@ def guarded(command: str, run: Callable[[], int | None]) -> int:
     except Exception as exc:
         if os.environ.get(DEBUG_ENV, "") not in ("", "0"):
             traceback.print_exc()
-        print(f"switchobs {command}: error: {_one_line(_message(exc, command))}", file=sys.stderr)
+        print(f"switchobs {command}: error: {_one_line(cite(_message(exc, command)))}", file=sys.stderr)
         return EXIT_BAD_INPUT
     finally:
         if isinstance(sys.stdout, _CheckedStdout):

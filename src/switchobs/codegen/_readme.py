@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+from .._papers import cite
 from ._emit import float_literal
 from ._misra import misra_summary
 from ._observer import GeneratedObserver, divisor_gaps, proof_command
@@ -150,10 +151,10 @@ def readme(gen: "GeneratedObserver", *, command: str | None) -> str:
     rt = f"{p}_real"
     method = {"rk4": "classic fourth-order Runge-Kutta (RK4)", "euler": "forward Euler"}.get(
         gen.method, STEP_METHODS[gen.method].description)
-    kind = {"adaptive": "switched adaptive observer of seed 001 eq. (3.4)",
-            "super-twisting": "super-twisting observer of seed 003 eq. (8)-(9)",
-            "vehicle-speed": "sliding-mode observer of the vehicle speed of seed 003 eq. (15)"}.get(
-        gen.kind, "switched observer (seed 000 eq. (8)-(9), seed 004)")
+    kind = cite({"adaptive": "switched adaptive observer of seed 001 eq. (3.4)",
+                 "super-twisting": "super-twisting observer of seed 003 eq. (8)-(9)",
+                 "vehicle-speed": "sliding-mode observer of the vehicle speed of seed 003 eq. (15)"}.get(
+        gen.kind, "switched observer (seed 000 eq. (8)-(9), seed 004)"), ascii=True)
     out = [
         f"# `{p}`: generated C {gen.kind} observer for model `{gen.model_name}`",
         "",
@@ -226,7 +227,7 @@ def readme(gen: "GeneratedObserver", *, command: str | None) -> str:
         "",
         f"## Parameters (`{P}_NP` = {gen.np})",
         "",
-        (SLIDING_MODE_GAINS[gen.kind] if gen.kind in SLIDING_MODE_GAINS else
+        (cite(SLIDING_MODE_GAINS[gen.kind], ascii=True) if gen.kind in SLIDING_MODE_GAINS else
          "Model parameters, then the gains `K_plus_<state>` (used where s > 0) and `K_minus_<state>`"
          + (", then the adaptation gain `Gamma` (row-major)" if gen.kind == "adaptive" else "")
          + ".  The gains do not follow a change of a model parameter: set them too, or regenerate."),
@@ -247,7 +248,7 @@ def readme(gen: "GeneratedObserver", *, command: str | None) -> str:
         "",
         "Model-specific checks, in order:",
         "",
-        *([f"- `{g}`" for g in gen.guards] or ["- none beyond finiteness"]),
+        *([f"- `{cite(str(g), ascii=True)}`" for g in gen.guards] or ["- none beyond finiteness"]),
         *([] if gen.kind in SLIDING_MODE_GAINS else ["- `s` finite, else `UNDEFINED_TIME_SCALE`."]),
         *([] if gen.h_max is None else ["- at most `MAX_SUBSTEPS` sub-steps of `H_MAX` (then the domain of d, b), "
                                         "else `SUBSTEP_LIMIT`."]),

@@ -13,12 +13,16 @@ an ``__attribute__((constructor))`` function placed there runs when it starts.
 * control characters (newlines included) become spaces, so the text stays on its line;
 * non-ASCII characters become ``<U+XXXX>`` (the source character set of C99 is ASCII,
   and a compiler's reading of other bytes depends on its locale and flags);
-* a backtick becomes ``'`` (the README quotes names in Markdown code spans).
+* a backtick becomes ``'`` (the README quotes names in Markdown code spans);
+* a paper cited by seed number is cited by author and year (``switchobs._papers.cite``, in ASCII), as every
+  text a user reads cites it.
 """
 
 from __future__ import annotations
 
 import re
+
+from .._papers import cite
 
 __all__ = ["c_comment"]
 
@@ -35,9 +39,11 @@ def c_comment(text: str) -> str:
     'x * / int injected = 1; / *'
     >>> c_comment("line\\nbreak ??/ \\u00b5s")
     'line break ? ?/ <U+00B5>s'
+    >>> c_comment("observer (seed 000 eq. (8)-(9), seed 004)")
+    'observer (Hoang et al. 2014 eq. (8)-(9), Pasillas-Lepine)'
     """
     out = []
-    for ch in str(text):
+    for ch in cite(str(text), ascii=True):
         code = ord(ch)
         if ch == "\\":
             out.append("(backslash)")

@@ -16,6 +16,7 @@ from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field, replace
 from typing import Any
 
+from .._papers import cite
 from .._progress import progress
 from ..exceptions import SimulationError
 from ._controllers import FivePhaseABS, SixPhaseABS, TwoPhaseABS
@@ -157,8 +158,8 @@ def scenario_observer_gains(name: str) -> dict[str, float]:
 
 
 def scenario_description(name: str) -> str:
-    """What a built-in scenario reproduces and the settings chosen for it."""
-    return _spec(name).description
+    """What a built-in scenario reproduces and the settings chosen for it (the papers by author and year)."""
+    return cite(_spec(name).description)
 
 
 def scenario_names() -> tuple[str, ...]:
@@ -298,7 +299,7 @@ class Table41Result:
                          f"{cell(r.two_phase_m, r.seed_two_phase_m)} | {cell(r.difference_m, sd)} |")
         lines += ["", f"two-phase shorter on every road and speed: **{self.two_phase_always_shorter}** "
                       f"(observer: {self.observer})"]
-        return "\n".join(lines)
+        return cite("\n".join(lines))
 
     def __str__(self) -> str:
         def seed(v: float | None) -> str:
@@ -312,7 +313,7 @@ class Table41Result:
                          f"{r.two_phase_m:8.2f} |{seed(r.seed_two_phase_m)} {r.difference_m:8.2f} |{seed(sd)}{flag}")
         lines.append(f"two-phase shorter on every road and speed: {self.two_phase_always_shorter} "
                      f"(observer: {self.observer}; {self.wall_time_s:.1f} s wall)")
-        return "\n".join(lines)
+        return cite("\n".join(lines))
 
 
 def _status(result: BrakingResult) -> str:

@@ -6,6 +6,8 @@ import math
 from collections.abc import Sequence
 from typing import Any
 
+from .._papers import cite
+
 __all__ = ["md_table", "demo_markdown"]
 
 
@@ -147,4 +149,4 @@ def demo_markdown(report: Any) -> str:
             "* Large estimate spikes right after each road change are expected (seed 000 Fig. 3).", "",
             "## Stage timings", "",
             md_table(["stage", "wall time [s]"], [[k, f"{v:.1f}"] for k, v in report.timings.items()]), ""]
-    return "\n".join(out)
+    return cite("\n".join(out))

@@ -10,6 +10,7 @@ from contextlib import contextmanager
 from dataclasses import dataclass, field
 from typing import TextIO
 
+from .._papers import cite
 from ..exceptions import CodegenError, PrerequisiteError, install_hint
 
 __all__ = ["Progress", "Stage", "check_prerequisites"]
@@ -102,7 +103,7 @@ class Progress:
     def stage(self, name: str, what: str) -> Iterator[None]:
         """Time one stage; on an exception say that it failed, then let the exception through."""
         self._count += 1
-        self._say(f"[{self._count}/{self.total}] {name}: {what}")
+        self._say(f"[{self._count}/{self.total}] {name}: {cite(what)}")
         start = time.perf_counter()
         try:
             yield
@@ -114,7 +115,7 @@ class Progress:
 
     def note(self, text: str) -> None:
         """An indented line inside the current stage."""
-        self._say(f"      {text}")
+        self._say(f"      {cite(text)}")
 
     def summary(self) -> Mapping[str, float]:
         return dict(self.timings)

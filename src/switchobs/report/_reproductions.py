@@ -26,6 +26,7 @@ import numpy as np
 
 from .._atomic import write_files
 from .._json import JsonRecord
+from .._papers import cite
 from .._progress import progress
 from ..exceptions import PrerequisiteError, SimulationError
 from ..loop import EstimatorSpec
@@ -80,7 +81,7 @@ def _seed000(runs: Runs) -> list[str]:
     fig3, fig4 = runs.braking("hoang-fig3", "xbs4"), runs.braking("hoang-fig4", "xbs4")
     a3 = fig3.metrics.assumption1
     m4 = fig4.metrics
-    lines = ["## Seed 000 (Hoang et al. 2014)", "", "### Equations of the design (exact, sympy)", "",
+    lines = ["## Seed 000", "", "### Equations of the design (exact, sympy)", "",
              "Symbolic identities: the test passes only if ours equal the seed's.", "",
              _row("equation", "seed", "ours", "test", ROLE), _row(*["---"] * 5),
              _row("(7) observability", "observable for $a \\neq 0$", "$\\det\\mathcal O = a^2$, condition $a \\ne 0$",
@@ -142,7 +143,7 @@ def _seed001(runs: Runs) -> list[str]:
     sec34 = runs.braking("aguado-sec34", EstimatorSpec("adaptive", **SEC34_GAINS))
     a1 = sec34.metrics.assumption1
     dry = road("dry-asphalt")
-    lines = ["## Seed 001 (Aguado-Rojas 2020)", "", "### Adaptive observer, Chapter 3", "",
+    lines = ["## Seed 001", "", "### Adaptive observer, Chapter 3", "",
              _row("item", "seed", "ours", "test / page", ROLE), _row(*["---"] * 5),
              _row("Prop. 1, (3.20)", "$k_1^- = -k_1^+$, $k_2^- = k_2^+$", "Theorem 1 with a double pole gives exactly this",
                   "`test_aguado2020_prop1_eq320_gains_and_conditions`; `theory/abs-adaptive2.md`", PREDICTED),
@@ -187,7 +188,7 @@ def _seed001(runs: Runs) -> list[str]:
 def _seed003(runs: Runs) -> list[str]:
     steps, arrivals, _, _ = runs.super_twisting
     o1, o2 = tsa_orders(runs)
-    return ["## Seed 003 (M'Sirdi et al. 2008)", "",
+    return ["## Seed 003", "",
             _row("item", "seed", "ours", ROLE), _row(*["---"] * 4),
             _row("Theorem 2: $\\lvert\\tilde x_1\\rvert = O(\\delta^2)$, $\\lvert\\tilde x_2\\rvert = O(\\delta)$",
                  "orders 2 and 1", f"fitted orders {o1:.2f} and {o2:.2f} ($\\delta$ = "
@@ -204,7 +205,7 @@ def _seed003(runs: Runs) -> list[str]:
             "[Wheel encoders](encoders.md).", ""]
 
 
-_SEED004 = ["## Seed 004 (Pasillas-Lépine)", "",
+_SEED004 = ["## Seed 004", "",
             _row("item", "seed", "ours", ROLE), _row(*["---"] * 4),
             _row("Theorem 1: $k_i^- = (-1)^ik_i^+ + (1 - (-1)^i)a_i$ in normal form; $A_-$ similar to $A_+$; "
                  "checkerboard $P$", "for every $n$", "exact for $n = 2, \\dots, 5$ "
@@ -237,10 +238,9 @@ def _reproductions_md(runs: Runs) -> str:
             "Every equation, figure and table of the seed papers that switchobs reproduces: the seed's statement "
             "or number, ours from a run, the deviation, and what we chose where the seed gives no value. The "
             "seeds are text extractions of the papers: their figures survive only as captions, which we quote.", "",
-            "Seeds: **000** Hoang, Pasillas-Lépine, De Bernardinis, Netto (2014), *Extended braking stiffness "
-            "estimation based on a switched observer*; **001** Aguado-Rojas, PhD thesis (2020); **003** M'Sirdi et "
-            "al. (2008), super-twisting observer; **004** Pasillas-Lépine, slides on switched observers via "
-            "singular time-rescaling.", "",
+            "The papers: Hoang, Pasillas-Lépine, De Bernardinis, Netto (2014), *Extended braking stiffness "
+            "estimation based on a switched observer*; Aguado-Rojas, PhD thesis (2020); M'Sirdi et al. (2008), "
+            "super-twisting observer; Pasillas-Lépine, slides on switched observers via singular time-rescaling.", "",
             "Not reproduced, each with its measured reason below: in Sec. 3.4 the quick convergence of the parameter "
             "estimates after dry → wet asphalt (the XBS estimate's is reproduced); in Sec. 3.6 the error staying in "
             "its band from 0.5 s after the change to snow; Table 6.1 cells that the seed's encoder, profile or notch, "
@@ -257,7 +257,7 @@ def _reproductions_md(runs: Runs) -> str:
             "simulated 29-dot encoder has the resolution but not the car's sensor errors.",
             "", *_contradicted_claims(runs), ""]
     body = head + _seed000(runs) + _seed001(runs) + _seed003(runs) + _SEED004
-    return "\n".join(body).rstrip("\n") + "\n"
+    return cite("\n".join(body).rstrip("\n") + "\n")
 
 
 #: Sections generated inside hand-written pages: name -> (page relative to the repository root, generator).
@@ -295,7 +295,7 @@ def _read_pages(root: Path) -> dict[str, str]:
 
 def _splice(text: str, name: str, block: Sequence[str]) -> str:
     i, j = text.find(_begin(name)), text.find(_end(name))
-    return text[:i] + "\n".join([_begin(name), _NOTE, "", *block, ""]) + text[j:]
+    return text[:i] + cite("\n".join([_begin(name), _NOTE, "", *block, ""])) + text[j:]
 
 
 def reproduction_pages(root: str | Path = ".") -> tuple[ReproductionPage, ...]:

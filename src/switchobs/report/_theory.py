@@ -18,6 +18,7 @@ import sympy as sp
 
 from .._atomic import write_files
 from .._json import JsonRecord
+from .._papers import cite
 from .._progress import progress
 from ..design import GainDesign, design
 from ..exceptions import ModelError
@@ -161,7 +162,7 @@ def theory_document(model: Model, spectrum: str, spectrum_source: str) -> Theory
     a_poly = _poly_tex([sp.Integer(1), *(-x for x in nf.a)], names)
     lines = [
         f"# Theory of the `{model.name}` model", "", _HEADER, "",
-        f"{model.description}. Seed references of the model file: "
+        f"{model.description}. References of the model file: "
         + "; ".join(f"{k}: {v}" for k, v in sorted(model.references.items())) + ".", "",
         f"## 1. The model ({_refs(model, 'model', 'seed 004, eq. (1)')})", "",
         "$$\n\\dot z = s(y, t)\\,\\big(A z + d(y)\\big) + b(y)\\,u, \\qquad y = C z\n$$", "",
@@ -238,7 +239,7 @@ def theory_document(model: Model, spectrum: str, spectrum_source: str) -> Theory
             "$\\alpha^-_i = (-1)^i (k^-_i - a_i)$, the observer-form Lyapunov solution $P(\\alpha)$ is "
             "checkerboard ($D P D = P$), and the coupling constraints are the $n - 1$ proportionality "
             "conditions between $P(\\alpha_+)$ and $P(\\alpha_-)$.", ""]
-    return TheoryDocument(model.name, "\n".join(lines).rstrip("\n") + "\n")
+    return TheoryDocument(model.name, cite("\n".join(lines).rstrip("\n") + "\n"))
 
 
 def _index(docs: Sequence[TheoryDocument]) -> TheoryDocument:
@@ -247,7 +248,7 @@ def _index(docs: Sequence[TheoryDocument]) -> TheoryDocument:
              "rescaling, the normal form, the gain formulas, the Routh–Hurwitz conditions, the common Lyapunov "
              "matrix and the coupling constraints, with the seed equation numbers.", ""]
     lines += [f"- [{doc.name}]({doc.filename})" for doc in docs]
-    return TheoryDocument("README", "\n".join(lines) + "\n")
+    return TheoryDocument("README", cite("\n".join(lines) + "\n"))
 
 
 def theory_documents() -> tuple[TheoryDocument, ...]:

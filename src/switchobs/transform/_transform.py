@@ -19,6 +19,7 @@ from typing import Any
 
 import sympy as sp
 
+from .._papers import cite
 from .._progress import progress
 from ..exceptions import ExpressionError, TransformError
 from ..model import Model
@@ -133,7 +134,7 @@ class Transformation:
             lines += [f"   {label}{_separator(label)}{_text(value)}" for label, value in step.items]
         lines.append("verdict: " + ("the normal form exists (checked by substitution)" if self.exists
                                     else f"no transformation: {self.failing}"))
-        return "\n".join(lines)
+        return cite("\n".join(lines))
 
     def to_markdown(self) -> str:
         """The derivation as a markdown page with LaTeX (``switchobs transform --theory``)."""
@@ -158,7 +159,7 @@ class Transformation:
         lines.append("The normal form exists; substituting $z = \\varphi(x)$ back gives "
                      "$\\tfrac{\\partial\\varphi}{\\partial x}(f + g u) = s(y)(A\\varphi + d(y)) + b(y) u$ exactly."
                      if self.exists else f"No transformation exists: {self.failing}.")
-        return "\n".join(lines) + "\n"
+        return cite("\n".join(lines) + "\n")
 
     def model_toml(self) -> str:
         """The normal form as a model file (``switchobs design MODEL.toml`` reads it)."""
