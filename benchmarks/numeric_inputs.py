@@ -113,7 +113,8 @@ def cell(r: dict | None) -> str:
     reason = r["error"].split("error: ", 1)[-1]
     reason = reason if len(reason) <= 90 else reason[:87] + "..."
     status = "stopped" if r["rc"] is None else f"exit {r['rc']}"
-    return f"{shown}, **{status}**: {reason}".replace("|", "\\|")
+    # a table cell of Markdown: "A_plus[1][1]" would be read as a reference link
+    return f"{shown}, **{status}**: {reason}".replace("|", "\\|").replace("[", "\\[").replace("]", "\\]")
 
 
 def measure(kind: str, n: int, sizes: dict, tmp: Path) -> dict[str, dict]:
