@@ -337,7 +337,7 @@ def test_msirdi2008_eq15_vehicle_speed_c_equals_sensors_reference():
         assert rel_err(x, np.array([ref.x3_hat[i + 1], ref.z3[i]])) <= RTOL_DOUBLE
     # Theorem 3: |dx3/dt| <= 8 + 7.5 < beta = 24, so the sliding motion is reached and kept
     assert ref.reaching_time_s < 2.0 / (g.beta - 15.5) and abs(x[0] - x3[-1]) < (g.beta + 15.5) * 6e-4
-    with pytest.raises(CodegenError, match=r"beta = -1.0 must be a finite number > 0 \(seed 003 eq. \(15\)\)"):
+    with pytest.raises(CodegenError, match=r"beta = -1.0 must be a finite number > 0 \(M'Sirdi et al. 2008 eq. \(15\)\)"):
         generate_vehicle_speed(-1.0)
 
 

@@ -86,7 +86,7 @@ def test_msirdi2008_sec5_theta1_theta2_identified_on_the_quarter_car(wheel):
 
 
 def test_vehicle_speed_observer_refuses_bad_input():
-    with pytest.raises(SimulationError, match=r"beta = 3 must exceed eta = 5 \(seed 003, Theorem 3\)"):
+    with pytest.raises(SimulationError, match=r"beta = 3 must exceed eta = 5 \(M'Sirdi et al. 2008, Theorem 3\)"):
         vehicle_speed_gain(5.0, beta=3.0)
     with pytest.raises(SimulationError, match="eta must be finite and > 0"):
         vehicle_speed_gain(0.0)

@@ -8,6 +8,8 @@ exits with a non-zero status.
 
 from __future__ import annotations
 
+from ._papers import cite
+
 __all__ = [
     "SwitchobsError",
     "ModelError",
@@ -34,7 +36,14 @@ __all__ = [
 
 
 class SwitchobsError(Exception):
-    """Base class of every error switchobs raises on purpose."""
+    """Base class of every error switchobs raises on purpose.
+
+    Its text cites the papers by author and year (:func:`switchobs._papers.cite`): the code writes the
+    messages with the specification's seed numbers, the user reads ``Aguado-Rojas 2020 eq. (3.4)``.
+    """
+
+    def __str__(self) -> str:
+        return cite(super().__str__())
 
 
 class ModelError(SwitchobsError, ValueError):
