@@ -8,7 +8,7 @@ from pathlib import Path
 
 import pytest
 
-from switchobs.report import encoder_comparison, two_axle_box_check
+from switchobs.experiments import encoder_comparison, two_axle_box_check
 
 DOC = Path(__file__).resolve().parents[1] / "docs" / "certify.md"
 
