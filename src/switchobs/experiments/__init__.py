@@ -22,9 +22,13 @@ fig4_roads, Fig4Road, fig4_encoder_run, Fig4Encoder, noise_gains, NoiseGains, FI
 encoder_comparison, EncoderComparison, two_axle_box_check, BoxRun
                   -- the evidence of docs/certify.md: synthesised gains on the encoder-fed demo braking, the box
                      certificate along the two-axle braking of seed 001 Sec. 3.6
+target_runs, TargetRun, proof_runs, proved_observer, division_model, TARGET_ROWS, PROOF_ROWS, ...
+                  -- the generated C on the emulated Cortex-M targets and its EVA proofs (docs/codegen.md)
 fig47_runs, Fig47, FIG47_ROAD, FIG47_SPEED_KMH
                   -- seed 001 Fig. 4.7: the slip around its optimum with the two- and the five-phase ABS
 """
+from ._target import (PROOF_ROWS, STATE_SIGNAL_RANGES, TARGET_ROWS, XBS3_RANGES, TargetRun, division_model,
+                      parameter_ranges, proof_runs, proved_observer, qemu_version, target_runs)
 from ._evidence import BoxRun, EncoderComparison, encoder_comparison, two_axle_box_check
 from ._adaptive import (ParameterRecorder, SEC34_AUGMENTED_BETAS, SEC34_BETAS, SEC34_CHANGES, SEC34_FINE_H_MAX,
                         SEC34_GAINS, SEC34_GAMMAS, SEC34_H_MAX, SEC34_LARGE_GAMMA, SEC34_MAX_SUBSTEPS, SEC34_QUICK_S,
@@ -57,7 +61,8 @@ from ._table61 import (EncoderFit, NOTCH_RAMPS_S, TABLE61_FIT_UNITS, constant_ce
                        seed_speed_spread, speed_exponents, speed_spread, tooth_error_bound, trapezoid_spread_bound,
                        tsa_orders)
 
-__all__ = ["BoxRun", "EncoderComparison", "encoder_comparison", "two_axle_box_check", "CHAIN_ABS_SCENARIOS", "CHAIN_TSA_WINDOWS", "ChainBraking", "ENCODER_COMMANDS", "EncoderFit",
+__all__ = ["PROOF_ROWS", "STATE_SIGNAL_RANGES", "TARGET_ROWS", "XBS3_RANGES", "TargetRun", "division_model",
+           "parameter_ranges", "proof_runs", "proved_observer", "qemu_version", "target_runs", "BoxRun", "EncoderComparison", "encoder_comparison", "two_axle_box_check", "CHAIN_ABS_SCENARIOS", "CHAIN_TSA_WINDOWS", "ChainBraking", "ENCODER_COMMANDS", "EncoderFit",
            "FIG67_BLOCKED_S", "FIG67_ENCODER", "FIG67_PHASES", "FIG67_SMALL_ECCENTRICITY", "FIG67_SPEEDS_KMH",
            "FIG67_SPLIT_M_S", "HalfWindowLate", "NOTCH_RAMPS_S", "POINCARE_KPS", "POINCARE_SETTING",
            "POINCARE_ZETAS", "ParameterRecorder", "QUARTER_CAR_BETAS", "QUARTER_CAR_OBSERVERS", "QUARTER_CAR_STEPS",

@@ -34,7 +34,7 @@ import numpy.typing as npt
 from .._json import JsonRecord
 from ..exceptions import SimulationError
 
-__all__ = ["EncoderComparison", "encoder_comparison", "BoxRun", "two_axle_box_check", "synthesis_evidence",
+__all__ = ["EncoderComparison", "encoder_comparison", "BoxRun", "two_axle_box_check",
            "FLOOR_WINDOW_S", "LOAD_BOX", "DEMO_BOX"]
 
 Array = npt.NDArray[np.float64]
