@@ -58,9 +58,13 @@ def _flat(rows: Any) -> list:
 
 
 def _matrix_json(M: sp.MatrixBase) -> list:
-    if M.cols == 1:
-        return [str(x) for x in M]
-    return [[str(x) for x in M.row(i)] for i in range(M.rows)]
+    rep = getattr(M, "_rep", None)
+    if rep is not None and (rep.domain.is_QQ or rep.domain.is_ZZ):
+        # the ring elements print as sympy prints the Rational ("-5/7", "2") without building one per entry
+        rows = [[str(x) for x in row] for row in rep.to_list()]
+    else:
+        rows = [[str(x) for x in M.row(i)] for i in range(M.rows)]
+    return [row[0] for row in rows] if M.cols == 1 else rows
 
 
 def _product(X: sp.MatrixBase, Y: sp.MatrixBase) -> sp.ImmutableMatrix | None:

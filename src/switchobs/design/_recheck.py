@@ -58,6 +58,11 @@ def lyapunov_residual_is_zero(A: sp.MatrixBase, P: sp.MatrixBase, Q: sp.MatrixBa
 
 def _fractions(M: sp.MatrixBase) -> list[list[Fraction]] | None:
     """The entries of ``M`` as Fractions when every one is a rational number, else None."""
+    rep = getattr(M, "_rep", None)
+    if rep is not None and (rep.domain.is_QQ or rep.domain.is_ZZ):
+        # the matrix's own ring elements (python-flint's fmpq here): no sympy Rational is built per entry,
+        # which took 1.5 of design's 8 s on a 64-state decimal model
+        return [[Fraction(int(x.numerator), int(x.denominator)) for x in row] for row in rep.to_list()]
     M = sp.Matrix(M)
     if not all(getattr(x, "is_Rational", False) for x in M):
         return None
