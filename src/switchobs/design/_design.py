@@ -35,7 +35,7 @@ from ..model import Model, entries, free_names, make_symbol, numeric, parse_expr
 from ._lyapunov import _generic_solution, observer_form_gramian
 from .._display import ROUNDED_NOTE, is_shortened, readable, unicode_output
 from .._progress import progress
-from ._normal_form import ObserverNormalForm, is_rational, observer_normal_form, rational_matrix
+from ._normal_form import ObserverNormalForm, is_rational, observer_normal_form, rational_matrix, rational_rows
 from ._recheck import lyapunov_by_substitution, lyapunov_residual_is_zero
 from ._routh import hurwitz_conditions, readable_condition, routh_first_column
 from ._spectrum import LAPLACE, parse_spectrum, polynomial_coefficients, spectrum_coefficients
@@ -58,12 +58,8 @@ def _flat(rows: Any) -> list:
 
 
 def _matrix_json(M: sp.MatrixBase) -> list:
-    rep = getattr(M, "_rep", None)
-    if rep is not None and (rep.domain.is_QQ or rep.domain.is_ZZ):
-        # the ring elements print as sympy prints the Rational ("-5/7", "2") without building one per entry
-        rows = [[str(x) for x in row] for row in rep.to_list()]
-    else:
-        rows = [[str(x) for x in M.row(i)] for i in range(M.rows)]
+    ring = rational_rows(M)  # its elements print as sympy prints the Rational ("-5/7", "2")
+    rows = [[str(x) for x in row] for row in (ring if ring is not None else M.tolist())]
     return [row[0] for row in rows] if M.cols == 1 else rows
 
 

@@ -19,7 +19,7 @@ from sympy.polys.matrices import DomainMatrix
 from ..exceptions import ModelError, NotObservableError
 from ..model import Model, parse_expression, symbols_from_json, symbols_to_json
 
-__all__ = ["ObserverNormalForm", "observer_normal_form", "normal_form_matrix", "is_rational", "rational_matrix"]
+__all__ = ["ObserverNormalForm", "observer_normal_form", "normal_form_matrix", "is_rational", "rational_matrix", "rational_rows"]
 
 
 def normal_form_matrix(a: sp.MatrixBase | list) -> sp.ImmutableMatrix:
@@ -42,13 +42,31 @@ def _is_normal_form(A: sp.MatrixBase, C: sp.MatrixBase) -> bool:
     return all(A[i, j] == (1 if j == i + 1 else 0) for i in range(n) for j in range(1, n))
 
 
+def _rational_rep(M: sp.MatrixBase) -> DomainMatrix | None:
+    """The matrix's own representation when it is over ZZ or QQ (sympy keeps rational matrices so), else None:
+    reading it builds no sympy Rational per entry, which took seconds on 64-state decimal designs."""
+    rep = getattr(M, "_rep", None)
+    return rep if isinstance(rep, DomainMatrix) and (rep.domain.is_QQ or rep.domain.is_ZZ) else None
+
+
+def rational_rows(M: sp.MatrixBase) -> list[list] | None:
+    """The entries of a rational matrix as its ring's elements (python-flint's ``fmpq``/``fmpz`` here: they
+    print as sympy prints the Rational and have ``numerator``/``denominator``), or None when ``M`` is not held
+    over ZZ or QQ (it may still be rational: see :func:`is_rational`)."""
+    rep = _rational_rep(M)
+    return None if rep is None else rep.to_list()
+
+
 def is_rational(M: sp.MatrixBase) -> bool:
     """Every entry is a rational number (no symbol, no irrational constant)."""
-    return all(sp.sympify(x).is_Rational for x in M)
+    return _rational_rep(M) is not None or all(sp.sympify(x).is_Rational for x in M)
 
 
 def rational_matrix(M: sp.MatrixBase) -> DomainMatrix:
     """A rational sympy matrix as a DomainMatrix over QQ (flint-backed when python-flint is installed)."""
+    rep = _rational_rep(M)
+    if rep is not None:
+        return rep.convert_to(QQ).to_dense()
     return DomainMatrix([[QQ.from_sympy(x) for x in M.row(i)] for i in range(M.rows)], M.shape, QQ)
 
 

@@ -28,7 +28,7 @@ from sympy.polys.matrices import DomainMatrix
 
 from ..exact import add, is_zero, lyapunov_form
 from ._lyapunov import _generic_solution, checkerboard_from_u
-from ._normal_form import normal_form_matrix
+from ._normal_form import normal_form_matrix, rational_rows
 
 __all__ = ["lyapunov_by_substitution", "lyapunov_residual_is_zero"]
 
@@ -58,11 +58,9 @@ def lyapunov_residual_is_zero(A: sp.MatrixBase, P: sp.MatrixBase, Q: sp.MatrixBa
 
 def _fractions(M: sp.MatrixBase) -> list[list[Fraction]] | None:
     """The entries of ``M`` as Fractions when every one is a rational number, else None."""
-    rep = getattr(M, "_rep", None)
-    if rep is not None and (rep.domain.is_QQ or rep.domain.is_ZZ):
-        # the matrix's own ring elements (python-flint's fmpq here): no sympy Rational is built per entry,
-        # which took 1.5 of design's 8 s on a 64-state decimal model
-        return [[Fraction(int(x.numerator), int(x.denominator)) for x in row] for row in rep.to_list()]
+    rows = rational_rows(M)
+    if rows is not None:
+        return [[Fraction(int(x.numerator), int(x.denominator)) for x in row] for row in rows]
     M = sp.Matrix(M)
     if not all(getattr(x, "is_Rational", False) for x in M):
         return None
