@@ -522,6 +522,22 @@ def certify_model(model: Model, *, values: Mapping[str, Any] | None = None, spec
         if not gains.is_numeric:
             gains = gains.at({k: v for k, v in used.items() if k in gains.model.parameters})
     parametric, model = model, model.with_values(dict(values or {})).numeric()
+    provenance = {"model": model.name, "parameters": used,
+                  "spectrum": None if spectrum is None else (spectrum if isinstance(spectrum, str)
+                                                             else [str(p) for p in spectrum]),
+                  "references": dict(model.references)}
+    normal = _normal_form_design(model, spectrum) if spectrum is not None and box is None else None
+    if normal is not None:
+        e1 = [[Fraction(1)] + [Fraction(0)] * (model.n - 1)]
+        observer = ObserverSection(A=matrix_strings(fraction_matrix(model.A, what="A")),
+                                   C=matrix_strings(fraction_matrix(model.C, what="C")),
+                                   K_plus=[str(k) for k in normal.k_plus], K_minus=[str(k) for k in normal.k_minus],
+                                   T=matrix_strings(normal.T))
+        family = as_family([normal.A_plus, normal.A_minus], ["A_plus", "A_minus"])
+        poles = tuple(complex(p) for p in normal.spectrum)
+        return certify(replace(family, poles=(poles, poles)), output=e1, dwell=dwell,
+                       eps=eps, solvers=solvers, observer=observer, provenance=provenance, discrete=discrete,
+                       candidate=(normal.P, [e1, e1]), arithmetic=arithmetic)
     design: GainDesign | None = gains
     if gains is not None:
         Kp, Km = gains.K_plus, gains.K_minus
@@ -548,14 +564,32 @@ def certify_model(model: Model, *, values: Mapping[str, Any] | None = None, spec
                                C=matrix_strings(fraction_matrix(model.C, what="C")),
                                K_plus=[str(x[0]) for x in fraction_matrix([[e] for e in Kp], what="K_plus")],
                                K_minus=[str(x[0]) for x in fraction_matrix([[e] for e in Km], what="K_minus")])
-    provenance = {"model": model.name, "parameters": used,
-                  "spectrum": None if spectrum is None else (spectrum if isinstance(spectrum, str)
-                                                             else [str(p) for p in spectrum]),
-                  "references": dict(model.references)}
     robust = None if box is None else certify_box(parametric, box, Kp, Km, values=values, eps=eps, solvers=solvers)
     return certify([A_plus, A_minus], names=["A_plus", "A_minus"], output=model.C, dwell=dwell, eps=eps,
                    solvers=solvers, observer=observer, provenance=provenance, discrete=discrete, box=robust,
                    candidate=_design_candidate(design), arithmetic=arithmetic)
+
+
+#: Entries of the normal form's coordinates ``T`` longer than this many digits put the certificate in those
+#: coordinates: the model's gains ``T^-1 k`` are then longer still (for a dense decimal model, by a factor of
+#: about ``n``); shorter, it stays in the model's own coordinates, where users read it.
+NORMAL_FORM_DIGITS = 100
+
+
+def _normal_form_design(model: Model, spectrum: str | Sequence) -> Any:
+    """The Theorem 1 design in the normal form's coordinates when the certificate is better written there,
+    else None (the model is already in normal form, not rational, or ``T``'s entries are short)."""
+    from ..design import is_rational, normal_form_design, parse_spectrum
+
+    if model.n < 2 or not (is_rational(sp.Matrix(model.A)) and is_rational(sp.Matrix(model.C))):
+        return None
+    poles = parse_spectrum(spectrum, model)
+    if any(sp.sympify(p).free_symbols for p in poles):
+        return None
+    design = normal_form_design(model, poles)
+    if max(len(str(x)) for row in design.T for x in row) <= NORMAL_FORM_DIGITS:
+        return None
+    return design
 
 
 def _design_candidate(design: GainDesign | None) -> tuple[Any, list[Any]] | None:

@@ -39,6 +39,10 @@ class Family:
     exact: tuple[Matrix, ...]
     numeric: tuple[np.ndarray, ...]
     hurwitz: bool = field(default=False, compare=False, repr=False)
+    #: Each matrix's eigenvalues when known exactly beforehand (a Theorem 1 design's poles), for display:
+    #: the floating-point eigenvalues of a large normal-form matrix, whose characteristic polynomial is its
+    #: first column, are off by whole units when the poles cluster, and its exact roots cost seconds.
+    poles: tuple[tuple[complex, ...], ...] | None = field(default=None, compare=False, repr=False)
 
     @property
     def n(self) -> int:
@@ -72,6 +76,8 @@ class Family:
 
     def spectra(self) -> dict[str, str]:
         """Each matrix's name and its spectrum as :func:`format_spectrum` prints it."""
+        if self.poles is not None:
+            return {nm: _format_eigenvalues(np.asarray(p, dtype=complex)) for nm, p in zip(self.names, self.poles)}
         return {nm: format_spectrum(M, E) for nm, M, E in zip(self.names, self.numeric, self.exact)}
 
     def __str__(self) -> str:
@@ -88,7 +94,10 @@ def format_spectrum(M: np.ndarray, exact: Matrix | None = None) -> str:
     the exact characteristic polynomial: the floating-point eigenvalues of an m-fold root scatter by
     ``eps**(1/m)`` (``-100`` as ``-100.001 +- 0.00095j``, differently on every BLAS).
     """
-    eig = _spectrum(np.asarray(M, dtype=float), exact)
+    return _format_eigenvalues(_spectrum(np.asarray(M, dtype=float), exact))
+
+
+def _format_eigenvalues(eig: np.ndarray) -> str:
     eig = eig[np.lexsort((eig.imag, eig.real))]
     parts = []
     for z in eig:

@@ -204,6 +204,13 @@ class ObserverSection:
 
     Its check re-derives ``A_plus = A - K_plus C`` and ``A_minus = -A + K_minus C``
     and compares them with the family.
+
+    With ``T`` (a nonsingular matrix), the family and the gains are written in the coordinates ``z = T x``
+    of the observer normal form: ``K_plus`` and ``K_minus`` are then ``T K_plus`` and ``T K_minus`` of the
+    model's gains, and the check is ``T A - K_plus C = A_plus T`` and ``-T A + K_minus C = A_minus T`` with
+    ``det T != 0``: the model's family ``T^-1 A_p T`` is similar to the certified one, so every stability
+    certificate of one holds for the other.  A dense model's gains in its own coordinates need ``T``'s
+    inverse and can be tens of thousands of digits long; in these coordinates they are not.
     """
 
     KEY: ClassVar[str] = "observer"
@@ -211,9 +218,13 @@ class ObserverSection:
     C: Any
     K_plus: Any
     K_minus: Any
+    T: Any = None
 
     def to_json(self) -> dict[str, Any]:
-        return {"A": self.A, "C": self.C, "K_plus": self.K_plus, "K_minus": self.K_minus}
+        out = {"A": self.A, "C": self.C, "K_plus": self.K_plus, "K_minus": self.K_minus}
+        if self.T is not None:
+            out["T"] = self.T
+        return out
 
     @classmethod
     def from_json(cls, data: Any) -> "ObserverSection":
@@ -223,23 +234,50 @@ class ObserverSection:
             if not isinstance(data.get(key, []), list):
                 raise CertificateError(f"certificate 'observer.{key}' must be a list of numbers, "
                                        f"got {_show(data.get(key))}")
-        return cls(data.get("A"), data.get("C"), data.get("K_plus", []), data.get("K_minus", []))
+        if "T" in data and not isinstance(data["T"], list):
+            raise CertificateError(f"certificate 'observer.T' must be a list of rows, got {_show(data['T'])}")
+        return cls(data.get("A"), data.get("C"), data.get("K_plus", []), data.get("K_minus", []), data.get("T"))
 
     def check(self, names: Sequence[str], matrices: Sequence[Any]) -> Check:
-        from ..exact import add, fraction_matrix, matmul, scale, sub
+        from ..exact import add, fraction_matrix, matmul, nonsingular, scale, sub
 
         n = len(matrices[0])
         A = fraction_matrix(self.A, what="observer A", rows=n, cols=n)
         C = fraction_matrix(self.C, what="observer C", cols=n)
         Kp = fraction_matrix([[x] for x in self.K_plus], what="K_plus", rows=n, cols=1)
         Km = fraction_matrix([[x] for x in self.K_minus], what="K_minus", rows=n, cols=1)
-        expected = {"A_plus": sub(A, matmul(Kp, C)), "A_minus": add(scale(-1, A), matmul(Km, C))}
+        if self.T is None:
+            expected = {"A_plus": sub(A, matmul(Kp, C)), "A_minus": add(scale(-1, A), matmul(Km, C))}
+            for nm, M in zip(names, matrices):
+                if nm in expected and expected[nm] != M:
+                    which = "A - K_plus C" if nm == "A_plus" else "-A + K_minus C"
+                    return Check("observer", False, f"{nm} in the family differs from {which} computed from the "
+                                                    "observer's A, C and gains")
+            return Check("observer", True)
+        T = fraction_matrix(self.T, what="observer T", rows=n, cols=n)
+        if not nonsingular(T):
+            return Check("observer", False, "the coordinates' matrix T is singular")
+        TA = matmul(T, A)
+        expected = {"A_plus": sub(TA, matmul(Kp, C)), "A_minus": add(scale(-1, TA), matmul(Km, C))}
         for nm, M in zip(names, matrices):
-            if nm in expected and expected[nm] != M:
-                which = "A - K_plus C" if nm == "A_plus" else "-A + K_minus C"
-                return Check("observer", False, f"{nm} in the family differs from {which} computed from the "
-                                                "observer's A, C and gains")
+            if nm in expected and expected[nm] != matmul(M, T):
+                which = "T A - K_plus C" if nm == "A_plus" else "-T A + K_minus C"
+                return Check("observer", False, f"{nm} T in the family's coordinates differs from {which} computed "
+                                                "from the observer's A, C, T and gains")
         return Check("observer", True)
+
+    def model_gains(self) -> tuple[list[float], list[float]] | None:
+        """``K_plus`` and ``K_minus`` in the model's coordinates (``T^-1`` of the stated ones) as the nearest
+        doubles, or None without ``T`` (the stated gains are then the model's, exactly)."""
+        from ..exact import fraction_matrix, solve_float
+
+        if self.T is None:
+            return None
+        n = len(self.T)
+        K = solve_float(fraction_matrix(self.T, what="observer T", rows=n, cols=n),
+                        fraction_matrix([[p, m] for p, m in zip(self.K_plus, self.K_minus)], what="gains",
+                                        rows=n, cols=2))
+        return [row[0] for row in K], [row[1] for row in K]
 
 
 @document_section

@@ -65,7 +65,7 @@ def register(sub: argparse._SubParsersAction) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    from ..certify import certify_model
+    from ..certify import ObserverSection, certify_model
 
     if args.gains_minus is not None and args.gains_plus is None:
         raise SpectrumError("--gains-minus needs --gains-plus")
@@ -96,12 +96,19 @@ def run(args: argparse.Namespace) -> int:
         obs = report.document.get("observer", {})
         values = ", ".join(f"{k} = {v}" for k, v in prov.get("parameters", {}).items())
         print(f"switchobs certify: model {prov.get('model')}{' (' + values + ')' if values else ''}", file=stream)
-        with exact_display(args.exact):
-            shown = {k: [readable_number(v) for v in obs.get(k, [])] for k in ("K_plus", "K_minus")}
-        print(f"  K_plus  = [{', '.join(shown['K_plus'])}]", file=stream)
-        print(f"  K_minus = [{', '.join(shown['K_minus'])}]", file=stream)
-        if any(shown[k] != obs.get(k, []) for k in shown):
-            print(f"  {ROUNDED_NOTE}", file=stream)
+        model_gains = ObserverSection.from_json(obs).model_gains() if "T" in obs else None
+        if model_gains is not None:  # the exact gains are in the normal form's coordinates: show the model's
+            for name, K in zip(("K_plus ", "K_minus"), model_gains):
+                print(f"  {name} = [{', '.join(f'{k:.6g}' for k in K)}]", file=stream)
+            print("  (the nearest doubles of T^-1 k, 6 significant digits: the certificate states the observer in "
+                  "its normal form's coordinates z = T x, exactly, with k = T K; --json for them)", file=stream)
+        else:
+            with exact_display(args.exact):
+                shown = {k: [readable_number(v) for v in obs.get(k, [])] for k in ("K_plus", "K_minus")}
+            print(f"  K_plus  = [{', '.join(shown['K_plus'])}]", file=stream)
+            print(f"  K_minus = [{', '.join(shown['K_minus'])}]", file=stream)
+            if any(shown[k] != obs.get(k, []) for k in shown):
+                print(f"  {ROUNDED_NOTE}", file=stream)
         print(report, file=stream)
         if report.discrete is not None:
             from ..report import sampled_lines

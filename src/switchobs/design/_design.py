@@ -23,6 +23,7 @@ import dataclasses
 import json
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field
+from fractions import Fraction
 from typing import Any
 
 import numpy as np
@@ -35,12 +36,13 @@ from ..model import Model, entries, free_names, make_symbol, numeric, parse_expr
 from ._lyapunov import _generic_solution, observer_form_gramian
 from .._display import ROUNDED_NOTE, is_shortened, readable, unicode_output
 from .._progress import progress
-from ._normal_form import ObserverNormalForm, is_rational, observer_normal_form, rational_matrix, rational_rows
+from ._normal_form import (ObserverNormalForm, is_rational, normal_form_matrix, observer_normal_form, rational_matrix,
+                           rational_rows)
 from ._recheck import lyapunov_by_substitution, lyapunov_residual_is_zero
 from ._routh import hurwitz_conditions, readable_condition, routh_first_column
 from ._spectrum import LAPLACE, parse_spectrum, polynomial_coefficients, spectrum_coefficients
 
-__all__ = ["GainDesign", "design_gains", "design", "theorem1_K_minus", "hoang_family_constraints", "minus_coefficients",
+__all__ = ["GainDesign", "NormalFormDesign", "design_gains", "design", "normal_form_design", "theorem1_K_minus", "hoang_family_constraints", "minus_coefficients",
            "plus_coefficients", "parse_gains"]
 
 
@@ -106,10 +108,12 @@ def theorem1_K_minus(nf: ObserverNormalForm, K_plus: sp.MatrixBase) -> sp.Immuta
     In normal form ``k_i^- = (-1)^i k_i^+ + (1 - (-1)^i) a_i``; then
     ``K_minus = T^-1 K_nf_minus``.
     """
-    k_nf = _to_normal_form(nf, K_plus)
-    n = len(nf.a)
-    k_nf_minus = sp.Matrix([_sign(i) * k_nf[i - 1] + (1 - _sign(i)) * nf.a[i - 1] for i in range(1, n + 1)])
-    return _to_model(nf, k_nf_minus)
+    return _to_model(nf, sp.Matrix(_theorem1_normal_form(list(_to_normal_form(nf, K_plus)), list(nf.a))))
+
+
+def _theorem1_normal_form(k_plus: Sequence[Any], a: Sequence[Any]) -> list[Any]:
+    """Theorem 1 (seed 004) in normal form: ``k_i^- = (-1)^i k_i^+ + (1 - (-1)^i) a_i``."""
+    return [_sign(i) * k_plus[i - 1] + (1 - _sign(i)) * a[i - 1] for i in range(1, len(a) + 1)]
 
 
 def hoang_family_constraints(alpha_plus: Sequence[sp.Expr], alpha_minus: Sequence[sp.Expr]) -> list[sp.Expr]:
@@ -759,6 +763,106 @@ def design_gains(model: Model, spectrum: str | Sequence | None = None, *,
         hurwitz_plus=hurwitz_plus, hurwitz_minus=hurwitz_minus, P=P, C_plus=sp.ImmutableMatrix(C),
         C_minus=sp.ImmutableMatrix(C_minus), gain_constraints=constraints, family_symbols=family,
         conditional=conditional)
+
+
+@dataclass(frozen=True)
+class NormalFormDesign:
+    """The Theorem 1 design of a rational model, in its observer normal form's coordinates ``z = T x``.
+
+    The same gains as :func:`design_gains` (seed 004 Theorem 1), stated where their numbers are short:
+    ``K_plus = T^-1 k_plus`` and ``K_minus = T^-1 k_minus`` in the model's coordinates need ``T``'s inverse,
+    whose entries, for a dense model with decimal entries, have tens of thousands of digits, while
+    ``a``, ``T``, the gains ``k`` and ``P`` here have at most a few thousand.  ``T A_plus = A_nf_plus T``
+    with ``A_nf_plus = A_nf - k_plus e_1'`` and ``A_minus`` likewise: the families are similar, so every
+    stability certificate of one holds for the other (``P_model = T' P T``).
+
+    Attributes
+    ----------
+    model : Model
+    spectrum : tuple of sympy numbers
+        The poles asked for ``A_plus`` (and, Theorem 1, ``A_minus``).
+    a : tuple of Fraction
+        ``det(sI - A) = s^n - a_1 s^(n-1) - ... - a_n``.
+    T : list of rows of Fraction
+    alpha : tuple of Fraction
+        ``det(sI - A_plus) = s^n + alpha_1 s^(n-1) + ... + alpha_n``.
+    k_plus, k_minus : tuple of Fraction
+        ``T K_plus`` and ``T K_minus``.
+    P : list of rows of Fraction
+        The common Lyapunov matrix in these coordinates: ``A_nf_p' P + P A_nf_p = -e_1 e_1'`` for both modes.
+    """
+
+    model: Model
+    spectrum: tuple[sp.Expr, ...]
+    a: tuple[Fraction, ...]
+    T: list[list[Fraction]]
+    alpha: tuple[Fraction, ...]
+    k_plus: tuple[Fraction, ...]
+    k_minus: tuple[Fraction, ...]
+    P: list[list[Fraction]]
+
+    @property
+    def A_plus(self) -> list[list[Fraction]]:
+        """``A_nf - k_plus e_1'``: the plus mode in these coordinates."""
+        return _normal_form_rows([x - k for x, k in zip(self.a, self.k_plus)], 1)
+
+    @property
+    def A_minus(self) -> list[list[Fraction]]:
+        """``-A_nf + k_minus e_1'``: the minus mode in these coordinates."""
+        return _normal_form_rows([k - x for x, k in zip(self.a, self.k_minus)], -1)
+
+    def gains(self) -> tuple[np.ndarray, np.ndarray]:
+        """``K_plus`` and ``K_minus`` in the model's coordinates, as the doubles nearest the exact values."""
+        from ..exact import solve_float
+
+        K = solve_float(self.T, [[p, m] for p, m in zip(self.k_plus, self.k_minus)])
+        return np.array([row[0] for row in K]), np.array([row[1] for row in K])
+
+
+def _normal_form_rows(first: Sequence[Fraction], superdiagonal: int) -> list[list[Fraction]]:
+    n = len(first)
+    return [[first[i] if j == 0 else Fraction(superdiagonal if j == i + 1 else 0) for j in range(n)]
+            for i in range(n)]
+
+
+def normal_form_design(model: Model, spectrum: str | Sequence) -> NormalFormDesign:
+    """The Theorem 1 gain pair for ``spectrum`` and its common P, in the observer normal form's coordinates.
+
+    For a numeric model with rational entries; what :func:`design_gains` computes for a spectrum, without
+    leaving the normal form (no ``T^-1``, no matrix in the model's coordinates), on python-flint.
+
+    Raises
+    ------
+    ModelError
+        The model has parameters without values or irrational entries.
+    SpectrumError, NotObservableError, NotHurwitzError
+        As :func:`design_gains`.
+
+    References
+    ----------
+    seed 004 Theorem 1 and 'Observer normal form'.
+    """
+    from ..exact import fraction_matrix, observable, observer_coordinates
+
+    if not (is_rational(sp.Matrix(model.A)) and is_rational(sp.Matrix(model.C))):
+        raise ModelError(f"model {model.name!r} is not numeric with rational entries; give its parameter values")
+    A = fraction_matrix(rational_rows(sp.Matrix(model.A)), what="A")
+    C = fraction_matrix(rational_rows(sp.Matrix(model.C)), what="C")
+    poles = parse_spectrum(spectrum, model)
+    progress(f"design: observer normal form (n = {model.n})")
+    if not observable(A, C)[0]:
+        observer_normal_form(model)  # raises, naming an unobservable direction
+    a, T = observer_coordinates(A, C)
+    alpha = spectrum_coefficients(poles)
+    if _readable(alpha, ()):
+        _raise_not_hurwitz("A_plus", normal_form_matrix([-x for x in alpha]))
+    alpha_q = tuple(Fraction(str(x)) for x in alpha)
+    k_plus = [x + y for x, y in zip(a, alpha_q)]
+    progress(f"design: common Lyapunov matrix P (n = {model.n})")
+    P_nf, _, _ = observer_form_gramian(alpha)
+    return NormalFormDesign(model, poles, tuple(a), T, alpha_q, tuple(k_plus),
+                            tuple(_theorem1_normal_form(k_plus, a)),
+                            fraction_matrix(rational_rows(sp.Matrix(P_nf)), what="P"))
 
 
 #: The same function under the name of its sub-package: ``from switchobs.design import design``.

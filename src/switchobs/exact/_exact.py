@@ -24,6 +24,7 @@ the exact elimination above.
 from __future__ import annotations
 
 import math
+import operator
 from collections.abc import Iterable, Iterator, Sequence
 from contextlib import contextmanager
 from dataclasses import dataclass
@@ -70,9 +71,15 @@ def to_fraction(value: Any, *, what: str = "entry") -> Fraction:
     if isinstance(value, str):
         # Size first: "1e999999999" would otherwise be expanded to a billion digits.
         return decimal_fraction(value, what=what, error=CertificateError, max_digits=MAX_CERTIFICATE_DIGITS)
-    p, q = getattr(value, "p", None), getattr(value, "q", None)
-    if isinstance(p, int) and isinstance(q, int) and q != 0:
-        return Fraction(p, q)
+    # sympy Rationals (p, q), python-flint's fmpq and numpy integers (numerator, denominator): exact, never
+    # through float (an fmpq's parts are fmpz, not int)
+    for num, den in (("p", "q"), ("numerator", "denominator")):
+        try:
+            p, q = operator.index(getattr(value, num)), operator.index(getattr(value, den))
+        except (AttributeError, TypeError):
+            continue
+        if q != 0:
+            return to_fraction(Fraction(p, q), what=what)
     try:
         f = float(value)
     except (TypeError, ValueError):
@@ -570,6 +577,83 @@ def _full_rank_mod_p(A: Sequence[Sequence[Fraction]], C: Sequence[Sequence[Fract
             return True
         block = block * NA
     return False
+def nonsingular(M: Sequence[Sequence[Any]]) -> bool:
+    """``det M != 0`` for a square rational ``M``, exactly: full rank modulo a prime decides at once.
+
+    The integer form's determinant is then nonzero; when the prime divides it, the exact rank decides.
+    """
+    import flint
+
+    n = len(M)
+    N, _, _ = _integer_rows(M)
+    if flint.nmod_mat([[int(x) % _PRIME for x in row] for row in N], _PRIME).rank() == n:
+        return True
+    return rank(M) == n
+
+
+def observer_coordinates(A: Sequence[Sequence[Any]], C: Sequence[Sequence[Any]]) -> tuple[list[Fraction], Matrix]:
+    """``(a, T)`` of the observer normal form of a rational single-output pair, on python-flint (in C).
+
+    ``det(sI - A) = s^n - a_1 s^(n-1) - ... - a_n`` and ``z = T x`` gives ``T A = A_nf T``, ``C = e_1' T``
+    with ``A_nf`` of first column ``a`` and a unit superdiagonal (seed 004, 'Observer normal form').
+    ``T = O_nf^-1 O``, ``O`` the observability matrix of ``(A, C)``; the normal form's own ``O_nf`` is unit
+    lower triangular and its inverse is the lower triangular Toeplitz matrix of ``1, -a_1, ..., -a_(n-1)``,
+    so ``T`` needs no solve and no inverse of ``O`` (whose entries, for a dense decimal ``A``, are
+    thousands of digits long).  ``T`` is singular exactly when the pair is unobservable (``det T = det O``).
+    """
+    import flint
+
+    n = len(A)
+    FA = _fmpq_mat(A)
+    rows = [_fmpq_mat(C)]
+    for _ in range(n - 1):
+        rows.append(rows[-1] * FA)
+    O = flint.fmpq_mat([[row[0, j] for j in range(n)] for row in rows])
+    coeffs = FA.charpoly().coeffs()  # constant first, monic: s^n + c_(n-1) s^(n-1) + ... + c_0
+    a = [-coeffs[n - i] for i in range(1, n + 1)]
+    toeplitz = flint.fmpq_mat([[1 if i == j else -a[i - j - 1] if j < i else 0 for j in range(n)]
+                               for i in range(n)])
+    T = toeplitz * O
+    return ([Fraction(int(x.p), int(x.q)) for x in a],
+            [[Fraction(int(x.p), int(x.q)) for x in row] for row in T.tolist()])
+
+
+def solve_float(M: Sequence[Sequence[Any]], B: Sequence[Sequence[Any]]) -> list[list[float]]:
+    """``X`` with ``M X = B`` to double precision, from a rigorous enclosure (arb balls, in C).
+
+    For display and for the doubles of generated code when the exact ``X`` is too long to be worth
+    computing: the working precision doubles from 256 bits until every entry's ball is narrower than
+    ``2^-60`` of its value, so each float is the double nearest to the exact entry within one unit in
+    the last place however ill-conditioned ``M`` is (an observability matrix can be, by hundreds of
+    digits).
+
+    Raises
+    ------
+    DimensionError
+        If ``M`` is singular.
+    """
+    import flint
+
+    if not nonsingular(M):
+        raise DimensionError(f"the {len(M)} x {len(M)} matrix is singular (rank {rank(M)})")
+    FM, FB = _fmpq_mat(M), _fmpq_mat(B)
+    old = flint.ctx.prec
+    prec = 256
+    try:
+        while True:
+            flint.ctx.prec = prec
+            try:
+                X = flint.arb_mat(FM).solve(flint.arb_mat(FB))
+            except ZeroDivisionError:  # the balls still contain a singular matrix: more precision
+                X = None
+            if X is not None and all(x.rad() <= abs(x.mid()) * flint.arb(2) ** -60 or x.rad() == 0
+                                     for row in X.tolist() for x in row):
+                return [[float(x.mid()) for x in row] for row in X.tolist()]
+            prec *= 2
+    finally:
+        flint.ctx.prec = old
+
+
 def observable(A: Sequence[Sequence[Fraction]], C: Sequence[Sequence[Fraction]]) -> tuple[bool, int]:
     """Exact observability of ``(A, C)``: grow the row space of ``C, CA, CA^2, ...`` until it stops.
 
