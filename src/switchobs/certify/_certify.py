@@ -533,9 +533,10 @@ def certify_model(model: Model, *, values: Mapping[str, Any] | None = None, spec
                                    C=matrix_strings(fraction_matrix(model.C, what="C")),
                                    K_plus=[str(k) for k in normal.k_plus], K_minus=[str(k) for k in normal.k_minus],
                                    T=matrix_strings(normal.T))
-        family = as_family([normal.A_plus, normal.A_minus], ["A_plus", "A_minus"])
+        # Hurwitz by construction: both modes have the characteristic polynomial prod (s - p) of the poles
+        family = as_family([normal.A_plus, normal.A_minus], ["A_plus", "A_minus"], hurwitz=False)
         poles = tuple(complex(p) for p in normal.spectrum)
-        return certify(replace(family, poles=(poles, poles)), output=e1, dwell=dwell,
+        return certify(replace(family, poles=(poles, poles), hurwitz=True), output=e1, dwell=dwell,
                        eps=eps, solvers=solvers, observer=observer, provenance=provenance, discrete=discrete,
                        candidate=(normal.P, [e1, e1]), arithmetic=arithmetic)
     design: GainDesign | None = gains

@@ -854,7 +854,7 @@ def normal_form_design(model: Model, spectrum: str | Sequence) -> NormalFormDesi
         observer_normal_form(model)  # raises, naming an unobservable direction
     a, T = observer_coordinates(A, C)
     alpha = spectrum_coefficients(poles)
-    if _readable(alpha, ()):
+    if any(not sp.re(p).is_negative for p in poles):  # numeric poles: exact, no Routh array of n rows needed
         _raise_not_hurwitz("A_plus", normal_form_matrix([-x for x in alpha]))
     alpha_q = tuple(Fraction(str(x)) for x in alpha)
     k_plus = [x + y for x, y in zip(a, alpha_q)]
