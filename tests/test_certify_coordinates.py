@@ -156,3 +156,10 @@ def test_cli_shows_the_model_gains_of_a_normal_form_certificate(tmp_path, capsys
     assert f"K_plus  = [{K_plus[0]:.6g}, " in out
     assert "normal form's coordinates z = T x" in out
     assert main(["verify", str(tmp_path / "c.json")]) == 0
+
+
+def test_docs_state_the_coordinates_threshold():
+    from pathlib import Path
+
+    text = " ".join((Path(__file__).resolve().parents[1] / "docs" / "certify.md").read_text().split())
+    assert f"`NORMAL_FORM_DIGITS` = {NORMAL_FORM_DIGITS} digits" in text

@@ -47,8 +47,9 @@ MAX_NUMBER_DIGITS = 1000
 #: Decimal digits of one number in a certificate, counting a decimal exponent as that many digits (below
 #: Python's own limit of 4300 digits for converting between integers and text).
 MAX_CERTIFICATE_DIGITS = 4000
-#: Size of a certificate file.
-MAX_CERTIFICATE_BYTES = 50_000_000
+#: Size of a certificate file: the normal-form certificate of a dense 128-state model with 6-digit entries is
+#: 52 MB (its T and P have 2000- and 4000-digit entries) and ``verify`` reads it in 0.3 GB.
+MAX_CERTIFICATE_BYTES = 100_000_000
 #: Size of a model, system or sweep file (TOML): a 64-state model of longest entries is about 8 MB.
 MAX_INPUT_FILE_BYTES = 10_000_000
 #: Rows of a processor-in-the-loop record: compiled into the harness, they and the states must fit the 4 MB code and

@@ -197,6 +197,33 @@ def document_section(cls: type) -> type:
     return cls
 
 
+def _bits(M: Sequence[Sequence[Any]]) -> int:
+    """Bits of the longest numerator plus the longest denominator of a Fraction matrix (its size over one
+    common denominator when, as in ``T``, the denominators divide the longest)."""
+    return max(x.numerator.bit_length() for row in M for x in row) + \
+        max(x.denominator.bit_length() for row in M for x in row)
+
+
+def _check_product_cost(pairs: Sequence[tuple[Any, Any]], *, what: str) -> None:
+    """Refuse products ``X Y`` whose work exceeds :data:`~switchobs._limits.MAX_CERTIFICATE_WORK`, before any.
+
+    Each nonzero entry of ``X`` meets a row of ``Y``; a product of a ``b``-bit and an ``s``-bit number (``b >= s``)
+    is counted ``(b / 64 + 1) (s / 64 + 1) ** 0.5``, the unit of :func:`~switchobs.exact.elimination_work` for
+    equal sizes.
+    """
+    from .._limits import MAX_CERTIFICATE_WORK
+
+    work = 0.0
+    for X, Y in pairs:
+        big, small = sorted((_bits(X), _bits(Y)), reverse=True)
+        nonzero = sum(1 for row in X for x in row if x)
+        work += nonzero * len(Y[0]) * (big / 64 + 1) * (small / 64 + 1) ** 0.5
+    if work > MAX_CERTIFICATE_WORK:
+        raise CertificateError(f"certificate '{what}': its exact check would take too long (its products "
+                               f"{work:.2g} > {MAX_CERTIFICATE_WORK:.2g} = MAX_CERTIFICATE_WORK); round the "
+                               "certificate to fewer digits")
+
+
 @document_section
 @dataclass(frozen=True)
 class ObserverSection:
@@ -255,6 +282,7 @@ class ObserverSection:
                                                     "observer's A, C and gains")
             return Check("observer", True)
         T = fraction_matrix(self.T, what="observer T", rows=n, cols=n)
+        _check_product_cost([(T, A)] + [(M, T) for M in matrices], what="observer.T")
         if not nonsingular(T):
             return Check("observer", False, "the coordinates' matrix T is singular")
         TA = matmul(T, A)

@@ -572,19 +572,39 @@ def _frozen(value: Any) -> Any:
 
 def _check_cost(doc: Mapping[str, Any], n: int) -> None:
     """Refuse a certificate whose exact products would take too long, before any of them: ``n**3`` products of
-    entries of ``D`` digits (``D`` those of its largest matrix over one common denominator), each counted as
+    entries of ``D`` digits (``D`` those of the matrix over one common denominator), each counted as
     :func:`~switchobs.exact.elimination_work` counts them, against :data:`~switchobs._limits.MAX_CERTIFICATE_WORK`.
-    The elimination then counts its own work as it goes (:func:`~switchobs.exact.definiteness`): the minors it
-    forms grow with every pivot, which no estimate made before it can bound tightly.
+    A product skips the zeros of its sparser factor, so a family matrix's products are scaled by the share of
+    its nonzero entries and a certificate matrix's (multiplied only with the family) by that of the densest
+    family matrix, when smaller than its own: the normal-form matrices of a large observer have ``2n - 1``
+    nonzero entries of ``n**2``.  The observer section's coordinates are costed by their own check
+    (:meth:`~switchobs.certify._schema.ObserverSection.check`).  The elimination then counts its own work as it
+    goes (:func:`~switchobs.exact.definiteness`): the minors it forms grow with every pivot, which no estimate
+    made before it can bound tightly.
     """
+    family = doc.get("family") if isinstance(doc.get("family"), Mapping) else {}
+    matrices = family.get("matrices") if isinstance(family.get("matrices"), list) else []
+    partner = max((_density(M) for M in matrices if isinstance(M, list)), default=1.0)
     for where, rows in _matrices(doc):
+        if where.startswith("observer."):
+            continue
         size = _common_digits(rows, MAX_CERTIFICATE_DIGITS * 2)
-        work = elimination_work(n, round(size * _BITS_PER_DIGIT)) * 2 * n
+        share = _density(rows) if where.startswith("family.") else min(_density(rows), partner)
+        work = elimination_work(n, round(size * _BITS_PER_DIGIT)) * 2 * n * share
         if work > MAX_CERTIFICATE_WORK:
             raise CertificateError(f"certificate '{where}': its exact check would take too long (n = {n} states, "
                                    f"a matrix of at least {size} digits over one common denominator: its products "
                                    f"alone {work:.2g} > {MAX_CERTIFICATE_WORK:.2g} = MAX_CERTIFICATE_WORK); round "
                                    "the certificate to fewer digits")
+
+
+def _density(rows: Any) -> float:
+    """The share of nonzero entries of a JSON matrix (1 for anything that is not a non-empty list of rows)."""
+    if not (isinstance(rows, list) and rows and all(isinstance(r, list) for r in rows)):
+        return 1.0
+    total = sum(len(r) for r in rows)
+    zeros = sum(1 for r in rows for x in r if x in ("0", 0, "-0"))
+    return (total - zeros) / total if total else 1.0
 
 
 #: log2(10): the bits of a decimal digit.
