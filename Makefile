@@ -23,7 +23,7 @@ demo: $(STAMP)
 # frama-c.  Missing ones are installed in one apt-get call when root with apt-get; otherwise (or if that fails)
 # each missing tool is named loudly and the tests that need it skip, saying so.
 CC_TOOLS := clang:clang cppcheck:cppcheck arm-none-eabi-gcc:gcc-arm-none-eabi newlib:libnewlib-arm-none-eabi \
-	qemu-system-arm:qemu-system-arm frama-c:frama-c-base
+	qemu-system-arm:qemu-system-arm frama-c:frama-c-base clang-tidy:clang-tidy
 cc-tools:
 	@missing=""; for pair in $(CC_TOOLS); do tool=$${pair%%:*}; pkg=$${pair#*:}; \
 	  if [ "$$tool" = newlib ]; then \
