@@ -30,11 +30,13 @@ import subprocess
 import sys
 import tempfile
 import time
+import tomllib
+from fractions import Fraction
 from pathlib import Path
 
 import numpy as np
 from _harness import number, publish, switchobs_exe
-from numeric_scaling import chain_model, eval_rational
+from numeric_scaling import chain_model
 from numeric_scaling import spectrum as integer_spectrum
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -133,8 +135,12 @@ def measure(kind: str, n: int, sizes: dict, tmp: Path) -> dict[str, dict]:
     if n in sizes["lmi"] and out["design"]["rc"] == 0:
         design = json.loads(out["design"]["stdout"])
         family = model.with_suffix(".npz")
-        np.savez(family, **{k: np.array([[eval_rational(x) for x in row] for row in design[k]])
-                            for k in ("A_plus", "A_minus")})
+        # what a user holds: the model and the gains as doubles (a normal-form design gives them as doubles)
+        data = tomllib.loads(text)
+        A = np.array([[float(Fraction(x)) for x in row] for row in data["A"]])
+        C = np.array([[float(Fraction(x)) for x in data["C"]]])
+        K = {k: np.array([float(Fraction(x)) for x in design[k]]).reshape(-1, 1) for k in ("K_plus", "K_minus")}
+        np.savez(family, A_plus=A - K["K_plus"] @ C, A_minus=-A + K["K_minus"] @ C)
         lmi = run([sys.executable, str(BASELINE), "lmi", str(family), "SCS"])
         status = json.loads(lmi["stdout"])["status"] if lmi["rc"] == 0 else ""
         if status != "optimal" and lmi["rc"] == 0:

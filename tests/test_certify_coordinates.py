@@ -16,7 +16,7 @@ import numpy as np
 import pytest
 
 from switchobs.certify import ObserverSection, certify_model, verify_certificate
-from switchobs.certify._certify import NORMAL_FORM_DIGITS
+from switchobs.design import NORMAL_FORM_DIGITS
 from switchobs.design import design_gains, normal_form_design
 from switchobs.exact import (add, fraction_matrix, lyapunov_form, matmul, nonsingular, observer_coordinates, solve,
                              solve_float, to_fraction, transpose)
@@ -163,3 +163,43 @@ def test_docs_state_the_coordinates_threshold():
 
     text = " ".join((Path(__file__).resolve().parents[1] / "docs" / "certify.md").read_text().split())
     assert f"`NORMAL_FORM_DIGITS` = {NORMAL_FORM_DIGITS} digits" in text
+
+
+def test_normal_form_statement_only_where_the_model_coordinates_are_long(dense):
+    from switchobs.design import normal_form_statement
+    from switchobs.model import builtin_model
+
+    model, poles = dense
+    assert normal_form_statement(model, poles) is not None
+    xbs3 = builtin_model("abs-xbs3")
+    assert normal_form_statement(xbs3.with_values({}).numeric(), "-10,-20,-20") is None  # short T: model's own
+    assert normal_form_statement(model, ",".join(["-beta"] * N)) is None  # design symbols: the symbolic design
+
+
+def test_normal_form_design_recheck_catches_a_wrong_T(dense):
+    import dataclasses
+
+    model, poles = dense
+    nf = normal_form_design(model, poles)
+    assert all(nf.verify().values())
+    T = [row[:] for row in nf.T]
+    T[2][5] += 1
+    broken = dataclasses.replace(nf, T=T).verify()
+    assert broken["similarity"] is False and broken["lyapunov_plus"] is True
+
+
+def test_cli_design_of_a_dense_model_states_the_normal_form(tmp_path, dense, capsys):
+    from switchobs.cli.main import main
+
+    text, poles = dense_text()
+    path = tmp_path / "dense.toml"
+    path.write_text(text, encoding="utf-8")
+    assert main(["design", str(path), "--spectrum", poles, "--json"]) == 0
+    data = json.loads(capsys.readouterr().out)
+    assert data["coordinates"].startswith("observer normal form") and all(data["verified"].values())
+    model, _ = dense
+    exact = design_gains(model, poles)
+    assert data["K_plus"] == [float(to_fraction(k)) for k in exact.K_plus]
+    assert data["k_plus"] == [str(x) for x in normal_form_design(model, poles).k_plus]
+    assert main(["design", str(path), "--spectrum", poles]) == 0
+    assert "in its observer normal form's coordinates z = T x" in capsys.readouterr().out

@@ -507,7 +507,7 @@ def certify_model(model: Model, *, values: Mapping[str, Any] | None = None, spec
     NotHurwitzError
         ``A_plus`` or ``A_minus`` is not Hurwitz (named, with its spectrum).
     """
-    from ..design import design_gains, observer_normal_form, parse_gains, theorem1_K_minus
+    from ..design import design_gains, normal_form_statement, observer_normal_form, parse_gains, theorem1_K_minus
 
     if K_minus is not None and K_plus is None:
         raise SpectrumError("K_minus needs K_plus (alone, K_minus is the Theorem 1 choice)")
@@ -526,7 +526,7 @@ def certify_model(model: Model, *, values: Mapping[str, Any] | None = None, spec
                   "spectrum": None if spectrum is None else (spectrum if isinstance(spectrum, str)
                                                              else [str(p) for p in spectrum]),
                   "references": dict(model.references)}
-    normal = _normal_form_design(model, spectrum) if spectrum is not None and box is None else None
+    normal = normal_form_statement(model, spectrum) if spectrum is not None and box is None else None
     if normal is not None:
         e1 = [[Fraction(1)] + [Fraction(0)] * (model.n - 1)]
         observer = ObserverSection(A=matrix_strings(fraction_matrix(model.A, what="A")),
@@ -569,28 +569,6 @@ def certify_model(model: Model, *, values: Mapping[str, Any] | None = None, spec
     return certify([A_plus, A_minus], names=["A_plus", "A_minus"], output=model.C, dwell=dwell, eps=eps,
                    solvers=solvers, observer=observer, provenance=provenance, discrete=discrete, box=robust,
                    candidate=_design_candidate(design), arithmetic=arithmetic)
-
-
-#: Entries of the normal form's coordinates ``T`` longer than this many digits put the certificate in those
-#: coordinates: the model's gains ``T^-1 k`` are then longer still (for a dense decimal model, by a factor of
-#: about ``n``); shorter, it stays in the model's own coordinates, where users read it.
-NORMAL_FORM_DIGITS = 100
-
-
-def _normal_form_design(model: Model, spectrum: str | Sequence) -> Any:
-    """The Theorem 1 design in the normal form's coordinates when the certificate is better written there,
-    else None (the model is already in normal form, not rational, or ``T``'s entries are short)."""
-    from ..design import is_rational, normal_form_design, parse_spectrum
-
-    if model.n < 2 or not (is_rational(sp.Matrix(model.A)) and is_rational(sp.Matrix(model.C))):
-        return None
-    poles = parse_spectrum(spectrum, model)
-    if any(sp.sympify(p).free_symbols for p in poles):
-        return None
-    design = normal_form_design(model, poles)
-    if max(len(str(x)) for row in design.T for x in row) <= NORMAL_FORM_DIGITS:
-        return None
-    return design
 
 
 def _design_candidate(design: GainDesign | None) -> tuple[Any, list[Any]] | None:

@@ -6,7 +6,7 @@ import argparse
 import sys
 
 from .._display import exact_display
-from ..design import design_gains
+from ..design import design_gains, normal_form_statement
 from ..exceptions import NotHurwitzError, NotObservableError, SpectrumError
 from ..report import Progress
 from ._common import add_model_arguments, emit_json, model_from_args
@@ -51,12 +51,22 @@ def run(args: argparse.Namespace) -> int:
     progress = Progress(1 if args.no_verify else 2, stream=None if quiet else sys.stderr)
     what = f"gains, Routh–Hurwitz conditions and the common P of {model.name} (n = {model.n})"
     with progress.stage("design", what):
-        result = design_gains(model, args.spectrum, characteristic_polynomial=args.charpoly,
-                              K_plus=args.gains_plus, K_minus=args.gains_minus)
+        # a rational model whose gains are long in its own coordinates is designed in its normal form's
+        normal = normal_form_statement(model, args.spectrum) if args.spectrum else None
+        result = normal if normal is not None else design_gains(
+            model, args.spectrum, characteristic_polynomial=args.charpoly, K_plus=args.gains_plus,
+            K_minus=args.gains_minus)
     checks = None
     if not args.no_verify:
         with progress.stage("re-check", "exact re-check of the certificate"):
             checks = result.verify()
+    if normal is not None:
+        if args.json:
+            emit_json({**normal.to_json(), "verified": checks})
+        else:
+            print(normal)
+            _print_checks(checks)
+        return 0 if checks is None or all(checks.values()) else 1
     # one rule with certify: a model's [values] are used; the symbolic result comes first, then the same design
     # at those values (a substitution: the re-check above covers it)
     at_values = not args.symbolic and bool(result.stored_values)
@@ -77,13 +87,17 @@ def run(args: argparse.Namespace) -> int:
     else:
         with exact_display(args.exact):
             print(result.describe(full=True) if args.full else result)
-        if checks is not None:
-            status = "all hold exactly" if all(checks.values()) else "FAILED: " + ", ".join(
-                k for k, v in checks.items() if not v)
-            print(f"  exact re-check ({', '.join(checks)}): {status}")
+        _print_checks(checks)
         if at_values:
             with exact_display(args.exact):
                 print(f"at the model's values: {failed}" if failed else
                       result.describe_at_values(full=True if args.full else None))
     ok = (checks is None or all(checks.values())) and failed is None
     return 0 if ok else 1
+
+
+def _print_checks(checks: dict[str, bool] | None) -> None:
+    if checks is not None:
+        status = "all hold exactly" if all(checks.values()) else "FAILED: " + ", ".join(
+            k for k, v in checks.items() if not v)
+        print(f"  exact re-check ({', '.join(checks)}): {status}")

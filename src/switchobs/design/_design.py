@@ -33,7 +33,7 @@ from sympy.polys.matrices import DomainMatrix
 from ..exceptions import (CertificateError, DimensionError, ExpressionError, ModelError, NotHurwitzError,
                           NotObservableError, SpectrumError)
 from ..model import Model, entries, free_names, make_symbol, numeric, parse_expression, rational_value
-from ._lyapunov import _generic_solution, observer_form_gramian
+from ._lyapunov import _generic_solution, checkerboard_rows, gramian_entries, observer_form_gramian
 from .._display import ROUNDED_NOTE, is_shortened, readable, unicode_output
 from .._progress import progress
 from ._normal_form import (ObserverNormalForm, is_rational, normal_form_matrix, observer_normal_form, rational_matrix,
@@ -42,7 +42,8 @@ from ._recheck import lyapunov_by_substitution, lyapunov_residual_is_zero
 from ._routh import hurwitz_conditions, readable_condition, routh_first_column
 from ._spectrum import LAPLACE, parse_spectrum, polynomial_coefficients, spectrum_coefficients
 
-__all__ = ["GainDesign", "NormalFormDesign", "design_gains", "design", "normal_form_design", "theorem1_K_minus", "hoang_family_constraints", "minus_coefficients",
+__all__ = ["GainDesign", "NormalFormDesign", "NORMAL_FORM_DIGITS", "design_gains", "design", "normal_form_design",
+           "normal_form_statement", "theorem1_K_minus", "hoang_family_constraints", "minus_coefficients",
            "plus_coefficients", "parse_gains"]
 
 
@@ -765,6 +766,13 @@ def design_gains(model: Model, spectrum: str | Sequence | None = None, *,
         conditional=conditional)
 
 
+#: Entries of the normal form's coordinates ``T`` longer than this many digits make them the statement of a
+#: rational design (:func:`normal_form_statement`): the model's gains ``T^-1 k`` are then longer still (for a
+#: dense decimal model by a factor of about ``n``); shorter, the design stays in the model's own coordinates,
+#: where users read it.
+NORMAL_FORM_DIGITS = 100
+
+
 @dataclass(frozen=True)
 class NormalFormDesign:
     """The Theorem 1 design of a rational model, in its observer normal form's coordinates ``z = T x``.
@@ -788,8 +796,9 @@ class NormalFormDesign:
         ``det(sI - A_plus) = s^n + alpha_1 s^(n-1) + ... + alpha_n``.
     k_plus, k_minus : tuple of Fraction
         ``T K_plus`` and ``T K_minus``.
-    P : list of rows of Fraction
-        The common Lyapunov matrix in these coordinates: ``A_nf_p' P + P A_nf_p = -e_1 e_1'`` for both modes.
+    u : tuple of Fraction
+        The common Lyapunov matrix's free entries: ``P_ij = (-1)^((j-i)/2) u_((i+j)/2)`` for ``i + j`` even,
+        0 otherwise (the observer-form Gramian, :mod:`switchobs.design._lyapunov`).
     """
 
     model: Model
@@ -799,7 +808,16 @@ class NormalFormDesign:
     alpha: tuple[Fraction, ...]
     k_plus: tuple[Fraction, ...]
     k_minus: tuple[Fraction, ...]
-    P: list[list[Fraction]]
+    u: tuple[Fraction, ...]
+
+    @property
+    def n(self) -> int:
+        return len(self.a)
+
+    @property
+    def P(self) -> list[list[Fraction]]:
+        """The common Lyapunov matrix in these coordinates: ``A_p' P + P A_p = -e_1 e_1'`` for both modes."""
+        return checkerboard_rows(self.u)
 
     @property
     def A_plus(self) -> list[list[Fraction]]:
@@ -818,6 +836,59 @@ class NormalFormDesign:
         K = solve_float(self.T, [[p, m] for p, m in zip(self.k_plus, self.k_minus)])
         return np.array([row[0] for row in K]), np.array([row[1] for row in K])
 
+    def verify(self) -> dict[str, bool]:
+        """Re-check the design exactly from its own numbers and the model's ``A``, ``C``.
+
+        ``similarity``: ``T A = A_nf T``, ``C = e_1' T`` and ``det T != 0``; ``lyapunov_plus`` and
+        ``lyapunov_minus``: ``A_p' P + P A_p = -e_1 e_1'``; ``charpoly``: the first column of ``A_plus`` is
+        ``-alpha`` and ``alpha`` the coefficients of ``prod (s - p)`` of the spectrum (``A_minus = -D A_plus D``
+        with ``D = diag(1, -1, ...)`` then has the same, Theorem 1).
+        """
+        from ..exact import add, fraction_matrix, lyapunov_form, matmul, nonsingular
+
+        n = self.n
+        A = fraction_matrix(rational_rows(sp.Matrix(self.model.A)), what="A")
+        C = fraction_matrix(rational_rows(sp.Matrix(self.model.C)), what="C")
+        e1 = [[Fraction(1)] + [Fraction(0)] * (n - 1)]
+        outer = [[e1[0][i] * e1[0][j] for j in range(n)] for i in range(n)]
+        zero = [[0] * n for _ in range(n)]
+        A_nf = _normal_form_rows(list(self.a), 1)
+        P = self.P
+        alpha = tuple(Fraction(str(x)) for x in spectrum_coefficients(self.spectrum))
+        return {"similarity": matmul(self.T, A) == matmul(A_nf, self.T) and matmul(e1, self.T) == C
+                and nonsingular(self.T),
+                "lyapunov_plus": add(lyapunov_form(self.A_plus, P), outer) == zero,
+                "lyapunov_minus": add(lyapunov_form(self.A_minus, P), outer) == zero,
+                "charpoly": alpha == self.alpha and [row[0] for row in self.A_plus] == [-x for x in alpha]}
+
+    def to_json(self) -> dict[str, Any]:
+        """The exact design (rational strings) and the model's gains as doubles."""
+        K_plus, K_minus = self.gains()
+        return {"model": self.model.name, "n": self.n, "choice": "theorem1",
+                "coordinates": "observer normal form z = T x (K = T^-1 k)",
+                "spectrum": [str(p) for p in self.spectrum], "a": [str(x) for x in self.a],
+                "T": [[str(x) for x in row] for row in self.T], "alpha": [str(x) for x in self.alpha],
+                "k_plus": [str(x) for x in self.k_plus], "k_minus": [str(x) for x in self.k_minus],
+                "P_u": [str(x) for x in self.u], "K_plus": [float(x) for x in K_plus],
+                "K_minus": [float(x) for x in K_minus]}
+
+    def __str__(self) -> str:
+        K_plus, K_minus = self.gains()
+        rows = [f"Theorem 1 design of {self.model.name} (n = {self.n}) in its observer normal form's coordinates "
+                "z = T x",
+                f"  spectrum of A_plus and A_minus: [{', '.join(_pole_text(p) for p in self.spectrum)}]",
+                f"  K_plus  = [{', '.join(f'{k:.6g}' for k in K_plus)}]",
+                f"  K_minus = [{', '.join(f'{k:.6g}' for k in K_minus)}]",
+                "  (the doubles nearest T^-1 k, 6 significant digits; exact: T, k_plus, k_minus and the common P "
+                "of z in --json, their numbers being shorter than K's)"]
+        return "\n".join(rows)
+
+
+def _pole_text(p: sp.Expr) -> str:
+    """A numeric pole with 6 significant digits, as users type it (``-1.06667``, ``-2+3j``)."""
+    z = complex(p)
+    return f"{z.real:.6g}" if z.imag == 0 else f"{z.real:.6g}{z.imag:+.6g}j"
+
 
 def _normal_form_rows(first: Sequence[Fraction], superdiagonal: int) -> list[list[Fraction]]:
     n = len(first)
@@ -828,15 +899,16 @@ def _normal_form_rows(first: Sequence[Fraction], superdiagonal: int) -> list[lis
 def normal_form_design(model: Model, spectrum: str | Sequence) -> NormalFormDesign:
     """The Theorem 1 gain pair for ``spectrum`` and its common P, in the observer normal form's coordinates.
 
-    For a numeric model with rational entries; what :func:`design_gains` computes for a spectrum, without
-    leaving the normal form (no ``T^-1``, no matrix in the model's coordinates), on python-flint.
+    For a numeric model with rational entries and numeric poles; what :func:`design_gains` computes for a
+    spectrum, without leaving the normal form (no ``T^-1``, no matrix in the model's coordinates), on
+    python-flint.
 
     Raises
     ------
     ModelError
         The model has parameters without values or irrational entries.
     SpectrumError, NotObservableError, NotHurwitzError
-        As :func:`design_gains`.
+        As :func:`design_gains`; a pole that is not a number.
 
     References
     ----------
@@ -849,20 +921,37 @@ def normal_form_design(model: Model, spectrum: str | Sequence) -> NormalFormDesi
     A = fraction_matrix(rational_rows(sp.Matrix(model.A)), what="A")
     C = fraction_matrix(rational_rows(sp.Matrix(model.C)), what="C")
     poles = parse_spectrum(spectrum, model)
+    if any(sp.sympify(p).free_symbols for p in poles):
+        raise SpectrumError(f"the spectrum {[str(p) for p in poles]} has design symbols; give numbers here "
+                            "(design_gains keeps symbols)")
     progress(f"design: observer normal form (n = {model.n})")
     if not observable(A, C)[0]:
         observer_normal_form(model)  # raises, naming an unobservable direction
     a, T = observer_coordinates(A, C)
-    alpha = spectrum_coefficients(poles)
-    if any(not sp.re(p).is_negative for p in poles):  # numeric poles: exact, no Routh array of n rows needed
-        _raise_not_hurwitz("A_plus", normal_form_matrix([-x for x in alpha]))
-    alpha_q = tuple(Fraction(str(x)) for x in alpha)
-    k_plus = [x + y for x, y in zip(a, alpha_q)]
+    alpha = tuple(Fraction(str(x)) for x in spectrum_coefficients(poles))
+    # parse_spectrum proved every pole left of the axis, exactly: prod (s - p) is Hurwitz, no Routh array needed
+    k_plus = [x + y for x, y in zip(a, alpha)]
     progress(f"design: common Lyapunov matrix P (n = {model.n})")
-    P_nf, _, _ = observer_form_gramian(alpha)
-    return NormalFormDesign(model, poles, tuple(a), T, alpha_q, tuple(k_plus),
-                            tuple(_theorem1_normal_form(k_plus, a)),
-                            fraction_matrix(rational_rows(sp.Matrix(P_nf)), what="P"))
+    return NormalFormDesign(model, poles, tuple(a), T, alpha, tuple(k_plus), tuple(_theorem1_normal_form(k_plus, a)),
+                            tuple(gramian_entries(alpha)))
+
+
+def normal_form_statement(model: Model, spectrum: str | Sequence) -> NormalFormDesign | None:
+    """The Theorem 1 design in the normal form's coordinates when it is the better statement, else None.
+
+    None when the model is not rational, already in normal form (``T = I``), the poles are not all numbers,
+    or ``T``'s entries have at most :data:`NORMAL_FORM_DIGITS` digits: the model's own coordinates then read
+    better and cost little more.  ``design`` and ``certify`` follow this one rule.
+    """
+    if model.n < 2 or not (is_rational(sp.Matrix(model.A)) and is_rational(sp.Matrix(model.C))):
+        return None
+    poles = parse_spectrum(spectrum, model)
+    if any(sp.sympify(p).free_symbols for p in poles):
+        return None
+    design = normal_form_design(model, poles)
+    if max(len(str(x)) for row in design.T for x in row) <= NORMAL_FORM_DIGITS:
+        return None
+    return design
 
 
 #: The same function under the name of its sub-package: ``from switchobs.design import design``.

@@ -16,6 +16,7 @@ shares ``P`` (Theorem 1).
 from __future__ import annotations
 
 from collections.abc import Sequence
+from fractions import Fraction
 from functools import lru_cache
 from typing import Any
 
@@ -23,7 +24,7 @@ import sympy as sp
 from sympy import QQ
 from sympy.polys.matrices import DomainMatrix
 
-__all__ = ["observer_form_gramian", "checkerboard_from_u", "naive_lyapunov"]
+__all__ = ["observer_form_gramian", "checkerboard_from_u", "checkerboard_rows", "gramian_entries", "naive_lyapunov"]
 
 
 def checkerboard_from_u(u: Sequence[sp.Expr]) -> sp.ImmutableMatrix:
@@ -39,12 +40,13 @@ def checkerboard_from_u(u: Sequence[sp.Expr]) -> sp.ImmutableMatrix:
     return sp.ImmutableMatrix(n, n, entry)
 
 
-def _first_row_system(alpha: Sequence[Any]) -> tuple[list[list[Any]], list[Any]]:
-    """The ``n x n`` system in ``u_1..u_n``: the first row of ``F'P + PF + e1 e1' = 0`` (checkerboard P)."""
+def _first_row_system(alpha: Sequence[Any], one: Any = sp.Integer(1)) -> tuple[list[list[Any]], list[Any]]:
+    """The ``n x n`` system in ``u_1..u_n``: the first row of ``F'P + PF + e1 e1' = 0`` (checkerboard P), in the
+    number type of ``one``."""
     n = len(alpha)
     rows, rhs = [], []
     for j in range(n):  # equation (1, j+1) of F'P + PF + e1 e1' = 0
-        row = [sp.Integer(0)] * n
+        row = [one * 0] * n
         for k in range(n):  # - sum_k alpha_k P_kj   (+ alpha_k P_1k for j = 0)
             if (k + j) % 2 == 0:
                 sign = -1 if ((j - k) // 2) % 2 else 1
@@ -53,7 +55,7 @@ def _first_row_system(alpha: Sequence[Any]) -> tuple[list[list[Any]], list[Any]]
             sign = -1 if ((j - 1) // 2) % 2 else 1
             row[(j - 1) // 2] += sign
         rows.append(row)
-        rhs.append(sp.Integer(-1) if j == 0 else sp.Integer(0))
+        rhs.append(-one if j == 0 else one * 0)
     return rows, rhs
 
 
@@ -86,6 +88,23 @@ def _rational_solution(alpha: Sequence[sp.Rational]) -> tuple[sp.Rational, ...]:
     b = DomainMatrix([[QQ.convert(r)] for r in rhs], (n, 1), QQ)
     u = M.lu_solve(b)
     return tuple(QQ.to_sympy(u[m, 0].element) for m in range(n))
+
+
+def gramian_entries(alpha: Sequence[Fraction]) -> list[Fraction]:
+    """``u_1..u_n`` of :func:`observer_form_gramian` for rational ``alpha``, on python-flint (the exact kernel's
+    solve): ``P_ij = (-1)^((j-i)/2) u_((i+j)/2)`` for ``i + j`` even."""
+    from ..exact import solve
+
+    rows, rhs = _first_row_system(list(alpha), Fraction(1))
+    return [x[0] for x in solve(rows, [[r] for r in rhs])]
+
+
+def checkerboard_rows(u: Sequence[Any]) -> list[list[Any]]:
+    """:func:`checkerboard_from_u` as a list of rows of ``u``'s own number type."""
+    n = len(u)
+    zero = u[0] * 0
+    return [[zero if (i + j) % 2 else (-u[(i + j) // 2] if ((j - i) // 2) % 2 else u[(i + j) // 2])
+             for j in range(n)] for i in range(n)]
 
 
 def observer_form_gramian(alpha: Sequence[sp.Expr]) -> tuple[sp.ImmutableMatrix, tuple[sp.Expr, ...], sp.Expr]:
