@@ -203,3 +203,9 @@ def test_cli_design_of_a_dense_model_states_the_normal_form(tmp_path, dense, cap
     assert data["k_plus"] == [str(x) for x in normal_form_design(model, poles).k_plus]
     assert main(["design", str(path), "--spectrum", poles]) == 0
     assert "in its observer normal form's coordinates z = T x" in capsys.readouterr().out
+
+
+def test_normal_form_design_reprs_stay_short(dense):
+    model, poles = dense
+    nf = normal_form_design(model, poles)
+    assert len(repr(nf)) < 120 and len(nf._repr_markdown_()) < 200 * N

@@ -202,6 +202,17 @@ def _pil_result():
     return PilResult("cortex-m4f", "float", "p", "mps2-an386", 2, (0, 3), (0, 3), states, states, 351.0, 40.0)
 
 
+def normal_form_design() -> Any:
+    """A Theorem 1 design in normal-form coordinates of a dense 3-state model with decimal entries."""
+    from switchobs.design import normal_form_design
+    from switchobs.model import Model
+
+    model = Model.from_dict({"name": "dense-3", "states": ["x1", "x2", "x3"], "output": "y", "time_scale": "y",
+                             "A": [["-0.5", "0.31", "0"], ["0.2", "-1.25", "0.7"], ["0.1", "0", "-2.5"]],
+                             "C": ["1.5", "0.25", "0"]})
+    return normal_form_design(model, "-1,-1.5,-2.25")
+
+
 def _samples() -> dict[str, Callable[[], tuple[Any, dict[str, Any]]]]:
     """Class name -> a function returning an instance and the ``to_json`` options that keep everything."""
     from switchobs import certify, loop, plants, report, sensors, sweep
@@ -308,6 +319,7 @@ def _samples() -> dict[str, Callable[[], tuple[Any, dict[str, Any]]]]:
     return {
         # design, spec, observers, codegen, transform
         "ObserverNormalForm": lambda: plain(normal_form()),
+        "NormalFormDesign": lambda: plain(normal_form_design()),
         "ObserverSpec": lambda: plain(adaptive().spec),
         "Guard": lambda: plain(_c_observer().generated.guards[0]),
         "SwitchedObserver": lambda: plain(observer()),

@@ -864,13 +864,39 @@ class NormalFormDesign:
     def to_json(self) -> dict[str, Any]:
         """The exact design (rational strings) and the model's gains as doubles."""
         K_plus, K_minus = self.gains()
-        return {"model": self.model.name, "n": self.n, "choice": "theorem1",
+        return {"model": self.model.name, "model_definition": self.model.to_json(), "n": self.n, "choice": "theorem1",
                 "coordinates": "observer normal form z = T x (K = T^-1 k)",
                 "spectrum": [str(p) for p in self.spectrum], "a": [str(x) for x in self.a],
                 "T": [[str(x) for x in row] for row in self.T], "alpha": [str(x) for x in self.alpha],
                 "k_plus": [str(x) for x in self.k_plus], "k_minus": [str(x) for x in self.k_minus],
                 "P_u": [str(x) for x in self.u], "K_plus": [float(x) for x in K_plus],
                 "K_minus": [float(x) for x in K_minus]}
+
+    def __repr__(self) -> str:  # the dataclass's would print T, thousands of digits each entry
+        return f"<NormalFormDesign: Theorem 1 design of {self.model.name} (n = {self.n}) in z = T x>"
+
+    def _repr_markdown_(self) -> str:
+        return "```\n" + str(self) + "\n```"
+
+    @classmethod
+    def from_json(cls, data: Mapping[str, Any]) -> "NormalFormDesign":
+        """The design of :meth:`to_json`, designed again from its model and spectrum and checked against the file.
+
+        Raises
+        ------
+        ModelError
+            No ``model_definition``, or stored exact numbers that are not what the design gives (a changed file).
+        """
+        if not isinstance(data, Mapping) or "model_definition" not in data or "spectrum" not in data:
+            raise ModelError("a normal-form design JSON needs its 'model_definition' and 'spectrum' "
+                             "(NormalFormDesign.to_json writes them); design again from the model")
+        design = normal_form_design(Model.from_json(data["model_definition"]), list(data["spectrum"]))
+        stored = design.to_json()
+        for key in ("T", "k_plus", "k_minus", "P_u"):
+            if stored[key] != data.get(key):
+                raise ModelError(f"the stored {key} is not what the design of model {design.model.name!r} gives; "
+                                 "the file was changed or is from another version")
+        return design
 
     def __str__(self) -> str:
         K_plus, K_minus = self.gains()
