@@ -209,3 +209,12 @@ def test_normal_form_design_reprs_stay_short(dense):
     model, poles = dense
     nf = normal_form_design(model, poles)
     assert len(repr(nf)) < 120 and len(nf._repr_markdown_()) < 200 * N
+
+
+def test_model_coordinates_are_the_long_statement_of_a_dense_design(dense):
+    # docs/design.md: the model's gains grow like n^2 times the data's digits, T's entries like n
+    model, poles = dense
+    nf = normal_form_design(model, poles)
+    in_model = max(len(str(k)) for k in design_gains(model, poles).K_plus)
+    in_z = max(len(str(x)) for row in nf.T for x in row + [nf.k_plus[0]])
+    assert in_model > N / 2 * in_z
