@@ -218,3 +218,21 @@ def test_model_coordinates_are_the_long_statement_of_a_dense_design(dense):
     in_model = max(len(str(k)) for k in design_gains(model, poles).K_plus)
     in_z = max(len(str(x)) for row in nf.T for x in row + [nf.k_plus[0]])
     assert in_model > N / 2 * in_z
+
+
+def test_codegen_of_a_dense_model_writes_the_exact_gains_doubles(tmp_path, monkeypatch):
+    import switchobs.design._design as designs
+    from switchobs.cli.main import main
+    from switchobs.codegen import generate_observer
+
+    monkeypatch.setattr(designs, "NORMAL_FORM_DIGITS", 10)  # a small model through the dense path: quick C
+    text, poles = dense_text(5)
+    model = Model.from_dict(tomllib.loads(text), source="dense test model")
+    assert designs.normal_form_statement(model, poles) is not None
+    path = tmp_path / "dense.toml"
+    path.write_text(text, encoding="utf-8")
+    assert main(["codegen", str(path), "--spectrum", poles, "--out", str(tmp_path / "c")]) == 0
+    via_exact = generate_observer(model, design_gains(model, poles))  # the model-coordinate design's doubles
+    assert via_exact.default_params == generate_observer(model, normal_form_design(model, poles).gains()).default_params
+    written = (tmp_path / "c" / f"{via_exact.prefix}.c").read_text()
+    assert written.split("\n", 3)[3] == via_exact.source.split("\n", 3)[3]  # the same C past the command line

@@ -14,7 +14,7 @@ import sympy as sp
 
 from .._atomic import check_output_directory, staged_directory, write_files
 from .._limits import MAX_INPUT_FILE_BYTES, read_text
-from ..design import GainDesign, design
+from ..design import GainDesign, NormalFormDesign, design, normal_form_statement
 from ..exceptions import CodegenError, FreeSymbolError, PrerequisiteError, SpectrumError
 from ..model import Model, builtin_names, load_model, rational_value
 from ..spec import METHODS, default_method
@@ -148,13 +148,17 @@ def _gamma(text: str) -> list[list[float]] | list[float]:
         raise CodegenError(f"--gamma expects numbers like \"50,20\" or \"50,0;0,20\", got {text!r}") from None
 
 
-def _discrete_certificate(model: Model, gains: GainDesign, values: dict[str, str], method: str):
-    """The discrete certificate of the exact A_plus, A_minus, C and P of the design at the given values."""
+def _discrete_certificate(model: Model, gains: GainDesign | NormalFormDesign, values: dict[str, str], method: str):
+    """The discrete certificate of the exact A_plus, A_minus, C and P of the design at the given values (for a
+    normal-form design, in its coordinates: a step of ``h A`` maps ``T``-similar families to similar ones)."""
     try:
         from ..certify import discrete_certificate
     except ImportError as exc:
         raise PrerequisiteError(f"--h-max auto needs switchobs.certify.discrete_certificate, which is not "
                                 f"available ({exc}); give --h-max VALUE") from None
+    if isinstance(gains, NormalFormDesign):
+        e1 = [[1] + [0] * (gains.n - 1)]
+        return discrete_certificate(gains.A_plus, gains.A_minus, e1, gains.P, method=method)
     merged: dict[str, Any] = {**model.values, **{k: rational_value(v, what=k) for k, v in values.items()}}
 
     def exact(M: sp.MatrixBase, name: str) -> sp.ImmutableMatrix:
@@ -208,8 +212,11 @@ def run(args: argparse.Namespace) -> int:
         if not (args.spectrum or args.charpoly or args.gains_plus):
             raise SpectrumError("give the gains with --spectrum, --charpoly or --gains-plus")
         model = load_model(args.model)
-        gains = design(model, args.spectrum, characteristic_polynomial=args.charpoly,
-                       K_plus=args.gains_plus, K_minus=args.gains_minus)
+        # a dense rational model: the design in its normal form's coordinates, the C gets K's doubles from it
+        normal = normal_form_statement(model, args.spectrum) if args.spectrum else None
+        gains = normal if normal is not None else design(
+            model, args.spectrum, characteristic_polynomial=args.charpoly, K_plus=args.gains_plus,
+            K_minus=args.gains_minus)
         unknown = [u.strip() for u in args.unknown.split(",")] if args.unknown else []
         if args.gamma and not unknown:
             raise CodegenError("--gamma is the adaptation gain of the adaptive observer; give --unknown too")
@@ -230,7 +237,8 @@ def run(args: argparse.Namespace) -> int:
                       "(uncertified, but it bounds the step)", file=sys.stderr)
                 return 1
             h_max, certificate = cert.h_max, cert.statement
-        gen = generate_observer(model, gains, values=values, real=args.real, method=method,
+        gen = generate_observer(model, gains.gains() if normal is not None else gains, values=values,
+                                real=args.real, method=method,
                                 prefix=args.prefix, unknown=unknown,
                                 Gamma=_gamma(args.gamma) if args.gamma else None, h_max=h_max,
                                 max_substeps=args.max_substeps, certificate=certificate, command=command,
