@@ -236,3 +236,25 @@ def test_codegen_of_a_dense_model_writes_the_exact_gains_doubles(tmp_path, monke
     assert via_exact.default_params == generate_observer(model, normal_form_design(model, poles).gains()).default_params
     written = (tmp_path / "c" / f"{via_exact.prefix}.c").read_text()
     assert written.split("\n", 3)[3] == via_exact.source.split("\n", 3)[3]  # the same C past the command line
+
+
+def test_observer_coordinates_equal_the_sympy_normal_form(dense):
+    from switchobs.design import observer_normal_form
+
+    model, _ = dense
+    a, T = observer_coordinates(fraction_matrix(model.A), fraction_matrix(model.C))
+    nf = observer_normal_form(model)
+    assert T == fraction_matrix(nf.T) and a == [to_fraction(x) for x in nf.a]
+
+
+@pytest.mark.parametrize("seed", range(6))
+def test_nonsingular_agrees_with_the_fraction_determinant(seed):
+    import sympy as sp
+
+    rng = np.random.default_rng(seed)
+    n = 7
+    M = [[Fraction(int(rng.integers(-9, 10)), int(rng.integers(1, 5))) for _ in range(n)] for _ in range(n)]
+    if seed % 2:  # a dependent row, scaled by a prime's multiple: singular however the residues fall
+        M[3] = [2 * x + 3 * y for x, y in zip(M[0], M[1])]
+    det = sp.Matrix([[sp.Rational(x.numerator, x.denominator) for x in row] for row in M]).det()
+    assert nonsingular(M) == (det != 0)
