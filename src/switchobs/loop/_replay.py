@@ -18,6 +18,7 @@ function computes both.  Signals recorded on different rasters are resampled ont
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Any
 
@@ -31,11 +32,11 @@ from ..exceptions import LogError, ObserverInputError, SimulationError
 from ..plants import QuarterCar
 from ..sensors import Encoder
 from ._adapter import ObserverXbsEstimator, initial_xbs_state
-from ._encoder_batch import EncoderMeasurements, EncoderSamples, edge_angles, measure_edges, wheel_edges
+from ._encoder_batch import EdgeChain, EncoderMeasurements, EncoderSamples, edge_angles, wheel_edges
 from ._factory import INITIAL_STATE, EstimatorSpec, xbs_estimator
 from ._stepping import step_through
 
-__all__ = ["LogSignals", "ReplayResult", "ReplaySummary", "replay", "zero_order_hold", "pressure_from_rate",
+__all__ = ["LogSignals", "ReplayResult", "ReplaySummary", "replay", "stream_replay", "ReplayStream", "REPLAY_CHUNK", "zero_order_hold", "pressure_from_rate",
            "speed_from_acceleration", "edges_from_counts", "edges_from_wheel_speed", "measurements_signals", "ideal_encoder"]
 
 Array = npt.NDArray[np.float64]
@@ -321,10 +322,179 @@ class ReplayResult(EncoderSamples):
         return str(self.summary)
 
 
+#: Raster rows of a log fed to the chain at a time by :func:`stream_replay` (a minute at 1 kHz): the chain's and
+#: the observer's arrays of one piece, a few tens of MB, whatever the log's length.
+REPLAY_CHUNK = 65_536
+
+
+class ReplayStream:
+    """The encoder chain and an XBS observer over a log's signals fed in pieces (what :func:`replay` runs).
+
+    :meth:`push` hands the next raster rows and edges to the chain (:class:`EdgeChain`), :meth:`drain` the
+    controller samples they decide with the observer's estimates, and :meth:`summary` how the replay ended.
+    The observer steps from measurement to measurement as :meth:`EncoderMeasurements.observer_steps` lists
+    them, its state and the last measurement it stepped from carried across pieces: the columns drained
+    piece by piece, joined, are those of the whole log at once bit for bit.
+
+    Parameters
+    ----------
+    ppr, both_edges
+        The encoder (:class:`LogSignals`).
+    observer, method, beta, impl, vehicle, rate_hz, order, window, harmonics, notch_damping, compiled
+        As :func:`replay`.
+
+    Raises
+    ------
+    SimulationError
+        Bad chain or observer settings.
+    """
+
+    def __init__(self, *, ppr: int, both_edges: bool = False, observer: str = "xbs4", method: str = "radau3",
+                 beta: float | None = None, impl: str = "python", vehicle: QuarterCar | None = None,
+                 rate_hz: float = 1000.0, order: int = 2, window: int = 15, harmonics: int = 5,
+                 notch_damping: float = 0.5, compiled: bool | None = None) -> None:
+        vehicle = QuarterCar() if vehicle is None else vehicle
+        spec = EstimatorSpec(observer, beta=beta, impl=impl, method=method)
+        progress(f"replay: building the {spec}")
+        est = xbs_estimator(spec, vehicle, "dry-asphalt") if observer != "none" else None
+        self._obs = est.observer if isinstance(est, ObserverXbsEstimator) else None
+        self.described = str(spec) if self._obs is not None else "no observer (the chain only)"
+        self._initial = INITIAL_STATE.get(observer, {})
+        self._encoder = ideal_encoder(ppr, both_edges=both_edges)
+        self._chain = EdgeChain(radius_m=vehicle.radius_m, rate_hz=rate_hz, order=order, window=window,
+                                harmonics=harmonics, notch_damping=notch_damping, compiled=compiled)
+        self._method, self._rate, self._window = method, float(rate_hz), window
+        self._samples = self._measured = self._steps = self._taken = 0
+        self._newest = -math.inf                 # the latest t_measured so far
+        self._last: tuple[float, float, float, float] | None = None   # (t, y, vx, p) of the last measurement taken
+        self._x: Array | None = None             # the observer's state after it
+        self._hat = math.nan                     # its readout, the estimate until the next step
+        self._outcome = "ok"
+        self._refusal: tuple[int, str] | None = None     # the step refused and why
+        self._final = math.nan                   # the estimate at the last sample
+
+    def push(self, t: Array, vx: Array, pressure: Array, edge_times: Array, edge_teeth: IntArray, *,
+             done: bool = False) -> None:
+        """The next raster rows (time [s], speed [m/s], ``∫ u dt`` [bar]) and edges (time stamps [s], teeth);
+        ``done``: the last ones."""
+        self._chain.push_raster(t, vx, pressure, done=done)
+        self._chain.push_edges(edge_times, edge_angles(self._encoder, edge_teeth), done=done)
+
+    def drain(self) -> dict[str, npt.NDArray[Any]]:
+        """The samples decided so far: :attr:`ReplayResult.COLUMNS` by name."""
+        m = self._chain.drain()
+        size = m["t"].size
+        hat, status = np.full(size, self._hat), np.zeros(size, dtype=np.int_)
+        ok = np.flatnonzero(np.isfinite(m["t_measured"]))
+        tc = m["t_measured"][ok]
+        # the samples whose measurement is newer than every earlier one (observer_steps)
+        newer = tc > np.concatenate([[self._newest], np.maximum.accumulate(tc)[:-1]])
+        taken = ok[newer]
+        self._samples += size
+        self._measured += ok.size
+        if tc.size:
+            self._newest = max(self._newest, float(tc.max()))
+        y, vx, p, tm = m["x2_measured"], m["vx_measured"], m["pressure_measured"], m["t_measured"]
+        marks, values = np.zeros(0, dtype=np.int_), np.zeros(0)
+        if taken.size and self._last is None:       # the first measurement: the observer starts there
+            start = int(taken[0])
+            if self._obs is not None:
+                self._x = initial_xbs_state(self._obs, float(y[start]), self._initial)
+                marks, values = taken[:1], self._readout(self._x[None, :])
+            self._last = (float(tm[start]), float(y[start]), float(vx[start]), float(p[start]))
+            taken = taken[1:]
+        self._taken += taken.size
+        if taken.size:
+            assert self._last is not None
+            t0, y0, v0, p0 = self._last
+            tt, yy, vv, pp = (np.concatenate([[a], b[taken]]) for a, b in ((t0, tm), (y0, y), (v0, vx), (p0, p)))
+            if self._x is not None and self._outcome == "ok":
+                span = tt[1:] - tt[:-1]
+                rows = np.column_stack([0.5 * (yy[:-1] + yy[1:]), 0.5 * (vv[:-1] + vv[1:]), (pp[1:] - pp[:-1]) / span])
+                states, refused, code, text = _step(self._obs, self._x, rows, span)
+                done = states.shape[0] - 1
+                self._steps += done
+                marks = np.concatenate([marks, taken[:done]])
+                values = np.concatenate([values, self._readout(states[1:])])
+                self._x = states[-1]
+                if refused is not None:
+                    marks, values = np.append(marks, taken[refused]), np.append(values, math.nan)
+                    status[taken[refused]] = code
+                    # numbered among all the steps, which summary() counts at the end
+                    self._outcome, self._refusal = "observer-failed", (self._steps + 1, text)
+            self._last = (float(tt[-1]), float(yy[-1]), float(vv[-1]), float(pp[-1]))
+        if marks.size:
+            # from each step's sample on, the readout of the state after it (module notes of observer_steps)
+            which = np.searchsorted(marks, np.arange(size), side="right") - 1
+            hat = np.where(which >= 0, values[np.maximum(which, 0)], self._hat)
+            self._hat = float(values[-1])
+        if self._outcome != "ok":
+            self._x = None
+        if size:
+            self._final = float(hat[-1])
+        return {**{k: m[k] for k in EncoderSamples.SIGNALS}, "xbs_hat": hat, "status": status}
+
+    def _readout(self, states: Array) -> Array:
+        return np.asarray(self._obs.readout(states), dtype=float)
+
+    def summary(self, source: str) -> ReplaySummary:
+        """How the replay of everything pushed ended (after the last :meth:`drain`).
+
+        Raises
+        ------
+        LogError
+            A log shorter than the chain's warm-up (no full TSA window, or a single measurement).
+        """
+        if self._taken == 0:
+            raise LogError(f"the log is shorter than the chain's warm-up: {self._chain.edges} edges give "
+                           f"{self._measured} measurements at {self._rate:g} Hz (a TSA window of {self._window} "
+                           "edges, then two measurements for one observer step)")
+        message = "" if self._refusal is None else \
+            f"step {self._refusal[0]} of {self._taken} refused: {self._refusal[1]}"
+        return ReplaySummary(source=source, observer=self.described, method=self._method, samples=self._samples,
+                             measured=self._measured, steps=self._steps, edges=self._chain.edges,
+                             outcome=self._outcome, message=message, rate_hz=self._rate,
+                             xbs_final=self._final)
+
+
+def stream_replay(signals: LogSignals, write: Callable[[dict[str, npt.NDArray[Any]]], object], *,
+                  chunk: int = REPLAY_CHUNK, **options: Any) -> ReplaySummary:
+    """Run the chain and the observer over ``signals`` in pieces of ``chunk`` raster rows (and the edges up
+    to them), handing each piece's samples to ``write`` (:attr:`ReplayResult.COLUMNS` by name) as they are
+    decided; the options are those of :func:`replay`.  The pieces joined equal :func:`replay`'s result
+    bit for bit; only a piece's arrays are held at a time besides ``signals``.
+
+    Returns
+    -------
+    ReplaySummary
+
+    Raises
+    ------
+    LogError, SimulationError
+        As :func:`replay` (the warm-up's error after the last piece).
+    """
+    if not (isinstance(chunk, int) and chunk >= 1):
+        raise SimulationError(f"chunk must be an integer >= 1, got {chunk!r}")
+    stream = ReplayStream(ppr=signals.ppr, both_edges=signals.both_edges, **options)
+    progress(f"replay: encoder chain over {signals.edge_times.size} edges at {stream._rate:g} Hz")
+    rows, e_at = signals.t.size, 0
+    for a in range(0, rows, chunk):
+        b = min(a + chunk, rows)
+        # the edges up to the piece's last time (the chain decides a sample once one is stamped after it), the
+        # rest with the last piece
+        e_to = signals.edge_times.size if b == rows else \
+            int(np.searchsorted(signals.edge_times, signals.t[b - 1], side="right"))
+        stream.push(signals.t[a:b], signals.vx[a:b], signals.pressure[a:b], signals.edge_times[e_at:e_to],
+                    signals.edge_teeth[e_at:e_to], done=b == rows)
+        e_at = e_to
+        write(stream.drain())
+    return stream.summary(signals.source)
+
+
 def replay(signals: LogSignals, *, observer: str = "xbs4", method: str = "radau3", beta: float | None = None,
            impl: str = "python", vehicle: QuarterCar | None = None, rate_hz: float = 1000.0, order: int = 2,
-           window: int = 15, harmonics: int = 5, notch_damping: float = 0.5, compiled: bool | None = None
-           ) -> ReplayResult:
+           window: int = 15, harmonics: int = 5, notch_damping: float = 0.5, compiled: bool | None = None,
+           chunk: int = REPLAY_CHUNK) -> ReplayResult:
     """Run the encoder chain and an XBS observer over a log's signals.
 
     Parameters
@@ -340,6 +510,8 @@ def replay(signals: LogSignals, *, observer: str = "xbs4", method: str = "radau3
     rate_hz, order, window, harmonics, notch_damping, compiled
         As :class:`EncoderLoopEstimator`: controller rate, TSA order ``m`` and window ``n`` (seed 001
         (5.2)-(5.5)), harmonics ``M`` of (6.2), the notch's damping, the C kernels.
+    chunk : int
+        Raster rows run at a time (:func:`stream_replay`; the result does not depend on it).
 
     Returns
     -------
@@ -362,52 +534,19 @@ def replay(signals: LogSignals, *, observer: str = "xbs4", method: str = "radau3
     >>> res.summary.outcome, res.summary.measured > 400, abs(float(np.nanmean(res.omega_measured)) - 20 / 0.3) < 1e-6
     ('ok', True, True)
     """
-    vehicle = QuarterCar() if vehicle is None else vehicle
-    spec = EstimatorSpec(observer, beta=beta, impl=impl, method=method)
-    progress(f"replay: building the {spec}")
-    est = xbs_estimator(spec, vehicle, "dry-asphalt") if observer != "none" else None
-    progress(f"replay: encoder chain over {signals.edge_times.size} edges at {rate_hz:g} Hz")
-    angles = edge_angles(signals.encoder, signals.edge_teeth)
-    m = measure_edges(signals.t, signals.vx, signals.pressure, signals.edge_times, angles, signals.edge_teeth,
-                      radius_m=vehicle.radius_m, rate_hz=rate_hz, order=order, window=window,
-                      harmonics=harmonics, notch_damping=notch_damping, compiled=compiled)
-    first, at, span, rows = m.observer_steps()
-    if first < 0 or at.size == 0:
-        raise LogError(f"the log is shorter than the chain's warm-up: {signals.edge_times.size} edges give "
-                       f"{int(np.count_nonzero(np.isfinite(m.t_measured)))} measurements at {rate_hz:g} Hz "
-                       f"(a TSA window of {window} edges, then two measurements for one observer step)")
-    hat = np.full(m.t.size, np.nan)
-    status = np.zeros(m.t.size, dtype=np.int_)
-    outcome, message, steps = "ok", "", 0
-    if isinstance(est, ObserverXbsEstimator):
-        obs = est.observer
-        progress(f"replay: {rows.shape[0]} observer steps")
-        x0 = initial_xbs_state(obs, float(m.x2_measured[first]), INITIAL_STATE[observer])
-        states, refused, code, message = _step(obs, x0, rows, span)
-        steps = states.shape[0] - 1
-        # from each step's sample on, the readout of the state after it (module notes of observer_steps)
-        taken = np.concatenate([[first], at[:steps]])
-        which = np.searchsorted(taken, np.arange(m.t.size), side="right") - 1
-        readout = np.asarray(obs.readout(states), dtype=float)
-        hat = np.where(which >= 0, readout[np.maximum(which, 0)], np.nan)
-        if refused is not None:
-            hat[at[refused]:] = np.nan
-            status[at[refused]] = code
-            outcome = "observer-failed"
-        described = str(spec)
-    else:
-        described = "no observer (the chain only)"
-    summary = ReplaySummary(source=signals.source, observer=described, method=method, samples=int(m.t.size),
-                            measured=int(np.count_nonzero(np.isfinite(m.t_measured))), steps=steps,
-                            edges=m.events, outcome=outcome, message=message, rate_hz=float(rate_hz),
-                            xbs_final=float(hat[-1]) if hat.size else math.nan)
-    return ReplayResult(**m.signals(), xbs_hat=hat, status=status, summary=summary)
+    pieces: list[dict[str, npt.NDArray[Any]]] = []
+    summary = stream_replay(signals, pieces.append, chunk=chunk, observer=observer, method=method, beta=beta,
+                            impl=impl, vehicle=vehicle, rate_hz=rate_hz, order=order, window=window,
+                            harmonics=harmonics, notch_damping=notch_damping, compiled=compiled)
+    joined = {k: pieces[0][k] if len(pieces) == 1 else np.concatenate([p[k] for p in pieces])
+              for k in ReplayResult.COLUMNS}
+    return ReplayResult(**joined, summary=summary)
 
 
 def _step(obs: Any, x0: Array, rows: Array, span: Array) -> tuple[Array, int | None, int, str]:
     """The states from ``x0`` through the steps (``x0`` first), the step refused (or None), its status code and
-    a message.  The whole run in one call (:func:`step_through`); after a refusal, the steps before it again
-    one by one to find where it was."""
+    the refusal's text.  The whole run in one call (:func:`step_through`); after a refusal, the steps before it
+    again one by one to find where it was."""
     try:
         return np.vstack([x0, step_through(obs, x0, rows, span)]), None, 0, ""
     except SimulationError:
@@ -417,7 +556,7 @@ def _step(obs: Any, x0: Array, rows: Array, span: Array) -> tuple[Array, int | N
         try:
             x = np.asarray(obs.step(x, row, dt), dtype=float)
         except ObserverInputError as exc:   # its message names the StepStatus and its code
-            return np.vstack(out), i, int(exc.code), f"step {i + 1} of {span.size} refused: {exc}"
+            return np.vstack(out), i, int(exc.code), str(exc)
         out.append(x)
     return np.vstack(out), None, 0, ""
 

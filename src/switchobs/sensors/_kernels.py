@@ -104,10 +104,11 @@ def three_stage_run(cfg: Array, state: Array, theta: Array, omega: Array, alpha:
     return out_om, out_al
 
 
-def notch_run(dt: float, damping: float, u: Array, centre: Array) -> Array:
-    """A fresh notch over the samples ``u`` with the centres ``centre`` (rad/s)."""
+def notch_run(dt: float, damping: float, u: Array, centre: Array, state: Array) -> Array:
+    """The notch over the samples ``u`` with the centres ``centre`` (rad/s), from and into ``state``
+    (4 float64: started, z1, z2, the previous sample)."""
     uu, cc = np.ascontiguousarray(u, dtype=float), np.ascontiguousarray(centre, dtype=float)
-    state, out = np.zeros(4), np.empty(uu.size)
+    out = np.empty(uu.size)
     _library().switchobs_notch_run(_ptr(state), dt, damping, uu.size, _ptr(uu), _ptr(cc), _ptr(out))
     return out
 
