@@ -16,6 +16,7 @@ the whole file (``tests/test_logs_memory.py`` measures the peak on a long log).
 
 from __future__ import annotations
 
+import contextlib
 import csv
 import math
 from array import array
@@ -30,8 +31,10 @@ import numpy.typing as npt
 from .._atomic import atomic_file
 from .._limits import MAX_LOG_BYTES, MAX_LOG_SAMPLES
 from ..exceptions import LogError, PrerequisiteError
+from ._mdf4 import Mdf4Writer
 
-__all__ = ["FORMATS", "Channel", "Log", "log_format", "read_log", "write_table", "write_mdf", "CHUNK_ROWS"]
+__all__ = ["FORMATS", "Channel", "Log", "log_format", "read_log", "write_table", "write_mdf", "CHUNK_ROWS",
+           "LogWriter"]
 
 Array = npt.NDArray[np.float64]
 
@@ -301,30 +304,85 @@ def read_log(path: str | Path, *, time_channel: str = "t", time_factor: float = 
     return Log(path, time_channel=time_channel, time_factor=time_factor)
 
 
+class LogWriter:
+    """A log of one table written piece by piece (:meth:`append`), atomically: the file appears when the
+    ``with`` block ends without an error, and nothing does otherwise.
+
+    MDF4: one channel group, the column ``time_column`` its master, the others its channels with their
+    units (:class:`Mdf4Writer`); Parquet: one row group a piece (pyarrow's ``ParquetWriter``); CSV: the
+    header, then a row per row.  Only the piece being written is held.
+
+    Parameters
+    ----------
+    path : str or Path
+    columns : mapping
+        ``name -> (unit, dtype)`` of every column, in order (the time column first for MDF4).
+    fmt : {"mdf", "parquet", "csv"}, optional
+        Default by the ending of ``path``.
+    time_column : str
+        The MDF4 master.
+    """
+
+    def __init__(self, path: str | Path, columns: Mapping[str, tuple[str, npt.DTypeLike]], *,
+                 fmt: str | None = None, time_column: str = "t") -> None:
+        self.path, self.format = Path(path), fmt or log_format(path)
+        if self.format not in FORMATS:
+            raise LogError(f"unknown log format {self.format!r}; use {', '.join(FORMATS)}")
+        self._columns, self._time = dict(columns), time_column
+        self._stack = contextlib.ExitStack()
+        self._sink: Any = None
+
+    def __enter__(self) -> LogWriter:
+        with contextlib.ExitStack() as stack:
+            partial = stack.enter_context(atomic_file(self.path, what="the log"))
+            if self.format == "parquet":
+                pa, pq = _pyarrow()
+                self._schema = pa.schema([(k, pa.from_numpy_dtype(np.dtype(d))) for k, (_, d) in self._columns.items()])
+                self._sink = stack.enter_context(pq.ParquetWriter(str(partial), self._schema))
+            elif self.format == "mdf":
+                self._sink = Mdf4Writer(stack.enter_context(open(partial, "w+b")))
+                self._sink.group({k: v for k, v in self._columns.items() if k != self._time})
+                stack.callback(self._sink.close)
+            else:
+                self._sink = csv.writer(stack.enter_context(open(partial, "w", newline="", encoding="utf-8")))
+                self._sink.writerow(list(self._columns))
+            self._stack = stack.pop_all()
+        return self
+
+    def append(self, columns: Mapping[str, npt.ArrayLike], *, empty: Mapping[str, npt.NDArray[np.bool_]] | None = None
+               ) -> None:
+        """Rows: every column's values (equal lengths); ``empty`` marks cells left empty (a null in Parquet,
+        an empty field in CSV; MDF4 has no empty cells)."""
+        arrays = {k: np.asarray(columns[k]) for k in self._columns}
+        empty = empty or {}
+        if self.format == "mdf":
+            self._sink.append(arrays[self._time], {k: v for k, v in arrays.items() if k != self._time})
+        elif self.format == "parquet":
+            pa = _pyarrow()[0]
+            self._sink.write_table(pa.table([pa.array(a, mask=empty.get(k)) for k, a in arrays.items()],
+                                            schema=self._schema))
+        else:
+            cols = [a.tolist() for a in arrays.values()]
+            gaps = [empty[k].tolist() if k in empty else None for k in arrays]
+            self._sink.writerows([_cell(c[i]) if g is None or not g[i] else "" for c, g in zip(cols, gaps)]
+                                 for i in range(len(cols[0]) if cols else 0))
+
+    def __exit__(self, *exc: object) -> None:
+        # on an error the partial file is removed unnamed (atomic_file); the sink is closed first either way
+        self._stack.__exit__(*exc)
+
+
 def write_table(path: str | Path, columns: Mapping[str, npt.ArrayLike], *, fmt: str | None = None) -> Path:
     """Write columns as a CSV or Parquet table, atomically; a column shorter than the first is padded with
     empty cells (nulls), as a column of encoder edges beside the signals is."""
     fmt = fmt or log_format(path)
+    if fmt not in ("parquet", "csv"):
+        raise LogError(f"write_table writes csv or parquet, not {fmt!r} (use write_mdf)")
     arrays = {k: np.asarray(v) for k, v in columns.items()}
     rows = max((a.size for a in arrays.values()), default=0)
-    with atomic_file(path, what="the log") as partial:
-        if fmt == "parquet":
-            pa, pq = _pyarrow()
-            fields = {}
-            for k, a in arrays.items():
-                mask = np.concatenate([np.zeros(a.size, dtype=bool), np.ones(rows - a.size, dtype=bool)])
-                full = np.concatenate([a, np.zeros(rows - a.size, dtype=a.dtype)])
-                fields[k] = pa.array(full, mask=mask)
-            pq.write_table(pa.table(fields), str(partial))
-        elif fmt == "csv":
-            with open(partial, "w", newline="", encoding="utf-8") as f:
-                w = csv.writer(f)
-                w.writerow(list(arrays))
-                cols = [a.tolist() for a in arrays.values()]
-                for i in range(rows):
-                    w.writerow([_cell(c[i]) if i < len(c) else "" for c in cols])
-        else:
-            raise LogError(f"write_table writes csv or parquet, not {fmt!r} (use write_mdf)")
+    with LogWriter(path, {k: ("", a.dtype) for k, a in arrays.items()}, fmt=fmt) as out:
+        out.append({k: np.concatenate([a, np.zeros(rows - a.size, dtype=a.dtype)]) for k, a in arrays.items()},
+                   empty={k: np.arange(rows) >= a.size for k, a in arrays.items() if a.size < rows})
     return Path(path)
 
 
@@ -336,19 +394,19 @@ def _cell(v: Any) -> str:
 
 def write_mdf(path: str | Path, groups: Sequence[tuple[npt.ArrayLike, Mapping[str, tuple[npt.ArrayLike, str]]]]
               ) -> Path:
-    """Write an ASAM MDF 4 file atomically: each group a master time [s] and its channels ``name -> (values,
-    unit)``."""
-    asammdf = _asammdf()
-    mdf = asammdf.MDF(version="4.10")
-    for t, channels in groups:
-        tt = np.asarray(t, dtype=float)
-        mdf.append([asammdf.Signal(np.asarray(v), tt, name=name, unit=unit) for name, (v, unit) in channels.items()])
-    with atomic_file(path, what="the log") as partial:
-        # asammdf gives a file name without the .mf4 ending that ending: save under it, then rename
-        staged = partial.with_name(partial.name + ".mf4")
-        try:
-            Path(mdf.save(str(staged), overwrite=True)).replace(partial)
-        finally:
-            staged.unlink(missing_ok=True)
-            mdf.close()
+    """Write an ASAM MDF 4 file atomically (:class:`Mdf4Writer`): each group a master time [s] and its channels
+    ``name -> (values, unit)`` (floats, or integers as 64-bit integers)."""
+    with atomic_file(path, what="the log") as partial, open(partial, "w+b") as f:
+        mdf = Mdf4Writer(f)
+        for t, channels in groups:
+            arrays = {name: (_mdf_values(v), unit) for name, (v, unit) in channels.items()}
+            mdf.group({name: (unit, a.dtype) for name, (a, unit) in arrays.items()})
+            mdf.append(t, {name: a for name, (a, _) in arrays.items()})
+        mdf.close()
     return Path(path)
+
+
+def _mdf_values(values: npt.ArrayLike) -> npt.NDArray[Any]:
+    """A channel's values as MDF4 stores them here: 8-byte floats or signed integers."""
+    a = np.asarray(values)
+    return a.astype(np.int64) if a.dtype.kind in "iub" else a.astype(float)

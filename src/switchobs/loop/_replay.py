@@ -18,7 +18,7 @@ function computes both.  Signals recorded on different rasters are resampled ont
 from __future__ import annotations
 
 import math
-from collections.abc import Callable
+from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass
 from typing import Any
 
@@ -308,6 +308,15 @@ class ReplayResult(EncoderSamples):
         """The signals by name (:attr:`COLUMNS`)."""
         return {name: getattr(self, name) for name in self.COLUMNS}
 
+    @classmethod
+    def join(cls, pieces: Sequence[Mapping[str, npt.NDArray[Any]]], summary: ReplaySummary) -> ReplayResult:
+        """The result of the pieces :func:`stream_replay` hands out, in order."""
+        if not pieces:
+            return cls(**{k: np.zeros(0, dtype=np.int_ if k == "status" else float) for k in cls.COLUMNS},
+                       summary=summary)
+        return cls(**{k: pieces[0][k] if len(pieces) == 1 else np.concatenate([p[k] for p in pieces])
+                      for k in cls.COLUMNS}, summary=summary)
+
     def to_dataframe(self) -> Any:
         """The signals as a pandas DataFrame indexed by nothing but the row (pandas must be installed)."""
         try:
@@ -425,7 +434,7 @@ class ReplayStream:
             self._last = (float(tt[-1]), float(yy[-1]), float(vv[-1]), float(pp[-1]))
         if marks.size:
             # from each step's sample on, the readout of the state after it (module notes of observer_steps)
-            which = np.searchsorted(marks, np.arange(size), side="right") - 1
+            which = np.cumsum(np.bincount(marks, minlength=size)) - 1     # the marks at or before each sample
             hat = np.where(which >= 0, values[np.maximum(which, 0)], self._hat)
             self._hat = float(values[-1])
         if self._outcome != "ok":
@@ -538,9 +547,7 @@ def replay(signals: LogSignals, *, observer: str = "xbs4", method: str = "radau3
     summary = stream_replay(signals, pieces.append, chunk=chunk, observer=observer, method=method, beta=beta,
                             impl=impl, vehicle=vehicle, rate_hz=rate_hz, order=order, window=window,
                             harmonics=harmonics, notch_damping=notch_damping, compiled=compiled)
-    joined = {k: pieces[0][k] if len(pieces) == 1 else np.concatenate([p[k] for p in pieces])
-              for k in ReplayResult.COLUMNS}
-    return ReplayResult(**joined, summary=summary)
+    return ReplayResult.join(pieces, summary)
 
 
 def _step(obs: Any, x0: Array, rows: Array, span: Array) -> tuple[Array, int | None, int, str]:
