@@ -42,7 +42,7 @@ def register(sub: argparse._SubParsersAction) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    from ..logs import ChannelMap, log_format, log_signals, plot_replay, read_log, result_writer
+    from ..logs import ChannelMap, LogStream, log_format, plot_replay, read_log, result_writer
     from ..loop import ReplayResult, stream_replay
 
     fmt = None
@@ -57,8 +57,8 @@ def run(args: argparse.Namespace) -> int:
         check_output_file(args.plot, what="the plot")
     cmap = ChannelMap.from_toml(args.channels)
     progress(f"replay: reading {args.log}")
-    log = read_log(args.log, time_channel=cmap.time.channel, time_factor=cmap.time.factor)
-    signals = log_signals(log, cmap)
+    # the log read, replayed and written piece by piece (memory bounded whatever its length)
+    signals = LogStream(read_log(args.log, time_channel=cmap.time.channel, time_factor=cmap.time.factor), cmap)
     pieces: list[dict] = []
     with contextlib.ExitStack() as stack:
         # each piece of the replay goes to the result as it comes (only the figure needs them all)

@@ -236,18 +236,20 @@ def edge_angles(encoder: Encoder, teeth: npt.ArrayLike) -> Array:
     return nominal[j] + 2.0 * math.pi * rev.astype(float)
 
 
-def wheel_edges(encoder: Encoder, t: Array, h: Array, om: Array, theta: Array
+def wheel_edges(encoder: Encoder, t: Array, h: Array, om: Array, theta: Array, *, above: float = 0.0
                 ) -> tuple[Array, Array, npt.NDArray[np.int_], npt.NDArray[np.int_]]:
     """Time stamps, assigned angles, generating steps and tooth counts of the edges the wheel crosses while its
     angle goes through ``theta`` at the step ends ``t`` (speed ``om``, linear over each step of length ``h``),
-    as ``EncoderLoopEstimator._edges`` generates them."""
+    as ``EncoderLoopEstimator._edges`` generates them: the edges at angles above ``above`` (``theta[0]`` of a
+    later piece of the run, whose earlier edges are crossed)."""
     two_pi = 2.0 * math.pi
     base, nominal = fixed_edges(encoder), encoder.nominal_angles()
-    revs = np.arange(int(theta[-1] // two_pi) + 2, dtype=float)
+    first = max(int(above // two_pi) - 1, 0)          # no edge of an earlier revolution lies above
+    revs = np.arange(first, int(theta[-1] // two_pi) + 2, dtype=float)
     levels = (base[None, :] + two_pi * revs[:, None]).ravel()
     angles = (nominal[None, :] + two_pi * revs[:, None]).ravel()
-    fired = (levels > 0.0) & (levels <= theta[-1])
-    teeth = np.flatnonzero(fired)
+    fired = (levels > above) & (levels <= theta[-1])
+    teeth = first * base.size + np.flatnonzero(fired)
     levels, angles = levels[fired], angles[fired]
     step = np.searchsorted(theta, levels, side="left")       # first step end at or past the level
     t0, hs, om0, om1, th0 = t[step - 1], h[step - 1], om[step - 1], om[step], theta[step - 1]

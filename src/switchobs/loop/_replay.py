@@ -18,9 +18,9 @@ function computes both.  Signals recorded on different rasters are resampled ont
 from __future__ import annotations
 
 import math
-from collections.abc import Callable, Mapping, Sequence
+from collections.abc import Callable, Iterator, Mapping, Sequence
 from dataclasses import dataclass
-from typing import Any
+from typing import Any, Protocol
 
 import numpy as np
 import numpy.typing as npt
@@ -36,7 +36,8 @@ from ._encoder_batch import EdgeChain, EncoderMeasurements, EncoderSamples, edge
 from ._factory import INITIAL_STATE, EstimatorSpec, xbs_estimator
 from ._stepping import step_through
 
-__all__ = ["LogSignals", "ReplayResult", "ReplaySummary", "replay", "stream_replay", "ReplayStream", "REPLAY_CHUNK", "zero_order_hold", "pressure_from_rate",
+__all__ = ["LogSignals", "ReplayResult", "ReplaySummary", "replay", "stream_replay", "ReplayStream", "REPLAY_CHUNK",
+           "SignalPiece", "SignalSource", "RateIntegral", "SpeedIntegral", "CounterEdges", "WheelSpeedEdges", "zero_order_hold", "pressure_from_rate",
            "speed_from_acceleration", "edges_from_counts", "edges_from_wheel_speed", "measurements_signals", "ideal_encoder"]
 
 Array = npt.NDArray[np.float64]
@@ -131,6 +132,20 @@ class LogSignals:
         if not (isinstance(self.ppr, int) and 1 <= self.ppr <= 100_000):
             raise LogError(f"ppr must be an integer in [1, 100000], got {self.ppr!r}")
 
+    def pieces(self, rows: int | None = None) -> Iterator[SignalPiece]:
+        """The signals in pieces of ``rows`` raster rows (default :data:`REPLAY_CHUNK`), each with the edges up
+        to its last time (the chain decides a sample once an edge is stamped after it), the rest with the
+        last: views of the arrays, no copies."""
+        rows = REPLAY_CHUNK if rows is None else rows
+        size, e_at = self.t.size, 0
+        for a in range(0, size, rows):
+            b = min(a + rows, size)
+            e_to = self.edge_times.size if b == size else \
+                int(np.searchsorted(self.edge_times, self.t[b - 1], side="right"))
+            yield SignalPiece(self.t[a:b], self.vx[a:b], self.pressure[a:b], self.edge_times[e_at:e_to],
+                              self.edge_teeth[e_at:e_to], done=b == size)
+            e_at = e_to
+
     @property
     def encoder(self) -> Encoder:
         """An encoder of this tooth count (its nominal angles are what the chain assigns to the edges)."""
@@ -158,18 +173,118 @@ def zero_order_hold(t: npt.ArrayLike, values: npt.ArrayLike, at: npt.ArrayLike) 
     return vv[i]
 
 
+def _running(start: float, steps: Array) -> Array:
+    """``start`` plus the running sum of ``steps``, added one after another (``start`` first): the value at
+    each of them, as ``np.cumsum`` of the whole series gives it when ``start`` is its sum so far."""
+    return np.cumsum(np.concatenate([[start], steps]))[1:]
+
+
+class RateIntegral:
+    """``∫ u dt`` [bar] of a pressure rate [bar/s] held from each sample to the next (ZOH), from the first
+    sample on, fed in pieces (:func:`pressure_from_rate` is one piece)."""
+
+    def __init__(self) -> None:
+        self._last: tuple[float, float, float] | None = None     # (t, rate, integral) of the last sample
+
+    def piece(self, t: Array, rate: Array) -> Array:
+        """The integral at the samples ``t`` (the next ones)."""
+        if t.size == 0:
+            return np.zeros(0)
+        if self._last is None:
+            out = np.cumsum(np.concatenate([[0.0], rate[:-1] * np.diff(t)]))
+        else:
+            t0, u0, total = self._last
+            out = _running(total, np.concatenate([[u0 * (t[0] - t0)], rate[:-1] * np.diff(t)]))
+        self._last = (float(t[-1]), float(rate[-1]), float(out[-1]))
+        return out
+
+
+class SpeedIntegral:
+    """Vehicle speed [m/s] from a longitudinal accelerometer [m/s²] (trapezoidal rule) and the speed at the
+    first sample, fed in pieces (:func:`speed_from_acceleration` is one piece).
+
+    Raises
+    ------
+    LogError
+        An initial speed that is not finite and > 0.
+    """
+
+    def __init__(self, initial_speed_m_s: float) -> None:
+        if not (math.isfinite(initial_speed_m_s) and initial_speed_m_s > 0):
+            raise LogError(f"the initial speed must be finite and > 0 m/s, got {initial_speed_m_s!r}")
+        self._v0 = initial_speed_m_s
+        self._last: tuple[float, float, float] | None = None     # (t, ax, sum of the increments)
+
+    def piece(self, t: Array, ax: Array) -> Array:
+        """The speed at the samples ``t`` (the next ones)."""
+        if t.size == 0:
+            return np.zeros(0)
+        if self._last is None:
+            total = np.cumsum(np.concatenate([[0.0], 0.5 * (ax[:-1] + ax[1:]) * np.diff(t)]))
+        else:
+            t0, a0, carried = self._last
+            tt, aa = np.concatenate([[t0], t]), np.concatenate([[a0], ax])
+            total = _running(carried, 0.5 * (aa[:-1] + aa[1:]) * np.diff(tt))
+        self._last = (float(t[-1]), float(ax[-1]), float(total[-1]))
+        return self._v0 + total
+
+
 def pressure_from_rate(t: npt.ArrayLike, rate: npt.ArrayLike) -> Array:
     """``∫ u dt`` from ``t[0]`` [bar] of a pressure rate [bar/s] held from each sample to the next (ZOH)."""
-    tt, uu = np.asarray(t, dtype=float), np.asarray(rate, dtype=float)
-    return np.cumsum(np.concatenate([[0.0], uu[:-1] * np.diff(tt)]))
+    return RateIntegral().piece(np.asarray(t, dtype=float), np.asarray(rate, dtype=float))
 
 
 def speed_from_acceleration(t: npt.ArrayLike, ax: npt.ArrayLike, initial_speed_m_s: float) -> Array:
     """Vehicle speed [m/s] from a longitudinal accelerometer [m/s²] (trapezoidal rule) and the speed at ``t[0]``."""
-    tt, aa = np.asarray(t, dtype=float), np.asarray(ax, dtype=float)
-    if not (math.isfinite(initial_speed_m_s) and initial_speed_m_s > 0):
-        raise LogError(f"the initial speed must be finite and > 0 m/s, got {initial_speed_m_s!r}")
-    return initial_speed_m_s + np.cumsum(np.concatenate([[0.0], 0.5 * (aa[:-1] + aa[1:]) * np.diff(tt)]))
+    return SpeedIntegral(initial_speed_m_s).piece(np.asarray(t, dtype=float), np.asarray(ax, dtype=float))
+
+
+class CounterEdges:
+    """Edges from an ECU's sampled tooth counter and its capture register, fed in pieces
+    (:func:`edges_from_counts` is one piece; the rules there).
+
+    Raises
+    ------
+    LogError
+        A counter that is not an integer or goes back, or an edge count beyond ``MAX_LOG_SAMPLES``.
+    """
+
+    def __init__(self, clock_hz: float) -> None:
+        self._clock = float(clock_hz)
+        self._last: tuple[float, float] | None = None     # (count, capture [s]) of the last sample
+        self._first = 0.0                                # the first sample's count
+        self._at = 0                                     # samples so far
+
+    def piece(self, counts: Array, ticks: Array) -> tuple[Array, IntArray]:
+        """The edges the next samples' counts and captures give: time stamps [s] and teeth."""
+        c, stamps = np.asarray(counts, dtype=float), np.asarray(ticks, dtype=float) / self._clock
+        if c.size and not np.array_equal(c, np.round(c)):
+            raise LogError("the tooth counter holds values that are not integers")
+        if c.size == 0:
+            return np.zeros(0), np.zeros(0, dtype=np.int_)
+        if self._last is None:          # base: the sample index of c[0] below in the whole log
+            self._first, base = float(c[0]), 0
+        else:                           # the last sample before, for the rise to the first of these
+            c, stamps = np.concatenate([[self._last[0]], c]), np.concatenate([[self._last[1]], stamps])
+            base = self._at - 1
+        self._at = base + c.size
+        rise = np.diff(c)
+        if np.any(rise < 0):
+            i = int(np.flatnonzero(rise < 0)[0])
+            raise LogError(f"the tooth counter goes back from {c[i]:.0f} to {c[i + 1]:.0f} at sample {base + i + 1}; "
+                           "it must not decrease (unwrap a wrapping counter first)")
+        total = int(c[-1] - self._first)
+        if total > MAX_LOG_SAMPLES:
+            raise LogError(f"the tooth counter counts {total} edges (limit MAX_LOG_SAMPLES = {MAX_LOG_SAMPLES})")
+        self._last = (float(c[-1]), float(stamps[-1]))
+        new = np.flatnonzero(rise > 0) + 1
+        d = rise[new - 1].astype(np.int64)
+        last, prev = stamps[new], stamps[new - 1]     # the register held the previous count's edge one sample before
+        group = np.repeat(np.arange(new.size), d)
+        j = np.arange(group.size) - np.repeat(np.cumsum(d) - d, d) + 1          # 1..d within each sample
+        times = np.where(j == d[group], last[group], prev[group] + (j / d[group]) * (last[group] - prev[group]))
+        teeth = np.repeat(c[new].astype(np.int64) - d, d) + j
+        return times, teeth.astype(np.int_)
 
 
 def edges_from_counts(t: npt.ArrayLike, counts: npt.ArrayLike, ticks: npt.ArrayLike, clock_hz: float
@@ -192,26 +307,41 @@ def edges_from_counts(t: npt.ArrayLike, counts: npt.ArrayLike, ticks: npt.ArrayL
     LogError
         A counter that goes back or an edge count beyond ``MAX_LOG_SAMPLES``.
     """
-    c = np.asarray(counts, dtype=float)
-    stamps = np.asarray(ticks, dtype=float) / float(clock_hz)
-    if c.size and not np.array_equal(c, np.round(c)):
-        raise LogError("the tooth counter holds values that are not integers")
-    rise = np.diff(c)
-    if np.any(rise < 0):
-        i = int(np.flatnonzero(rise < 0)[0])
-        raise LogError(f"the tooth counter goes back from {c[i]:.0f} to {c[i + 1]:.0f} at sample {i + 1}; "
-                       "it must not decrease (unwrap a wrapping counter first)")
-    total = int(c[-1] - c[0]) if c.size else 0
-    if total > MAX_LOG_SAMPLES:
-        raise LogError(f"the tooth counter counts {total} edges (limit MAX_LOG_SAMPLES = {MAX_LOG_SAMPLES})")
-    new = np.flatnonzero(rise > 0) + 1
-    d = rise[new - 1].astype(np.int64)
-    last, prev = stamps[new], stamps[new - 1]     # the register held the previous count's edge one sample before
-    group = np.repeat(np.arange(new.size), d)
-    j = np.arange(group.size) - np.repeat(np.cumsum(d) - d, d) + 1          # 1..d within each sample
-    times = np.where(j == d[group], last[group], prev[group] + (j / d[group]) * (last[group] - prev[group]))
-    teeth = np.repeat(c[new].astype(np.int64) - d, d) + j
-    return times, teeth.astype(np.int_)
+    return CounterEdges(clock_hz).piece(np.asarray(counts, dtype=float), np.asarray(ticks, dtype=float))
+
+
+class WheelSpeedEdges:
+    """The edges an ideal ``encoder`` gives on a wheel turning at sampled speeds, fed in pieces
+    (:func:`edges_from_wheel_speed` is one piece; the angle carried on from piece to piece).
+
+    Raises
+    ------
+    LogError
+        A negative wheel speed.
+    """
+
+    def __init__(self, encoder: Encoder) -> None:
+        self._encoder = encoder
+        self._last: tuple[float, float, float] | None = None     # (t, omega, angle) of the last sample
+
+    def piece(self, t: Array, omega: Array) -> tuple[Array, IntArray]:
+        """The edges the wheel crosses up to the last of the samples ``t`` (speeds ``omega`` [rad/s])."""
+        tt, om = np.asarray(t, dtype=float), np.asarray(omega, dtype=float)
+        if np.any(om < 0):
+            raise LogError(f"the wheel speed is negative ({float(om[om < 0][0])!r} rad/s); it must be >= 0")
+        if tt.size == 0:
+            return np.zeros(0), np.zeros(0, dtype=np.int_)
+        if self._last is None:
+            above, h = 0.0, np.diff(tt)
+            theta = np.cumsum(np.concatenate([[0.0], 0.5 * (om[:-1] + om[1:]) * h]))
+        else:
+            t0, om0, above = self._last
+            tt, om = np.concatenate([[t0], tt]), np.concatenate([[om0], om])
+            h = np.diff(tt)
+            theta = np.concatenate([[above], _running(above, 0.5 * (om[:-1] + om[1:]) * h)])
+        self._last = (float(tt[-1]), float(om[-1]), float(theta[-1]))
+        stamps, _, _, teeth = wheel_edges(self._encoder, tt, h, om, theta, above=above)
+        return stamps, teeth
 
 
 def edges_from_wheel_speed(t: npt.ArrayLike, omega: npt.ArrayLike, encoder: Encoder) -> tuple[Array, IntArray]:
@@ -221,13 +351,7 @@ def edges_from_wheel_speed(t: npt.ArrayLike, omega: npt.ArrayLike, encoder: Enco
     located on it as the simulated chain locates them (:class:`EncoderLoopEstimator`): a log of wheel speeds
     goes through the same TSA and compensation as one of edges.
     """
-    tt, om = np.asarray(t, dtype=float), np.asarray(omega, dtype=float)
-    if np.any(om < 0):
-        raise LogError(f"the wheel speed is negative ({float(om[om < 0][0])!r} rad/s); it must be >= 0")
-    h = np.diff(tt)
-    theta = np.cumsum(np.concatenate([[0.0], 0.5 * (om[:-1] + om[1:]) * h]))
-    stamps, _, _, teeth = wheel_edges(encoder, tt, h, om, theta)
-    return stamps, teeth
+    return WheelSpeedEdges(encoder).piece(np.asarray(t, dtype=float), np.asarray(omega, dtype=float))
 
 
 @dataclass(frozen=True)
@@ -372,7 +496,7 @@ class ReplayStream:
         self._encoder = ideal_encoder(ppr, both_edges=both_edges)
         self._chain = EdgeChain(radius_m=vehicle.radius_m, rate_hz=rate_hz, order=order, window=window,
                                 harmonics=harmonics, notch_damping=notch_damping, compiled=compiled)
-        self._method, self._rate, self._window = method, float(rate_hz), window
+        self._method, self.rate_hz, self._window = method, float(rate_hz), window
         self._samples = self._measured = self._steps = self._taken = 0
         self._newest = -math.inf                 # the latest t_measured so far
         self._last: tuple[float, float, float, float] | None = None   # (t, y, vx, p) of the last measurement taken
@@ -456,22 +580,49 @@ class ReplayStream:
         """
         if self._taken == 0:
             raise LogError(f"the log is shorter than the chain's warm-up: {self._chain.edges} edges give "
-                           f"{self._measured} measurements at {self._rate:g} Hz (a TSA window of {self._window} "
+                           f"{self._measured} measurements at {self.rate_hz:g} Hz (a TSA window of {self._window} "
                            "edges, then two measurements for one observer step)")
         message = "" if self._refusal is None else \
             f"step {self._refusal[0]} of {self._taken} refused: {self._refusal[1]}"
         return ReplaySummary(source=source, observer=self.described, method=self._method, samples=self._samples,
                              measured=self._measured, steps=self._steps, edges=self._chain.edges,
-                             outcome=self._outcome, message=message, rate_hz=self._rate,
+                             outcome=self._outcome, message=message, rate_hz=self.rate_hz,
                              xbs_final=self._final)
 
 
-def stream_replay(signals: LogSignals, write: Callable[[dict[str, npt.NDArray[Any]]], object], *,
-                  chunk: int = REPLAY_CHUNK, **options: Any) -> ReplaySummary:
-    """Run the chain and the observer over ``signals`` in pieces of ``chunk`` raster rows (and the edges up
-    to them), handing each piece's samples to ``write`` (:attr:`ReplayResult.COLUMNS` by name) as they are
+@dataclass(frozen=True, eq=False)
+class SignalPiece:
+    """The next raster rows (time [s], speed [m/s], ``∫ u dt`` [bar]) and edges (time stamps [s], teeth) of a
+    log's signals, in SI units: what :class:`ReplayStream` is pushed; ``done`` on the last."""
+
+    t: Array
+    vx: Array
+    pressure: Array
+    edge_times: Array
+    edge_teeth: IntArray
+    done: bool = False
+
+
+class SignalSource(Protocol):
+    """Signals fed piece by piece (:class:`LogSignals`; ``switchobs.logs.LogStream`` reads a log so):
+    the encoder's ``ppr`` and ``both_edges``, the pieces, and ``source`` (final once they are read)."""
+
+    ppr: int
+    both_edges: bool
+
+    @property
+    def source(self) -> str: ...
+
+    def pieces(self, rows: int | None = None) -> Iterator[SignalPiece]: ...
+
+
+def stream_replay(signals: SignalSource, write: Callable[[dict[str, npt.NDArray[Any]]], object], *,
+                  chunk: int | None = None, **options: Any) -> ReplaySummary:
+    """Run the chain and the observer over ``signals`` piece by piece (at most ``chunk`` raster rows each, if
+    given), handing each piece's samples to ``write`` (:attr:`ReplayResult.COLUMNS` by name) as they are
     decided; the options are those of :func:`replay`.  The pieces joined equal :func:`replay`'s result
-    bit for bit; only a piece's arrays are held at a time besides ``signals``.
+    bit for bit, whatever their boundaries; only a piece's arrays are held at a time besides what
+    ``signals`` holds (a :class:`LogSignals` its arrays, a log read piece by piece one piece).
 
     Returns
     -------
@@ -482,20 +633,12 @@ def stream_replay(signals: LogSignals, write: Callable[[dict[str, npt.NDArray[An
     LogError, SimulationError
         As :func:`replay` (the warm-up's error after the last piece).
     """
-    if not (isinstance(chunk, int) and chunk >= 1):
+    if chunk is not None and not (isinstance(chunk, int) and chunk >= 1):
         raise SimulationError(f"chunk must be an integer >= 1, got {chunk!r}")
     stream = ReplayStream(ppr=signals.ppr, both_edges=signals.both_edges, **options)
-    progress(f"replay: encoder chain over {signals.edge_times.size} edges at {stream._rate:g} Hz")
-    rows, e_at = signals.t.size, 0
-    for a in range(0, rows, chunk):
-        b = min(a + chunk, rows)
-        # the edges up to the piece's last time (the chain decides a sample once one is stamped after it), the
-        # rest with the last piece
-        e_to = signals.edge_times.size if b == rows else \
-            int(np.searchsorted(signals.edge_times, signals.t[b - 1], side="right"))
-        stream.push(signals.t[a:b], signals.vx[a:b], signals.pressure[a:b], signals.edge_times[e_at:e_to],
-                    signals.edge_teeth[e_at:e_to], done=b == rows)
-        e_at = e_to
+    progress(f"replay: encoder chain at {stream.rate_hz:g} Hz")
+    for piece in signals.pieces(chunk):
+        stream.push(piece.t, piece.vx, piece.pressure, piece.edge_times, piece.edge_teeth, done=piece.done)
         write(stream.drain())
     return stream.summary(signals.source)
 
@@ -519,8 +662,9 @@ def replay(signals: LogSignals, *, observer: str = "xbs4", method: str = "radau3
     rate_hz, order, window, harmonics, notch_damping, compiled
         As :class:`EncoderLoopEstimator`: controller rate, TSA order ``m`` and window ``n`` (seed 001
         (5.2)-(5.5)), harmonics ``M`` of (6.2), the notch's damping, the C kernels.
-    chunk : int
-        Raster rows run at a time (:func:`stream_replay`; the result does not depend on it).
+    chunk : int, optional
+        Raster rows run at a time (:func:`stream_replay`; default :data:`REPLAY_CHUNK`; the result does not
+        depend on it).
 
     Returns
     -------
