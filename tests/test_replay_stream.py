@@ -17,6 +17,7 @@ import numpy as np
 import pytest
 
 import switchobs.logs._io as log_io
+from switchobs.cli.main import main
 from switchobs.exceptions import LogError
 from switchobs.logs import ChannelMap, LogStream, braking_log_map, log_signals, read_log, replay_log, write_mdf, \
     write_table
@@ -150,7 +151,7 @@ def test_a_log_read_in_small_pieces_replays_to_the_whole_log_bit_for_bit(tmp_pat
     (np.arange(5, 10), "holds an empty cell at sample 5 (t = 0.005 s; 5 in a row, 7 in all)"),
     (None, "jump from 0.5 s to 0.56 s, a gap of 0.06 s above max_gap_s = 0.05 s"),
 ])
-def test_a_bad_log_read_in_pieces_gives_the_whole_channels_message(tmp_path, small_pieces, bad, message):
+def test_a_bad_log_read_in_pieces_gives_the_whole_channels_message(tmp_path, small_pieces, capsys, bad, message):
     t, vx, p, stamps, teeth = drive(1.0)
     if bad is not None:      # a run of NaN across a piece boundary (7 rows) and two more later
         vx = vx.copy()
@@ -162,6 +163,13 @@ def test_a_bad_log_read_in_pieces_gives_the_whole_channels_message(tmp_path, sma
     cmap = ChannelMap.from_dict(__import__("tomllib").loads(braking_log_map()))
     with pytest.raises(LogError, match=__import__("re").escape(message)):
         replay_log(tmp_path / "log.csv", cmap)
+    # the command: one line, exit 2, and no result, not even the pieces before the failure
+    (tmp_path / "map.toml").write_text(braking_log_map(), encoding="utf-8")
+    code = main(["replay", str(tmp_path / "log.csv"), "--channels", str(tmp_path / "map.toml"), "--out",
+                 str(tmp_path / "out.mf4")])
+    err = capsys.readouterr().err
+    assert code == 2 and message in err and err.count("\n") == 1
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["log.csv", "map.toml"]
 
 
 #: The peak resident memory of this process's image (VmHWM, kB): not ru_maxrss, which counts the pages of the

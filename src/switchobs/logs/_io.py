@@ -6,12 +6,17 @@ column of a table has the table's time column).  The file's size is checked befo
 refused by its size, never read whole.  Cells left empty (a null in Parquet, an empty field in CSV) are
 kept as a mask: a column of encoder edges is shorter than the signals beside it in one table.
 
-Channels are read when asked for, in chunks into arrays of their final size: an MDF4 channel fragment by
-fragment of its group's data blocks (asammdf's ``iter_get``; each group's time stamps once), a Parquet
-column by batches of :data:`CHUNK_ROWS` rows (pyarrow's ``iter_batches``, that column only), a CSV file
-row by row into 8 bytes a value, only the columns the channel map names (:meth:`Log.want`).  Reading
-thus holds the channels asked for and one chunk, not the file's other channels or a decoded copy of
-the whole file (``tests/test_logs_memory.py`` measures the peak on a long log).
+Channels are read piece by piece (:meth:`Log.pieces`): an MDF4 group fragment by fragment of its data
+blocks (asammdf's ``iter_get``, :data:`MDF_FRAGMENT_BYTES` of records at a time, the file read through a
+file object: asammdf maps a file it opens by name, and every page read would stay resident), a Parquet
+table by batches of :data:`CHUNK_ROWS` rows (pyarrow's ``iter_batches``, the columns asked for only), a
+CSV file row by row, handed on every :data:`CHUNK_ROWS` rows (only the columns asked for parsed, 8 bytes a
+value).  Reading thus holds one piece, not the file's other channels or a decoded copy of the whole file;
+:meth:`Log.channel` joins a channel's pieces (``tests/test_logs_memory.py`` measures the peak on a long
+log, ``tests/test_replay_stream.py`` that of a streamed replay).
+
+Logs are written by :class:`LogWriter` piece by piece and atomically (MDF4 by :mod:`._mdf4`, Parquet a row
+group a piece, CSV row by row).
 """
 
 from __future__ import annotations
@@ -235,10 +240,8 @@ class Log:
             ts.append(t)
             values.append(cols[name][0])
             present.append(cols[name][1])
-        unit = self.unit(name, what=what)
-        join = (lambda parts, kind: parts[0] if len(parts) == 1 else np.concatenate(parts) if parts
-                else np.zeros(0, dtype=kind))
-        return Channel(name, join(ts, float), join(values, float), join(present, bool), unit)
+        return Channel(name, join_pieces(ts, float), join_pieces(values, float), join_pieces(present, bool),
+                       self.unit(name, what=what))
 
     def _parquet_pieces(self, names: list[str]) -> Iterator[tuple[Array, dict[str, tuple[Array, Bools]]]]:
         """The table's time column and ``names`` by batches of :data:`CHUNK_ROWS` rows."""
@@ -347,6 +350,11 @@ class Log:
         if at != total:
             raise LogError(f"{what}: channel {names[0]!r} of {str(self.path)!r} holds {at} of the {total} samples "
                            "its group declares")
+
+
+def join_pieces(parts: list[npt.NDArray[Any]], dtype: Any) -> npt.NDArray[Any]:
+    """Pieces end to end (the one piece itself, no copy)."""
+    return parts[0] if len(parts) == 1 else np.concatenate(parts) if parts else np.zeros(0, dtype=dtype)
 
 
 def read_log(path: str | Path, *, time_channel: str = "t", time_factor: float = 1.0) -> Log:

@@ -40,7 +40,7 @@ from ..exceptions import LogError, SwitchobsError
 from ..loop import (REPLAY_CHUNK, CounterEdges, LogSignals, RateIntegral, SignalPiece, SpeedIntegral, WheelSpeedEdges,
                     ideal_encoder)
 from ..plants import QuarterCar
-from ._io import Channel, Log
+from ._io import Log, join_pieces
 
 __all__ = ["UNITS", "MAX_GAP_S", "ChannelSpec", "ChannelMap", "log_signals", "LogStream"]
 
@@ -320,15 +320,6 @@ class _Cells:
         return self._time or self._back
 
 
-def _values(ch: Channel, what: str, factor: float = 1.0) -> tuple[np.ndarray, np.ndarray]:
-    """A signal channel's time stamps and SI values; every cell must hold a finite number."""
-    cells = _Cells(ch.name, what)
-    cells.feed(ch.t, ch.values, ch.present)
-    if (message := cells.error()) is not None:
-        raise LogError(message)
-    return ch.t, ch.values * factor if factor != 1.0 else ch.values
-
-
 def _unit_agrees(unit: str, spec: ChannelSpec, kind: str, what: str) -> None:
     """A file that records units (MDF4) must record the one the map declares (after the spellings of UNITS)."""
     if unit and _ALIASES.get(unit.strip(), unit.strip()) != _ALIASES.get(spec.unit.strip(), spec.unit.strip()):
@@ -510,9 +501,7 @@ class LogStream:
                 elif got[0].size:
                     waiting.append(got)
                     newest = float(got[0][-1])
-            out = (np.concatenate([w[0] for w in waiting]) if len(waiting) > 1 else waiting[0][0] if waiting
-                   else np.zeros(0), np.concatenate([w[1] for w in waiting]) if len(waiting) > 1 else
-                   waiting[0][1] if waiting else np.zeros(0, dtype=np.int_))
+            out = (join_pieces([w[0] for w in waiting], float), join_pieces([w[1] for w in waiting], np.int_))
             waiting.clear()
             finite[2].feed(out[0])
             stamps_order.feed(out[0])
@@ -744,9 +733,7 @@ def log_signals(log: Log, cmap: ChannelMap) -> LogSignals:
     """
     stream = LogStream(log, cmap)
     parts = list(stream.pieces())
-
-    def join(name: str) -> np.ndarray:
-        got = [getattr(p, name) for p in parts]
-        return got[0] if len(got) == 1 else np.concatenate(got)
-    return LogSignals(join("t"), join("vx"), join("pressure"), join("edge_times"), join("edge_teeth"),
-                      ppr=cmap.ppr, both_edges=cmap.both_edges, source=stream.source)
+    t, vx, pressure, stamps = (join_pieces([getattr(p, k) for p in parts], float) for k in ("t", "vx", "pressure",
+                                                                                      "edge_times"))
+    return LogSignals(t, vx, pressure, stamps, join_pieces([p.edge_teeth for p in parts], np.int_), ppr=cmap.ppr,
+                      both_edges=cmap.both_edges, source=stream.source)

@@ -9,6 +9,11 @@ the chain (:func:`measure_edges`: TSA seed 001 (5.1)-(5.5), three-stage compensa
 6.3) and the observer over them, one observer step from measurement to measurement with the signals held
 (the zero-order hold of the generated C step, seed 000 eq. (13)), and returns a :class:`ReplayResult`.
 
+:class:`ReplayStream` runs the same piece by piece (:func:`stream_replay`: each piece's samples handed out as
+soon as the inputs decide them, the chain's, the observer's and the conversions' state carried across; the
+pieces joined equal the whole arrays' result bit for bit), so that a log of any length replays in the memory
+of a piece; :func:`replay` is that stream joined.
+
 A log of a simulated braking that carries the samples the chain read in the simulation
 (:attr:`EncoderLoopEstimator.measurements`) replays to the simulation's estimates bit for bit: the same
 function computes both.  Signals recorded on different rasters are resampled onto one by

@@ -3,7 +3,8 @@
  *
  * A port statement for statement of ThreeStageEstimator.update (stage 1 _RevolutionDetrend or _HighPass,
  * stage 2 _Rls, stage 3 the compensation) and NotchFilter.update: the same floating-point operations in
- * the same order, the system libm as Python's math.  The dot products and matrix-vector products are
+ * the same order, the system libm as Python's math (the products with the symmetric Gamma read its rows for
+ * its columns: the same numbers, see sym_matvec).  The dot products and matrix-vector products are
  * summed left to right, where numpy hands them to BLAS: the three-stage outputs differ from the
  * Python reference by rounding only (tests/test_sensors_kernels.py states the tolerance); the notch is
  * bit for bit.  ISO C99 keeps floating-point contraction off (no fused multiply-add).
