@@ -396,7 +396,9 @@ class LogWriter:
             if self.format == "parquet":
                 pa, pq = _pyarrow()
                 self._schema = pa.schema([(k, pa.from_numpy_dtype(np.dtype(d))) for k, (_, d) in self._columns.items()])
-                self._sink = stack.enter_context(pq.ParquetWriter(str(partial), self._schema))
+                # no dictionary encoding: measured signals seldom repeat a value, and trying it is most of the
+                # writing's time (60000 rows of 10 columns: 24 ms with it, 4 ms without)
+                self._sink = stack.enter_context(pq.ParquetWriter(str(partial), self._schema, use_dictionary=False))
             elif self.format == "mdf":
                 self._sink = Mdf4Writer(stack.enter_context(open(partial, "w+b")))
                 self._sink.group({k: v for k, v in self._columns.items() if k != self._time})
