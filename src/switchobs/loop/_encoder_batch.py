@@ -7,6 +7,8 @@ and compensates the samples in a few array operations and one call of the three-
 gives the numbers the per-step :class:`EncoderLoopEstimator` gives (the same floating-point
 operations on the same values; ``tests/test_loop_encoder_batch.py`` checks them bit for bit).
 :meth:`EncoderMeasurements.observer_steps` lists the observer steps the per-step estimator takes.
+:class:`EdgeChain` is the chain from the edges on fed in pieces (a log's replay streams through it);
+:func:`measure_edges` feeds it once.
 """
 
 from __future__ import annotations
