@@ -9,8 +9,11 @@ from run to run by more than that work on a shared machine, so the same commands
 process after a first command (``main`` called again: the start-up paid once).  Then the stages in one
 process: reading and mapping the log, the encoder chain (TSA, three-stage, notch), the observer's steps,
 writing the result.
-Run: ``.venv/bin/python benchmarks/replay_log.py [--quick] [--repeats 5]`` (``--quick``: a 10 s log, one run;
-printed only).
+Last, the memory: the peak resident set (``/usr/bin/time -f %M``) of the same command with ``--out out.mf4``
+on drives of one minute, ten minutes and an hour (the replay reads, runs and writes piece by piece, so the
+peak should not grow with the log).
+Run: ``.venv/bin/python benchmarks/replay_log.py [--quick] [--repeats 5]`` (``--quick``: a 10 s log, one run,
+memory on 10 s and 60 s drives; printed only).
 """
 
 from __future__ import annotations
@@ -18,16 +21,22 @@ from __future__ import annotations
 import argparse
 import contextlib
 import io
+import shutil
+import statistics
+import subprocess
 import tempfile
 from pathlib import Path
 
 import numpy as np
-from _harness import MIN_REPEATS, Stats, cli_cpu, cpu, number, publish
+from _harness import MIN_REPEATS, Stats, cli_cpu, cpu, number, publish, switchobs_exe
 
 from switchobs.logs import ChannelMap, braking_log_map, log_signals, read_log, write_mdf, write_result
 from switchobs.loop import edges_from_wheel_speed, ideal_encoder, replay
 
 DURATION_S, QUICK_DURATION_S, SHORT_S = 60.0, 10.0, 1.0
+#: Drives whose peak memory is measured [s] (and with --quick).
+MEMORY_S, QUICK_MEMORY_S = (60.0, 600.0, 3600.0), (10.0, 60.0)
+MEMORY_REPEATS = 3
 
 
 def write_drive(path: Path, duration: float) -> int:
@@ -41,6 +50,21 @@ def write_drive(path: Path, duration: float) -> int:
     write_mdf(path, [(t, {"vx": (vx, "m/s"), "p": (p, "bar")}),
                      (stamps, {"edge_time": (stamps, "s"), "edge_tooth": (teeth, "")})])
     return int(stamps.size)
+
+
+def peak_memory(argv: list[str], repeats: int, cwd: Path) -> list[int]:
+    """Peak resident set [kB] of whole ``switchobs ARGV`` processes (``/usr/bin/time -f %M``, GNU time: the
+    child's own peak, not that of this process, which holds the long drives it wrote)."""
+    timer = shutil.which("time", path="/usr/bin:/bin")
+    if timer is None:
+        raise SystemExit("the memory table needs GNU time (/usr/bin/time); install it (Debian: apt-get install time)")
+    out = []
+    for _ in range(repeats):
+        proc = subprocess.run([timer, "-f", "%M", switchobs_exe(), *argv], cwd=cwd, capture_output=True, text=True)
+        if proc.returncode != 0:
+            raise SystemExit(f"switchobs {' '.join(argv)} failed ({proc.returncode}): {proc.stderr.strip()}")
+        out.append(int(proc.stderr.strip().splitlines()[-1]))
+    return out
 
 
 def in_process(argv: list[str], repeats: int) -> Stats:
@@ -100,6 +124,19 @@ def main() -> None:
         table = ["| stage (one process, after start-up) | CPU [ms] | × real time |", "| --- | ---: | ---: |"]
         for name, st in stages:
             table.append(f"| {name} | {st.show(1e3)} | {number(duration / st.median)} |")
+        memory = ["| drive | samples | edges | log [MB] | peak RSS [MB] |", "| --- | ---: | ---: | ---: | ---: |"]
+        for seconds in QUICK_MEMORY_S if args.quick else MEMORY_S:
+            log = d / f"drive{seconds:g}.mf4"
+            count = write_drive(log, seconds)
+            peaks = peak_memory(["replay", log.name, "--channels", "map.toml", "--observer-impl", "c", "--out",
+                                 "out.mf4"], MEMORY_REPEATS, d)
+            shown = " [".join([number(statistics.median(peaks) / 1024), f"{number(min(peaks) / 1024)}–"
+                               f"{number(max(peaks) / 1024)}]"])
+            span = f"{seconds:g} s" if seconds < 60 else f"{seconds / 60:g} min" if seconds < 3600 else \
+                f"{seconds / 3600:g} h"
+            memory.append(f"| {span} | {int(seconds * 1000) + 1} | {count} | "
+                          f"{number(log.stat().st_size / 1e6)} | {shown} |")
+            log.unlink()
     method = (f"CPU time (user + system), median [min–max] of {repeats} runs. A {duration:g} s MDF4 log at 1 kHz (speed and brake pressure, {int(duration * 1000) + 1} samples) with "
               f"the {edges} edges of a 60-ppr encoder, time-stamped to 1 µs, replayed through the encoder chain "
               "(TSA n = 15, three-stage M = 5) and the xbs4 observer (radau3), the result written as MDF4. After "
@@ -108,8 +145,11 @@ def main() -> None:
               "alone varies from run to run by more than the replay's work, so this difference is noisy (even of "
               "either sign); the next table times the same commands without it.")
     method += (" In one process: `switchobs.cli.main.main` called with the same arguments after a first call (which "
-               "paid the start-up), the 60 s log's command minus the 1 s log's.")
-    publish("replay_log", method, [whole, warm, table], write=not args.quick)
+               "paid the start-up), the 60 s log's command minus the 1 s log's. Memory: the peak resident set of "
+               "`switchobs replay LOG --channels map.toml --observer-impl c --out out.mf4` (`/usr/bin/time -f %M`), "
+               f"median [min–max] of {MEMORY_REPEATS} runs, on the same drive written by the project's MDF4 writer for "
+               "one minute, ten minutes and an hour.")
+    publish("replay_log", method, [whole, warm, table, memory], write=not args.quick)
 
 
 if __name__ == "__main__":

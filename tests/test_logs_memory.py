@@ -5,11 +5,12 @@ one chunk of ``CHUNK_ROWS``) beside 20 channels the map does not name, written b
 format, is read and mapped (``read_log``, ``log_signals``) in a fresh process under ``tracemalloc``
 (numpy's buffers included) and, for Parquet, pyarrow's memory pool.  The peak above what the reading
 returns (the ``LogSignals`` arrays, 10 MB) is bounded by twice those arrays and an allowance for the
-reader: a few chunks for CSV, pyarrow's page buffers for Parquet, asammdf's decoded data block (its
-fragments hold up to 32 MiB of records of the whole group) for MDF4.  Measured peaks: Parquet 65 MB,
-CSV 26 MB, MDF4 114 MB; reading every column as whole tables did (before the chunked readers): Parquet
-182 MB and CSV 136 MB, which these bounds refuse.  MDF4 was and is read fragment by fragment (111 MB
-before): its peak follows the data blocks, not the log's length.
+reader: a few chunks for CSV, pyarrow's page buffers for Parquet, asammdf's decoded fragment for MDF4.
+Measured peaks, read in pieces and joined (``log_signals``): Parquet 95 MB (the signals' and the edges'
+batches side by side), CSV 25 MB, MDF4 81 MB (1 MiB fragments); before, whole columns into arrays of their
+size: Parquet 65 MB, CSV 26 MB, MDF4 114 MB (asammdf's 32 MiB fragments); reading every column as whole
+tables did (before the chunked readers): Parquet 182 MB and CSV 136 MB, which these bounds refuse.  The
+replay itself does not join the pieces (``tests/test_replay_stream.py`` measures its peak).
 """
 
 from __future__ import annotations

@@ -58,9 +58,10 @@ MAX_PIL_ROWS = 20_000
 #: Size of a measurement log replayed (MDF4, CSV, Parquet): refused by its size before it is opened, so a
 #: huge file is never read whole.
 MAX_LOG_BYTES = 1_000_000_000
-#: Samples of one channel of a replayed log, and encoder edges: a one-hour log at 1 kHz (3.6 million) fits.  The
-#: log is read whole, and the chain's arrays grow with it (a 10-minute log at 1 kHz with a 60-ppr encoder peaks
-#: at about 0.5 GB: ``/usr/bin/time -f %M switchobs replay``), so an hour stays within about 2 GB.
+#: Samples of one channel of a replayed log, and encoder edges: a one-hour log at 1 kHz (3.6 million) fits.  Not
+#: a memory bound: ``switchobs replay`` reads, runs and writes the log piece by piece, and its peak does not grow
+#: with the log (about 0.24 GB for 10 minutes and for an hour at 1 kHz with a 60-ppr encoder, ``/usr/bin/time -f
+#: %M``; ``benchmarks/replay_log.py``); ``log_signals`` and ``replay`` hold the whole arrays (they grow with the log).
 MAX_LOG_SAMPLES = 4_000_000
 #: States of a model (and of every file derived from one: a system, a certificate) and modes of a certificate's
 #: family: the one dimension limit, checked before any work.

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import argparse
+import contextlib
 import sys
 
 from .._atomic import check_output_file
@@ -41,8 +42,8 @@ def register(sub: argparse._SubParsersAction) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    from ..logs import ChannelMap, log_format, log_signals, plot_replay, read_log, write_result
-    from ..loop import replay
+    from ..logs import ChannelMap, LogStream, log_format, plot_replay, read_log, result_writer
+    from ..loop import ReplayResult, stream_replay
 
     fmt = None
     if args.out is not None:
@@ -56,24 +57,34 @@ def run(args: argparse.Namespace) -> int:
         check_output_file(args.plot, what="the plot")
     cmap = ChannelMap.from_toml(args.channels)
     progress(f"replay: reading {args.log}")
-    log = read_log(args.log, time_channel=cmap.time.channel, time_factor=cmap.time.factor)
-    signals = log_signals(log, cmap)
-    result = replay(signals, observer=args.observer, method=args.method, beta=args.beta, impl=args.observer_impl,
-                    vehicle=cmap.vehicle, **cmap.chain_options())
-    if args.out is not None:
-        progress(f"replay: writing {args.out}")
-        write_result(result, args.out, fmt=fmt)
+    # the log read, replayed and written piece by piece (memory bounded whatever its length)
+    signals = LogStream(read_log(args.log, time_channel=cmap.time.channel, time_factor=cmap.time.factor), cmap)
+    pieces: list[dict] = []
+    with contextlib.ExitStack() as stack:
+        # each piece of the replay goes to the result as it comes (only the figure needs them all)
+        sinks = [stack.enter_context(result_writer(args.out, fmt=fmt)).append] if args.out is not None else []
+        if args.plot:
+            sinks.append(pieces.append)
+        if args.out is not None:
+            progress(f"replay: writing {args.out}")
+
+        def write(piece: dict) -> None:
+            for sink in sinks:
+                sink(piece)
+        summary = stream_replay(signals, write, observer=args.observer,
+                                method=args.method, beta=args.beta, impl=args.observer_impl, vehicle=cmap.vehicle,
+                                **cmap.chain_options())
     if args.plot:
         from .._figures import save_figure
-        save_figure(plot_replay(result), args.plot)
+        save_figure(plot_replay(ReplayResult.join(pieces, summary)), args.plot)
     if args.json:
-        emit_json(result.summary.to_json())
+        emit_json(summary.to_json())
     else:
-        print(result.summary)
+        print(summary)
         for path, what in ((args.out, "signals"), (args.plot, "plot")):
             if path:
                 print(f"{what} written to {path}")
-    if result.summary.outcome != "ok":
-        print(f"switchobs replay: failed: {result.summary.message}", file=sys.stderr)
+    if summary.outcome != "ok":
+        print(f"switchobs replay: failed: {summary.message}", file=sys.stderr)
         return 1
     return 0

@@ -13,7 +13,9 @@ replay_log                -- a log file and a channel map -> ReplayResult (the P
 ChannelMap, ChannelSpec, UNITS -- the channel map and the units it may declare
 read_log, Log, Channel    -- a log's channels, read on demand (size-checked first)
 log_signals               -- a log and a map -> LogSignals (units, counters, wheel speeds, resampling)
+LogStream                 -- the same piece by piece (what ``switchobs replay`` runs: memory bounded)
 write_result              -- a ReplayResult as an MDF4, Parquet or CSV log
+result_writer, LogWriter  -- a result (any table) written piece by piece, atomically (``switchobs replay --out``)
 plot_replay               -- its figure (wheel speed, x2, XBS estimate; matplotlib)
 write_table, write_mdf, write_braking_log -- write logs (a simulated braking's chain inputs, in a layout)
 braking_log_map           -- the channel map of a log write_braking_log writes (TOML text)
@@ -37,14 +39,14 @@ from typing import Any
 import numpy as np
 
 from ..exceptions import LogError
-from ..loop import EncoderMeasurements, ReplayResult, replay
-from ._io import CHUNK_ROWS, FORMATS, Channel, Log, log_format, read_log, write_mdf, write_table
-from ._map import UNITS, ChannelMap, ChannelSpec, log_signals
+from ..loop import EncoderMeasurements, ReplayResult, stream_replay
+from ._io import CHUNK_ROWS, FORMATS, Channel, Log, LogWriter, log_format, read_log, write_mdf, write_table
+from ._map import UNITS, ChannelMap, ChannelSpec, LogStream, log_signals
 from ._plot import plot_replay
 
 __all__ = ["replay_log", "ChannelMap", "ChannelSpec", "UNITS", "read_log", "Log", "Channel", "log_signals",
            "write_result", "write_table", "write_mdf", "write_braking_log", "braking_log_map", "FORMATS", "log_format",
-           "CHUNK_ROWS", "RESULT_UNITS", "plot_replay"]
+           "CHUNK_ROWS", "RESULT_UNITS", "plot_replay", "LogWriter", "result_writer", "LogStream"]
 
 #: Units of the columns :func:`write_result` writes.
 RESULT_UNITS: dict[str, str] = {"t": "s", "t_measured": "s", "x2_tsa": "m/s^2", "x2_notch": "m/s^2",
@@ -55,7 +57,8 @@ RESULT_UNITS: dict[str, str] = {"t": "s", "t_measured": "s", "x2_tsa": "m/s^2", 
 def replay_log(path: str | Path, channels: ChannelMap | str | Path, *, observer: str = "xbs4",
                method: str = "radau3", beta: float | None = None, impl: str = "python",
                compiled: bool | None = None) -> ReplayResult:
-    """Replay the log ``path`` through the encoder chain and an XBS observer (``switchobs replay``).
+    """Replay the log ``path`` through the encoder chain and an XBS observer (``switchobs replay``), read
+    piece by piece (:class:`LogStream`); the result is its pieces joined.
 
     Parameters
     ----------
@@ -74,20 +77,27 @@ def replay_log(path: str | Path, channels: ChannelMap | str | Path, *, observer:
         asammdf or pyarrow missing for an MDF4 or Parquet log.
     """
     cmap = channels if isinstance(channels, ChannelMap) else ChannelMap.from_toml(channels)
-    log = read_log(path, time_channel=cmap.time.channel, time_factor=cmap.time.factor)
-    signals = log_signals(log, cmap)
-    return replay(signals, observer=observer, method=method, beta=beta, impl=impl, vehicle=cmap.vehicle,
-                  compiled=compiled, **cmap.chain_options())
+    stream = LogStream(read_log(path, time_channel=cmap.time.channel, time_factor=cmap.time.factor), cmap)
+    pieces: list[dict[str, Any]] = []
+    summary = stream_replay(stream, pieces.append, observer=observer, method=method, beta=beta, impl=impl,
+                            vehicle=cmap.vehicle, compiled=compiled, **cmap.chain_options())
+    return ReplayResult.join(pieces, summary)
+
+
+def result_writer(path: str | Path, *, fmt: str | None = None) -> LogWriter:
+    """A :class:`LogWriter` of the replay's signals (:attr:`ReplayResult.COLUMNS`, units
+    :data:`RESULT_UNITS`; an MDF4 file of one group, ``t`` its master), to append the pieces of
+    :func:`switchobs.loop.stream_replay` to as they come."""
+    return LogWriter(path, {k: (RESULT_UNITS[k], np.int64 if k == "status" else float) for k in ReplayResult.COLUMNS},
+                     fmt=fmt)
 
 
 def write_result(result: ReplayResult, path: str | Path, *, fmt: str | None = None) -> Path:
     """Write the replay's signals (:meth:`ReplayResult.arrays`) as a log, atomically (format by the ending,
     or ``fmt``): an MDF4 file of one group with units (:data:`RESULT_UNITS`), or a table."""
-    fmt = fmt or log_format(path)
-    columns = result.arrays()
-    if fmt == "mdf":
-        return write_mdf(path, [(columns["t"], {k: (v, RESULT_UNITS[k]) for k, v in columns.items() if k != "t"})])
-    return write_table(path, columns, fmt=fmt)
+    with result_writer(path, fmt=fmt) as out:
+        out.append(result.arrays())
+    return Path(path)
 
 
 def _unknown_layout(layout: str) -> LogError:

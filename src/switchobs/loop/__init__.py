@@ -28,6 +28,10 @@ run_braking, BrakingRun, CONTROLLER_NAMES -- one braking case from plain values 
                             observer), compiled to C when possible, metrics back (what a sweep calls)
 LogSignals, replay, ReplayResult, ReplaySummary -- recorded data in: a log's edges, speed and pressure (SI
                             units) through the encoder chain and an XBS observer (``switchobs replay``)
+stream_replay, ReplayStream, REPLAY_CHUNK, SignalPiece, SignalSource -- the same piece by piece, each piece's
+                            result handed out as it is decided, the chain's and the observer's state carried
+                            across (bit for bit the same)
+RateIntegral, SpeedIntegral, CounterEdges, WheelSpeedEdges -- those helpers fed in pieces (their state carried)
 zero_order_hold, pressure_from_rate, speed_from_acceleration, edges_from_counts, edges_from_wheel_speed,
 measurements_signals, ideal_encoder -- from what loggers record to LogSignals; a simulated run's chain inputs as one
 DemoSettings, demo_scenario, demo_braking -- the braking of ``switchobs demo``
@@ -55,8 +59,10 @@ from ._encoder_batch import EncoderMeasurements, EncoderSamples, encoder_measure
 from ._encoder_loop import X2_MEASUREMENTS, EncoderLoopEstimator, EncoderLoopRecord, EncoderX2
 from ._pil import (PIL_SCENARIO, PIL_TOLERANCE, PilComparison, PilRecord, braking_record, compare_with_reference,
                    reference_observer, reference_run)
-from ._replay import (LogSignals, ReplayResult, ReplaySummary, edges_from_counts, edges_from_wheel_speed,
-                      ideal_encoder, measurements_signals, pressure_from_rate, replay, speed_from_acceleration, zero_order_hold)
+from ._replay import (REPLAY_CHUNK, CounterEdges, LogSignals, RateIntegral, ReplayResult, ReplayStream, ReplaySummary,
+                      SignalPiece, SignalSource, SpeedIntegral, WheelSpeedEdges, edges_from_counts,
+                      edges_from_wheel_speed, ideal_encoder, measurements_signals, pressure_from_rate, replay,
+                      speed_from_acceleration, stream_replay, zero_order_hold)
 from ._factory import (DEFAULT_BETA, DEFAULT_GAMMA, INITIAL_STATE, OBSERVER_KINDS, EstimatorSpec, compiled_observers,
                        default_method, install_observers, xbs_estimator)
 
@@ -66,7 +72,8 @@ __all__ = ["EstimatorSpec", "xbs_estimator", "default_method", "OBSERVER_KINDS",
            "DemoSettings", "demo_scenario", "demo_braking", "road_segments", "segment_errors", "ErrorRow",
            "summarise_braking", "BrakingSummary", "SETTLE_S", "braking_record", "PilRecord", "reference_run", "reference_observer",
            "compare_with_reference", "PilComparison", "PIL_SCENARIO", "PIL_TOLERANCE",
-           "LogSignals", "replay", "ReplayResult", "ReplaySummary",
+           "LogSignals", "replay", "ReplayResult", "ReplaySummary", "stream_replay", "ReplayStream", "REPLAY_CHUNK",
+           "SignalPiece", "SignalSource", "RateIntegral", "SpeedIntegral", "CounterEdges", "WheelSpeedEdges",
            "zero_order_hold", "pressure_from_rate", "speed_from_acceleration", "edges_from_counts",
            "edges_from_wheel_speed", "measurements_signals", "ideal_encoder", "compiled_observers",
            "install_observers"]

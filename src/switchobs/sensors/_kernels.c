@@ -3,7 +3,8 @@
  *
  * A port statement for statement of ThreeStageEstimator.update (stage 1 _RevolutionDetrend or _HighPass,
  * stage 2 _Rls, stage 3 the compensation) and NotchFilter.update: the same floating-point operations in
- * the same order, the system libm as Python's math.  The dot products and matrix-vector products are
+ * the same order, the system libm as Python's math (the products with the symmetric Gamma read its rows for
+ * its columns: the same numbers, see sym_matvec).  The dot products and matrix-vector products are
  * summed left to right, where numpy hands them to BLAS: the three-stage outputs differ from the
  * Python reference by rounding only (tests/test_sensors_kernels.py states the tolerance); the notch is
  * bit for bit.  ISO C99 keeps floating-point contraction off (no fused multiply-add).
@@ -63,20 +64,72 @@ static double dot(int d, const double *a, const double *b) {
     return acc;
 }
 
+/* y = Gamma x for the symmetric Gamma: y[i] = dot(d, Gamma + i d, x), each sum over k in the same order, read
+ * from row k instead of column k (Gamma[i][k] == Gamma[k][i] bit for bit: it starts diagonal, and the decay
+ * and the update (gphi[i] gphi[j]) f keep each pair of mirrored entries equal), so that four sums run side
+ * by side in registers (written out: the compiler's vectoriser at -O2 takes a block of four, not a loop
+ * whose length it does not know). */
+static void sym_matvec(int d, const double *restrict gamma, const double *restrict x, double *restrict y) {
+    int i = 0;
+    for (; i + 4 <= d; i += 4) {
+        double a0 = 0.0, a1 = 0.0, a2 = 0.0, a3 = 0.0;
+        for (int k = 0; k < d; ++k) {
+            const double *restrict g = gamma + k * d + i;
+            double xk = x[k];
+            a0 += g[0] * xk;
+            a1 += g[1] * xk;
+            a2 += g[2] * xk;
+            a3 += g[3] * xk;
+        }
+        y[i] = a0;
+        y[i + 1] = a1;
+        y[i + 2] = a2;
+        y[i + 3] = a3;
+    }
+    for (; i < d; ++i) {
+        double acc = 0.0;
+        for (int k = 0; k < d; ++k) acc += gamma[k * d + i] * x[k];
+        y[i] = acc;
+    }
+}
+
+/* gamma[i][j] = gamma[i][j] - (a[i] a[j]) f, four entries at a time as sym_matvec */
+static void rank_one_down(int d, double *restrict gamma, const double *restrict a, double f) {
+    for (int r = 0; r < d; ++r) {
+        double *restrict row = gamma + r * d;
+        double ar = a[r];
+        int j;
+        for (j = 0; j + 4 <= d; j += 4) {
+            row[j] = row[j] - (ar * a[j]) * f;
+            row[j + 1] = row[j + 1] - (ar * a[j + 1]) * f;
+            row[j + 2] = row[j + 2] - (ar * a[j + 2]) * f;
+            row[j + 3] = row[j + 3] - (ar * a[j + 3]) * f;
+        }
+        for (; j < d; ++j) row[j] = row[j] - (ar * a[j]) * f;
+    }
+}
+
 /* _Rls.step on Gamma (d x d, row major) and theta */
 static void rls_step(const double *cfg, int d, double *gamma, double *theta, const double *phi, double phi_sq,
                      double zeta) {
     double gphi[MAX_DIM], gp[MAX_DIM];
     double w = cfg[CFG_DT] / (1.0 + cfg[CFG_KAPPA] * phi_sq);
-    for (int i = 0; i < d * d; ++i) gamma[i] *= cfg[CFG_DECAY];
-    for (int i = 0; i < d; ++i) gphi[i] = dot(d, gamma + i * d, phi);
+    double decay = cfg[CFG_DECAY];       /* read once: gamma might alias cfg, as far as the compiler knows */
+    int i = 0;
+    for (; i + 4 <= d * d; i += 4) {
+        gamma[i] *= decay;
+        gamma[i + 1] *= decay;
+        gamma[i + 2] *= decay;
+        gamma[i + 3] *= decay;
+    }
+    for (; i < d * d; ++i) gamma[i] *= decay;
+    sym_matvec(d, gamma, phi, gphi);
     double f = w / (1.0 + w * dot(d, phi, gphi));
-    for (int i = 0; i < d; ++i)
-        for (int j = 0; j < d; ++j) gamma[i * d + j] = gamma[i * d + j] - (gphi[i] * gphi[j]) * f;
+    rank_one_down(d, gamma, gphi, f);
     double err = dot(d, phi, theta) - zeta;
-    for (int i = 0; i < d; ++i) gp[i] = dot(d, gamma + i * d, phi);
+    sym_matvec(d, gamma, phi, gp);
     double we = w * err;
-    for (int i = 0; i < d; ++i) theta[i] -= gp[i] * we;
+    for (i = 0; i < d; ++i) theta[i] -= gp[i] * we;
 }
 
 /* _HighPass.__call__ on (on, x, y) */
@@ -212,53 +265,68 @@ static double horner(const double *c, int64_t deg, double x) {
     return acc;
 }
 
+/* The fit of one window (n times tw, angles thw): the coefficients p of the order-m polynomial in
+ * s = (t - tw[0]) / span fitted to theta - thw[0], by Householder QR.  a and y: work (n * (m + 1), n). */
+static void fit_window(const double *tw, const double *thw, int64_t n, int64_t m, double span, double *a,
+                       double *y, double *p) {
+    int64_t cols = m + 1;
+    double t0 = tw[0];
+    for (int64_t j = 0; j < n; ++j) {          /* a: column major, n x cols */
+        double s = (tw[j] - t0) / span, power = 1.0;
+        for (int64_t k = 0; k < cols; ++k) {
+            a[k * n + j] = power;
+            power *= s;
+        }
+        y[j] = thw[j] - thw[0];
+    }
+    /* Householder QR, column by column: H = I - tau v v^T with v[k] = 1 maps a[k.., k] onto beta e_k */
+    for (int64_t k = 0; k < cols; ++k) {
+        double *ak = a + k * n;
+        double xnorm2 = 0.0;
+        for (int64_t j = k + 1; j < n; ++j) xnorm2 += ak[j] * ak[j];
+        double alpha0 = ak[k];
+        if (xnorm2 == 0.0) continue;       /* already triangular in this column: H = I */
+        double beta = sqrt(alpha0 * alpha0 + xnorm2);
+        if (alpha0 > 0.0) beta = -beta;
+        double tau = (beta - alpha0) / beta, scale = 1.0 / (alpha0 - beta);
+        for (int64_t j = k + 1; j < n; ++j) ak[j] *= scale;
+        ak[k] = beta;
+        for (int64_t c = k + 1; c <= cols; ++c) {     /* the later columns, then y (c == cols) */
+            double *ac = c < cols ? a + c * n : y;
+            double w = ac[k];
+            for (int64_t j = k + 1; j < n; ++j) w += ak[j] * ac[j];
+            w *= tau;
+            ac[k] -= w;
+            for (int64_t j = k + 1; j < n; ++j) ac[j] -= w * ak[j];
+        }
+    }
+    for (int64_t k = cols - 1; k >= 0; --k) {       /* R p = (Q^T y)[0 .. m] */
+        double acc = y[k];
+        for (int64_t c = k + 1; c < cols; ++c) acc -= a[c * n + k] * p[c];
+        p[k] = acc / a[k * n + k];
+    }
+}
+
 /* _tsa._fit over count windows: window i holds the n events last[i] - n + 1 .. last[i]; the order-m
  * polynomial in s = (t - t0) / span is fitted to theta - theta0 (seed 001 (5.2)-(5.3), Appendix C) and it
  * and its derivatives are evaluated at t_eval[i] (5.4)-(5.5).  out (4 x count, row major): theta, omega,
- * alpha and the window's mean time stamp.  work: n * (m + 2) + 2 * (m + 1) doubles. */
+ * alpha and the window's mean time stamp.  work: n * (m + 2) + 2 * (m + 1) doubles.  A sample whose window
+ * is the previous sample's (no edge in between: at 1 kHz and a few hundred edges a second, every other
+ * sample or so) reuses its fit: the same numbers, evaluated at its own time. */
 void switchobs_tsa_fit(int64_t count, const double *times, const double *angles, const int64_t *last,
                        const double *t_eval, int64_t n, int64_t m, double *work, double *out) {
     int64_t cols = m + 1;
-    double *a = work, *y = work + n * cols, *p = y + n, *dp = p + cols;   /* a: column major, n x cols */
+    double *a = work, *y = work + n * cols, *p = y + n, *dp = p + cols;
+    double span = 0.0, total = 0.0;
     for (int64_t i = 0; i < count; ++i) {
         const double *tw = times + last[i] - n + 1, *thw = angles + last[i] - n + 1;
-        double t0 = tw[0], span = tw[n - 1] - t0, total = 0.0;
-        for (int64_t j = 0; j < n; ++j) {
-            double s = (tw[j] - t0) / span, power = 1.0;
-            for (int64_t k = 0; k < cols; ++k) {
-                a[k * n + j] = power;
-                power *= s;
-            }
-            y[j] = thw[j] - thw[0];
-            total += tw[j];
+        if (i == 0 || last[i] != last[i - 1]) {
+            span = tw[n - 1] - tw[0];
+            total = 0.0;
+            for (int64_t j = 0; j < n; ++j) total += tw[j];
+            fit_window(tw, thw, n, m, span, a, y, p);
         }
-        /* Householder QR, column by column: H = I - tau v v^T with v[k] = 1 maps a[k.., k] onto beta e_k */
-        for (int64_t k = 0; k < cols; ++k) {
-            double *ak = a + k * n;
-            double xnorm2 = 0.0;
-            for (int64_t j = k + 1; j < n; ++j) xnorm2 += ak[j] * ak[j];
-            double alpha0 = ak[k];
-            if (xnorm2 == 0.0) continue;       /* already triangular in this column: H = I */
-            double beta = sqrt(alpha0 * alpha0 + xnorm2);
-            if (alpha0 > 0.0) beta = -beta;
-            double tau = (beta - alpha0) / beta, scale = 1.0 / (alpha0 - beta);
-            for (int64_t j = k + 1; j < n; ++j) ak[j] *= scale;
-            ak[k] = beta;
-            for (int64_t c = k + 1; c <= cols; ++c) {     /* the later columns, then y (c == cols) */
-                double *ac = c < cols ? a + c * n : y;
-                double w = ac[k];
-                for (int64_t j = k + 1; j < n; ++j) w += ak[j] * ac[j];
-                w *= tau;
-                ac[k] -= w;
-                for (int64_t j = k + 1; j < n; ++j) ac[j] -= w * ak[j];
-            }
-        }
-        for (int64_t k = cols - 1; k >= 0; --k) {       /* R p = (Q^T y)[0 .. m] */
-            double acc = y[k];
-            for (int64_t c = k + 1; c < cols; ++c) acc -= a[c * n + k] * p[c];
-            p[k] = acc / a[k * n + k];
-        }
-        double se = (t_eval[i] - t0) / span;
+        double se = (t_eval[i] - tw[0]) / span;
         for (int64_t k = 1; k < cols; ++k) dp[k - 1] = p[k] * (double)k;
         out[i] = thw[0] + horner(p, m, se);
         out[count + i] = horner(dp, m - 1, se) / span;

@@ -354,6 +354,24 @@ class NotchFilter:
         self._z1 = self._z2 = 0.0
         self._u: float | None = None
 
+    def run(self, u: npt.ArrayLike, centre_rad_s: npt.ArrayLike, *, compiled: bool | None = None) -> Array:
+        """:meth:`update` over the samples ``u`` with the centres ``centre_rad_s`` (equal lengths), the filter's
+        state carried on: a series filtered in pieces equals it filtered at once.
+
+        ``compiled`` as in :class:`ThreeStageEstimator`: the C port gives the same numbers bit for bit.
+        """
+        uu, cc = np.asarray(u, dtype=float).ravel(), np.asarray(centre_rad_s, dtype=float).ravel()
+        if uu.size != cc.size:
+            raise SimulationError(f"u has {uu.size} samples and centre_rad_s {cc.size}; give one centre per sample")
+        if not use_kernels(compiled):
+            return np.array([self.update(a, b) for a, b in zip(uu.tolist(), cc.tolist())], dtype=float)
+        # the kernel's state is this filter's, handed over and back (the same floats)
+        state = np.array([0.0 if self._u is None else 1.0, self._z1, self._z2, 0.0 if self._u is None else self._u])
+        out = notch_run(self.dt_s, self.damping, uu, cc, state)
+        if state[0] != 0.0:
+            self._z1, self._z2, self._u = float(state[1]), float(state[2]), float(state[3])
+        return out
+
     def update(self, u: float, center_rad_s: float) -> float:
         """Filter one sample ``u`` with the notch centred at ``center_rad_s`` (rad/s)."""
         # pre-warped centre times half the step; the clamp keeps tan finite near Nyquist
@@ -435,10 +453,4 @@ def notch_series(u: npt.ArrayLike, centre_rad_s: npt.ArrayLike, *, dt_s: float, 
 
     ``compiled`` as in :class:`ThreeStageEstimator`: the C port gives the same numbers bit for bit.
     """
-    filt = NotchFilter(dt_s=dt_s, damping=damping)
-    uu, cc = np.asarray(u, dtype=float).ravel(), np.asarray(centre_rad_s, dtype=float).ravel()
-    if uu.size != cc.size:
-        raise SimulationError(f"u has {uu.size} samples and centre_rad_s {cc.size}; give one centre per sample")
-    if use_kernels(compiled):
-        return notch_run(filt.dt_s, filt.damping, uu, cc)
-    return np.array([filt.update(a, b) for a, b in zip(uu.tolist(), cc.tolist())], dtype=float)
+    return NotchFilter(dt_s=dt_s, damping=damping).run(u, centre_rad_s, compiled=compiled)
