@@ -14,9 +14,12 @@ Then a small study on a real cluster: the spec with 50 draws per gain pair (200 
 ``switchobs sweep ... --scheduler none`` against the same command on a cluster of separate processes
 started before it (``dask scheduler`` and two ``dask worker --nthreads 1``, fresh for each run: their first
 case would import the stack and build the four observers), wall time of the whole ``switchobs`` process,
-median [min–max] of ``--repeats`` runs.  The workers are warmed once per study: the C observers are built
-one task each, spread over the workers, and handed to every worker before the first batch
-(``switchobs.sweep`` module notes).
+median [min–max] of ``--repeats`` runs, and the same study run a second time on a cluster whose workers
+ran it once (warm: the stack imported, the observers installed): the difference of the two is the start-up
+of fresh workers.  The workers are warmed once per study: they import the stack while the command builds the
+C observers, which every worker then takes before the first batch (``switchobs.sweep`` module notes).  The
+rows of every run must be the same bytes.  Beside them, two in-process runs started together: what a
+second process gets from the machine's other core (on a shared machine, maybe nothing).
 
 Run: ``python benchmarks/sweep_robustness.py [--quick] [--count N] [--sample K] [--repeats R]`` (``--count``:
 draws per gain pair instead of the spec's 250; ``--quick``: 2 draws, 4 sampled cases, a 20-case cluster
@@ -80,35 +83,59 @@ def dask_cluster(workdir: Path, workers: int = 2) -> Iterator[str]:
                 proc.kill()
 
 
-def small_study(tmp: Path, count: int, repeats: int) -> tuple[list[str], int]:
-    """Rows of the in-process / cluster table for the spec with ``count`` draws per pair, and its cases."""
+def small_study(tmp: Path, count: int, repeats: int) -> tuple[list[str], int, float]:
+    """Rows of the in-process / cluster table for the spec with ``count`` draws per pair, its cases, and the
+    start-up of fresh workers (the median wall of the fresh cluster's run less that of the warm one)."""
     spec = tmp / f"robustness-{count}.toml"
     spec.write_text(re.sub(r"(?m)^count = \d+", f"count = {count}", SPEC.read_text()), encoding="utf-8")
     cases = len(load_sweep_spec(spec).cases)
-    walls: dict[str, list[float]] = {"none": [], "cluster": []}
+    walls: dict[str, list[float]] = {"none": [], "cluster": [], "again": [], "pair": []}
     cpus: dict[str, list[float]] = {"none": [], "cluster": []}
-    for _ in range(repeats):                     # interleaved: a change of the machine's load hits both
-        for where in ("none", "cluster"):
-            out = tmp / f"small-{where}.jsonl"
+
+    def run(where: str, address: str | None, at_once: int = 1) -> float:
+        """Wall time until ``at_once`` copies of the command, started together, have all exited."""
+        commands = []
+        for copy in range(at_once):
+            out = tmp / f"small-{where}{copy or ''}.jsonl"
             out.unlink(missing_ok=True)
-            before = resource.getrusage(resource.RUSAGE_CHILDREN)
-            with dask_cluster(tmp) if where == "cluster" else _nothing() as address:
-                command = ["sweep", str(spec), "--out", str(out), "-q", "--scheduler", address or "none"]
-                t0 = time.perf_counter()
-                proc = subprocess.run([switchobs_exe(), *command], capture_output=True, text=True, check=False)
-                walls[where].append(time.perf_counter() - t0)
-            after = resource.getrusage(resource.RUSAGE_CHILDREN)   # the cluster's processes reaped by now
-            cpus[where].append((after.ru_utime - before.ru_utime) + (after.ru_stime - before.ru_stime))
+            commands.append(["sweep", str(spec), "--out", str(out), "-q", "--scheduler", address or "none"])
+        t0 = time.perf_counter()
+        procs = [subprocess.Popen([switchobs_exe(), *c], stdout=subprocess.DEVNULL, stderr=subprocess.PIPE,
+                                  text=True) for c in commands]
+        errors = [proc.communicate()[1] for proc in procs]
+        wall = time.perf_counter() - t0
+        for command, proc, error in zip(commands, procs, errors):
             if proc.returncode != 0:
-                raise SystemExit(f"switchobs {' '.join(command)} failed ({proc.returncode}): {proc.stderr.strip()}")
+                raise SystemExit(f"switchobs {' '.join(command)} failed ({proc.returncode}): {error.strip()}")
+        return wall
+
+    for _ in range(repeats):                     # interleaved: a change of the machine's load hits all four
+        for where in ("none", "cluster", "again", "pair"):
+            before = resource.getrusage(resource.RUSAGE_CHILDREN)
+            with dask_cluster(tmp) if where != "none" else _nothing() as address:
+                if where == "again":
+                    run("warm-up", address)      # the same study once before: its workers are warm
+                # the pair: two in-process runs at once, what the machine's second core gives a second process
+                walls[where].append(run(where, address, 2 if where == "pair" else 1))
+            after = resource.getrusage(resource.RUSAGE_CHILDREN)   # the cluster's processes reaped by now
+            if where in cpus:
+                cpus[where].append((after.ru_utime - before.ru_utime) + (after.ru_stime - before.ru_stime))
     (none, cluster), (cpu_none, cpu_cluster) = ((Stats(tuple(d["none"])), Stats(tuple(d["cluster"])))
                                                 for d in (walls, cpus))
+    again, pair = Stats(tuple(walls["again"])), Stats(tuple(walls["pair"]))
+    first = (tmp / "small-none.jsonl").read_bytes()
+    if any((tmp / f"small-{where}.jsonl").read_bytes() != first for where in ("cluster", "again", "pair", "pair1")):
+        raise SystemExit("the cluster's rows differ from the in-process rows")
     rows = [f"| the spec with `count = {count}` draws per pair ({cases} cases) | wall, whole process [s] | cases/s "
             "| CPU, all processes [s] |", "| --- | ---: | ---: | ---: |",
             f"| `--scheduler none` (in-process) | {none.show()} | {number(cases / none.median)} | {cpu_none.show()} |",
-            f"| `--scheduler tcp://…`: `dask scheduler`, 2 × `dask worker --nthreads 1` | {cluster.show()} "
-            f"| {number(cases / cluster.median)} | {cpu_cluster.show()} |"]
-    return rows, cases
+            f"| `--scheduler tcp://…`: `dask scheduler`, 2 × `dask worker --nthreads 1`, just started "
+            f"| {cluster.show()} | {number(cases / cluster.median)} | {cpu_cluster.show()} |",
+            f"| the same study again on the same cluster (its workers warm) | {again.show()} "
+            f"| {number(cases / again.median)} | – |",
+            f"| two `--scheduler none` runs at once, until both exit (what a second process gets here) "
+            f"| {pair.show()} | {number(2 * cases / pair.median)} | – |"]
+    return rows, cases, cluster.median - again.median
 
 
 @contextmanager
@@ -164,17 +191,21 @@ def main() -> None:
              f"machine shared with other jobs (load average above its cores) the wall time measures the queue "
              f"for the processors; the CPU time is the work."]
     with tempfile.TemporaryDirectory() as tmp:
-        small, small_cases = small_study(Path(tmp), 5 if args.quick else 50, 1 if args.quick else args.repeats)
+        small, small_cases, start_up = small_study(Path(tmp), 5 if args.quick else 50, 1 if args.quick else args.repeats)
     notes.append(f"The {small_cases}-case study: wall time from the command's start to its exit, median [min–max] "
                  f"of {1 if args.quick else args.repeats} runs of each, interleaved; the cluster's processes are "
-                 "started before each run and stopped after it; the cluster row includes building the four C "
-                 "observers (one task each on the workers) and handing them to every worker. CPU: the command's, "
-                 "and for the cluster also its scheduler's and workers' from their start to their stop (their "
-                 "start-up included).")
+                 "started before each run and stopped after it; the cluster rows include building the four C "
+                 "observers in the command (the workers import the stack meanwhile) and handing them to every "
+                 "worker; the warm row's cluster ran the study once before (untimed). The start-up of fresh "
+                 f"workers, the difference of the two cluster rows' medians: {number(start_up)} s. The rows of "
+                 "every run are the same bytes. Two in-process runs started together end after the pair's wall "
+                 "time: twice one run's when the machine's other jobs leave our processes one core, then no "
+                 "parallel run can gain. CPU: the command's, and for the cluster also its scheduler's "
+                 "and workers' from their start to their stop (their start-up included).")
     publish("sweep_robustness",
             "The Monte-Carlo robustness study on the default local Dask cluster (one single-threaded worker "
             "process per core), as one whole `switchobs` process from start to exit (interpreter start-up, "
-            "cluster start, the C observers' design and build, once each on the workers and then handed to "
+            "cluster start, the C observers' design and build, once each in the command and then handed to "
             "every worker, the cases, the tables, plots and tuning), run once; the encoder chain runs over the "
             "compiled plant's run afterwards (`switchobs.plants.simulate`, replay).",
             [table, small], notes, write=not args.quick)

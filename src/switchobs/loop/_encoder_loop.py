@@ -199,9 +199,9 @@ class EncoderLoopEstimator:
         self._states: list[Any] = [None] * len(self._observers)
         self._estimate = self._initial_xbs
         self._events = 0
-        self._rows: list[tuple[float, ...]] = []
-        self._omega_steps: list[float] = [self._omega]
-        self._beside_rows: list[list[float]] = []
+        self._rows: list[tuple[float, ...]] | Array = []                # arrays after replay()
+        self._omega_steps: list[float] | Array = [self._omega]
+        self._beside_rows: list[list[float]] | Array = []
         for _, est in self._beside:
             est.reset(t0, y0, vx0)
         self._beside_rows.append([est.estimate for _, est in self._beside])
@@ -337,10 +337,12 @@ class EncoderLoopEstimator:
         estimates = np.full((m.t.size, len(self._observers)), np.nan)
         for k, (states, _) in enumerate(stepped):
             estimates[ok, k] = np.asarray(self._observers[k][1].readout(states), dtype=float)
-        # what the interleaved run leaves for record()
-        self._rows = [tuple(r) for r in np.column_stack([*columns, estimates]).tolist()]
-        self._events, self._hist_t, self._omega_steps = m.events, m.steps_t.tolist(), m.omega_steps.tolist()
-        self._beside_rows = [[] for _ in self._hist_t]
+        # what the interleaved run leaves for record(), as arrays (record() reads lists and arrays alike): as
+        # lists they were a tuple per sample and a list per plant step, whose allocation set off the garbage
+        # collector, which walks every object of the process (a third of a sweep case, more on a Dask worker)
+        self._rows = np.column_stack([*columns, estimates])
+        self._events, self._hist_t, self._omega_steps = m.events, m.steps_t.copy(), m.omega_steps.copy()
+        self._beside_rows = np.empty((m.steps_t.size, 0))
         self._states = [states[-1] if len(states) else None for states, _ in stepped]
         self._last = stepped[0][1]
         if ok.size:

@@ -23,13 +23,15 @@ case has its row the table is written atomically and the journal removed.  The t
 ``case_id``, ``status``, ``error`` and the scalar fields of the case and the metrics as typed columns
 ``case.NAME`` and ``metrics.NAME`` (a list, or a name whose values mix types, as JSON text) for analysis.
 
-Warm workers: before the first batch goes out, every C observer of the cases is built once (the symbolic
-design and the C generation take about a second each, a case some tens of milliseconds), one build task
-per observer spread over the workers, and every worker takes them all (``Client.run``) with the imports of
-the simulation stack, so no worker repeats a design before its first case.  What travels is each observer's generated C source, never a binary: a
-worker compiles it into, or finds it verified in, its own per-user compiled-code cache
-(:func:`switchobs.codegen.load_library`); a worker that joins later, or whose warm-up fails, builds what
-its cases need itself.
+Warm workers: before the first batch goes out, every worker imports the simulation stack (one task pinned to
+each) while this process builds every C observer of the cases once, and every worker then takes them all
+(``Client.run``), so no worker repeats a design before its first case.  The builds stay here: the first
+takes most of a second (the symbolic design and sympy's first use), each further one some 70 ms, so spread
+over the workers each of them would pay the first again after its imports, and the tuning of the study
+(:func:`~switchobs.sweep.tune_betas`) needs the design in this process anyway.  What travels is each
+observer's generated C source, never a binary: a worker compiles it into, or finds it verified in, its own
+per-user compiled-code cache (:func:`switchobs.codegen.load_library`); a worker that joins later, or whose
+warm-up fails, builds what its cases need itself.
 
 A case's warnings (numpy's overflow in a diverging run) are not printed: its row reports the outcome
 (non-finite numbers are null, the status says why).  In this process and on the local cluster, what C code
@@ -592,29 +594,30 @@ def _run_on_dask(todo: list[Case], take: Any, *, scheduler: Any, workers: int | 
 
 
 def _warm_workers(client: Any, cases: Sequence[Case]) -> None:
-    """The cases' C observers built once, one task each on the workers, and installed on every worker with
-    the stack's imports (module notes).  A build or a warm-up that fails is left out: the cases concerned
-    build what they need."""
+    """Every worker imports the simulation stack (one task pinned to each) while this process builds the cases'
+    C observers, which every worker then takes (module notes).  A build that fails is left out, a warm-up
+    that fails is given up: the cases concerned build what they need."""
     settings = observer_settings(cases)
     if not settings:
         return
     progress(f"sweep: warming the workers ({len(settings)} C observer{'s' if len(settings) != 1 else ''})")
-    built: dict[Any, Any] = {}
+    imports: list[Any] = []
     try:
-        futures = client.map(build_observers, [[s] for s in settings], pure=False)
-        for future in futures:
-            try:
-                built.update(future.result())
-            except Exception:  # noqa: BLE001 - a build that fails here fails again in its cases, as a row
-                pass
+        imports = [client.submit(_warm_worker, {}, workers=[w], pure=False)
+                   for w in client.scheduler_info().get("workers", {})]
+        built = build_observers(settings)
         if built:
             client.run(_warm_worker, built, on_error="return")
     except Exception:  # noqa: BLE001 - a warm-up that cannot be sent costs time, not results
         pass
+    finally:
+        for future in imports:   # released, never awaited: a worker that left must not hold the sweep
+            future.release()
 
 
 def _warm_worker(built: dict[Any, Any]) -> int:
     """On a worker: the simulation stack imported and the observers ``built`` installed (their number)."""
+    from .. import codegen  # noqa: F401 - what unpickling a C observer imports (casadi)
     from ..loop import install_observers
     from ..plants import simulate  # noqa: F401 - the import a first case would pay
 
