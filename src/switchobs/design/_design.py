@@ -35,7 +35,7 @@ from ..model import Model, entries, free_names, make_symbol, numeric, parse_expr
 from ._lyapunov import _generic_solution, observer_form_gramian
 from .._display import ROUNDED_NOTE, is_shortened, readable, unicode_output
 from .._progress import progress
-from ._normal_form import ObserverNormalForm, is_rational, observer_normal_form, rational_matrix, rational_rows
+from ._normal_form import ObserverNormalForm, flint_matrix, observer_normal_form, rational_rows, sympy_matrix
 from ._recheck import lyapunov_by_substitution, lyapunov_residual_is_zero
 from ._routh import hurwitz_conditions, readable_condition, routh_first_column
 from ._spectrum import LAPLACE, parse_spectrum, polynomial_coefficients, spectrum_coefficients
@@ -63,11 +63,15 @@ def _matrix_json(M: sp.MatrixBase) -> list:
     return [row[0] for row in rows] if M.cols == 1 else rows
 
 
-def _product(X: sp.MatrixBase, Y: sp.MatrixBase) -> sp.ImmutableMatrix | None:
-    """``X Y`` over QQ when both are rational (exact, no expressions); ``None`` otherwise."""
-    if not (is_rational(X) and is_rational(Y)):
+def _product(*factors: sp.MatrixBase) -> sp.ImmutableMatrix | None:
+    """The product of the factors when all are rational (exact, on python-flint's ``fmpq_mat``); else None."""
+    exact = [flint_matrix(M) for M in factors]
+    if any(M is None for M in exact):
         return None
-    return sp.ImmutableMatrix((rational_matrix(sp.Matrix(X)) * rational_matrix(sp.Matrix(Y))).to_Matrix())
+    out = exact[0]
+    for M in exact[1:]:
+        out = out * M
+    return sympy_matrix(out)
 
 
 def _to_model(nf: ObserverNormalForm, k_nf: sp.MatrixBase) -> sp.ImmutableMatrix:
@@ -769,10 +773,8 @@ design = design_gains
 
 def _congruence(T: sp.MatrixBase, P_nf: sp.MatrixBase) -> sp.ImmutableMatrix:
     """``T' P_nf T``: the normal-form Lyapunov matrix in the model's coordinates."""
-    if is_rational(T) and is_rational(P_nf):
-        Tq = rational_matrix(sp.Matrix(T))
-        return sp.ImmutableMatrix((Tq.transpose() * rational_matrix(sp.Matrix(P_nf)) * Tq).to_Matrix())
-    return sp.ImmutableMatrix((T.T * P_nf * T).applyfunc(sp.cancel))
+    rational = _product(T.T, P_nf, T)
+    return rational if rational is not None else sp.ImmutableMatrix((T.T * P_nf * T).applyfunc(sp.cancel))
 
 
 def _raise_not_coupled(Kp: sp.MatrixBase, Km: sp.MatrixBase, why: str) -> None:
