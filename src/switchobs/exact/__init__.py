@@ -10,9 +10,9 @@ verifier's reasoning stays its own (it shares this arithmetic, not the producers
 Public API
 ----------
 Matrix, to_fraction, fraction_matrix, matrix_strings, identity, zeros, transpose, matmul, add, sub, scale,
-lyapunov_form, integer_form, is_zero, inf_norm, float_matrix  -- exact matrices as lists of rows (products on flint)
+lyapunov_form, integer_form, is_zero, inf_norm, float_matrix, product_work -- exact matrices as lists of rows (products on flint)
 Definiteness, definiteness, ldl_psd, ARITHMETICS, arithmetic -- M > 0 / M >= 0, decided exactly; M = L D L'
-rank, nullspace, solve, lyapunov_solve, observable            -- exact elimination (fmpq_mat, nmod_mat)
+rank, nullspace, solve, lyapunov_solve, observable, charpoly  -- exact elimination (fmpq_mat, nmod_mat)
 expm_enclosure, sqrt_lower, sqrt_upper                        -- rigorous bounds
 dyadic, psd_dyadic, factor_rows, range_basis, project_primal, project_dual, kernel_vector,
 normalise, short_sqrt_lower, MAX_PROJECTION_UNKNOWNS, FACE_TOLERANCES  -- floats to exact candidates
@@ -20,7 +20,7 @@ Interval, monomial_range, box_pieces, vertex_values, evaluate_terms, observer_pa
                                                               -- polytopes of matrices over parameter boxes
 """
 
-from ._exact import (elimination_work, ARITHMETICS, Definiteness, Matrix, add, arithmetic, definiteness, expm_enclosure, float_matrix,
+from ._exact import (elimination_work, ARITHMETICS, Definiteness, Matrix, add, arithmetic, charpoly, definiteness, expm_enclosure, float_matrix, product_work,
                      fraction_matrix, identity, inf_norm, integer_form, is_zero, ldl_psd, lyapunov_form,
                      lyapunov_solve, matmul, matrix_strings, nullspace, observable, rank, scale, solve, sqrt_lower,
                      sqrt_upper, sub, to_fraction, transpose, zeros)
@@ -29,9 +29,9 @@ from ._polytope import (Interval, box_pieces, evaluate_terms, monomial_range, ob
 from ._rounding import (FACE_TOLERANCES, MAX_PROJECTION_UNKNOWNS, dyadic, factor_rows, kernel_vector, normalise,
                         project_dual, project_primal, psd_dyadic, range_basis, short_sqrt_lower)
 
-__all__ = ["ARITHMETICS", "Definiteness", "Matrix", "add", "arithmetic", "definiteness", "elimination_work", "expm_enclosure",
+__all__ = ["ARITHMETICS", "Definiteness", "Matrix", "add", "arithmetic", "charpoly", "definiteness", "elimination_work", "expm_enclosure",
            "float_matrix", "fraction_matrix", "identity", "inf_norm", "integer_form", "is_zero", "ldl_psd",
-           "lyapunov_form", "lyapunov_solve", "matmul", "matrix_strings", "nullspace", "observable", "rank", "scale",
+           "lyapunov_form", "lyapunov_solve", "matmul", "product_work", "matrix_strings", "nullspace", "observable", "rank", "scale",
            "solve", "sqrt_lower", "sqrt_upper", "sub", "to_fraction", "transpose", "zeros", "FACE_TOLERANCES",
            "MAX_PROJECTION_UNKNOWNS", "dyadic", "factor_rows", "kernel_vector", "normalise", "project_dual",
            "project_primal", "psd_dyadic", "range_basis", "short_sqrt_lower", "Interval", "box_pieces",
