@@ -165,6 +165,20 @@ def test_the_normal_form_transformation_of_dense_and_triangular_models(n):
         assert O == sp.Matrix.vstack(*[C * A**k for k in range(n)]) and nf.observability_determinant == O.det()
 
 
+def test_the_recheck_refuses_a_characteristic_polynomial_the_matrices_do_not_have():
+    import dataclasses
+
+    rng = np.random.default_rng(5)
+    d = design(_random_model(5, rng), _random_spectrum(5, rng))
+    assert not d.normal_form.is_identity and d._normal_form_similarity() is not None
+    assert d.verify()["charpoly_plus"] and d.verify()["charpoly_minus"]
+    wrong = tuple(a + (1 if i == 2 else 0) for i, a in enumerate(d.alpha_plus))
+    checks = dataclasses.replace(d, alpha_plus=wrong, alpha_minus=wrong).verify()
+    assert not checks["charpoly_plus"] and not checks["charpoly_minus"]
+    singular = dataclasses.replace(d, normal_form=dataclasses.replace(d.normal_form, T_inv=2 * d.normal_form.T_inv))
+    assert singular._normal_form_similarity() is None and singular.verify()["charpoly_plus"]
+
+
 def test_numeric_K_minus_outside_the_family_is_refused_and_inside_accepted():
     model = builtin_model("abs-xbs3").numeric()
     d = design(model, "-40,-60,-60")
