@@ -20,8 +20,9 @@ import numpy as np
 import pytest
 
 from switchobs import _limits
-from switchobs.exact import elimination_work
-from switchobs._limits import MAX_CERTIFICATE_WORK, MAX_DIMENSION, MAX_INPUT_FILE_BYTES, read_text
+from switchobs.exact import product_work
+from switchobs._limits import (MAX_CERTIFICATE_DIGITS, MAX_CERTIFICATE_WORK, MAX_DIMENSION, MAX_INPUT_FILE_BYTES,
+                               read_text)
 from switchobs.certify import verify_certificate
 from switchobs.certify._schema import CertificateDocument
 from switchobs.cli._errors import guarded
@@ -192,14 +193,18 @@ def test_one_dimension_limit_for_models_systems_and_certificates():
 
 # ---------------------------------------------------------------- certificate cost
 def _certificate(n: int, digits: int) -> dict:
-    """A well-formed strict-cqlf certificate: n x n integer matrices of about ``digits`` digits."""
+    """A well-formed strict-cqlf certificate: n x n matrices of about ``digits`` digits over one common
+    denominator -- integers up to MAX_CERTIFICATE_DIGITS, beyond it numerators of half the digits over
+    ``10**(digits // 2)`` (every number stays within the limit)."""
     rng = np.random.default_rng(n + digits)
-    big = 10 ** (digits - 1)
+    shift = digits // 2 if digits > MAX_CERTIFICATE_DIGITS else 0
+    big = 10 ** (digits - shift - 1)
+    over = f"/{10 ** shift}" if shift else ""
 
-    def entry() -> str:
-        return str(int(rng.integers(1, 9)) * big + int(rng.integers(0, 10**6)))
-    A = [[str(-10 * n * big) if i == j else entry() for j in range(n)] for i in range(n)]
-    P = [[str(10 * n * big) if i == j else "0" for j in range(n)] for i in range(n)]
+    def entry() -> str:  # ends in 1: coprime to the denominator, which so stays the common one
+        return f"{int(rng.integers(1, 9)) * big + 10 * int(rng.integers(0, 10**5)) + 1}{over}"
+    A = [[f"{-10 * n * big}{over}" if i == j else entry() for j in range(n)] for i in range(n)]
+    P = [[f"{10 * n * big}{over}" if i == j else "0" for j in range(n)] for i in range(n)]
     return {"format": "switchobs-certificate", "version": 1,
             "family": {"names": ["A_plus", "A_minus"], "matrices": [A, A]},
             "certificates": [{"kind": "strict-cqlf", "P": P}],
@@ -209,9 +214,9 @@ def _certificate(n: int, digits: int) -> dict:
 
 def _digits_at_the_work_bound(n: int) -> int:
     """The digits D at which the products of an n-state certificate reach MAX_CERTIFICATE_WORK (the inverse of
-    the estimate of certify/_verify._check_cost: n**3 products weighted by (bits / 64 + 1) ** 1.5)."""
-    bits = 64 * ((MAX_CERTIFICATE_WORK / (n * n * (n + 1))) ** (2 / 3) - 1)
-    assert elimination_work(n, round(bits)) * 2 * n == pytest.approx(MAX_CERTIFICATE_WORK, rel=1e-3)
+    the estimate of certify/_verify._check_cost: n**3 products weighted by (bits / 64 + 1) ** 1.5 / 5)."""
+    bits = 64 * ((5 * MAX_CERTIFICATE_WORK / n ** 3) ** (2 / 3) - 1)
+    assert product_work(n, round(bits)) == pytest.approx(MAX_CERTIFICATE_WORK, rel=1e-3)
     return int(bits / math.log2(10))
 
 
@@ -233,8 +238,8 @@ def test_a_certificate_within_the_work_bound_is_checked():
 
 
 def test_a_dense_certificate_near_the_work_bound_is_checked_in_seconds():
-    # 64 x 64 just inside MAX_CERTIFICATE_WORK: the arb enclosure proves the three definiteness claims (12 s
-    # of exact elimination at 300 digits before it became the first try)
+    # MAX_DIMENSION states just inside MAX_CERTIFICATE_WORK: the arb enclosure proves the three definiteness
+    # claims (12 s of exact elimination at 64 states and 300 digits before it became the first try)
     n = MAX_DIMENSION
     doc = _certificate(n, _digits_at_the_work_bound(n) - 40)
     start = time.process_time()

@@ -102,6 +102,83 @@ def test_routh_array_agrees_with_the_hurwitz_determinants():
         assert by_routh == all(g > 0 for g in hurwitz_conditions(alpha)), alpha
 
 
+def _fraction_routh(alpha):
+    """The rational Routh array, the textbook way, in Fractions."""
+    from fractions import Fraction
+
+    coeff = [Fraction(1), *(Fraction(str(a)) for a in alpha)]
+    width = len(alpha) // 2 + 2
+    prev, cur = (coeff[0::2] + [Fraction(0)] * width)[:width], (coeff[1::2] + [Fraction(0)] * width)[:width]
+    column = [Fraction(1)]
+    for _ in alpha:
+        column.append(cur[0])
+        if cur[0] <= 0:
+            break
+        prev, cur = cur, [(cur[0] * prev[j + 1] - prev[0] * cur[j + 1]) / cur[0] for j in range(width - 1)] + [0]
+    return column
+
+
+def test_the_fraction_free_routh_array_equals_the_rational_one():
+    rng = np.random.default_rng(11)
+    hurwitz = 0
+    for k in range(300):
+        n = int(rng.integers(1, 16))
+        if k % 3:
+            alpha = [sp.Rational(int(rng.integers(-5, 60)), int(rng.choice([1, 2, 3, 7, 10, 1000]))) for _ in range(n)]
+        else:  # Hurwitz by construction: the array runs to the end
+            alpha = list(sp.Poly(sp.Mul(*[sp.Symbol("s") + sp.Rational(int(rng.integers(1, 50)),
+                                                                        int(rng.integers(1, 9))) for _ in range(n)]),
+                                 sp.Symbol("s")).all_coeffs()[1:])
+        column = routh_first_column(alpha)
+        assert column == _fraction_routh(alpha) and all(isinstance(x, sp.Rational) for x in column), alpha
+        hurwitz += len(column) == n + 1
+    assert 100 <= hurwitz < 300
+
+
+def test_flint_results_become_the_sympy_matrices_sympy_builds():
+    import flint
+
+    from switchobs.design._normal_form import flint_matrix, sympy_matrix
+
+    for entries in ([[1, 0], [-3, 7]], [[sp.Rational(1, 3), 0], [2, sp.Rational(-10**40 - 1, 10**30)]]):
+        expected = sp.ImmutableMatrix(entries)
+        built = sympy_matrix(flint_matrix(expected))
+        assert built == expected and built.args == expected.args and hash(built) == hash(expected)
+        assert built._rep == expected._rep and built._rep.domain == expected._rep.domain
+        assert built._rep.rep.fmt == expected._rep.rep.fmt
+    assert flint_matrix(sp.Matrix([[sp.sqrt(2)]])) is None
+    assert sympy_matrix(flint.fmpq_mat(2, 1, [0, 0])) == sp.zeros(2, 1)
+
+
+@pytest.mark.parametrize("n", [3, 6, 9])
+def test_the_normal_form_transformation_of_dense_and_triangular_models(n):
+    rng = np.random.default_rng(200 + n)
+    chain = Model.from_dict({"name": "chain", "states": [f"x{i}" for i in range(n)],
+                             "A": [[str(sp.Rational(-int(rng.integers(1, 9)), 4)) if i == j else ("1" if j == i + 1
+                                   else "0") for j in range(n)] for i in range(n)],
+                             "C": ["1"] + ["0"] * (n - 1), "time_scale": "y"})
+    for model in (_random_model(n, rng), chain):
+        nf = observer_normal_form(model)
+        A, C, O = sp.Matrix(model.A), sp.Matrix(model.C), nf.observability_matrix
+        assert nf.T * nf.T_inv == sp.eye(n) and nf.T * A * nf.T_inv == nf.A
+        assert C * nf.T_inv == sp.Matrix([[1] + [0] * (n - 1)])
+        assert O == sp.Matrix.vstack(*[C * A**k for k in range(n)]) and nf.observability_determinant == O.det()
+
+
+def test_the_recheck_refuses_a_characteristic_polynomial_the_matrices_do_not_have():
+    import dataclasses
+
+    rng = np.random.default_rng(5)
+    d = design(_random_model(5, rng), _random_spectrum(5, rng))
+    assert not d.normal_form.is_identity and d._normal_form_similarity() is not None
+    assert d.verify()["charpoly_plus"] and d.verify()["charpoly_minus"]
+    wrong = tuple(a + (1 if i == 2 else 0) for i, a in enumerate(d.alpha_plus))
+    checks = dataclasses.replace(d, alpha_plus=wrong, alpha_minus=wrong).verify()
+    assert not checks["charpoly_plus"] and not checks["charpoly_minus"]
+    singular = dataclasses.replace(d, normal_form=dataclasses.replace(d.normal_form, T_inv=2 * d.normal_form.T_inv))
+    assert singular._normal_form_similarity() is None and singular.verify()["charpoly_plus"]
+
+
 def test_numeric_K_minus_outside_the_family_is_refused_and_inside_accepted():
     model = builtin_model("abs-xbs3").numeric()
     d = design(model, "-40,-60,-60")

@@ -11,8 +11,8 @@ from random import Random
 
 import pytest
 
-from switchobs.exact import (definiteness, ldl_psd, lyapunov_form, lyapunov_solve, matmul, nullspace, rank, solve,
-                             transpose)
+from switchobs.exact import (charpoly, definiteness, ldl_psd, lyapunov_form, lyapunov_solve, matmul, nullspace, rank,
+                             solve, transpose)
 from switchobs.exact._exact import _eliminated_definiteness, _symmetric_integer_form
 from switchobs.exceptions import DimensionError
 
@@ -147,6 +147,25 @@ def test_products_determinants_ranks_solutions_equal_the_fraction_code(n, digits
             solve(square, B)
 
 
+def ref_charpoly(M):
+    """``[1, c_1, ..., c_n]`` by Faddeev-LeVerrier: ``M_k = M M_(k-1) + c_(k-1) I``, ``c_k = -tr(M M_k) / k``."""
+    n = len(M)
+    eye = [[Fraction(int(i == j)) for j in range(n)] for i in range(n)]
+    coeffs, Mk = [Fraction(1)], [[Fraction(0)] * n for _ in range(n)]
+    for k in range(1, n + 1):
+        Mk = [[x + coeffs[-1] * e for x, e in zip(row, erow)] for row, erow in zip(ref_matmul(M, Mk), eye)]
+        coeffs.append(-sum(ref_matmul(M, Mk)[i][i] for i in range(n)) / k)
+    return coeffs
+
+
+@pytest.mark.parametrize("n, digits, seed", [(1, 3, 0), (3, 10, 1), (8, 40, 2), (12, 6, 3)])
+def test_the_characteristic_polynomial_equals_the_fraction_code(n, digits, seed):
+    rng = Random(seed)
+    A = [[_entry(rng, digits) for _ in range(n)] for _ in range(n)]
+    assert charpoly(A) == ref_charpoly(A)
+    assert all(type(c) is Fraction for c in charpoly(A))
+
+
 def test_the_exact_lyapunov_solution_solves_the_equation():
     A = [[Fraction(-3), Fraction(1, 7)], [Fraction(2, 3), Fraction(-5, 2)]]
     Q = [[Fraction(1), Fraction(0)], [Fraction(0), Fraction(2)]]
@@ -181,7 +200,8 @@ def test_the_design_recheck_of_a_numeric_design_runs_on_the_kernel(tmp_path):
     import sympy as sp
 
     from switchobs.design import design_gains
-    from switchobs.design._recheck import _fractions, lyapunov_residual_is_zero
+    from switchobs.design._normal_form import flint_matrix
+    from switchobs.design._recheck import lyapunov_residual_is_zero
     from switchobs.model import load_model
 
     path = tmp_path / "decimal.toml"
@@ -190,7 +210,7 @@ def test_the_design_recheck_of_a_numeric_design_runs_on_the_kernel(tmp_path):
                     'C = ["1", "0", "0"]\ntime_scale = "y"\n', encoding="utf-8")
     design = design_gains(load_model(str(path)), spectrum="-1,-1.5,-2.03125")
     Q = sp.Matrix(design.C_plus).T * sp.Matrix(design.C_plus)
-    assert _fractions(design.A_plus) is not None and _fractions(sp.Matrix([[sp.Symbol("a")]])) is None
+    assert flint_matrix(design.A_plus) is not None and flint_matrix(sp.Matrix([[sp.Symbol("a")]])) is None
     assert lyapunov_residual_is_zero(design.A_plus, design.P, Q)
     assert not lyapunov_residual_is_zero(design.A_plus, design.P, 2 * Q)
     assert all(design.verify().values())

@@ -47,11 +47,10 @@ MAX_NUMBER_DIGITS = 1000
 #: Decimal digits of one number in a certificate, counting a decimal exponent as that many digits (below
 #: Python's own limit of 4300 digits for converting between integers and text).
 MAX_CERTIFICATE_DIGITS = 4000
-#: Size of a certificate file: the normal-form certificate of a dense 128-state model with 6-digit entries is
-#: 52 MB (its T and P have 2000- and 4000-digit entries) and ``verify`` reads it in 0.3 GB.
+#: Size of a certificate file: the 6-digit decimal 128-state chain's certificate is 64 MB (its dense ``P``).
 MAX_CERTIFICATE_BYTES = 100_000_000
-#: Size of a model, system or sweep file (TOML): a 64-state model of longest entries is about 8 MB.
-MAX_INPUT_FILE_BYTES = 10_000_000
+#: Size of a model, system or sweep file (TOML): a 128-state model of longest entries is about 33 MB.
+MAX_INPUT_FILE_BYTES = 40_000_000
 #: Rows of a processor-in-the-loop record: compiled into the harness, they and the states must fit the 4 MB code and
 #: 4 MB data memories of the emulated MPS2 boards (20000 rows of 3 doubles are 480 kB).
 MAX_PIL_ROWS = 20_000
@@ -65,18 +64,19 @@ MAX_LOG_BYTES = 1_000_000_000
 MAX_LOG_SAMPLES = 4_000_000
 #: States of a model (and of every file derived from one: a system, a certificate) and modes of a certificate's
 #: family: the one dimension limit, checked before any work.
-MAX_DIMENSION = 64
+MAX_DIMENSION = 128
 #: Seconds a read of a file or standard input may wait for data (a FIFO nobody writes to).
 MAX_READ_WAIT_S = 10
 #: Characters of a model's or system's name (one line of printable text).
 MAX_NAME_LENGTH = 200
 #: Work of a certificate's exact check, in the units of :func:`switchobs.exact.elimination_work` (entry updates
 #: weighted by ``(bits / 64) ** 1.5``, about 5.5e7 a second on the 2-core test machine, within 15 % for dense
-#: 16-64 state matrices of 100-4000 digits): checked for the products before any arithmetic (``n**3`` products
-#: of the largest matrix's digits over one common denominator) and counted by the exact elimination as it goes,
-#: which stops at the bound, so no certificate costs much more than 7 s of elimination.  The 6-digit decimal
-#: 64-state chain that ``certify`` writes needs 2.8e8 for its products (D = 2010 digits).
-MAX_CERTIFICATE_WORK = 400_000_000
+#: 16-64 state matrices of 100-4000 digits): checked for the products before any arithmetic
+#: (:func:`switchobs.exact.product_work`: ``n**3`` products of the largest matrix's digits over one common
+#: denominator on flint's integer matrices) and counted by the exact elimination as it goes, which stops at the
+#: bound, so no certificate costs much more than 25 s of elimination.  The 6-digit decimal 128-state chain that
+#: ``certify`` writes needs 1.3e9 for its products (its ``P``: D = 4016 digits), the 64-state one 5.7e7 (D = 2010).
+MAX_CERTIFICATE_WORK = 1_400_000_000
 #: A dwell-time certificate is checked while ``||A_p||_inf * tau_D <= 2**MAX_DWELL_BITS`` (the enclosure of
 #: ``exp(A_p tau_D)`` takes that many squarings); beyond, the check fails as undecidable in reasonable time.
 MAX_DWELL_BITS = 64
@@ -249,6 +249,12 @@ def decimal_fraction(text: str, *, what: str, error: type[Exception], max_digits
         raise error(f"{what}: {_shorten(text)!r} has more than {max_digits} digits (limit {max_digits}, "
                     "counting the decimal exponent); write a shorter number")
     try:
+        # the forms certificates are written in ("-375/2", "42") are read from the groups matched above: Fraction's
+        # own parser would run a second regular expression over every digit
+        if m.re is _FRACTION and len(m.group(1)) + len(m.group(2)) + len(m.group(3)) + 1 == len(s):  # no spaces
+            return Fraction(int(m.group(1) + m.group(2)), int(m.group(3)))
+        if m.re is _DECIMAL and m.group(2) and m.group(3) is None and m.group(4) is None:
+            return Fraction(int(s))
         return Fraction(s)
     except (ValueError, ZeroDivisionError):
         raise error(f"{what}: {_shorten(text)!r} is not a finite number (a zero denominator?)") from None

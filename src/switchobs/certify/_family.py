@@ -9,12 +9,11 @@ from typing import Any, Union
 
 import numpy as np
 from sympy import QQ, Poly, Symbol
-from sympy.polys.matrices import DomainMatrix
 
 from ..design import routh_first_column
 from ..exceptions import CertificateError, DimensionError, ModelError, NotHurwitzError
 from ..model import matrix_rows
-from ..exact import Matrix, float_matrix, fraction_matrix, integer_form, matrix_strings
+from ..exact import Matrix, charpoly, float_matrix, fraction_matrix, integer_form, matrix_strings
 
 __all__ = ["Family", "as_family", "format_spectrum", "FamilyLike"]
 
@@ -110,8 +109,7 @@ def _spectrum(M: np.ndarray, exact: Matrix | None) -> np.ndarray:
     gaps = np.abs(eig[:, None] - eig[None, :])[~np.eye(len(eig), dtype=bool)]
     if exact is None or len(eig) < 2 or np.min(gaps) > 1e-3 * max(1.0, float(np.max(np.abs(eig)))):
         return eig   # no cluster: the eigenvalues are simple and well separated
-    dm = DomainMatrix([[QQ(x.numerator, x.denominator) for x in row] for row in exact], (len(exact),) * 2, QQ)
-    _, factors = Poly(dm.charpoly(), Symbol("lam"), domain=QQ).sqf_list()
+    _, factors = Poly(charpoly(exact), Symbol("lam"), domain=QQ).sqf_list()
     return np.concatenate([np.asarray(np.roots([float(c) for c in f.all_coeffs()]), dtype=complex)
                            for f, m in factors for _ in range(m)])
 
@@ -165,8 +163,7 @@ def _hurwitz_enclosed(N: Sequence[Sequence[int]], d: int) -> bool | None:
 
 
 def _hurwitz_routh(M: Matrix) -> bool:
-    dm = DomainMatrix([[QQ(x.numerator, x.denominator) for x in row] for row in M], (len(M), len(M)), QQ)
-    alpha = [QQ.to_sympy(c) for c in dm.charpoly()[1:]]
+    alpha = charpoly(M)[1:]
     column = routh_first_column(alpha)
     return len(column) == len(alpha) + 1 and column[-1] > 0
 

@@ -62,8 +62,8 @@ from .._limits import (MAX_CERTIFICATE_BYTES, MAX_CERTIFICATE_DIGITS, MAX_CERTIF
                        digits, read_text)
 from .._progress import progress
 from ..exceptions import CertificateError, SwitchobsError
-from ..exact import (Matrix, add, definiteness, elimination_work, expm_enclosure, fraction_matrix, inf_norm,
-                     integer_form, is_zero, lyapunov_form, matmul, observable, scale, sqrt_upper,
+from ..exact import (Matrix, add, definiteness, expm_enclosure, fraction_matrix, inf_norm,
+                     integer_form, is_zero, lyapunov_form, matmul, observable, product_work, scale, sqrt_upper,
                      to_fraction, transpose, arithmetic as _arithmetic)
 from ._schema import (ANY_DWELL, ArbitrarySwitching, CertificateDocument, CertificateKind, Check, DualEntry,
                       DwellTimeEntry, Existence, FamilySection, LyapunovEntry, ObserverSection, SingularSumEntry,
@@ -572,8 +572,8 @@ def _frozen(value: Any) -> Any:
 
 def _check_cost(doc: Mapping[str, Any], n: int) -> None:
     """Refuse a certificate whose exact products would take too long, before any of them: ``n**3`` products of
-    entries of ``D`` digits (``D`` those of the matrix over one common denominator), each counted as
-    :func:`~switchobs.exact.elimination_work` counts them, against :data:`~switchobs._limits.MAX_CERTIFICATE_WORK`.
+    entries of ``D`` digits (``D`` those of the matrix over one common denominator), counted by
+    :func:`~switchobs.exact.product_work`, against :data:`~switchobs._limits.MAX_CERTIFICATE_WORK`.
     A product skips the zeros of its sparser factor, so a family matrix's products are scaled by the share of
     its nonzero entries and a certificate matrix's (multiplied only with the family) by that of the densest
     family matrix, when smaller than its own: the normal-form matrices of a large observer have ``2n - 1``
@@ -590,7 +590,7 @@ def _check_cost(doc: Mapping[str, Any], n: int) -> None:
             continue
         size = _common_digits(rows, MAX_CERTIFICATE_DIGITS * 2)
         share = _density(rows) if where.startswith("family.") else min(_density(rows), partner)
-        work = elimination_work(n, round(size * _BITS_PER_DIGIT)) * 2 * n * share
+        work = product_work(n, round(size * _BITS_PER_DIGIT)) * share
         if work > MAX_CERTIFICATE_WORK:
             raise CertificateError(f"certificate '{where}': its exact check would take too long (n = {n} states, "
                                    f"a matrix of at least {size} digits over one common denominator: its products "
@@ -636,7 +636,9 @@ def _common_digits(rows: Sequence[Sequence[Any]], cap: int) -> int:
                 value = to_fraction(entry)
             except SwitchobsError:
                 continue  # not a number: the check itself names it
-            common = common * value.denominator // gcd(common, value.denominator)
+            shared = gcd(common, value.denominator)
+            if shared != value.denominator:  # a denominator the common one holds already costs one gcd, no division
+                common *= value.denominator // shared
             top = max(top, digits(value.numerator))
             if digits(common) + top > cap:
                 return digits(common) + top

@@ -26,6 +26,7 @@ from dataclasses import dataclass, field
 from fractions import Fraction
 from typing import Any
 
+import flint
 import numpy as np
 import sympy as sp
 from sympy.polys.matrices import DomainMatrix
@@ -36,8 +37,8 @@ from ..model import Model, entries, free_names, make_symbol, numeric, parse_expr
 from ._lyapunov import _generic_solution, checkerboard_rows, gramian_entries, observer_form_gramian
 from .._display import ROUNDED_NOTE, is_shortened, readable, unicode_output
 from .._progress import progress
-from ._normal_form import (ObserverNormalForm, is_rational, normal_form_matrix, observer_normal_form, rational_matrix,
-                           rational_rows)
+from ._normal_form import (ObserverNormalForm, flint_matrix, is_rational, normal_form_matrix, observer_normal_form,
+                           rational_rows, sympy_matrix)
 from ._recheck import lyapunov_by_substitution, lyapunov_residual_is_zero
 from ._routh import hurwitz_conditions, readable_condition, routh_first_column
 from ._spectrum import LAPLACE, parse_spectrum, polynomial_coefficients, spectrum_coefficients
@@ -66,11 +67,15 @@ def _matrix_json(M: sp.MatrixBase) -> list:
     return [row[0] for row in rows] if M.cols == 1 else rows
 
 
-def _product(X: sp.MatrixBase, Y: sp.MatrixBase) -> sp.ImmutableMatrix | None:
-    """``X Y`` over QQ when both are rational (exact, no expressions); ``None`` otherwise."""
-    if not (is_rational(X) and is_rational(Y)):
+def _product(*factors: sp.MatrixBase) -> sp.ImmutableMatrix | None:
+    """The product of the factors when all are rational (exact, on python-flint's ``fmpq_mat``); else None."""
+    exact = [flint_matrix(M) for M in factors]
+    if any(M is None for M in exact):
         return None
-    return sp.ImmutableMatrix((rational_matrix(sp.Matrix(X)) * rational_matrix(sp.Matrix(Y))).to_Matrix())
+    out = exact[0]
+    for M in exact[1:]:
+        out = out * M
+    return sympy_matrix(out)
 
 
 def _to_model(nf: ObserverNormalForm, k_nf: sp.MatrixBase) -> sp.ImmutableMatrix:
@@ -281,8 +286,20 @@ class GainDesign:
         def residual_zero(A: sp.MatrixBase, C: sp.MatrixBase) -> bool:
             return generic if generic is not None else lyapunov_residual_is_zero(A, self.P, sp.Matrix(C).T * C)
 
-        def charpoly_is(A: sp.MatrixBase, alpha: Sequence[sp.Expr]) -> bool:
-            # Coefficient by coefficient, from the matrix's own domain (QQ for numbers): no degree-n expression.
+        similarity = self._normal_form_similarity()
+
+        def charpoly_is(A: sp.MatrixBase, alpha: Sequence[sp.Expr], sign: int) -> bool:
+            # For numbers on flint's fmpq_mat (sympy's sparse Berkowitz took 8 s per matrix at n = 128): first as
+            # S A = N S with S = T (plus) or Sigma T (minus) invertible and N the companion matrix of alpha, which
+            # proves det(sI - A) = det(sI - N) in three products (flint's charpoly of a 128-state decimal A_plus
+            # takes 7 s), else coefficient by coefficient; no degree-n expression either way.
+            exact = flint_matrix(A)
+            if exact is not None and _all_rational(alpha):
+                N = flint_matrix(normal_form_matrix([-a for a in alpha]))
+                if similarity is not None and similarity[sign] * exact == N * similarity[sign]:
+                    return True
+                coeffs = exact.charpoly().coeffs()[::-1]
+                return coeffs[0] == 1 and all(c == flint.fmpq(int(a.p), int(a.q)) for c, a in zip(coeffs[1:], alpha))
             dm = DomainMatrix.from_Matrix(sp.Matrix(A))
             coeffs = [dm.domain.to_sympy(c) for c in dm.charpoly()]
             return coeffs[0] == 1 and all(sp.cancel(c - a) == 0 for c, a in zip(coeffs[1:], alpha))
@@ -290,8 +307,8 @@ class GainDesign:
         subs = dict(zip(self.family_symbols, self.K_minus))
         checks = {
             "lyapunov_plus": residual_zero(self.A_plus, self.C_plus),
-            "charpoly_plus": charpoly_is(self.A_plus, self.alpha_plus),
-            "charpoly_minus": charpoly_is(self.A_minus, self.alpha_minus),
+            "charpoly_plus": charpoly_is(self.A_plus, self.alpha_plus, 1),
+            "charpoly_minus": charpoly_is(self.A_minus, self.alpha_minus, -1),
             "P_symmetric": self.P == self.P.T or all(sp.cancel(x) == 0 for x in self.P - self.P.T),
         }
         if not self.conditional:
@@ -299,6 +316,20 @@ class GainDesign:
             checks["gain_constraints"] = all(sp.cancel(c.lhs.xreplace(subs) - c.rhs.xreplace(subs)) == 0
                                              for c in self.gain_constraints)
         return checks
+
+    def _normal_form_similarity(self) -> dict[int, flint.fmpq_mat] | None:
+        """``{1: T, -1: Sigma T}`` (``Sigma = diag(1, -1, 1, ...)``) as flint matrices when ``T`` is rational, not the
+        identity and ``T T_inv = I`` holds (so ``T`` is invertible), else None: ``T A_plus T^-1`` and
+        ``Sigma T A_minus T^-1 Sigma`` are the companion matrices of ``alpha_plus`` and ``alpha_minus``."""
+        nf = self.normal_form
+        T, T_inv = (None, None) if nf.is_identity else (flint_matrix(nf.T), flint_matrix(nf.T_inv))
+        if T is None or T_inv is None:
+            return None
+        n = T.nrows()
+        if T * T_inv != flint.fmpq_mat(n, n, [int(i == j) for i in range(n) for j in range(n)]):
+            return None
+        signed = flint.fmpq_mat(n, n, [x if (k // n) % 2 == 0 else -x for k, x in enumerate(T.entries())])
+        return {1: T, -1: signed}
 
     def gains_for(self, model: Model, values: Mapping[str, Any] | None = None) -> tuple[np.ndarray, np.ndarray]:
         """Float ``(K_plus, K_minus)`` for an observer of ``model``, at the design's values overridden by ``values``.
@@ -710,7 +741,12 @@ def design_gains(model: Model, spectrum: str | Sequence | None = None, *,
         else:
             alpha_plus = polynomial_coefficients(characteristic_polynomial, model)
         Kp = _to_model(nf, sp.Matrix([a[i] + alpha_plus[i] for i in range(model.n)]))
-    hurwitz_plus = _readable(alpha_plus, _gain_symbols(Kp, model))
+    if poles is not None and _all_rational(alpha_plus):
+        # parse_spectrum proved every pole's real part negative, so prod (s - p) is Hurwitz: its Routh array (2 s
+        # at n = 128 on 6-digit poles) would only repeat that
+        hurwitz_plus: tuple[sp.Basic, ...] = ()
+    else:
+        hurwitz_plus = _readable(alpha_plus, _gain_symbols(Kp, model))
     if any(c is sp.false for c in hurwitz_plus):
         _raise_not_hurwitz("A_plus", model.A - Kp * model.C)
 
@@ -988,10 +1024,8 @@ design = design_gains
 
 def _congruence(T: sp.MatrixBase, P_nf: sp.MatrixBase) -> sp.ImmutableMatrix:
     """``T' P_nf T``: the normal-form Lyapunov matrix in the model's coordinates."""
-    if is_rational(T) and is_rational(P_nf):
-        Tq = rational_matrix(sp.Matrix(T))
-        return sp.ImmutableMatrix((Tq.transpose() * rational_matrix(sp.Matrix(P_nf)) * Tq).to_Matrix())
-    return sp.ImmutableMatrix((T.T * P_nf * T).applyfunc(sp.cancel))
+    rational = _product(T.T, P_nf, T)
+    return rational if rational is not None else sp.ImmutableMatrix((T.T * P_nf * T).applyfunc(sp.cancel))
 
 
 def _raise_not_coupled(Kp: sp.MatrixBase, Km: sp.MatrixBase, why: str) -> None:

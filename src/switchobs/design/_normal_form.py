@@ -12,14 +12,19 @@ from collections.abc import Mapping
 from dataclasses import dataclass
 from typing import Any
 
+import flint
 import sympy as sp
-from sympy import QQ
+from sympy import QQ, ZZ
+from sympy.core.basic import Basic
+from sympy.core.containers import Tuple
 from sympy.polys.matrices import DomainMatrix
+from sympy.polys.matrices._dfm import DFM
 
 from ..exceptions import ModelError, NotObservableError
 from ..model import Model, parse_expression, symbols_from_json, symbols_to_json
 
-__all__ = ["ObserverNormalForm", "observer_normal_form", "normal_form_matrix", "is_rational", "rational_matrix", "rational_rows"]
+__all__ = ["ObserverNormalForm", "observer_normal_form", "normal_form_matrix", "is_rational", "rational_rows",
+           "flint_matrix", "sympy_matrix"]
 
 
 def normal_form_matrix(a: sp.MatrixBase | list) -> sp.ImmutableMatrix:
@@ -62,19 +67,59 @@ def is_rational(M: sp.MatrixBase) -> bool:
     return _rational_rep(M) is not None or all(sp.sympify(x).is_Rational for x in M)
 
 
-def rational_matrix(M: sp.MatrixBase) -> DomainMatrix:
-    """A rational sympy matrix as a DomainMatrix over QQ (flint-backed when python-flint is installed)."""
+def flint_matrix(M: sp.MatrixBase) -> flint.fmpq_mat | None:
+    """A rational sympy matrix as python-flint's ``fmpq_mat``, or None when an entry is not rational.
+
+    The design's rational products, solves and characteristic polynomials run on it: sympy's DomainMatrix
+    calls the same routines, but through its sparse Python loops for everything it builds from a Matrix.
+    """
     rep = _rational_rep(M)
     if rep is not None:
-        return rep.convert_to(QQ).to_dense()
-    return DomainMatrix([[QQ.from_sympy(x) for x in M.row(i)] for i in range(M.rows)], M.shape, QQ)
+        return flint.fmpq_mat(*M.shape, [x for row in rep.to_list() for x in row])
+    M = sp.Matrix(M)
+    if not all(getattr(x, "is_Rational", False) for x in M):
+        return None
+    return flint.fmpq_mat(*M.shape, [flint.fmpq(int(x.p), int(x.q)) for x in M])
 
 
-def _rational_observability(A: DomainMatrix, C: DomainMatrix) -> DomainMatrix:
+def sympy_matrix(M: flint.fmpq_mat) -> sp.ImmutableMatrix:
+    """The ``fmpq_mat`` ``M`` as a sympy ImmutableMatrix, equal in every part to ``ImmutableMatrix(entries)``.
+
+    The same object sympy builds (its entries as sympy Rationals, its ``_rep`` over ZZ when every entry is
+    an integer, else QQ, stored sparse), made from the entries' own numerators and denominators, which flint
+    keeps coprime: sympy's constructor takes a gcd and a cache look-up per entry, seconds for the 128-state
+    decimal designs whose entries have thousands of digits.
+    """
+    entries = M.entries()
+    flat = [sp.Rational.from_coprime_ints(int(x.p), int(x.q)) for x in entries]
+    rows, cols = M.nrows(), M.ncols()
+    rep = DomainMatrix.from_rep(DFM(M, (rows, cols), QQ)).to_sparse()
+    if all(x.q == 1 for x in entries):
+        rep = rep.convert_to(ZZ)
+    obj = Basic.__new__(sp.ImmutableMatrix, sp.Integer(rows), sp.Integer(cols), Tuple(*flat, sympify=False))
+    obj._rows, obj._cols, obj._rep = rows, cols, rep
+    return obj
+
+
+def _rational_observability(A: flint.fmpq_mat, C: flint.fmpq_mat) -> flint.fmpq_mat:
     rows = [C]
-    for _ in range(A.shape[0] - 1):
+    for _ in range(A.nrows() - 1):
         rows.append(rows[-1] * A)
-    return DomainMatrix.vstack(*rows)
+    return flint.fmpq_mat(A.nrows(), A.ncols(), [x for row in rows for x in row.entries()])
+
+
+def _determinant(M: flint.fmpq_mat) -> flint.fmpq:
+    """``det M``: the product of the diagonal for a triangular ``M`` (the observability matrix of every chain
+    ``x_i' = -d_i x_i + x_(i+1)``, ``y = x_1``), else flint's determinant (7 s for a 128-state decimal chain)."""
+    n = M.nrows()
+    entries = M.entries()
+    lower = all(entries[i * n + j] == 0 for i in range(n) for j in range(i + 1, n))
+    if lower or all(entries[i * n + j] == 0 for i in range(n) for j in range(i)):
+        det = flint.fmpq(1)
+        for i in range(n):
+            det *= entries[i * n + i]
+        return det
+    return M.det()
 
 
 def _unobservable(model: Model, direction: list) -> NotObservableError:
@@ -86,24 +131,30 @@ def _unobservable(model: Model, direction: list) -> NotObservableError:
 
 
 def _rational_normal_form(model: Model) -> ObserverNormalForm:
-    """The normal form of a numeric pair, in exact rational matrix arithmetic over QQ (no expressions)."""
+    """The normal form of a numeric pair, in exact rational matrix arithmetic (python-flint; no expressions).
+
+    ``O_nf``, the observability matrix of the normal form, is unit lower triangular and its inverse is the
+    lower triangular Toeplitz matrix of the characteristic coefficients ``(1, c_1, ..., c_(n-1))`` (row ``i``
+    of ``O_nf^-1 O_nf`` is ``e1' p_i(A_nf)`` with ``p_i`` the degree-``i`` head of the characteristic
+    polynomial, which is ``e_(i+1)'`` for the normal form), so ``T = O_nf^-1 O`` is one product, no solve.
+    """
     n = model.n
-    O = _rational_observability(rational_matrix(sp.Matrix(model.A)), rational_matrix(sp.Matrix(model.C)))
-    det = O.det()
+    A = flint_matrix(model.A)
+    O = _rational_observability(A, flint_matrix(model.C))
+    det = _determinant(O)
     if det == 0:
-        raise _unobservable(model, [QQ.to_sympy(x) for x in O.nullspace().to_Matrix().row(0)])
-    a = [-c for c in rational_matrix(sp.Matrix(model.A)).charpoly()[1:]]
-    a_sym = sp.ImmutableMatrix([QQ.to_sympy(x) for x in a])
-    O_sym = sp.ImmutableMatrix(O.to_Matrix())
+        nullspace = DomainMatrix.from_rep(DFM(O, (n, n), QQ)).nullspace()
+        raise _unobservable(model, [QQ.to_sympy(x) for x in nullspace.to_Matrix().row(0)])
+    c = A.charpoly().coeffs()[::-1]  # [1, c_1, ..., c_n]: det(sI - A) = s^n + c_1 s^(n-1) + ... + c_n
+    a_sym = sympy_matrix(flint.fmpq_mat(n, 1, [-x for x in c[1:]]))
+    O_sym = sympy_matrix(O)
+    det_sym = sp.Rational.from_coprime_ints(int(det.p), int(det.q))
     if _is_normal_form(sp.Matrix(model.A), sp.Matrix(model.C)):
         eye = sp.ImmutableMatrix.eye(n)
-        return ObserverNormalForm(a_sym, eye, eye, O_sym, QQ.to_sympy(det), ())
-    O_nf = _rational_observability(rational_matrix(normal_form_matrix(list(a_sym))),
-                                   rational_matrix(sp.Matrix([[1] + [0] * (n - 1)])))
-    T = O_nf.lu_solve(O)
-    T_inv = O.lu_solve(O_nf)
-    return ObserverNormalForm(a_sym, sp.ImmutableMatrix(T.to_Matrix()), sp.ImmutableMatrix(T_inv.to_Matrix()), O_sym,
-                              QQ.to_sympy(det), ())
+        return ObserverNormalForm(a_sym, eye, eye, O_sym, det_sym, ())
+    O_nf_inv = flint.fmpq_mat(n, n, [c[i - j] if i >= j else 0 for i in range(n) for j in range(n)])
+    T = O_nf_inv * O
+    return ObserverNormalForm(a_sym, sympy_matrix(T), sympy_matrix(T.inv()), O_sym, det_sym, ())
 
 
 @dataclass(frozen=True)

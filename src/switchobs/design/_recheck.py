@@ -20,15 +20,14 @@ from __future__ import annotations
 
 import random
 from collections.abc import Sequence
-from fractions import Fraction
 from functools import lru_cache
 
+import flint
 import sympy as sp
 from sympy.polys.matrices import DomainMatrix
 
-from ..exact import add, is_zero, lyapunov_form
 from ._lyapunov import _generic_solution, checkerboard_from_u
-from ._normal_form import normal_form_matrix, rational_rows
+from ._normal_form import flint_matrix, normal_form_matrix
 
 __all__ = ["lyapunov_by_substitution", "lyapunov_residual_is_zero"]
 
@@ -38,33 +37,23 @@ def _observer_form(alpha: Sequence[sp.Expr]) -> sp.ImmutableMatrix:
 
 
 def lyapunov_residual_is_zero(A: sp.MatrixBase, P: sp.MatrixBase, Q: sp.MatrixBase) -> bool:
-    """``A' P + P A + Q == 0`` exactly: for numbers by the exact kernel, else in the polynomial ring or field of
-    the entries (DomainMatrix).
+    """``A' P + P A + Q == 0`` exactly for a symmetric ``P`` (``A' P + (A' P)'``: one product; the design's
+    re-check tests the symmetry of its ``P`` on its own): for numbers on python-flint's ``fmpq_mat``, else in the
+    polynomial ring or field of the entries (DomainMatrix).
 
     Ring arithmetic instead of ``cancel()`` on expressions: exact, and orders of magnitude faster for
-    fully symbolic matrices.  Rational matrices go to :func:`switchobs.exact.lyapunov_form` (python-flint's
-    integer matrices): a numeric 32-state design with 6-digit data has 4000-digit entries, whose products
-    took 86 s in DomainMatrix's sparse Python loops.
+    fully symbolic matrices.  A numeric 32-state design with 6-digit data has 4000-digit entries, whose products
+    took 86 s in DomainMatrix's sparse Python loops; flint multiplies them in C.
     """
-    numbers = [_fractions(M) for M in (A, P, Q)]
+    numbers = [flint_matrix(M) for M in (A, P, Q)]
     if all(M is not None for M in numbers):
         Af, Pf, Qf = numbers
-        return is_zero(add(lyapunov_form(Af, Pf), Qf))
+        AtP = Af.transpose() * Pf
+        return AtP + AtP.transpose() + Qf == flint.fmpq_mat(Qf.nrows(), Qf.ncols())
     mats = [DomainMatrix.from_Matrix(sp.Matrix(M)) for M in (A, P, Q)]
     dom = mats[0].domain.unify(mats[1].domain).unify(mats[2].domain)
     A_, P_, Q_ = (M.convert_to(dom) for M in mats)
     return (A_.transpose() * P_ + P_ * A_ + Q_).is_zero_matrix
-
-
-def _fractions(M: sp.MatrixBase) -> list[list[Fraction]] | None:
-    """The entries of ``M`` as Fractions when every one is a rational number, else None."""
-    rows = rational_rows(M)
-    if rows is not None:
-        return [[Fraction(int(x.numerator), int(x.denominator)) for x in row] for row in rows]
-    M = sp.Matrix(M)
-    if not all(getattr(x, "is_Rational", False) for x in M):
-        return None
-    return [[Fraction(int(x.p), int(x.q)) for x in M.row(i)] for i in range(M.rows)]
 
 
 def _sigma(n: int) -> sp.Matrix:

@@ -38,7 +38,7 @@ __all__ = [
     "Matrix", "to_fraction", "fraction_matrix", "matrix_strings", "identity", "zeros", "transpose",
     "matmul", "add", "sub", "scale", "lyapunov_form", "integer_form", "Definiteness", "definiteness",
     "rank", "nullspace", "solve", "observable", "expm_enclosure", "inf_norm", "sqrt_lower", "sqrt_upper",
-    "is_zero", "ARITHMETICS", "arithmetic", "float_matrix", "ldl_psd", "lyapunov_solve",
+    "is_zero", "ARITHMETICS", "arithmetic", "float_matrix", "ldl_psd", "lyapunov_solve", "charpoly", "product_work",
 ]
 
 Matrix = list[list[Fraction]]
@@ -390,6 +390,14 @@ def elimination_work(rows: int, bits: int) -> float:
     return rows * (rows + 1) / 2 * (bits / 64 + 1) ** 1.5
 
 
+def product_work(n: int, bits: int) -> float:
+    """The work of the ``n**3`` entry products of two ``n x n`` integer matrices of ``bits``-bit entries on
+    python-flint's ``fmpz_mat`` (multi-modular, in C), in the units of :func:`elimination_work`: about a fifth of
+    an elimination update each (measured: 16-128 states, 300-26000 bits, within a factor 3 above the process
+    time, never below it)."""
+    return n ** 3 * (bits / 64 + 1) ** 1.5 / 5
+
+
 def _symmetric_bareiss(N: Sequence[Sequence[Any]], *, strict: bool, factor: bool = False
                        ) -> tuple[Definiteness, list[list[Fraction]] | None, list[Fraction] | None]:
     """Fraction-free symmetric elimination of the integer matrix ``N``: the verdict and, with ``factor``,
@@ -507,6 +515,13 @@ def _fmpq_mat(M: Sequence[Sequence[Any]]) -> Any:
 
     N, d, _ = _integer_rows(M)
     return flint.fmpq_mat(_fmpz_mat(N)) / d
+
+
+def charpoly(M: Sequence[Sequence[Any]]) -> list[Fraction]:
+    """``[1, c_1, ..., c_n]`` with ``det(sI - M) = s^n + c_1 s^(n-1) + ... + c_n``, exact (python-flint's
+    ``fmpq_mat``, in C: sympy's sparse Berkowitz took 7 s for a 128-state observer's error matrix)."""
+    coeffs = _fmpq_mat(M).charpoly().coeffs()[::-1]
+    return [Fraction(int(c.p), int(c.q)) for c in coeffs]
 
 
 def lyapunov_solve(A: Sequence[Sequence[Any]], Q: Sequence[Sequence[Any]]) -> list[list[Fraction]]:
