@@ -47,7 +47,8 @@ MAX_NUMBER_DIGITS = 1000
 #: Decimal digits of one number in a certificate, counting a decimal exponent as that many digits (below
 #: Python's own limit of 4300 digits for converting between integers and text).
 MAX_CERTIFICATE_DIGITS = 4000
-#: Size of a certificate file: the 6-digit decimal 128-state chain's certificate is 64 MB (its dense ``P``).
+#: Size of a certificate file: the normal-form certificate of the dense 6-digit decimal 128-state model of
+#: ``benchmarks/numeric_inputs.py`` is 52 MB (its ``T`` and ``P`` have 2000- and 4000-digit entries).
 MAX_CERTIFICATE_BYTES = 100_000_000
 #: Size of a model, system or sweep file (TOML): a 128-state model of longest entries is about 33 MB.
 MAX_INPUT_FILE_BYTES = 40_000_000
@@ -72,11 +73,13 @@ MAX_NAME_LENGTH = 200
 #: Work of a certificate's exact check, in the units of :func:`switchobs.exact.elimination_work` (entry updates
 #: weighted by ``(bits / 64) ** 1.5``, about 5.5e7 a second on the 2-core test machine, within 15 % for dense
 #: 16-64 state matrices of 100-4000 digits): checked for the products before any arithmetic
-#: (:func:`switchobs.exact.product_work`: ``n**3`` products of the largest matrix's digits over one common
-#: denominator on flint's integer matrices) and counted by the exact elimination as it goes, which stops at the
-#: bound, so no certificate costs much more than 25 s of elimination.  The 6-digit decimal 128-state chain that
-#: ``certify`` writes needs 1.3e9 for its products (its ``P``: D = 4016 digits), the 64-state one 5.7e7 (D = 2010).
-MAX_CERTIFICATE_WORK = 1_400_000_000
+#: (:func:`switchobs.exact.product_work`: ``n**3`` products of a matrix's digits over one common denominator on
+#: flint's integer matrices, scaled by the share of nonzero entries of the sparser factor) and counted by the
+#: exact elimination as it goes, which stops at the bound, so no certificate costs much more than 7 s of
+#: elimination.  The 128-state certificates of ``benchmarks/numeric_inputs.py`` need at most 2.1e7 for their
+#: products (the normal-form ``P`` of the dense and decimal-chain models: 4000 digits, half of them zeros,
+#: against companion matrices).
+MAX_CERTIFICATE_WORK = 400_000_000
 #: A dwell-time certificate is checked while ``||A_p||_inf * tau_D <= 2**MAX_DWELL_BITS`` (the enclosure of
 #: ``exp(A_p tau_D)`` takes that many squarings); beyond, the check fails as undecidable in reasonable time.
 MAX_DWELL_BITS = 64
