@@ -18,8 +18,9 @@ import pytest
 from switchobs.certify import ObserverSection, certify_model, verify_certificate
 from switchobs.design import NORMAL_FORM_DIGITS
 from switchobs.design import design_gains, normal_form_design
-from switchobs.exact import (add, fraction_matrix, lyapunov_form, matmul, nonsingular, observer_coordinates, solve,
-                             solve_float, to_fraction, transpose)
+from switchobs.design._normal_form import flint_matrix, rational_coordinates
+from switchobs.exact import (add, fraction_matrix, lyapunov_form, matmul, nonsingular, solve, solve_float, to_fraction,
+                             transpose)
 from switchobs.model import Model
 
 N = 12
@@ -58,7 +59,8 @@ def report(dense):
 def test_observer_coordinates_are_the_normal_form_seed004(dense):
     model, _ = dense
     A, C = fraction_matrix(model.A), fraction_matrix(model.C)
-    a, T = observer_coordinates(A, C)
+    c, _, T = rational_coordinates(flint_matrix(model.A), flint_matrix(model.C))
+    a, T = [-to_fraction(x) for x in c[1:]], fraction_matrix(T.tolist())
     n = len(A)
     A_nf = [[a[i] if j == 0 else Fraction(1 if j == i + 1 else 0) for j in range(n)] for i in range(n)]
     assert matmul(T, A) == matmul(A_nf, T)
@@ -238,13 +240,23 @@ def test_codegen_of_a_dense_model_writes_the_exact_gains_doubles(tmp_path, monke
     assert written.split("\n", 3)[3] == via_exact.source.split("\n", 3)[3]  # the same C past the command line
 
 
-def test_observer_coordinates_equal_the_sympy_normal_form(dense):
-    from switchobs.design import observer_normal_form
+def test_normal_form_coordinates_are_O_nf_inverse_O_by_their_definition_seed004(dense):
+    import sympy as sp
 
-    model, _ = dense
-    a, T = observer_coordinates(fraction_matrix(model.A), fraction_matrix(model.C))
-    nf = observer_normal_form(model)
-    assert T == fraction_matrix(nf.T) and a == [to_fraction(x) for x in nf.a]
+    model, _ = dense  # T = O_nf^-1 O solved in sympy from the definitions, not by the Toeplitz product
+    A, C = sp.Matrix(model.A), sp.Matrix(model.C)
+    design = normal_form_design(model, ",".join(["-1"] * N))
+    A_nf = sp.Matrix(N, N, lambda i, j: sp.Rational(design.a[i]) if j == 0 else int(j == i + 1))
+
+    def observability(M: sp.Matrix, row: sp.Matrix) -> sp.Matrix:
+        rows = [row]
+        for _ in range(N - 1):
+            rows.append(rows[-1] * M)
+        return sp.Matrix.vstack(*rows)
+
+    T = observability(A_nf, sp.Matrix([[1] + [0] * (N - 1)])).LUsolve(observability(A, C))
+    assert design.T == fraction_matrix(T)
+    assert list(design.a) == [-to_fraction(c) for c in sp.Matrix(A).charpoly().all_coeffs()[1:]]
 
 
 @pytest.mark.parametrize("seed", range(6))

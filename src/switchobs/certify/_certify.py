@@ -528,7 +528,6 @@ def certify_model(model: Model, *, values: Mapping[str, Any] | None = None, spec
                   "references": dict(model.references)}
     normal = normal_form_statement(model, spectrum) if spectrum is not None and box is None else None
     if normal is not None:
-        e1 = [[Fraction(1)] + [Fraction(0)] * (model.n - 1)]
         observer = ObserverSection(A=matrix_strings(fraction_matrix(model.A, what="A")),
                                    C=matrix_strings(fraction_matrix(model.C, what="C")),
                                    K_plus=[str(k) for k in normal.k_plus], K_minus=[str(k) for k in normal.k_minus],
@@ -536,9 +535,9 @@ def certify_model(model: Model, *, values: Mapping[str, Any] | None = None, spec
         # Hurwitz by construction: both modes have the characteristic polynomial prod (s - p) of the poles
         family = as_family([normal.A_plus, normal.A_minus], ["A_plus", "A_minus"], hurwitz=False)
         poles = tuple(complex(p) for p in normal.spectrum)
-        return certify(replace(family, poles=(poles, poles), hurwitz=True), output=e1, dwell=dwell,
+        return certify(replace(family, poles=(poles, poles), hurwitz=True), output=normal.C, dwell=dwell,
                        eps=eps, solvers=solvers, observer=observer, provenance=provenance, discrete=discrete,
-                       candidate=(normal.P, [e1, e1]), arithmetic=arithmetic)
+                       candidate=(normal.P, [normal.C, normal.C]), arithmetic=arithmetic)
     design: GainDesign | None = gains
     if gains is not None:
         Kp, Km = gains.K_plus, gains.K_minus

@@ -157,8 +157,7 @@ def _discrete_certificate(model: Model, gains: GainDesign | NormalFormDesign, va
         raise PrerequisiteError(f"--h-max auto needs switchobs.certify.discrete_certificate, which is not "
                                 f"available ({exc}); give --h-max VALUE") from None
     if isinstance(gains, NormalFormDesign):
-        e1 = [[1] + [0] * (gains.n - 1)]
-        return discrete_certificate(gains.A_plus, gains.A_minus, e1, gains.P, method=method)
+        return discrete_certificate(gains.A_plus, gains.A_minus, gains.C, gains.P, method=method)
     merged: dict[str, Any] = {**model.values, **{k: rational_value(v, what=k) for k, v in values.items()}}
 
     def exact(M: sp.MatrixBase, name: str) -> sp.ImmutableMatrix:

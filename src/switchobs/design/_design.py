@@ -38,7 +38,7 @@ from ._lyapunov import _generic_solution, checkerboard_rows, gramian_entries, ob
 from .._display import ROUNDED_NOTE, is_shortened, readable, unicode_output
 from .._progress import progress
 from ._normal_form import (ObserverNormalForm, flint_matrix, is_rational, normal_form_matrix, observer_normal_form,
-                           rational_rows, sympy_matrix)
+                           rational_coordinates, rational_rows, sympy_matrix)
 from ._recheck import lyapunov_by_substitution, lyapunov_residual_is_zero
 from ._routh import hurwitz_conditions, readable_condition, routh_first_column
 from ._spectrum import LAPLACE, parse_spectrum, polynomial_coefficients, spectrum_coefficients
@@ -856,6 +856,11 @@ class NormalFormDesign:
         return checkerboard_rows(self.u)
 
     @property
+    def C(self) -> list[list[Fraction]]:
+        """``e_1'``: the output in these coordinates (``C = e_1' T`` in the model's)."""
+        return [[Fraction(1)] + [Fraction(0)] * (self.n - 1)]
+
+    @property
     def A_plus(self) -> list[list[Fraction]]:
         """``A_nf - k_plus e_1'``: the plus mode in these coordinates."""
         return _normal_form_rows([x - k for x, k in zip(self.a, self.k_plus)], 1)
@@ -885,7 +890,7 @@ class NormalFormDesign:
         n = self.n
         A = fraction_matrix(rational_rows(sp.Matrix(self.model.A)), what="A")
         C = fraction_matrix(rational_rows(sp.Matrix(self.model.C)), what="C")
-        e1 = [[Fraction(1)] + [Fraction(0)] * (n - 1)]
+        e1 = self.C
         outer = [[e1[0][i] * e1[0][j] for j in range(n)] for i in range(n)]
         zero = [[0] * n for _ in range(n)]
         A_nf = _normal_form_rows(list(self.a), 1)
@@ -902,11 +907,13 @@ class NormalFormDesign:
         K_plus, K_minus = self.gains()
         return {"model": self.model.name, "model_definition": self.model.to_json(), "n": self.n, "choice": "theorem1",
                 "coordinates": "observer normal form z = T x (K = T^-1 k)",
-                "spectrum": [str(p) for p in self.spectrum], "a": [str(x) for x in self.a],
-                "T": [[str(x) for x in row] for row in self.T], "alpha": [str(x) for x in self.alpha],
-                "k_plus": [str(x) for x in self.k_plus], "k_minus": [str(x) for x in self.k_minus],
-                "P_u": [str(x) for x in self.u], "K_plus": [float(x) for x in K_plus],
-                "K_minus": [float(x) for x in K_minus]}
+                "spectrum": [str(p) for p in self.spectrum], **self._exact_json(),
+                "K_plus": [float(x) for x in K_plus], "K_minus": [float(x) for x in K_minus]}
+
+    def _exact_json(self) -> dict[str, Any]:
+        return {"a": [str(x) for x in self.a], "T": [[str(x) for x in row] for row in self.T],
+                "alpha": [str(x) for x in self.alpha], "k_plus": [str(x) for x in self.k_plus],
+                "k_minus": [str(x) for x in self.k_minus], "P_u": [str(x) for x in self.u]}
 
     def __repr__(self) -> str:  # the dataclass's would print T, thousands of digits each entry
         return f"<NormalFormDesign: Theorem 1 design of {self.model.name} (n = {self.n}) in z = T x>"
@@ -927,7 +934,7 @@ class NormalFormDesign:
             raise ModelError("a normal-form design JSON needs its 'model_definition' and 'spectrum' "
                              "(NormalFormDesign.to_json writes them); design again from the model")
         design = normal_form_design(Model.from_json(data["model_definition"]), list(data["spectrum"]))
-        stored = design.to_json()
+        stored = design._exact_json()  # not to_json: the gains' enclosure is not compared
         for key in ("T", "k_plus", "k_minus", "P_u"):
             if stored[key] != data.get(key):
                 raise ModelError(f"the stored {key} is not what the design of model {design.model.name!r} gives; "
@@ -976,26 +983,14 @@ def normal_form_design(model: Model, spectrum: str | Sequence) -> NormalFormDesi
     ----------
     seed 004 Theorem 1 and 'Observer normal form'.
     """
-    from ..exact import fraction_matrix, observable, observer_coordinates
-
     if not (is_rational(sp.Matrix(model.A)) and is_rational(sp.Matrix(model.C))):
         raise ModelError(f"model {model.name!r} is not numeric with rational entries; give its parameter values")
-    A = fraction_matrix(rational_rows(sp.Matrix(model.A)), what="A")
-    C = fraction_matrix(rational_rows(sp.Matrix(model.C)), what="C")
     poles = parse_spectrum(spectrum, model)
     if any(sp.sympify(p).free_symbols for p in poles):
         raise SpectrumError(f"the spectrum {[str(p) for p in poles]} has design symbols; give numbers here "
                             "(design_gains keeps symbols)")
-    progress(f"design: observer normal form (n = {model.n})")
-    if not observable(A, C)[0]:
-        observer_normal_form(model)  # raises, naming an unobservable direction
-    a, T = observer_coordinates(A, C)
-    alpha = tuple(Fraction(str(x)) for x in spectrum_coefficients(poles))
-    # parse_spectrum proved every pole left of the axis, exactly: prod (s - p) is Hurwitz, no Routh array needed
-    k_plus = [x + y for x, y in zip(a, alpha)]
-    progress(f"design: common Lyapunov matrix P (n = {model.n})")
-    return NormalFormDesign(model, poles, tuple(a), T, alpha, tuple(k_plus), tuple(_theorem1_normal_form(k_plus, a)),
-                            tuple(gramian_entries(alpha)))
+    c, T = _coordinates(model)
+    return _design_in_coordinates(model, poles, c, T)
 
 
 def normal_form_statement(model: Model, spectrum: str | Sequence) -> NormalFormDesign | None:
@@ -1003,17 +998,43 @@ def normal_form_statement(model: Model, spectrum: str | Sequence) -> NormalFormD
 
     None when the model is not rational, already in normal form (``T = I``), the poles are not all numbers,
     or ``T``'s entries have at most :data:`NORMAL_FORM_DIGITS` digits: the model's own coordinates then read
-    better and cost little more.  ``design`` and ``certify`` follow this one rule.
+    better and cost little more.  ``design`` and ``certify`` follow this one rule; it is decided on ``T``
+    before anything else of the design is computed.
     """
     if model.n < 2 or not (is_rational(sp.Matrix(model.A)) and is_rational(sp.Matrix(model.C))):
         return None
     poles = parse_spectrum(spectrum, model)
     if any(sp.sympify(p).free_symbols for p in poles):
         return None
-    design = normal_form_design(model, poles)
-    if max(len(str(x)) for row in design.T for x in row) <= NORMAL_FORM_DIGITS:
+    c, T = _coordinates(model)
+    if max(len(str(x)) for x in T.entries()) <= NORMAL_FORM_DIGITS:
         return None
-    return design
+    return _design_in_coordinates(model, poles, c, T)
+
+
+def _coordinates(model: Model) -> tuple[list[Any], Any]:
+    """``[1, c_1, ..., c_n]`` and ``T`` (python-flint) of an observable rational model; NotObservableError
+    naming an unobservable direction otherwise (decided modulo a prime first, not by ``det O``)."""
+    from ..exact import fraction_matrix, observable
+
+    progress(f"design: observer normal form (n = {model.n})")
+    A, C = flint_matrix(model.A), flint_matrix(model.C)
+    if not observable(fraction_matrix(A.tolist(), what="A"), fraction_matrix(C.tolist(), what="C"))[0]:
+        observer_normal_form(model)  # raises, naming an unobservable direction
+    c, _, T = rational_coordinates(A, C)
+    return c, T
+
+
+def _design_in_coordinates(model: Model, poles: tuple[sp.Expr, ...], c: Sequence[Any], T: Any) -> NormalFormDesign:
+    """The rest of :func:`normal_form_design` once the coordinates are known."""
+    a = [-Fraction(int(x.p), int(x.q)) for x in c[1:]]
+    alpha = tuple(Fraction(str(x)) for x in spectrum_coefficients(poles))
+    # parse_spectrum proved every pole left of the axis, exactly: prod (s - p) is Hurwitz, no Routh array needed
+    k_plus = [x + y for x, y in zip(a, alpha)]
+    progress(f"design: common Lyapunov matrix P (n = {model.n})")
+    rows = [[Fraction(int(x.p), int(x.q)) for x in row] for row in T.tolist()]
+    return NormalFormDesign(model, poles, tuple(a), rows, alpha, tuple(k_plus),
+                            tuple(_theorem1_normal_form(k_plus, a)), tuple(gramian_entries(alpha)))
 
 
 #: The same function under the name of its sub-package: ``from switchobs.design import design``.

@@ -24,7 +24,7 @@ from ..exceptions import ModelError, NotObservableError
 from ..model import Model, parse_expression, symbols_from_json, symbols_to_json
 
 __all__ = ["ObserverNormalForm", "observer_normal_form", "normal_form_matrix", "is_rational", "rational_rows",
-           "flint_matrix", "sympy_matrix"]
+           "flint_matrix", "sympy_matrix", "rational_coordinates"]
 
 
 def normal_form_matrix(a: sp.MatrixBase | list) -> sp.ImmutableMatrix:
@@ -101,11 +101,26 @@ def sympy_matrix(M: flint.fmpq_mat) -> sp.ImmutableMatrix:
     return obj
 
 
-def _rational_observability(A: flint.fmpq_mat, C: flint.fmpq_mat) -> flint.fmpq_mat:
+def rational_coordinates(A: flint.fmpq_mat, C: flint.fmpq_mat) -> tuple[list[flint.fmpq], flint.fmpq_mat,
+                                                                         flint.fmpq_mat]:
+    """``(c, O, T)`` of a rational single-output pair: ``[1, c_1, ..., c_n]`` with
+    ``det(sI - A) = s^n + c_1 s^(n-1) + ... + c_n``, the observability matrix ``O`` and the normal form's
+    coordinates ``T = O_nf^-1 O`` (``T A = A_nf T``, ``C = e_1' T``), on python-flint.
+
+    ``O_nf``, the observability matrix of the normal form, is unit lower triangular and its inverse is the
+    lower triangular Toeplitz matrix of ``(1, c_1, ..., c_(n-1))`` (row ``i`` of ``O_nf^-1 O_nf`` is
+    ``e1' p_i(A_nf)`` with ``p_i`` the degree-``i`` head of the characteristic polynomial, which is ``e_(i+1)'``
+    for the normal form), so ``T`` is one product: no solve, and no inverse of ``O``, whose entries for a dense
+    decimal ``A`` are thousands of digits long.  ``det T = det O``.
+    """
+    n = A.nrows()
     rows = [C]
-    for _ in range(A.nrows() - 1):
+    for _ in range(n - 1):
         rows.append(rows[-1] * A)
-    return flint.fmpq_mat(A.nrows(), A.ncols(), [x for row in rows for x in row.entries()])
+    O = flint.fmpq_mat(n, n, [x for row in rows for x in row.entries()])
+    c = A.charpoly().coeffs()[::-1]
+    O_nf_inv = flint.fmpq_mat(n, n, [c[i - j] if i >= j else 0 for i in range(n) for j in range(n)])
+    return c, O, O_nf_inv * O
 
 
 def _determinant(M: flint.fmpq_mat) -> flint.fmpq:
@@ -131,29 +146,19 @@ def _unobservable(model: Model, direction: list) -> NotObservableError:
 
 
 def _rational_normal_form(model: Model) -> ObserverNormalForm:
-    """The normal form of a numeric pair, in exact rational matrix arithmetic (python-flint; no expressions).
-
-    ``O_nf``, the observability matrix of the normal form, is unit lower triangular and its inverse is the
-    lower triangular Toeplitz matrix of the characteristic coefficients ``(1, c_1, ..., c_(n-1))`` (row ``i``
-    of ``O_nf^-1 O_nf`` is ``e1' p_i(A_nf)`` with ``p_i`` the degree-``i`` head of the characteristic
-    polynomial, which is ``e_(i+1)'`` for the normal form), so ``T = O_nf^-1 O`` is one product, no solve.
-    """
+    """The normal form of a numeric pair, in exact rational matrix arithmetic (python-flint; no expressions)."""
     n = model.n
-    A = flint_matrix(model.A)
-    O = _rational_observability(A, flint_matrix(model.C))
+    c, O, T = rational_coordinates(flint_matrix(model.A), flint_matrix(model.C))
     det = _determinant(O)
     if det == 0:
         nullspace = DomainMatrix.from_rep(DFM(O, (n, n), QQ)).nullspace()
         raise _unobservable(model, [QQ.to_sympy(x) for x in nullspace.to_Matrix().row(0)])
-    c = A.charpoly().coeffs()[::-1]  # [1, c_1, ..., c_n]: det(sI - A) = s^n + c_1 s^(n-1) + ... + c_n
     a_sym = sympy_matrix(flint.fmpq_mat(n, 1, [-x for x in c[1:]]))
     O_sym = sympy_matrix(O)
     det_sym = sp.Rational.from_coprime_ints(int(det.p), int(det.q))
     if _is_normal_form(sp.Matrix(model.A), sp.Matrix(model.C)):
         eye = sp.ImmutableMatrix.eye(n)
         return ObserverNormalForm(a_sym, eye, eye, O_sym, det_sym, ())
-    O_nf_inv = flint.fmpq_mat(n, n, [c[i - j] if i >= j else 0 for i in range(n) for j in range(n)])
-    T = O_nf_inv * O
     return ObserverNormalForm(a_sym, sympy_matrix(T), sympy_matrix(T.inv()), O_sym, det_sym, ())
 
 

@@ -13,7 +13,7 @@ Matrix, to_fraction, fraction_matrix, matrix_strings, identity, zeros, transpose
 lyapunov_form, integer_form, is_zero, inf_norm, float_matrix, product_work -- exact matrices as lists of rows (products on flint)
 Definiteness, definiteness, ldl_psd, ARITHMETICS, arithmetic -- M > 0 / M >= 0, decided exactly; M = L D L'
 rank, nullspace, solve, lyapunov_solve, observable, nonsingular, charpoly -- exact elimination (fmpq_mat, nmod_mat)
-observer_coordinates, solve_float                             -- the observer normal form; enclosed solves
+solve_float                                                   -- a solve to double precision from an enclosure
 expm_enclosure, sqrt_lower, sqrt_upper                        -- rigorous bounds
 dyadic, psd_dyadic, factor_rows, range_basis, project_primal, project_dual, kernel_vector,
 normalise, short_sqrt_lower, MAX_PROJECTION_UNKNOWNS, FACE_TOLERANCES  -- floats to exact candidates
@@ -24,7 +24,7 @@ Interval, monomial_range, box_pieces, vertex_values, evaluate_terms, observer_pa
 from ._exact import (elimination_work, ARITHMETICS, Definiteness, Matrix, add, arithmetic, charpoly, definiteness,
                      expm_enclosure, float_matrix, fraction_matrix, identity, inf_norm, integer_form, is_zero, ldl_psd,
                      lyapunov_form, lyapunov_solve, matmul, matrix_strings, nonsingular, nullspace, observable,
-                     observer_coordinates, product_work, rank, scale, solve, solve_float, sqrt_lower, sqrt_upper, sub,
+                     product_work, rank, scale, solve, solve_float, sqrt_lower, sqrt_upper, sub,
                      to_fraction, transpose, zeros)
 from ._polytope import (Interval, box_pieces, evaluate_terms, monomial_range, observer_pair, vertex_matrices,
                         vertex_values)
@@ -34,7 +34,7 @@ from ._rounding import (FACE_TOLERANCES, MAX_PROJECTION_UNKNOWNS, dyadic, factor
 __all__ = ["ARITHMETICS", "Definiteness", "Matrix", "add", "arithmetic", "charpoly", "definiteness", "elimination_work", "expm_enclosure",
            "float_matrix", "fraction_matrix", "identity", "inf_norm", "integer_form", "is_zero", "ldl_psd",
            "lyapunov_form", "lyapunov_solve", "matmul", "matrix_strings", "nonsingular", "nullspace", "observable",
-           "observer_coordinates", "product_work", "solve_float", "rank", "scale",
+           "product_work", "solve_float", "rank", "scale",
            "solve", "sqrt_lower", "sqrt_upper", "sub", "to_fraction", "transpose", "zeros", "FACE_TOLERANCES",
            "MAX_PROJECTION_UNKNOWNS", "dyadic", "factor_rows", "kernel_vector", "normalise", "project_dual",
            "project_primal", "psd_dyadic", "range_basis", "short_sqrt_lower", "Interval", "box_pieces",

@@ -592,6 +592,8 @@ def _full_rank_mod_p(A: Sequence[Sequence[Fraction]], C: Sequence[Sequence[Fract
             return True
         block = block * NA
     return False
+
+
 def nonsingular(M: Sequence[Sequence[Any]]) -> bool:
     """``det M != 0`` for a square rational ``M``, exactly: full rank modulo a prime decides at once.
 
@@ -604,33 +606,6 @@ def nonsingular(M: Sequence[Sequence[Any]]) -> bool:
     if flint.nmod_mat([[int(x) % _PRIME for x in row] for row in N], _PRIME).rank() == n:
         return True
     return rank(M) == n
-
-
-def observer_coordinates(A: Sequence[Sequence[Any]], C: Sequence[Sequence[Any]]) -> tuple[list[Fraction], Matrix]:
-    """``(a, T)`` of the observer normal form of a rational single-output pair, on python-flint (in C).
-
-    ``det(sI - A) = s^n - a_1 s^(n-1) - ... - a_n`` and ``z = T x`` gives ``T A = A_nf T``, ``C = e_1' T``
-    with ``A_nf`` of first column ``a`` and a unit superdiagonal (seed 004, 'Observer normal form').
-    ``T = O_nf^-1 O``, ``O`` the observability matrix of ``(A, C)``; the normal form's own ``O_nf`` is unit
-    lower triangular and its inverse is the lower triangular Toeplitz matrix of ``1, -a_1, ..., -a_(n-1)``,
-    so ``T`` needs no solve and no inverse of ``O`` (whose entries, for a dense decimal ``A``, are
-    thousands of digits long).  ``T`` is singular exactly when the pair is unobservable (``det T = det O``).
-    """
-    import flint
-
-    n = len(A)
-    FA = _fmpq_mat(A)
-    rows = [_fmpq_mat(C)]
-    for _ in range(n - 1):
-        rows.append(rows[-1] * FA)
-    O = flint.fmpq_mat([[row[0, j] for j in range(n)] for row in rows])
-    coeffs = FA.charpoly().coeffs()  # constant first, monic: s^n + c_(n-1) s^(n-1) + ... + c_0
-    a = [-coeffs[n - i] for i in range(1, n + 1)]
-    toeplitz = flint.fmpq_mat([[1 if i == j else -a[i - j - 1] if j < i else 0 for j in range(n)]
-                               for i in range(n)])
-    T = toeplitz * O
-    return ([Fraction(int(x.p), int(x.q)) for x in a],
-            [[Fraction(int(x.p), int(x.q)) for x in row] for row in T.tolist()])
 
 
 def solve_float(M: Sequence[Sequence[Any]], B: Sequence[Sequence[Any]]) -> list[list[float]]:
